@@ -1,0 +1,44 @@
+"""Every tolerance, limit and fixed parameter of refsoft, in one place.
+
+Modules import their numbers from here so that a port author (and a reviewer) can see at a
+glance which constants shape the outputs.
+"""
+
+import numpy as np
+
+# --- Rasterizer (DESIGN section 2) -------------------------------------------------------
+#: Fractional bits of snapped window coordinates (1/256 pixel, as llvmpipe).
+SUBPIXEL_BITS = 8
+#: One pixel in snapped units.
+SUBPIXEL_ONE = 1 << SUBPIXEL_BITS
+#: Half the guard band, in pixels: triangles reaching further than this from the viewport
+#: centre are clipped against x/y planes so that 64-bit edge functions cannot overflow
+#: (coordinates stay below 2**29 snapped units; products below 2**60).
+GUARD_BAND_PIXELS = float(1 << 20)
+#: Tile edge in pixels for the binned, tile-parallel rasterizer.
+TILE_SIZE = 16
+#: Depth buffer clear value (window depth; LESS test).
+DEPTH_CLEAR = 1.0
+
+# --- Limits (DESIGN section 10) -----------------------------------------------------------
+#: Largest image edge accepted, in pixels.
+MAX_IMAGE_EDGE = 16384
+#: Largest image accepted, in pixels (width * height); about 1 GiB of G-buffer at float32.
+MAX_IMAGE_PIXELS = 1 << 26
+#: Largest mesh accepted.
+MAX_VERTICES = 1 << 26
+MAX_TRIANGLES = 1 << 26
+
+# --- Shading (DESIGN section 5) -----------------------------------------------------------
+#: Fixed world-space direction *towards* the light (normalised at import).
+LIGHT_DIRECTION = np.array([0.3, 0.8, 0.5]) / np.linalg.norm([0.3, 0.8, 0.5])
+#: colour * (AMBIENT + DIFFUSE * |dot(n, L)|): two-sided, so a surface's colour does not
+#: depend on the side it is seen from (a reflection and the truth see the same colour).
+AMBIENT = 0.3
+DIFFUSE = 0.7
+#: Colour of pixels no object covers (linear RGB in [0, 1]).
+BACKGROUND_COLOR = np.array([0.08, 0.09, 0.12])
+
+# --- Camera validation ---------------------------------------------------------------------
+#: |cross(forward, up)| below this means up is parallel to the view direction.
+CAMERA_PARALLEL_TOL = 1e-9

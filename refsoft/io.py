@@ -1,0 +1,49 @@
+"""Atomic file writes: every output is written under a temporary name in the same folder, then
+renamed, so an interrupted run never leaves a torn file and never damages an existing one."""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from contextlib import contextmanager
+
+import numpy as np
+
+
+@contextmanager
+def atomic_path(path, suffix=""):
+    """Yield a temporary path next to ``path``; rename it to ``path`` if the block succeeds."""
+    path = os.fspath(path)
+    folder = os.path.dirname(os.path.abspath(path))
+    os.makedirs(folder, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix="." + os.path.basename(path) + ".", suffix=".tmp" + suffix, dir=folder)
+    os.close(fd)
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+
+
+def write_npz(path, **arrays):
+    """``np.savez_compressed`` to ``path`` atomically."""
+    with atomic_path(path, ".npz") as tmp:
+        np.savez_compressed(tmp, **arrays)
+
+
+def write_png(path, image):
+    """Write an (H, W, 3) or (H, W) uint8 image as PNG atomically."""
+    import imageio.v3 as iio
+
+    with atomic_path(path, ".png") as tmp:
+        iio.imwrite(tmp, np.asarray(image, dtype=np.uint8), extension=".png")
+
+
+def write_json(path, data):
+    """Write JSON (indented, keys in order) atomically."""
+    with atomic_path(path) as tmp:
+        with open(tmp, "w") as fh:
+            json.dump(data, fh, indent=1)
+            fh.write("\n")

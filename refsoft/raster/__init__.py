@@ -1,0 +1,327 @@
+"""The exact CPU rasterizer (DESIGN section 2), in two stages like a GPU pipeline:
+
+1. :func:`rasterize` — clip-space triangles to a visibility buffer: per pixel the window depth
+   and the visible triangle (LESS depth test, first drawn wins ties);
+2. :func:`interpolate` — perspective-correct attributes of the visible triangle at each pixel.
+
+On top of these, :func:`gbuffer` renders one reflector's position and normal maps, and
+:func:`color_pass` renders the shaded main view with object ids.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import constants
+from ..camera import Camera, check_image_size
+from ..errors import RefsoftError
+from ..mesh import Mesh
+from . import _kernels, _setup
+
+__all__ = ["Fragments", "GBuffer", "ColorPass", "rasterize", "interpolate", "gbuffer", "color_pass",
+           "to_uint8", "PRECISIONS"]
+
+#: Accepted precision names and their dtypes.
+PRECISIONS = {"float32": np.float32, "float64": np.float64}
+
+
+def _dtype(precision) -> type:
+    key = precision if isinstance(precision, str) else np.dtype(precision).name
+    if key not in PRECISIONS:
+        raise RefsoftError(f"precision must be 'float32' or 'float64', got {precision!r}")
+    return PRECISIONS[key]
+
+
+@dataclass(frozen=True, eq=False)
+class Fragments:
+    """Visibility buffer made by :func:`rasterize`.
+
+    Attributes
+    ----------
+    depth : ndarray, shape (H, W), float32
+        Window depth of the visible fragment; 1.0 where nothing is drawn.
+    triangle : ndarray, shape (H, W), int32
+        Index of the visible input triangle; -1 where nothing is drawn.
+    index : ndarray, shape (H, W), int32
+        Index of the visible *clip triangle* (internal; used by :func:`interpolate`).
+    setup : dict of ndarray
+        Clip-triangle data: snapped ``X``, ``Y`` (T, 3) int64, ``Z``, ``IW`` (T, 3) float64,
+        ``B`` (T, 3, 3) float64 barycentrics w.r.t. the input triangle, ``tri`` (T,) int32.
+    n_faces : int
+        Number of input triangles.
+    """
+
+    depth: np.ndarray
+    triangle: np.ndarray
+    index: np.ndarray
+    setup: dict
+    n_faces: int
+
+    @property
+    def mask(self) -> np.ndarray:
+        """Coverage, shape (H, W), bool."""
+        return self.triangle >= 0
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        return self.depth.shape
+
+
+def _check_faces(faces, n_vertices: int) -> np.ndarray:
+    f = np.asarray(faces)
+    if f.ndim != 2 or f.shape[1] != 3 or not np.issubdtype(f.dtype, np.integer):
+        raise RefsoftError(f"faces must be an integer array of shape (F, 3), got {f.dtype} {f.shape}")
+    if len(f) and (f.min() < 0 or f.max() >= n_vertices):
+        raise RefsoftError(f"face indices must be in [0, {n_vertices - 1}], got [{int(f.min())}, {int(f.max())}]")
+    return np.ascontiguousarray(f, dtype=np.int32)
+
+
+def rasterize(clip, faces, width: int, height: int, peel_depth=None) -> Fragments:
+    """Rasterize clip-space triangles with OpenGL's rules (DESIGN section 2).
+
+    Parameters
+    ----------
+    clip : array_like, shape (V, 4), float64
+        Clip coordinates of the vertices (``view_proj @ [p, 1]``).
+    faces : array_like, shape (F, 3), integer
+        Triangles, drawn in index order; both windings are drawn.
+    width, height : int
+        Viewport size in pixels.
+    peel_depth : array_like, shape (H, W), float32, optional
+        Depth peeling: keep only fragments strictly behind this depth (the previous layer).
+
+    Returns
+    -------
+    Fragments
+    """
+    width, height = check_image_size(width, height, "viewport")
+    clip = np.asarray(clip, dtype=np.float64)
+    if clip.ndim != 2 or clip.shape[1] != 4:
+        raise RefsoftError(f"clip coordinates must have shape (V, 4), got {clip.shape}")
+    if not np.all(np.isfinite(clip)):
+        raise RefsoftError("clip coordinates are not finite")
+    clip = np.ascontiguousarray(clip)
+    faces = _check_faces(faces, len(clip))
+    use_peel = peel_depth is not None
+    if use_peel:
+        peel = np.ascontiguousarray(peel_depth, dtype=np.float32)
+        if peel.shape != (height, width):
+            raise RefsoftError(f"peel_depth must have shape {(height, width)}, got {peel.shape}")
+    else:
+        peel = np.zeros((1, 1), dtype=np.float32)
+    g = constants.GUARD_BAND_PIXELS
+    gx, gy = 2.0 * g / width, 2.0 * g / height
+    counts = _setup.count_clip_triangles(clip, faces, gx, gy)
+    offsets = np.zeros(len(faces) + 1, dtype=np.int64)
+    np.cumsum(counts, out=offsets[1:])
+    X, Y, Z, IW, B, tri, valid, bbox, area, bias = _setup.emit_clip_triangles(
+        clip, faces, offsets, int(offsets[-1]), gx, gy, width, height)
+    tile = constants.TILE_SIZE
+    tiles_x, tiles_y = -(-width // tile), -(-height // tile)
+    starts, items = _kernels.bin_triangles(valid, bbox, tile, tiles_x, tiles_y)
+    depth = np.full((height, width), constants.DEPTH_CLEAR, dtype=np.float32)
+    index = np.full((height, width), -1, dtype=np.int32)
+    _kernels.raster_tiles(starts, items, X, Y, Z, bbox, area, bias, width, height, tile, tiles_x,
+                          depth, index, peel, use_peel)
+    triangle = np.where(index >= 0, tri[np.maximum(index, 0)] if len(tri) else -1, -1).astype(np.int32)
+    setup = {"X": X, "Y": Y, "Z": Z, "IW": IW, "B": B, "tri": tri}
+    return Fragments(depth, triangle, index, setup, len(faces))
+
+
+def interpolate(fragments: Fragments, attributes, faces, precision="float32", normalize=False) -> np.ndarray:
+    """Perspective-correct per-pixel attributes (GL ``smooth``) of the visible triangles.
+
+    Parameters
+    ----------
+    fragments : Fragments
+        From :func:`rasterize` with the same ``faces``.
+    attributes : array_like, shape (V, C)
+        Per-vertex attributes.
+    faces : array_like, shape (F, 3), integer
+    precision : {"float32", "float64"}
+        Arithmetic and output precision.
+    normalize : bool
+        Renormalise the interpolated vector per pixel (normals); zero stays zero.
+
+    Returns
+    -------
+    ndarray, shape (H, W, C), float32 or float64
+        Zero where nothing is drawn.
+    """
+    dt = _dtype(precision)
+    attr = np.asarray(attributes)
+    if attr.ndim != 2 or len(attr) == 0:
+        raise RefsoftError(f"attributes must have shape (V, C), got {attr.shape}")
+    attr = np.ascontiguousarray(attr, dtype=dt)
+    faces = _check_faces(faces, len(attr))
+    if len(faces) != fragments.n_faces:
+        raise RefsoftError(f"faces ({len(faces)}) do not match the rasterized triangles ({fragments.n_faces})")
+    s = fragments.setup
+    h, w = fragments.shape
+    out = np.empty((h, w, attr.shape[1]), dtype=dt)
+    _kernels.interpolate_rows(fragments.index, s["X"], s["Y"], s["IW"].astype(dt), s["B"].astype(dt),
+                              s["tri"], faces, attr, h, bool(normalize), out)
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class GBuffer:
+    """One reflector's G-buffer (Estalella section 3.1).
+
+    Attributes
+    ----------
+    position : ndarray, shape (H, W, 3), float32 or float64
+        World-space position (relative to ``origin``); zero where not covered.
+    normal : ndarray, shape (H, W, 3), float32 or float64
+        Interpolated vertex normal, renormalised; zero where not covered.
+    mask : ndarray, shape (H, W), bool
+        Coverage.
+    depth : ndarray, shape (H, W), float32
+        Window depth; 1.0 where not covered.
+    triangle : ndarray, shape (H, W), int32
+        Visible triangle of the mesh; -1 where not covered.
+    view_proj : ndarray, shape (4, 4), float64
+        The camera's world-to-clip matrix.
+    origin : ndarray, shape (3,), float64
+        Positions are ``world - origin`` (zero for world space).
+    """
+
+    position: np.ndarray
+    normal: np.ndarray
+    mask: np.ndarray
+    depth: np.ndarray
+    triangle: np.ndarray
+    view_proj: np.ndarray
+    origin: np.ndarray
+
+
+def _check_camera(camera):
+    if not isinstance(camera, Camera):
+        raise RefsoftError(f"camera must be a refsoft.Camera, got {type(camera).__name__}")
+
+
+def _check_mesh(mesh):
+    if not isinstance(mesh, Mesh):
+        raise RefsoftError(f"mesh must be a refsoft.Mesh, got {type(mesh).__name__}")
+
+
+def gbuffer(mesh: Mesh, camera: Camera, precision="float32", origin=None) -> GBuffer:
+    """Render a mesh's position and normal maps from a camera.
+
+    Parameters
+    ----------
+    mesh : Mesh
+        World-space mesh (the reflector, or its closed proxy).
+    camera : Camera
+    precision : {"float32", "float64"}
+    origin : array_like, shape (3,), optional
+        Interpolate positions relative to this point (e.g. the eye) to keep float32 precision
+        far from the world origin. Default: the world origin.
+
+    Returns
+    -------
+    GBuffer
+    """
+    _check_mesh(mesh)
+    _check_camera(camera)
+    dt = _dtype(precision)
+    o = np.zeros(3) if origin is None else np.asarray(origin, dtype=np.float64)
+    if o.shape != (3,) or not np.all(np.isfinite(o)):
+        raise RefsoftError(f"origin must be 3 finite numbers, got {origin!r}")
+    vp = camera.view_proj()
+    clip = _setup.transform_points(mesh.vertices, vp)
+    frags = rasterize(clip, mesh.faces, camera.width, camera.height)
+    pos = interpolate(frags, mesh.vertices - o, mesh.faces, dt)
+    nrm = interpolate(frags, mesh.normals, mesh.faces, dt, normalize=True)
+    return GBuffer(pos, nrm, frags.mask, frags.depth, frags.triangle, vp, o)
+
+
+def to_uint8(color) -> np.ndarray:
+    """8-bit conversion of DESIGN section 5: ``round(clip(c, 0, 1) * 255)``, half to even."""
+    c = np.asarray(color, dtype=np.float64)
+    return np.rint(np.clip(c, 0.0, 1.0) * 255.0).astype(np.uint8)
+
+
+@dataclass(frozen=True, eq=False)
+class ColorPass:
+    """The shaded main view.
+
+    Attributes
+    ----------
+    image : ndarray, shape (H, W, 3), uint8
+    color : ndarray, shape (H, W, 3), float32
+        Linear colour before 8-bit conversion (background colour where nothing is drawn).
+    object_id : ndarray, shape (H, W), int32
+        1-based id of the visible object; 0 for the background.
+    depth : ndarray, shape (H, W), float32
+    triangle : ndarray, shape (H, W), int32
+        Triangle index within the visible object; -1 for the background.
+    """
+
+    image: np.ndarray
+    color: np.ndarray
+    object_id: np.ndarray
+    depth: np.ndarray
+    triangle: np.ndarray
+
+
+def shade(normals, colors) -> np.ndarray:
+    """Simple two-sided shading: ``colour * (AMBIENT + DIFFUSE * |dot(n, L)|)`` (float32).
+
+    Parameters
+    ----------
+    normals : ndarray, shape (..., 3)
+        Unit normals (zero allowed: ambient only).
+    colors : ndarray, shape (..., 3)
+        Object colours.
+    """
+    light = constants.LIGHT_DIRECTION.astype(np.float32)
+    n = np.asarray(normals, dtype=np.float32)
+    lam = np.abs(n[..., 0] * light[0] + n[..., 1] * light[1] + n[..., 2] * light[2])
+    k = np.float32(constants.AMBIENT) + np.float32(constants.DIFFUSE) * lam
+    return (np.asarray(colors, dtype=np.float32) * k[..., None]).astype(np.float32)
+
+
+def color_pass(meshes, colors, camera: Camera) -> ColorPass:
+    """Render several objects, shaded, with their ids (object ``i`` has id ``i + 1``).
+
+    Parameters
+    ----------
+    meshes : sequence of Mesh
+        World-space meshes, drawn in order (earlier objects win depth ties).
+    colors : array_like, shape (len(meshes), 3)
+        Colours in [0, 1].
+    camera : Camera
+
+    Returns
+    -------
+    ColorPass
+    """
+    _check_camera(camera)
+    meshes = list(meshes)
+    if not meshes:
+        raise RefsoftError("color_pass needs at least one mesh")
+    for m in meshes:
+        _check_mesh(m)
+    colors = np.asarray(colors, dtype=np.float64)
+    if colors.shape != (len(meshes), 3):
+        raise RefsoftError(f"colors must have shape ({len(meshes)}, 3), got {colors.shape}")
+    verts = np.concatenate([m.vertices for m in meshes])
+    norms = np.concatenate([m.normals for m in meshes])
+    v_off = np.cumsum([0] + [m.n_vertices for m in meshes])
+    f_off = np.cumsum([0] + [m.n_faces for m in meshes])
+    faces = np.concatenate([m.faces.astype(np.int64) + v_off[i] for i, m in enumerate(meshes)])
+    face_object = np.repeat(np.arange(1, len(meshes) + 1, dtype=np.int32), [m.n_faces for m in meshes])
+    clip = _setup.transform_points(verts, camera.view_proj())
+    frags = rasterize(clip, faces, camera.width, camera.height)
+    nrm = interpolate(frags, norms, faces, np.float32, normalize=True)
+    covered = frags.mask
+    tri = frags.triangle
+    object_id = np.where(covered, face_object[np.maximum(tri, 0)], 0).astype(np.int32)
+    local_tri = np.where(covered, tri - f_off[np.maximum(object_id - 1, 0)], -1).astype(np.int32)
+    table = np.vstack([constants.BACKGROUND_COLOR, colors]).astype(np.float32)
+    color = shade(nrm, table[object_id])
+    color[~covered] = constants.BACKGROUND_COLOR.astype(np.float32)
+    return ColorPass(to_uint8(color), color, object_id, frags.depth, local_tri)

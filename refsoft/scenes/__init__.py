@@ -1,0 +1,50 @@
+"""Built-in procedural scenes, loadable by name (``refsoft.load_scene("sphere")``)."""
+
+from __future__ import annotations
+
+import os
+
+from ..errors import SceneError
+from ..scene import Scene
+from .basic import sphere_scene
+
+#: name -> (builder, one-line description)
+BUILTIN_SCENES = {
+    "sphere": (sphere_scene, "a mirror ball among coloured objects on a floor (static)"),
+}
+
+
+def builtin_names() -> list[str]:
+    """Names of the built-in scenes."""
+    return list(BUILTIN_SCENES)
+
+
+def load_scene(name_or_path, **overrides) -> Scene:
+    """Load a built-in scene by name or a TOML scene file by path.
+
+    Parameters
+    ----------
+    name_or_path : str or PathLike
+        A name from :func:`builtin_names` or a path to a ``.toml`` file.
+    **overrides
+        Camera fields to replace (e.g. ``width=320, height=240``).
+
+    Returns
+    -------
+    Scene
+    """
+    from dataclasses import replace
+
+    from ..scene_toml import load_scene_file
+
+    key = os.fspath(name_or_path)
+    if key in BUILTIN_SCENES:
+        scene = BUILTIN_SCENES[key][0]()
+    elif key.endswith(".toml") or os.path.sep in key or os.path.exists(key):
+        scene = load_scene_file(key)
+    else:
+        raise SceneError(f"unknown scene {key!r}: not a built-in ({', '.join(BUILTIN_SCENES)}) nor a .toml file")
+    if overrides:
+        overrides = {k: v for k, v in overrides.items() if v is not None}
+        scene = replace(scene, camera=replace(scene.camera, **overrides))
+    return scene

@@ -1,0 +1,138 @@
+"""Slow, plainly written NumPy references for the fast kernels (same conventions, DESIGN §2).
+
+Nothing here is fast or clever: one triangle at a time, whole bounding boxes evaluated with
+NumPy, Python lists for clipped polygons. The fast kernels must agree with these.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+GUARD_BAND_PIXELS = float(1 << 20)
+
+
+def plane_distances(c, gx, gy):
+    """Signed distances of a clip vertex to the 5 clip planes (near, +x, -x, +y, -y guard)."""
+    x, y, z, w = c
+    return [z + w, gx * w - x, gx * w + x, gy * w - y, gy * w + y]
+
+
+def clip_triangle(c3, gx, gy):
+    """Sutherland-Hodgman: list of (clip vertex, barycentric row) after every plane."""
+    poly = [(np.array(c3[i], dtype=np.float64), np.eye(3)[i]) for i in range(3)]
+    for p in range(5):
+        out = []
+        n = len(poly)
+        for i in range(n):
+            a, b = poly[i], poly[(i + 1) % n]
+            da, db = plane_distances(a[0], gx, gy)[p], plane_distances(b[0], gx, gy)[p]
+            if da >= 0:
+                out.append(a)
+            if (da >= 0) != (db >= 0):
+                ins, outs, di, do = (a, b, da, db) if da >= 0 else (b, a, db, da)
+                t = di / (di - do)
+                out.append((ins[0] + t * (outs[0] - ins[0]), ins[1] + t * (outs[1] - ins[1])))
+        poly = out
+        if len(poly) < 3:
+            return []
+    return poly
+
+
+def edge(ax, ay, bx, by, px, py):
+    return (bx - ax) * (py - ay) - (by - ay) * (px - ax)
+
+
+def setup_triangles(clip, faces, width, height):
+    """All clip triangles in draw order: dicts with snapped x, y, z, 1/w, B and the face index."""
+    gx, gy = 2 * GUARD_BAND_PIXELS / width, 2 * GUARD_BAND_PIXELS / height
+    tris = []
+    for f, face in enumerate(faces):
+        poly = clip_triangle([clip[i] for i in face], gx, gy)
+        for j in range(1, len(poly) - 1):
+            verts = [poly[0], poly[j], poly[j + 1]]
+            xs, ys, zs, iws, bs = [], [], [], [], []
+            for c, b in verts:
+                xs.append(int(np.rint((c[0] / c[3] + 1.0) * (0.5 * width) * 256.0)))
+                ys.append(int(np.rint((c[1] / c[3] + 1.0) * (0.5 * height) * 256.0)))
+                zs.append(0.5 * (c[2] / c[3]) + 0.5)
+                iws.append(1.0 / c[3])
+                bs.append(b)
+            area = edge(xs[0], ys[0], xs[1], ys[1], xs[2], ys[2])
+            order = [0, 1, 2] if area >= 0 else [0, 2, 1]
+            tris.append(dict(face=f, area=abs(area), x=[xs[k] for k in order], y=[ys[k] for k in order],
+                             z=[zs[k] for k in order], iw=[iws[k] for k in order],
+                             B=np.array([bs[k] for k in order])))
+    return tris
+
+
+def is_inclusive(ax, ay, bx, by):
+    """Left edge (dy < 0) or bottom edge (dy == 0, dx > 0) of a counter-clockwise triangle."""
+    dx, dy = bx - ax, by - ay
+    return dy < 0 or (dy == 0 and dx > 0)
+
+
+def naive_rasterize(clip, faces, width, height, peel=None):
+    """Returns depth (float32), face index (int32), clip-triangle list index (int32), triangles."""
+    tris = setup_triangles(np.asarray(clip, dtype=np.float64), np.asarray(faces), width, height)
+    depth = np.ones((height, width), dtype=np.float32)
+    face = np.full((height, width), -1, dtype=np.int32)
+    which = np.full((height, width), -1, dtype=np.int32)
+    rows, cols = np.mgrid[0:height, 0:width]
+    px = cols.astype(np.int64) * 256 + 128
+    py = (height - 1 - rows).astype(np.int64) * 256 + 128
+    for t, tri in enumerate(tris):
+        if tri["area"] == 0:
+            continue
+        x, y, z = tri["x"], tri["y"], tri["z"]
+        covered = np.ones((height, width), dtype=bool)
+        e = []
+        for i in range(3):
+            a, b = (i + 1) % 3, (i + 2) % 3
+            ei = edge(x[a], y[a], x[b], y[b], px, py)
+            covered &= (ei > 0) | ((ei == 0) & is_inclusive(x[a], y[a], x[b], y[b]))
+            e.append(ei)
+        zz = (e[0].astype(np.float64) * z[0] + e[1].astype(np.float64) * z[1] + e[2].astype(np.float64) * z[2]) \
+            * (1.0 / float(tri["area"]))
+        zz = np.clip(zz, 0.0, 1.0).astype(np.float32)
+        win = covered & (zz < depth)
+        if peel is not None:
+            win &= zz > peel
+        depth[win] = zz[win]
+        face[win] = tri["face"]
+        which[win] = t
+    return depth, face, which, tris
+
+
+def naive_interpolate(which, tris, attributes, faces, dtype, normalize=False):
+    """Perspective-correct interpolation, pixel by pixel, in ``dtype`` (same formula as DESIGN §2)."""
+    h, w = which.shape
+    attr = np.asarray(attributes, dtype=dtype)
+    out = np.zeros((h, w, attr.shape[1]), dtype=dtype)
+    for r in range(h):
+        for c in range(w):
+            t = which[r, c]
+            if t < 0:
+                continue
+            tri = tris[t]
+            x, y = tri["x"], tri["y"]
+            px, py = c * 256 + 128, (h - 1 - r) * 256 + 128
+            e = [edge(x[(i + 1) % 3], y[(i + 1) % 3], x[(i + 2) % 3], y[(i + 2) % 3], px, py) for i in range(3)]
+            a = [dtype(e[i]) * dtype(tri["iw"][i]) for i in range(3)]
+            s = a[0] + a[1] + a[2]
+            lam = [a[i] / s for i in range(3)]
+            B = tri["B"].astype(dtype)
+            bary = [lam[0] * B[0, j] + lam[1] * B[1, j] + lam[2] * B[2, j] for j in range(3)]
+            v = faces[tri["face"]]
+            val = bary[0] * attr[v[0]] + bary[1] * attr[v[1]] + bary[2] * attr[v[2]]
+            if normalize:
+                length = np.sqrt(_sumsq(val))
+                val = val / length if length > 0 else np.zeros_like(val)
+            out[r, c] = val
+    return out
+
+
+def _sumsq(v):
+    s = v[0] * v[0]
+    for k in range(1, len(v)):
+        s = s + v[k] * v[k]
+    return s
