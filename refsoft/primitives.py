@@ -23,9 +23,10 @@ def _positive(value, name, kind=float):
     return kind(value)
 
 
-def _grid_faces(rows: int, cols: int, offset: int = 0) -> np.ndarray:
-    """Faces of a (rows+1) x (cols+1) vertex grid, two triangles per cell, counter-clockwise
-    when the grid's u runs along columns and v along rows (normal u x v)."""
+def _grid_faces(rows: int, cols: int, offset: int = 0, flip: bool = False) -> np.ndarray:
+    """Faces of a (rows+1) x (cols+1) vertex grid, two triangles per cell, wound so that the face
+    normal is ``u x v`` (u: along a row, increasing column; v: increasing row), or ``v x u``
+    with ``flip``."""
     r, c = np.mgrid[0:rows, 0:cols]
     a = r * (cols + 1) + c
     b = a + 1
@@ -34,7 +35,14 @@ def _grid_faces(rows: int, cols: int, offset: int = 0) -> np.ndarray:
     tris = np.concatenate([np.stack([a, b, e], -1).reshape(-1, 3), np.stack([a, e, d], -1).reshape(-1, 3)])
     # Interleave so each cell's two triangles are adjacent in index order.
     order = np.arange(len(tris)).reshape(2, -1).T.reshape(-1)
-    return tris[order] + offset
+    tris = tris[order] + offset
+    return tris[:, [0, 2, 1]] if flip else tris
+
+
+def _drop_degenerate(v, faces):
+    """Faces whose area is not negligible (pole rows collapse to a point)."""
+    area = np.linalg.norm(np.cross(v[faces[:, 1]] - v[faces[:, 0]], v[faces[:, 2]] - v[faces[:, 0]]), axis=1)
+    return faces[area > 1e-9 * area.max()]
 
 
 def icosphere(subdivisions: int = 3, radius: float = 1.0) -> Mesh:
@@ -61,10 +69,9 @@ def uv_sphere(rings: int = 32, segments: int = 64, radius: float = 1.0) -> Mesh:
     phi = np.linspace(0.0, 2.0 * np.pi, segments + 1)     # seam duplicated (own normals)
     t, p = np.meshgrid(theta, phi, indexing="ij")
     n = np.stack([np.sin(t) * np.sin(p), np.cos(t), np.sin(t) * np.cos(p)], -1).reshape(-1, 3)
-    faces = _grid_faces(rings, segments)
-    # Drop the degenerate triangles at the poles.
+    # rows run down from +y, columns around y: u x v points inwards, so flip
     v = n * radius
-    f = faces[np.linalg.norm(np.cross(v[faces[:, 1]] - v[faces[:, 0]], v[faces[:, 2]] - v[faces[:, 0]]), axis=1) > 0]
+    f = _drop_degenerate(v, _grid_faces(rings, segments, flip=True))
     return Mesh(v, f, n, name="uv_sphere")
 
 
@@ -125,7 +132,7 @@ def cylinder(radius: float = 0.5, height: float = 1.0, sections: int = 32, segme
     yy, pp = np.meshgrid(y, phi, indexing="ij")
     side_n = np.stack([np.sin(pp), np.zeros_like(pp), np.cos(pp)], -1).reshape(-1, 3)
     side_v = side_n * radius + np.stack([np.zeros_like(yy), yy, np.zeros_like(yy)], -1).reshape(-1, 3)
-    verts, norms, faces = [side_v], [side_n], [_grid_faces(segments, sections)]
+    verts, norms, faces = [side_v], [side_n], [_grid_faces(segments, sections, flip=True)]
     if caps:
         offset = len(side_v)
         ring = np.stack([np.sin(phi[:-1]), np.zeros(sections), np.cos(phi[:-1])], -1) * radius
@@ -154,9 +161,8 @@ def capsule(radius: float = 0.5, height: float = 1.0, rings: int = 16, segments:
     v = n * radius
     v[..., 1] += shift[:, None]
     v, n = v.reshape(-1, 3), n.reshape(-1, 3)
-    faces = _grid_faces(len(theta) - 1, segments)
-    area = np.linalg.norm(np.cross(v[faces[:, 1]] - v[faces[:, 0]], v[faces[:, 2]] - v[faces[:, 0]]), axis=1)
-    return Mesh(v, faces[area > 0], n, name="capsule")
+    faces = _drop_degenerate(v, _grid_faces(len(theta) - 1, segments, flip=True))
+    return Mesh(v, faces, n, name="capsule")
 
 
 def torus(major_radius: float = 1.0, minor_radius: float = 0.3, major_sections: int = 64,
@@ -173,9 +179,7 @@ def torus(major_radius: float = 1.0, minor_radius: float = 0.3, major_sections: 
     radial = np.stack([np.sin(uu), np.zeros_like(uu), np.cos(uu)], -1)
     n = radial * np.cos(ww)[..., None] + np.array([0.0, 1.0, 0.0]) * np.sin(ww)[..., None]
     v = radial * R + n * r
-    faces = _grid_faces(M, m)
-    # Grid orientation here is u x w; flip so faces wind counter-clockwise seen from outside.
-    faces = faces[:, [0, 2, 1]]
+    faces = _grid_faces(M, m, flip=True)
     return Mesh(v.reshape(-1, 3), faces, n.reshape(-1, 3), name="torus")
 
 

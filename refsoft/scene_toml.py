@@ -88,12 +88,13 @@ def _load_mesh_ref(ctx, value, key, base_dir):
     ctx.fail(key, f"must be a file path or a primitive table, got {value!r}")
 
 
-def _transform(ctx, d, key):
+def _transform(ctx, d, key, base=Transform()):
+    """A Transform from a table; fields it lacks are taken from ``base``."""
     try:
         return Transform(
-            ctx.vec3(d["translate"], f"{key}.translate") if "translate" in d else (0.0, 0.0, 0.0),
-            ctx.vec3(d["rotate_deg"], f"{key}.rotate_deg") if "rotate_deg" in d else (0.0, 0.0, 0.0),
-            ctx.scale(d["scale"], f"{key}.scale") if "scale" in d else (1.0, 1.0, 1.0),
+            ctx.vec3(d["translate"], f"{key}.translate") if "translate" in d else base.translate,
+            ctx.vec3(d["rotate_deg"], f"{key}.rotate_deg") if "rotate_deg" in d else base.rotate_deg,
+            ctx.scale(d["scale"], f"{key}.scale") if "scale" in d else base.scale,
         )
     except SceneError as exc:
         if str(exc).startswith(str(ctx.path)):
@@ -138,6 +139,8 @@ def scene_from_dict(data: dict, path: str = "<scene>", base_dir: str = ".") -> S
         name = o.get("name", f"object{i + 1}")
         if not isinstance(name, str) or not name:
             ctx.fail(f"{key}.name", f"must be a non-empty string, got {name!r}")
+        if any(prev.name == name for prev in objects):
+            ctx.fail(f"{key}.name", f"duplicate object name {name!r}")
         if ("mesh" in o) == ("primitive" in o):
             ctx.fail(key, "needs exactly one of 'mesh' or 'primitive'")
         mesh = _load_mesh_ref(ctx, o.get("mesh", o.get("primitive")), f"{key}.{'mesh' if 'mesh' in o else 'primitive'}", base_dir)
@@ -172,16 +175,18 @@ def scene_from_dict(data: dict, path: str = "<scene>", base_dir: str = ".") -> S
             values["fov_y"] = ctx.number(k["fov_y"], f"{key}.fov_y") if "fov_y" in k else camera.fov_y
             cam_keys.append((ctx.integer(k["frame"], f"{key}.frame"), values))
         obj_keys = {}
-        names = {o.name for o in objects}
+        by_name = {o.name: o for o in objects}
         for i, k in enumerate(a.get("objects", [])):
             key = f"animation.objects[{i}]"
             ctx.table(k, key, ANIM_OBJECT_KEYS)
             for req in ("name", "frame"):
                 if req not in k:
                     ctx.fail(f"{key}.{req}", "missing key")
-            if k["name"] not in names:
+            if k["name"] not in by_name:
                 ctx.fail(f"{key}.name", f"no object named {k['name']!r}")
-            obj_keys.setdefault(k["name"], []).append((ctx.integer(k["frame"], f"{key}.frame"), _transform(ctx, k, key)))
+            base = by_name[k["name"]].transform  # unkeyed fields keep the object's own
+            obj_keys.setdefault(k["name"], []).append((ctx.integer(k["frame"], f"{key}.frame"),
+                                                       _transform(ctx, k, key, base)))
         try:
             animation = Animation(frames, tuple(cam_keys), {n: tuple(v) for n, v in obj_keys.items()})
         except SceneError as exc:
