@@ -1,0 +1,82 @@
+"""The command line: outputs, one-line errors, atomic writes; README and CI stay in step."""
+
+import os
+import re
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from refsoft import cli
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def run_cli(*args, cwd=None):
+    return subprocess.run([sys.executable, "-m", "refsoft.cli", *args], capture_output=True, text=True, cwd=cwd)
+
+
+def test_gbuffer_command_writes_maps_and_pictures(tmp_path):
+    out = tmp_path / "o"
+    assert cli.main(["gbuffer", "sphere", "--width", "80", "--height", "60", "--out", str(out)]) == 0
+    with np.load(out / "gbuffer_1.npz") as z:
+        assert z["gbuffer_position"].shape == (60, 80, 3) and z["gbuffer_position"].dtype == np.float32
+        assert z["gbuffer_normal"].dtype == np.float32
+        assert z["gbuffer_mask"].dtype == bool and z["gbuffer_mask"].sum() > 100
+        assert z["gbuffer_view_proj"].shape == (4, 4) and z["gbuffer_view_proj"].dtype == np.float64
+    import imageio.v3 as iio
+
+    pic = iio.imread(out / "gbuffer.png")
+    assert pic.shape == (60, 2 * 80 + 4, 3)
+    assert iio.imread(out / "view.png").shape == (60, 80, 3)
+    assert not [f for f in os.listdir(out) if f.endswith(".tmp") or ".tmp." in f]
+
+
+def test_widened_and_float64(tmp_path):
+    assert cli.main(["gbuffer", "sphere", "--width", "40", "--height", "30", "--widen", "1.5",
+                     "--precision", "float64", "--out", str(tmp_path)]) == 0
+    with np.load(tmp_path / "gbuffer_1.npz") as z:
+        assert z["gbuffer_position"].shape == (45, 60, 3) and z["gbuffer_position"].dtype == np.float64
+
+
+def test_scenes_lists_builtins(capsys):
+    assert cli.main(["scenes"]) == 0
+    assert re.search(r"^sphere\s+\d+\s+\d+\s+1\s+1", capsys.readouterr().out, re.M)
+
+
+@pytest.mark.parametrize("args, message", [
+    (["gbuffer", "nope"], "unknown scene 'nope'"),
+    (["gbuffer", "sphere", "--width", "0"], "width must be positive"),
+    (["gbuffer", "sphere", "--width", "100000"], "exceeds the limit"),
+    (["gbuffer", "sphere", "--reflector", "2"], "not a reflector"),
+    (["gbuffer", "sphere", "--frame", "3"], "--frame must be in"),
+    (["gbuffer", "sphere", "--widen", "0.5"], "widen factor"),
+    (["gbuffer", "missing.toml"], "scene file not found"),
+])
+def test_bad_input_gives_one_line_and_exit_2(tmp_path, args, message):
+    r = run_cli(*args, "--out", str(tmp_path / "o"), cwd=tmp_path)
+    assert r.returncode == 2
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("refsoft: error:") and message in lines[0], r.stderr
+    assert "Traceback" not in r.stderr
+
+
+def test_failed_run_does_not_damage_existing_outputs(tmp_path):
+    out = tmp_path / "o"
+    assert cli.main(["gbuffer", "sphere", "--width", "40", "--height", "30", "--out", str(out)]) == 0
+    before = {f: (out / f).read_bytes() for f in os.listdir(out)}
+    r = run_cli("gbuffer", "sphere", "--width", "40", "--height", "30", "--reflector", "3", "--out", str(out))
+    assert r.returncode == 2
+    assert {f: (out / f).read_bytes() for f in os.listdir(out)} == before
+
+
+def test_readme_opens_with_two_commands_that_ci_runs():
+    readme = open(os.path.join(ROOT, "README.md")).read()
+    block = readme.split("```")[1].splitlines()[1:]
+    commands = [line for line in block if line.strip()]
+    assert len(commands) == 2
+    assert "refsoft " in commands[0] and "pip install" in commands[0]
+    assert "pytest" in commands[1] and "pip install" in commands[1]
+    ci = open(os.path.join(ROOT, ".ci", "run")).read()
+    assert "README.md" in ci  # .ci/run executes exactly the README's first code block
