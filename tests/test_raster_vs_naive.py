@@ -84,3 +84,21 @@ def test_depth_peeling_matches_reference():
     both = first.mask & second.mask
     assert both.sum() > 100
     assert np.all(second.depth[both] > first.depth[both])
+
+
+@pytest.mark.parametrize("precision", ["float32", "float64"])
+def test_gbuffer_fused_pass_equals_separate_interpolation(precision):
+    from refsoft import Mesh
+
+    rng = np.random.default_rng(9)
+    cam = CAMERAS["perspective"]
+    verts, faces = random_soup(rng, 50)
+    normals = rng.normal(size=verts.shape)
+    mesh = Mesh(verts, faces, normals)
+    gb = raster.gbuffer(mesh, cam, precision)
+    clip = _setup.transform_points(verts, cam.view_proj())
+    _, face, which, tris = naive_rasterize(clip, faces, cam.width, cam.height)
+    dt = np.dtype(precision).type
+    np.testing.assert_array_equal(gb.triangle, face)
+    np.testing.assert_array_equal(gb.position, naive_interpolate(which, tris, mesh.vertices, faces, dt))
+    np.testing.assert_array_equal(gb.normal, naive_interpolate(which, tris, mesh.normals, faces, dt, True))

@@ -25,6 +25,8 @@ __all__ = ["Fragments", "GBuffer", "ColorPass", "rasterize", "interpolate", "gbu
 
 #: Accepted precision names and their dtypes.
 PRECISIONS = {"float32": np.float32, "float64": np.float64}
+#: The kernels' precision is chosen by the conversion function they are given.
+_CONVERT = {np.float32: _kernels.to_float32, np.float64: _kernels.to_float64}
 
 
 def _dtype(precision) -> type:
@@ -47,8 +49,10 @@ class Fragments:
     index : ndarray, shape (H, W), int32
         Index of the visible *clip triangle* (internal; used by :func:`interpolate`).
     setup : dict of ndarray
-        Clip-triangle data: snapped ``X``, ``Y`` (T, 3) int64, ``Z``, ``IW`` (T, 3) float64,
-        ``B`` (T, 3, 3) float64 barycentrics w.r.t. the input triangle, ``tri`` (T,) int32.
+        Clip-triangle data: snapped ``X``, ``Y`` (T, 3) int32, ``Z``, ``IW`` (T, 3) float64,
+        ``slot`` (T,) int32 row of ``B`` (K, 3, 3) float64, the clip vertices' barycentrics
+        w.r.t. the input triangle (-1: unclipped, identity; -2: unclipped, vertices 1 and 2
+        swapped), ``tri`` (T,) int32.
     n_faces : int
         Number of input triangles.
     """
@@ -111,22 +115,30 @@ def rasterize(clip, faces, width: int, height: int, peel_depth=None) -> Fragment
             raise RefsoftError(f"peel_depth must have shape {(height, width)}, got {peel.shape}")
     else:
         peel = np.zeros((1, 1), dtype=np.float32)
+    bad = (clip[:, 3] <= 0) & (clip[:, 2] + clip[:, 3] >= 0)
+    if bad.any():
+        raise RefsoftError(f"clip vertex {int(np.argmax(bad))} has w <= 0 inside the near plane: the "
+                           "projection must give w > 0 in front of the near plane")
     g = constants.GUARD_BAND_PIXELS
     gx, gy = 2.0 * g / width, 2.0 * g / height
-    counts = _setup.count_clip_triangles(clip, faces, gx, gy)
+    codes = _setup.vertex_outcodes(clip, gx, gy)
+    counts, clipped = _setup.count_clip_triangles(clip, faces, codes, gx, gy)
     offsets = np.zeros(len(faces) + 1, dtype=np.int64)
     np.cumsum(counts, out=offsets[1:])
-    X, Y, Z, IW, B, tri, valid, bbox, area, bias = _setup.emit_clip_triangles(
-        clip, faces, offsets, int(offsets[-1]), gx, gy, width, height)
+    clip_offsets = np.zeros(len(faces) + 1, dtype=np.int64)
+    np.cumsum(clipped, out=clip_offsets[1:])
+    win_xy, win_zw = _setup.vertex_window(clip, codes, width, height)
+    X, Y, Z, IW, slot, B, tri, valid, bbox, area, bias = _setup.emit_clip_triangles(
+        clip, faces, codes, win_xy, win_zw, offsets, clip_offsets, gx, gy, width, height)
     tile = constants.TILE_SIZE
     tiles_x, tiles_y = -(-width // tile), -(-height // tile)
     starts, items = _kernels.bin_triangles(valid, bbox, tile, tiles_x, tiles_y)
     depth = np.full((height, width), constants.DEPTH_CLEAR, dtype=np.float32)
     index = np.full((height, width), -1, dtype=np.int32)
-    _kernels.raster_tiles(starts, items, X, Y, Z, bbox, area, bias, width, height, tile, tiles_x,
-                          depth, index, peel, use_peel)
-    triangle = np.where(index >= 0, tri[np.maximum(index, 0)] if len(tri) else -1, -1).astype(np.int32)
-    setup = {"X": X, "Y": Y, "Z": Z, "IW": IW, "B": B, "tri": tri}
+    triangle = np.full((height, width), -1, dtype=np.int32)
+    _kernels.raster_tiles(starts, items, X, Y, Z, tri, bbox, area, bias, width, height, tile, tiles_x,
+                          depth, index, triangle, peel, use_peel)
+    setup = {"X": X, "Y": Y, "Z": Z, "IW": IW, "slot": slot, "B": B, "tri": tri}
     return Fragments(depth, triangle, index, setup, len(faces))
 
 
@@ -160,9 +172,9 @@ def interpolate(fragments: Fragments, attributes, faces, precision="float32", no
         raise RefsoftError(f"faces ({len(faces)}) do not match the rasterized triangles ({fragments.n_faces})")
     s = fragments.setup
     h, w = fragments.shape
-    out = np.empty((h, w, attr.shape[1]), dtype=dt)
-    _kernels.interpolate_rows(fragments.index, s["X"], s["Y"], s["IW"].astype(dt), s["B"].astype(dt),
-                              s["tri"], faces, attr, h, bool(normalize), out)
+    out = np.zeros((h, w, attr.shape[1]), dtype=dt)
+    _kernels.interpolate_rows(fragments.index, s["X"], s["Y"], s["IW"].astype(dt), s["slot"],
+                              s["B"].astype(dt), s["tri"], faces, attr, h, bool(normalize), _CONVERT[dt], out)
     return out
 
 
@@ -233,8 +245,15 @@ def gbuffer(mesh: Mesh, camera: Camera, precision="float32", origin=None) -> GBu
     vp = camera.view_proj()
     clip = _setup.transform_points(mesh.vertices, vp)
     frags = rasterize(clip, mesh.faces, camera.width, camera.height)
-    pos = interpolate(frags, mesh.vertices - o, mesh.faces, dt)
-    nrm = interpolate(frags, mesh.normals, mesh.faces, dt, normalize=True)
+    # positions and normals share each pixel's barycentrics: one fused pass, same arithmetic
+    # as interpolate(..., dt) and interpolate(..., dt, normalize=True)
+    h, w = frags.shape
+    pos = np.zeros((h, w, 3), dtype=dt)
+    nrm = np.zeros((h, w, 3), dtype=dt)
+    s = frags.setup
+    _kernels.interpolate_pair(frags.index, s["X"], s["Y"], s["IW"].astype(dt), s["slot"], s["B"].astype(dt), s["tri"],
+                              mesh.faces, np.ascontiguousarray(mesh.vertices - o, dtype=dt),
+                              np.ascontiguousarray(mesh.normals, dtype=dt), h, _CONVERT[dt], pos, nrm)
     return GBuffer(pos, nrm, frags.mask, frags.depth, frags.triangle, vp, o)
 
 

@@ -12,43 +12,61 @@ from numba import prange
 from .._numba import kernel
 
 
-@kernel
+#: Triangles are binned in this many contiguous chunks, in parallel; the result does not
+#: depend on it (nor on the thread count): each tile lists its triangles in index order.
+BIN_CHUNKS = 16
+
+
+@kernel(parallel=True)
 def bin_triangles(valid, bbox, tile, tiles_x, tiles_y):
     """Per-tile lists of clip triangles (in index order) whose pixel box meets the tile.
 
     Returns ``(starts, items)``: tile ``k``'s triangles are ``items[starts[k]:starts[k+1]]``.
     """
     n_tiles = tiles_x * tiles_y
-    counts = np.zeros(n_tiles + 1, dtype=np.int64)
     n = valid.shape[0]
-    for t in range(n):
-        if not valid[t]:
-            continue
-        for ty in range(bbox[t, 2] // tile, bbox[t, 3] // tile + 1):
-            for tx in range(bbox[t, 0] // tile, bbox[t, 1] // tile + 1):
-                counts[ty * tiles_x + tx + 1] += 1
-    starts = np.cumsum(counts)
-    fill = starts[:-1].copy()
-    items = np.empty(starts[-1], dtype=np.int32)
-    for t in range(n):
-        if not valid[t]:
-            continue
-        for ty in range(bbox[t, 2] // tile, bbox[t, 3] // tile + 1):
-            for tx in range(bbox[t, 0] // tile, bbox[t, 1] // tile + 1):
-                k = ty * tiles_x + tx
-                items[fill[k]] = t
-                fill[k] += 1
+    chunk = (n + BIN_CHUNKS - 1) // BIN_CHUNKS
+    counts = np.zeros((BIN_CHUNKS, n_tiles), dtype=np.int64)
+    for ch in prange(BIN_CHUNKS):
+        for t in range(ch * chunk, min(n, (ch + 1) * chunk)):
+            if not valid[t]:
+                continue
+            for ty in range(bbox[t, 2] // tile, bbox[t, 3] // tile + 1):
+                for tx in range(bbox[t, 0] // tile, bbox[t, 1] // tile + 1):
+                    counts[ch, ty * tiles_x + tx] += 1
+    # exclusive prefix sum in (tile, chunk) order: chunk ch of tile k starts at fill[ch, k]
+    starts = np.empty(n_tiles + 1, dtype=np.int64)
+    fill = np.empty((BIN_CHUNKS, n_tiles), dtype=np.int64)
+    total = 0
+    for k in range(n_tiles):
+        starts[k] = total
+        for ch in range(BIN_CHUNKS):
+            fill[ch, k] = total
+            total += counts[ch, k]
+    starts[n_tiles] = total
+    items = np.empty(total, dtype=np.int32)
+    for ch in prange(BIN_CHUNKS):
+        for t in range(ch * chunk, min(n, (ch + 1) * chunk)):
+            if not valid[t]:
+                continue
+            for ty in range(bbox[t, 2] // tile, bbox[t, 3] // tile + 1):
+                for tx in range(bbox[t, 0] // tile, bbox[t, 1] // tile + 1):
+                    k = ty * tiles_x + tx
+                    items[fill[ch, k]] = t
+                    fill[ch, k] += 1
     return starts, items
 
 
 @kernel(parallel=True)
-def raster_tiles(starts, items, X, Y, Z, bbox, area, bias, width, height, tile, tiles_x,
-                 depth, index, peel, use_peel):
-    """Depth-tested coverage. Writes ``depth`` (float32) and ``index`` (clip triangle, int32).
+def raster_tiles(starts, items, X, Y, Z, tri, bbox, area, bias, width, height, tile, tiles_x,
+                 depth, index, triangle, peel, use_peel):
+    """Depth-tested coverage. Writes ``depth`` (float32), ``index`` (clip triangle, int32) and
+    ``triangle`` (input triangle, int32).
 
-    A fragment's window depth is ``(e0 z0 + e1 z1 + e2 z2) * (1 / area)`` in float64, clamped to
-    [0, 1] and rounded to float32; it is kept when it is LESS than the stored depth (and, when
-    peeling, strictly greater than ``peel``).
+    A pixel centre is covered when ``e_i + bias_i >= 0`` for the three edges (bias -1 makes an
+    edge exclusive). A fragment's window depth is ``(e0 z0 + e1 z1 + e2 z2) * (1 / area)`` in
+    float64, clamped to [0, 1] and rounded to float32; it is kept when it is LESS than the stored
+    depth (and, when peeling, strictly greater than ``peel``).
     """
     n_tiles = starts.shape[0] - 1
     for k in prange(n_tiles):
@@ -64,11 +82,12 @@ def raster_tiles(starts, items, X, Y, Z, bbox, area, bias, width, height, tile, 
             r1 = min(bbox[t, 3], r_hi)
             c0 = max(bbox[t, 0], c_lo)
             c1 = min(bbox[t, 1], c_hi)
-            x0, x1, x2 = X[t, 0], X[t, 1], X[t, 2]
-            y0, y1, y2 = Y[t, 0], Y[t, 1], Y[t, 2]
-            b0, b1, b2 = bias[t, 0], bias[t, 1], bias[t, 2]
+            x0, x1, x2 = np.int64(X[t, 0]), np.int64(X[t, 1]), np.int64(X[t, 2])
+            y0, y1, y2 = np.int64(Y[t, 0]), np.int64(Y[t, 1]), np.int64(Y[t, 2])
             z0, z1, z2 = Z[t, 0], Z[t, 1], Z[t, 2]
             inv_area = 1.0 / np.float64(area[t])
+            face = tri[t]
+            b0, b1, b2 = np.int64(bias[t, 0]), np.int64(bias[t, 1]), np.int64(bias[t, 2])
             # column steps of each edge function: E(c+1) = E(c) - (yb - ya) * 256
             s0 = -(y2 - y1) * 256
             s1 = -(y0 - y2) * 256
@@ -76,70 +95,132 @@ def raster_tiles(starts, items, X, Y, Z, bbox, area, bias, width, height, tile, 
             px0 = np.int64(c0) * 256 + 128
             for r in range(r0, r1 + 1):
                 py = np.int64(height - 1 - r) * 256 + 128
-                e0 = (x2 - x1) * (py - y1) - (y2 - y1) * (px0 - x1)
-                e1 = (x0 - x2) * (py - y2) - (y0 - y2) * (px0 - x2)
-                e2 = (x1 - x0) * (py - y0) - (y1 - y0) * (px0 - x0)
+                # biased edge values: covered when all three are >= 0
+                e0 = (x2 - x1) * (py - y1) - (y2 - y1) * (px0 - x1) + b0
+                e1 = (x0 - x2) * (py - y2) - (y0 - y2) * (px0 - x2) + b1
+                e2 = (x1 - x0) * (py - y0) - (y1 - y0) * (px0 - x0) + b2
+                drow = depth[r]
+                inside = False
                 for c in range(c0, c1 + 1):
-                    if e0 + b0 >= 0 and e1 + b1 >= 0 and e2 + b2 >= 0:
-                        z = (np.float64(e0) * z0 + np.float64(e1) * z1 + np.float64(e2) * z2) * inv_area
-                        z = min(max(z, 0.0), 1.0)
-                        zf = np.float32(z)
-                        if zf < depth[r, c] and (not use_peel or zf > peel[r, c]):
-                            depth[r, c] = zf
+                    if (e0 | e1 | e2) >= 0:
+                        inside = True
+                        z = ((np.float64(e0 - b0) * z0 + np.float64(e1 - b1) * z1)
+                             + np.float64(e2 - b2) * z2) * inv_area
+                        zf = np.float32(min(max(z, 0.0), 1.0))
+                        if zf < drow[c] and (not use_peel or zf > peel[r, c]):
+                            drow[c] = zf
                             index[r, c] = t
+                            triangle[r, c] = face
+                    elif inside:
+                        break  # a triangle's covered pixels in a row are contiguous
                     e0 += s0
                     e1 += s1
                     e2 += s2
 
 
+@kernel
+def to_float32(x):
+    """Round to float32 (passed to the interpolation kernels to pick their precision)."""
+    return np.float32(x)
+
+
+@kernel
+def to_float64(x):
+    """Convert to float64 (passed to the interpolation kernels to pick their precision)."""
+    return np.float64(x)
+
+
+@kernel
+def _barycentrics(t, r, c, height, X, Y, IW, slot, B, conv):
+    """Perspective-correct barycentrics of pixel (r, c) w.r.t. the input triangle of clip
+    triangle ``t``, computed in the precision of ``conv`` (``IW`` and ``B`` already in it).
+    An unclipped triangle maps through the identity (``slot == -1``) or swaps vertices 1 and 2
+    (``slot == -2``): both exact, equal to multiplying by the permutation matrix."""
+    py = np.int64(height - 1 - r) * 256 + 128
+    px = np.int64(c) * 256 + 128
+    x0, x1, x2 = np.int64(X[t, 0]), np.int64(X[t, 1]), np.int64(X[t, 2])
+    y0, y1, y2 = np.int64(Y[t, 0]), np.int64(Y[t, 1]), np.int64(Y[t, 2])
+    a0 = conv((x2 - x1) * (py - y1) - (y2 - y1) * (px - x1)) * IW[t, 0]
+    a1 = conv((x0 - x2) * (py - y2) - (y0 - y2) * (px - x2)) * IW[t, 1]
+    a2 = conv((x1 - x0) * (py - y0) - (y1 - y0) * (px - x0)) * IW[t, 2]
+    s = a0 + a1 + a2
+    l0 = a0 / s
+    l1 = a1 / s
+    l2 = a2 / s
+    k = slot[t]
+    if k == -1:
+        return l0, l1, l2
+    if k == -2:
+        return l0, l2, l1
+    b0 = l0 * B[k, 0, 0] + l1 * B[k, 1, 0] + l2 * B[k, 2, 0]
+    b1 = l0 * B[k, 0, 1] + l1 * B[k, 1, 1] + l2 * B[k, 2, 1]
+    b2 = l0 * B[k, 0, 2] + l1 * B[k, 1, 2] + l2 * B[k, 2, 2]
+    return b0, b1, b2
+
+
 @kernel(parallel=True)
-def interpolate_rows(index, X, Y, IW, B, tri, faces, attributes, height, normalize, out):
+def interpolate_rows(index, X, Y, IW, slot, B, tri, faces, attributes, height, normalize, conv, out):
     """Perspective-correct attributes of the visible triangle at every covered pixel.
 
-    In the attributes' precision: ``a_i = e_i * (1 / w_i)``, ``l_i = a_i / (a0 + a1 + a2)``,
-    original barycentrics ``b_j = l0 B[0, j] + l1 B[1, j] + l2 B[2, j]`` and
-    ``out = b0 A[v0] + b1 A[v1] + b2 A[v2]``; with ``normalize``, ``out / |out|`` (zero stays
-    zero). ``IW`` and ``B`` must already be in the attributes' dtype. Uncovered pixels are 0.
+    In the precision of ``conv`` (:func:`to_float32` or :func:`to_float64`, matching the dtype
+    of ``attributes``, ``IW``, ``B`` and ``out``): ``a_i = e_i * (1 / w_i)``,
+    ``l_i = a_i / (a0 + a1 + a2)``, original barycentrics
+    ``b_j = l0 B[0, j] + l1 B[1, j] + l2 B[2, j]`` (``B`` the clip vertices' barycentrics,
+    the identity for unclipped triangles) and ``out = b0 A[v0] + b1 A[v1] + b2 A[v2]``;
+    with ``normalize``, ``out / |out|`` (zero stays zero). ``out`` must be zeroed: uncovered
+    pixels are not written.
     """
     h, w = index.shape
     n_ch = attributes.shape[1]
     for r in prange(h):
-        ef = np.empty(3, dtype=attributes.dtype)  # casts int64 edge values to the working dtype
         acc = np.empty(n_ch, dtype=attributes.dtype)
-        py = np.int64(height - 1 - r) * 256 + 128
+        irow = index[r]
+        orow = out[r]
         for c in range(w):
-            t = index[r, c]
+            t = irow[c]
             if t < 0:
-                for ch in range(n_ch):
-                    out[r, c, ch] = 0
                 continue
-            px = np.int64(c) * 256 + 128
-            x0, x1, x2 = X[t, 0], X[t, 1], X[t, 2]
-            y0, y1, y2 = Y[t, 0], Y[t, 1], Y[t, 2]
-            ef[0] = (x2 - x1) * (py - y1) - (y2 - y1) * (px - x1)
-            ef[1] = (x0 - x2) * (py - y2) - (y0 - y2) * (px - x2)
-            ef[2] = (x1 - x0) * (py - y0) - (y1 - y0) * (px - x0)
-            a0 = ef[0] * IW[t, 0]
-            a1 = ef[1] * IW[t, 1]
-            a2 = ef[2] * IW[t, 2]
-            s = a0 + a1 + a2
-            l0 = a0 / s
-            l1 = a1 / s
-            l2 = a2 / s
-            bb0 = l0 * B[t, 0, 0] + l1 * B[t, 1, 0] + l2 * B[t, 2, 0]
-            bb1 = l0 * B[t, 0, 1] + l1 * B[t, 1, 1] + l2 * B[t, 2, 1]
-            bb2 = l0 * B[t, 0, 2] + l1 * B[t, 1, 2] + l2 * B[t, 2, 2]
+            b0, b1, b2 = _barycentrics(t, r, c, height, X, Y, IW, slot, B, conv)
             f = tri[t]
             v0, v1, v2 = faces[f, 0], faces[f, 1], faces[f, 2]
             for ch in range(n_ch):
-                acc[ch] = bb0 * attributes[v0, ch] + bb1 * attributes[v1, ch] + bb2 * attributes[v2, ch]
+                acc[ch] = b0 * attributes[v0, ch] + b1 * attributes[v1, ch] + b2 * attributes[v2, ch]
             if normalize:
                 sq = acc[0] * acc[0]
                 for ch in range(1, n_ch):
                     sq += acc[ch] * acc[ch]
                 length = np.sqrt(sq)
-                for ch in range(n_ch):
-                    out[r, c, ch] = acc[ch] / length if length > 0 else 0
+                if length > 0:
+                    for ch in range(n_ch):
+                        orow[c, ch] = acc[ch] / length
             else:
                 for ch in range(n_ch):
-                    out[r, c, ch] = acc[ch]
+                    orow[c, ch] = acc[ch]
+
+
+@kernel(parallel=True)
+def interpolate_pair(index, X, Y, IW, slot, B, tri, faces, attr_a, attr_b, height, conv, out_a, out_b):
+    """:func:`interpolate_rows` of two 3-vector attributes at once, the second renormalised (the
+    G-buffer's positions and normals share each pixel's barycentrics). Same arithmetic."""
+    h, w = index.shape
+    for r in prange(h):
+        irow = index[r]
+        row_a = out_a[r]
+        row_b = out_b[r]
+        for c in range(w):
+            t = irow[c]
+            if t < 0:
+                continue
+            b0, b1, b2 = _barycentrics(t, r, c, height, X, Y, IW, slot, B, conv)
+            f = tri[t]
+            v0, v1, v2 = faces[f, 0], faces[f, 1], faces[f, 2]
+            for ch in range(3):
+                row_a[c, ch] = b0 * attr_a[v0, ch] + b1 * attr_a[v1, ch] + b2 * attr_a[v2, ch]
+            n0 = b0 * attr_b[v0, 0] + b1 * attr_b[v1, 0] + b2 * attr_b[v2, 0]
+            n1 = b0 * attr_b[v0, 1] + b1 * attr_b[v1, 1] + b2 * attr_b[v2, 1]
+            n2 = b0 * attr_b[v0, 2] + b1 * attr_b[v1, 2] + b2 * attr_b[v2, 2]
+            length = np.sqrt((n0 * n0 + n1 * n1) + n2 * n2)
+            if length > 0:
+                row_b[c, 0] = n0 / length
+                row_b[c, 1] = n1 / length
+                row_b[c, 2] = n2 / length

@@ -104,17 +104,26 @@ def _outcodes(c, gx, gy):
 
 
 @kernel(parallel=True)
-def count_clip_triangles(clip, faces, gx, gy):
-    """Clip triangles each input triangle produces (0 when culled by a plane), int64 (F,)."""
+def vertex_outcodes(clip, gx, gy):
+    """Per vertex, bit p set when it is outside clip plane p. uint8 (V,)."""
+    n = clip.shape[0]
+    codes = np.empty(n, dtype=np.uint8)
+    for i in prange(n):
+        codes[i] = _outcodes(clip[i], gx, gy)
+    return codes
+
+
+@kernel(parallel=True)
+def count_clip_triangles(clip, faces, codes, gx, gy):
+    """Per input triangle: clip triangles it produces (0 when culled by a plane) and whether it
+    was clipped (1) or passes whole (0). Two int64 (F,) arrays."""
     nf = faces.shape[0]
     counts = np.zeros(nf, dtype=np.int64)
+    clipped = np.zeros(nf, dtype=np.int64)
     for f in prange(nf):
-        c0 = clip[faces[f, 0]]
-        c1 = clip[faces[f, 1]]
-        c2 = clip[faces[f, 2]]
-        o0 = _outcodes(c0, gx, gy)
-        o1 = _outcodes(c1, gx, gy)
-        o2 = _outcodes(c2, gx, gy)
+        o0 = codes[faces[f, 0]]
+        o1 = codes[faces[f, 1]]
+        o2 = codes[faces[f, 2]]
         if (o0 | o1 | o2) == 0:
             counts[f] = 1
         elif (o0 & o1 & o2) != 0:
@@ -122,101 +131,147 @@ def count_clip_triangles(clip, faces, gx, gy):
         else:
             poly_c = np.empty((MAX_POLY, 4))
             poly_b = np.empty((MAX_POLY, 3))
-            n = _clip_polygon(c0, c1, c2, gx, gy, poly_c, poly_b)
+            n = _clip_polygon(clip[faces[f, 0]], clip[faces[f, 1]], clip[faces[f, 2]], gx, gy, poly_c, poly_b)
             counts[f] = n - 2 if n >= 3 else 0
-    return counts
-
-
-_IDENTITY = np.eye(3)
+            clipped[f] = counts[f]
+    return counts, clipped
 
 
 @kernel
 def _snap_xy(v):
     """Window coordinate ``(v + 1) * (size / 2)`` snapped to 1/256 px, round half to even."""
-    return np.int64(np.rint(v * 256.0))
+    return np.int32(np.rint(v * 256.0))
 
 
 @kernel
-def _store_vertex(t, slot, c, b, width, height, X, Y, Z, IW, B):
-    X[t, slot] = _snap_xy((c[0] / c[3] + 1.0) * (0.5 * width))
-    Y[t, slot] = _snap_xy((c[1] / c[3] + 1.0) * (0.5 * height))
-    Z[t, slot] = 0.5 * (c[2] / c[3]) + 0.5
-    IW[t, slot] = 1.0 / c[3]
-    for k in range(3):
-        B[t, slot, k] = b[k]
+def _window(c, width, height):
+    """Window coordinates of clip vertex ``c``: snapped x, y (int64, 1/256 px), z_w, 1/w."""
+    return (np.int64(_snap_xy((c[0] / c[3] + 1.0) * (0.5 * width))),
+            np.int64(_snap_xy((c[1] / c[3] + 1.0) * (0.5 * height))),
+            0.5 * (c[2] / c[3]) + 0.5, 1.0 / c[3])
+
+
+@kernel(parallel=True)
+def vertex_window(clip, codes, width, height):
+    """Window coordinates of every vertex inside all clip planes (others: zeros, never used):
+    snapped ``x``, ``y`` int32 and ``z``, ``1/w`` float64, as :func:`_window` computes them (a vertex shared by many triangles is set up once, like a GPU's post-transform cache)."""
+    n = clip.shape[0]
+    out_xy = np.zeros((n, 2), dtype=np.int32)
+    out_zw = np.zeros((n, 2), dtype=np.float64)
+    for i in prange(n):
+        if codes[i] != 0:
+            continue
+        c = clip[i]
+        x, y, z, iw = _window(c, width, height)
+        out_xy[i, 0] = x
+        out_xy[i, 1] = y
+        out_zw[i, 0] = z
+        out_zw[i, 1] = iw
+    return out_xy, out_zw
 
 
 @kernel
-def _emit(t, f, c0, c1, c2, b0, b1, b2, width, height, X, Y, Z, IW, B, tri, valid, bbox, area, bias):
-    """Store clip triangle ``t`` (clip vertices ``c*`` with barycentrics ``b*``), counter-clockwise."""
-    _store_vertex(t, 0, c0, b0, width, height, X, Y, Z, IW, B)
-    _store_vertex(t, 1, c1, b1, width, height, X, Y, Z, IW, B)
-    _store_vertex(t, 2, c2, b2, width, height, X, Y, Z, IW, B)
-    a2 = (X[t, 1] - X[t, 0]) * (Y[t, 2] - Y[t, 0]) - (Y[t, 1] - Y[t, 0]) * (X[t, 2] - X[t, 0])
-    if a2 < 0:  # clockwise on screen: swap vertices 1 and 2 (both windings are drawn)
+def _emit(t, f, x0, y0, z0, w0, x1, y1, z1, w1, x2, y2, z2, w2, width, height,
+          X, Y, Z, IW, tri, valid, bbox, area, bias):
+    """Store clip triangle ``t`` of input triangle ``f`` counter-clockwise on screen, with its
+    doubled area, edge biases and pixel box. Returns True when vertices 1 and 2 were swapped."""
+    a2 = (x1 - x0) * (y2 - y0) - (y1 - y0) * (x2 - x0)
+    swapped = a2 < 0
+    if swapped:  # clockwise on screen: swap vertices 1 and 2 (both windings are drawn)
         a2 = -a2
-        X[t, 1], X[t, 2] = X[t, 2], X[t, 1]
-        Y[t, 1], Y[t, 2] = Y[t, 2], Y[t, 1]
-        Z[t, 1], Z[t, 2] = Z[t, 2], Z[t, 1]
-        IW[t, 1], IW[t, 2] = IW[t, 2], IW[t, 1]
-        for k in range(3):
-            B[t, 1, k], B[t, 2, k] = B[t, 2, k], B[t, 1, k]
+        x1, y1, z1, w1, x2, y2, z2, w2 = x2, y2, z2, w2, x1, y1, z1, w1
+    X[t, 0] = x0
+    X[t, 1] = x1
+    X[t, 2] = x2
+    Y[t, 0] = y0
+    Y[t, 1] = y1
+    Y[t, 2] = y2
+    Z[t, 0] = z0
+    Z[t, 1] = z1
+    Z[t, 2] = z2
+    IW[t, 0] = w0
+    IW[t, 1] = w1
+    IW[t, 2] = w2
     tri[t] = f
     area[t] = a2
     # Edge i runs from vertex i+1 to vertex i+2 (opposite vertex i). Inclusive (bias 0) for left
     # edges (dy < 0) and bottom edges (dy == 0, dx > 0) of a counter-clockwise triangle, y up.
-    for i in range(3):
-        a = (i + 1) % 3
-        b = (i + 2) % 3
-        dx = X[t, b] - X[t, a]
-        dy = Y[t, b] - Y[t, a]
-        bias[t, i] = 0 if (dy < 0 or (dy == 0 and dx > 0)) else -1
-    xmin = min(X[t, 0], min(X[t, 1], X[t, 2]))
-    xmax = max(X[t, 0], max(X[t, 1], X[t, 2]))
-    ymin = min(Y[t, 0], min(Y[t, 1], Y[t, 2]))
-    ymax = max(Y[t, 0], max(Y[t, 1], Y[t, 2]))
-    # pixel centres lie at 256 k + 128: first and last k whose centre lies in [min, max]
-    k0 = max(-((128 - xmin) // 256), 0)
-    k1 = min((xmax - 128) // 256, width - 1)
-    j0 = max(-((128 - ymin) // 256), 0)
-    j1 = min((ymax - 128) // 256, height - 1)
+    bias[t, 0] = 0 if (y2 - y1 < 0 or (y2 == y1 and x2 - x1 > 0)) else -1
+    bias[t, 1] = 0 if (y0 - y2 < 0 or (y0 == y2 and x0 - x2 > 0)) else -1
+    bias[t, 2] = 0 if (y1 - y0 < 0 or (y1 == y0 and x1 - x0 > 0)) else -1
+    xmin = min(x0, min(x1, x2))
+    xmax = max(x0, max(x1, x2))
+    ymin = min(y0, min(y1, y2))
+    ymax = max(y0, max(y1, y2))
+    # pixel centres lie at 256 k + 128: first and last k whose centre lies in [min, max];
+    # ceil(n / 256) = (n + 255) >> 8 and floor(n / 256) = n >> 8 (arithmetic shifts)
+    k0 = max((xmin - 128 + 255) >> 8, 0)
+    k1 = min((xmax - 128) >> 8, width - 1)
+    j0 = max((ymin - 128 + 255) >> 8, 0)
+    j1 = min((ymax - 128) >> 8, height - 1)
     bbox[t, 0] = k0
     bbox[t, 1] = k1
     bbox[t, 2] = height - 1 - j1  # top row
     bbox[t, 3] = height - 1 - j0  # bottom row
     valid[t] = a2 != 0 and k0 <= k1 and j0 <= j1
+    return swapped
 
 
 @kernel(parallel=True)
-def emit_clip_triangles(clip, faces, offsets, total, gx, gy, width, height):
-    """Clip, snap and set up every triangle. ``offsets[f]`` is the first output slot of face f."""
-    X = np.empty((total, 3), dtype=np.int64)
-    Y = np.empty((total, 3), dtype=np.int64)
+def emit_clip_triangles(clip, faces, codes, win_xy, win_zw, offsets, clip_offsets, gx, gy, width, height):
+    """Clip, snap and set up every triangle.
+
+    ``offsets[f]`` is the first output slot of face f; ``clip_offsets[f]`` the first row of the
+    barycentric table ``B`` for the clip triangles of a face that was clipped. Returns the clip
+    triangles: snapped ``X``, ``Y`` (T, 3) int32 (1/256 px, y up); window depth ``Z`` and ``IW``
+    = 1/w (T, 3) float64; ``slot`` (T,) int32, the row of ``B`` (K, 3, 3) float64 holding the
+    clip vertices' barycentrics w.r.t. the input triangle, or for an unclipped triangle -1 (identity)
+    or -2 (vertices 1 and 2 swapped); ``tri`` (T,) int32 input triangle; ``valid`` (T,) bool; pixel ``bbox`` (T, 4)
+    int32 (col min, col max, row min, row max); doubled ``area`` (T,) int64 > 0 when valid;
+    edge ``bias`` (T, 3) int8 (0 inclusive, -1 exclusive).
+    """
+    total = offsets[-1]
+    X = np.empty((total, 3), dtype=np.int32)
+    Y = np.empty((total, 3), dtype=np.int32)
     Z = np.empty((total, 3), dtype=np.float64)
     IW = np.empty((total, 3), dtype=np.float64)
-    B = np.empty((total, 3, 3), dtype=np.float64)
+    slot = np.empty(total, dtype=np.int32)
+    B = np.empty((clip_offsets[-1], 3, 3), dtype=np.float64)
     tri = np.empty(total, dtype=np.int32)
     valid = np.empty(total, dtype=np.bool_)
-    bbox = np.empty((total, 4), dtype=np.int64)
+    bbox = np.empty((total, 4), dtype=np.int32)
     area = np.empty(total, dtype=np.int64)
-    bias = np.empty((total, 3), dtype=np.int64)
+    bias = np.empty((total, 3), dtype=np.int8)
     nf = faces.shape[0]
     for f in prange(nf):
         start = offsets[f]
         count = offsets[f + 1] - start
         if count == 0:
             continue
-        c0 = clip[faces[f, 0]]
-        c1 = clip[faces[f, 1]]
-        c2 = clip[faces[f, 2]]
-        if count == 1 and (_outcodes(c0, gx, gy) | _outcodes(c1, gx, gy) | _outcodes(c2, gx, gy)) == 0:
-            _emit(start, f, c0, c1, c2, _IDENTITY[0], _IDENTITY[1], _IDENTITY[2], width, height,
-                  X, Y, Z, IW, B, tri, valid, bbox, area, bias)
+        if clip_offsets[f + 1] == clip_offsets[f]:  # inside every plane: no clipping
+            v0, v1, v2 = faces[f, 0], faces[f, 1], faces[f, 2]
+            swapped = _emit(start, f,
+                            np.int64(win_xy[v0, 0]), np.int64(win_xy[v0, 1]), win_zw[v0, 0], win_zw[v0, 1],
+                            np.int64(win_xy[v1, 0]), np.int64(win_xy[v1, 1]), win_zw[v1, 0], win_zw[v1, 1],
+                            np.int64(win_xy[v2, 0]), np.int64(win_xy[v2, 1]), win_zw[v2, 0], win_zw[v2, 1],
+                            width, height, X, Y, Z, IW, tri, valid, bbox, area, bias)
+            slot[start] = -2 if swapped else -1
             continue
         poly_c = np.empty((MAX_POLY, 4))
         poly_b = np.empty((MAX_POLY, 3))
-        n = _clip_polygon(c0, c1, c2, gx, gy, poly_c, poly_b)
+        n = _clip_polygon(clip[faces[f, 0]], clip[faces[f, 1]], clip[faces[f, 2]], gx, gy, poly_c, poly_b)
         for j in range(n - 2):
-            _emit(start + j, f, poly_c[0], poly_c[j + 1], poly_c[j + 2], poly_b[0], poly_b[j + 1],
-                  poly_b[j + 2], width, height, X, Y, Z, IW, B, tri, valid, bbox, area, bias)
-    return X, Y, Z, IW, B, tri, valid, bbox, area, bias
+            t = start + j
+            b = clip_offsets[f] + j
+            x0, y0, z0, w0 = _window(poly_c[0], width, height)
+            x1, y1, z1, w1 = _window(poly_c[j + 1], width, height)
+            x2, y2, z2, w2 = _window(poly_c[j + 2], width, height)
+            swapped = _emit(t, f, x0, y0, z0, w0, x1, y1, z1, w1, x2, y2, z2, w2, width, height,
+                            X, Y, Z, IW, tri, valid, bbox, area, bias)
+            i1, i2 = (j + 2, j + 1) if swapped else (j + 1, j + 2)
+            for k in range(3):
+                B[b, 0, k] = poly_b[0, k]
+                B[b, 1, k] = poly_b[i1, k]
+                B[b, 2, k] = poly_b[i2, k]
+            slot[t] = b
+    return X, Y, Z, IW, slot, B, tri, valid, bbox, area, bias
