@@ -1,0 +1,71 @@
+"""Regenerate the figures under docs/figures/ from the code: ``python docs/make_figures.py``.
+
+Needs the ``plot`` extra (matplotlib) for the fill-rule diagram.
+"""
+
+import os
+import sys
+
+import numpy as np
+
+import refsoft
+from refsoft import raster
+from refsoft.io import write_png
+from refsoft.visualize import normal_colors, position_colors, side_by_side
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+FIG = os.path.join(HERE, "figures")
+
+
+def gbuffer_figure():
+    scene = refsoft.load_scene("sphere", width=320, height=240)
+    gb = raster.gbuffer(scene.world_mesh(1), scene.camera)
+    view = raster.color_pass([scene.world_mesh(i + 1) for i in range(len(scene.objects))],
+                             [o.color for o in scene.objects], scene.camera)
+    pic = side_by_side(view.image, position_colors(gb.position, gb.mask), normal_colors(gb.normal, gb.mask))
+    write_png(os.path.join(FIG, "gbuffer_sphere.png"), pic)
+
+
+def fill_rule_figure():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Polygon
+
+    W = H = 8
+    # two triangles sharing an edge that passes exactly through pixel centres
+    pts = np.array([[1.5, 0.5], [6.5, 2.5], [3.5, 6.5], [0.5, 5.5]])
+    faces = np.array([[0, 1, 2], [0, 2, 3]])
+    clip = np.c_[pts[:, 0] * 2 / W - 1, pts[:, 1] * 2 / H - 1, np.zeros(4), np.ones(4)]
+    frags = raster.rasterize(clip, faces, W, H)
+    fig, ax = plt.subplots(figsize=(4.5, 4.5))
+    colors = ["#d95f02", "#1b9e77"]
+    for f, col in zip(faces, colors):
+        ax.add_patch(Polygon(pts[f], closed=True, fill=False, edgecolor=col, lw=2))
+    for row in range(H):
+        for c in range(W):
+            x, y = c + 0.5, H - row - 0.5
+            t = frags.triangle[row, c]
+            ax.plot(x, y, "o", ms=9, color=colors[t] if t >= 0 else "white", mec="k")
+    ax.set_xlim(0, W)
+    ax.set_ylim(0, H)
+    ax.set_xticks(range(W + 1))
+    ax.set_yticks(range(H + 1))
+    ax.grid(True, lw=0.5)
+    ax.set_aspect("equal")
+    ax.set_title("pixel centres filled by the triangle that covers them\n"
+                 "(GL window coordinates, y up; shared edge covered once)", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(os.path.join(FIG, "fill_rule.png"), dpi=100)
+    plt.close(fig)
+
+
+if __name__ == "__main__":
+    os.makedirs(FIG, exist_ok=True)
+    gbuffer_figure()
+    try:
+        fill_rule_figure()
+    except ImportError:
+        print("matplotlib missing: fill_rule.png not made (pip install '.[plot]')", file=sys.stderr)
+    print(f"figures written to {FIG}")
