@@ -136,3 +136,80 @@ def _sumsq(v):
     for k in range(1, len(v)):
         s = s + v[k] * v[k]
     return s
+
+
+# ------------------------------------------------------------------------------------ search
+def naive_normalize(x, y, z, dt):
+    length = np.sqrt((x * x + y * y) + z * z)
+    inv = np.where(length > 0, dt(1.0) / np.where(length > 0, length, dt(1.0)), dt(0.0)).astype(dt)
+    return (x * inv).astype(dt), (y * inv).astype(dt), (z * inv).astype(dt)
+
+
+def naive_scores(P, N, eye, v, dt, inverse=False):
+    """DESIGN 4.1 score (or the inverse score of 4.6) for arrays of pixels P, N (..., 3), in dt."""
+    P = P.astype(dt)
+    N = N.astype(dt)
+    eye = np.asarray(eye).astype(dt)
+    v = np.asarray(v).astype(dt)
+    px, py, pz = P[..., 0], P[..., 1], P[..., 2]
+    nx, ny, nz = N[..., 0], N[..., 1], N[..., 2]
+    vx, vy, vz = (np.full(px.shape, v[i], dtype=dt) for i in range(3))
+    if inverse:
+        k = dt(2.0) * (((vx - px) * nx + (vy - py) * ny) + (vz - pz) * nz)
+        vx, vy, vz = vx - k * nx, vy - k * ny, vz - k * nz
+    ax, ay, az = naive_normalize(eye[0] - px, eye[1] - py, eye[2] - pz, dt)
+    bx, by, bz = naive_normalize(vx - px, vy - py, vz - pz, dt)
+    hx, hy, hz = naive_normalize(ax + bx, ay + by, az + bz, dt)
+    return ((nx * hx + ny * hy) + nz * hz).astype(dt)
+
+
+CROSS = [(0, 0), (0, -1), (-1, 0), (0, 1), (1, 0)]
+BOX = CROSS + [(-1, -1), (-1, 1), (1, 1), (1, -1)]
+
+
+def naive_walk(P, N, mask, eye, v, r, c, offsets, cap, dt, inverse):
+    """Plain hill climb (DESIGN 4.2 / 4.4): returns r, c, score, margin, iterations, capped, border."""
+    h, w = mask.shape
+
+    def s(rr, cc):
+        return naive_scores(P[rr, cc], N[rr, cc], eye, v, dt, inverse)[()]
+
+    it = 0
+    while True:
+        it += 1
+        best, best_rc, second, border = s(r, c), (r, c), None, False
+        for dr, dc in offsets[1:]:
+            rr, cc = r + dr, c + dc
+            if not (0 <= rr < h and 0 <= cc < w) or not mask[rr, cc]:
+                border = True
+                continue
+            sc = s(rr, cc)
+            if sc > best:
+                second, best, best_rc = best, sc, (rr, cc)
+            elif second is None or sc > second:
+                second = sc
+        if best_rc == (r, c):
+            margin = best - second if second is not None else dt(2.0)
+            return r, c, best, margin, it, False, border
+        if it >= cap:
+            cur = s(r, c)
+            return r, c, cur, best - cur, it, True, border
+        r, c = best_rc
+
+
+def naive_search(P, N, mask, eye, v, start, neighbourhood, cap, dt, inverse_search):
+    offsets = CROSS if neighbourhood == "cross" else BOX
+    r, c, best, margin, it, capped, border = naive_walk(P, N, mask, eye, v, start[0], start[1], offsets, cap, dt,
+                                                        False)
+    flags = 4 if capped else 0
+    p, n = P[r, c].astype(dt), N[r, c].astype(dt)
+    vv = np.asarray(v).astype(dt)
+    d = ((vv[0] - p[0]) * n[0] + (vv[1] - p[1]) * n[1]) + (vv[2] - p[2]) * n[2]
+    if d < 0:
+        flags |= 1
+        if inverse_search:
+            r, c, best, margin, it2, capped, border = naive_walk(P, N, mask, eye, v, r, c, offsets, cap, dt, True)
+            it += it2
+            flags |= 4 if capped else 0
+    flags |= 2 if border else 0
+    return (r, c), best, margin, it, flags

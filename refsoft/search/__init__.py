@@ -1,0 +1,221 @@
+"""The reflection-point search (Estalella et al. 2006, section 4; DESIGN section 4).
+
+For each vertex ``V`` and a reflector's G-buffer, :func:`search` walks from a start pixel to the
+pixel whose normal best matches the bisector of the directions to the eye and to ``V``;
+:func:`virtual_vertices` then mirrors ``V`` across that pixel's tangent plane.
+:func:`trace_search` replays one search step by step.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import RefsoftError
+from ..raster import GBuffer
+from ..raster._kernels import to_float32, to_float64
+from . import _kernels
+from ._kernels import BORDER, CAPPED, CULLED, HIDDEN, RESTARTED
+
+__all__ = ["search", "virtual_vertices", "start_pixel", "SearchResult", "trace_search", "Trace",
+           "HIDDEN", "BORDER", "CAPPED", "RESTARTED", "CULLED", "NEIGHBOURHOODS", "INVERSE_MODES",
+           "flag_names", "default_cap"]
+
+#: Neighbourhood name -> candidates per iteration (current pixel included).
+NEIGHBOURHOODS = {"cross": 5, "box": 9}
+#: Hidden-vertex modes (DESIGN 4.6).
+INVERSE_MODES = ("plane", "search", "discard")
+_FLAG_NAMES = ((HIDDEN, "HIDDEN"), (BORDER, "BORDER"), (CAPPED, "CAPPED"), (RESTARTED, "RESTARTED"),
+               (CULLED, "CULLED"))
+
+
+def flag_names(flags: int) -> list[str]:
+    """Names of the bits set in one flags value, e.g. ``['HIDDEN', 'BORDER']``."""
+    return [name for bit, name in _FLAG_NAMES if int(flags) & bit]
+
+
+def default_cap(shape) -> int:
+    """The iteration cap of DESIGN 4.4: ``2 * (width + height)`` of the G-buffer."""
+    return 2 * (int(shape[0]) + int(shape[1]))
+
+
+@dataclass(frozen=True, eq=False)
+class SearchResult:
+    """Per-vertex results of :func:`search` for one reflector.
+
+    Attributes
+    ----------
+    pixel : ndarray, shape (N, 2), int32
+        Reflection pixel (row, col) in the G-buffer; (-1, -1) where CULLED.
+    score : ndarray, shape (N,), float32 or float64
+        ``s`` at that pixel (the inverse score after an inverse search).
+    margin : ndarray, shape (N,)
+        Best minus second-best score in the final neighbourhood (2.0 when no other candidate is
+        covered); a port's differing pixel is a tie when this is within a few ULP.
+    iterations : ndarray, shape (N,), int32
+        Neighbourhoods evaluated (standard plus inverse search).
+    flags : ndarray, shape (N,), uint8
+        HIDDEN | BORDER | CAPPED | RESTARTED | CULLED.
+    neighbourhood, inverse : str
+        The options used.
+    cap : int
+    """
+
+    pixel: np.ndarray
+    score: np.ndarray
+    margin: np.ndarray
+    iterations: np.ndarray
+    flags: np.ndarray
+    neighbourhood: str
+    inverse: str
+    cap: int
+
+    def __len__(self):
+        return len(self.pixel)
+
+
+def start_pixel(mask) -> tuple[int, int] | None:
+    """The search's start without history (DESIGN 4.3).
+
+    The centre of the covered pixels' bounding box, ``(floor((r0 + r1) / 2), floor((c0 + c1) /
+    2))``; if that pixel is not covered, the covered pixel nearest to it (Euclidean distance,
+    ties to the smaller row, then the smaller col). ``None`` for an empty mask.
+    """
+    mask = np.asarray(mask, dtype=bool)
+    rows, cols = np.nonzero(mask)
+    if len(rows) == 0:
+        return None
+    r = (int(rows.min()) + int(rows.max())) // 2
+    c = (int(cols.min()) + int(cols.max())) // 2
+    if mask[r, c]:
+        return r, c
+    d2 = (rows.astype(np.int64) - r) ** 2 + (cols.astype(np.int64) - c) ** 2
+    # np.nonzero lists pixels in row-major order, so argmin's first minimum is the tie rule
+    k = int(np.argmin(d2))
+    return int(rows[k]), int(cols[k])
+
+
+def _check_gbuffer(gbuffer):
+    if not isinstance(gbuffer, GBuffer):
+        raise RefsoftError(f"gbuffer must be a refsoft.raster.GBuffer, got {type(gbuffer).__name__}")
+    dt = gbuffer.position.dtype
+    if dt not in (np.float32, np.float64) or gbuffer.normal.dtype != dt:
+        raise RefsoftError(f"G-buffer position and normal must share a float32 or float64 dtype")
+    return dt.type
+
+
+def _points(x, name, n=None):
+    a = np.asarray(x, dtype=np.float64)
+    if a.ndim != 2 or a.shape[1] != 3 or (n is not None and len(a) != n):
+        raise RefsoftError(f"{name} must have shape ({'N' if n is None else n}, 3), got {a.shape}")
+    if not np.all(np.isfinite(a)):
+        raise RefsoftError(f"{name} has non-finite values")
+    return a
+
+
+def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", inverse: str = "plane",
+           previous=None, cap: int | None = None) -> SearchResult:
+    """Find each vertex's reflection pixel in a reflector's G-buffer.
+
+    Parameters
+    ----------
+    gbuffer : GBuffer
+        The reflector's G-buffer (float32 or float64: the search uses the same precision).
+    eye : array_like, shape (3,)
+        The eye, world space.
+    vertices : array_like, shape (N, 3)
+        Vertices to reflect, world space.
+    neighbourhood : {"cross", "box"}
+        Candidates per step: the crosshair (left, up, right, down) or the 3x3 box.
+    inverse : {"plane", "search", "discard"}
+        Hidden-vertex mode; only ``"search"`` changes the search (an inverse search follows).
+    previous : array_like, shape (N, 2), int, optional
+        Each vertex's reflection pixel in the previous frame, or (-1, -1): frame-to-frame
+        coherence. A previous pixel that is no longer covered restarts (flag RESTARTED).
+    cap : int, optional
+        Iteration cap per search (default ``2 * (width + height)``).
+
+    Returns
+    -------
+    SearchResult
+    """
+    dt = _check_gbuffer(gbuffer)
+    if neighbourhood not in NEIGHBOURHOODS:
+        raise RefsoftError(f"neighbourhood must be one of {list(NEIGHBOURHOODS)}, got {neighbourhood!r}")
+    if inverse not in INVERSE_MODES:
+        raise RefsoftError(f"inverse must be one of {list(INVERSE_MODES)}, got {inverse!r}")
+    eye = _points(np.reshape(eye, (1, 3)) if np.size(eye) == 3 else eye, "eye", 1)[0]
+    verts = _points(vertices, "vertices")
+    h, w = gbuffer.mask.shape
+    cap = default_cap((h, w)) if cap is None else cap
+    if isinstance(cap, bool) or not isinstance(cap, (int, np.integer)) or cap < 1:
+        raise RefsoftError(f"cap must be a positive integer, got {cap!r}")
+    n = len(verts)
+    if previous is None:
+        starts = np.full((n, 2), -1, dtype=np.int64)
+    else:
+        starts = np.asarray(previous)
+        if starts.shape != (n, 2) or not np.issubdtype(starts.dtype, np.integer):
+            raise RefsoftError(f"previous must be an integer array of shape ({n}, 2), got {starts.dtype} {starts.shape}")
+        starts = starts.astype(np.int64)
+        none = np.all(starts == -1, axis=1)
+        bad = ~none & ((starts[:, 0] < 0) | (starts[:, 0] >= h) | (starts[:, 1] < 0) | (starts[:, 1] >= w))
+        if bad.any():
+            raise RefsoftError(f"previous pixel of vertex {int(np.argmax(bad))} is outside the {h}x{w} G-buffer")
+        starts = np.where(none[:, None], -1, starts)
+    pixel = np.full((n, 2), -1, dtype=np.int32)
+    score = np.zeros(n, dtype=dt)
+    margin = np.zeros(n, dtype=dt)
+    iterations = np.zeros(n, dtype=np.int32)
+    flags = np.full(n, CULLED, dtype=np.uint8)
+    start = start_pixel(gbuffer.mask)
+    if start is not None and n:
+        o = gbuffer.origin
+        _kernels.search_all(np.ascontiguousarray(gbuffer.position), np.ascontiguousarray(gbuffer.normal),
+                            np.ascontiguousarray(gbuffer.mask), (eye - o).astype(dt),
+                            np.ascontiguousarray((verts - o).astype(dt)), np.ascontiguousarray(starts),
+                            start[0], start[1], NEIGHBOURHOODS[neighbourhood], int(cap), inverse == "search",
+                            to_float32 if dt is np.float32 else to_float64, pixel, score, margin, iterations,
+                            flags)
+    return SearchResult(pixel, score, margin, iterations, flags, neighbourhood, inverse, int(cap))
+
+
+def virtual_vertices(gbuffer: GBuffer, result: SearchResult, vertices) -> np.ndarray:
+    """Virtual vertices V' (DESIGN 4.6), world space.
+
+    With ``d = V - P_R`` and ``N_R`` at the reflection pixel: a visible vertex (``d.N >= 0``)
+    gives ``V - 2 (d.N) N``; a hidden one gives, by ``result.inverse``: ``plane``
+    ``P_R + 2 N (d.N) - d`` (Estalella's equation 1, verbatim), ``search`` ``V`` itself (the
+    inverse search found where V is seen), ``discard`` ``V - 2 (d.N) N`` (its triangles are not
+    drawn). CULLED vertices give ``V``. Arithmetic in the G-buffer's precision, relative to its
+    origin.
+
+    Returns
+    -------
+    ndarray, shape (N, 3), float32 or float64 (the G-buffer's dtype)
+    """
+    dt = _check_gbuffer(gbuffer)
+    verts = _points(vertices, "vertices", len(result))
+    o = gbuffer.origin
+    v = (verts - o).astype(dt)
+    ok = (result.flags & CULLED) == 0
+    r = np.where(ok, result.pixel[:, 0], 0)
+    c = np.where(ok, result.pixel[:, 1], 0)
+    p = gbuffer.position[r, c]
+    nrm = gbuffer.normal[r, c]
+    d = v - p
+    dn = (d[:, 0] * nrm[:, 0] + d[:, 1] * nrm[:, 1]) + d[:, 2] * nrm[:, 2]
+    two = dt(2.0)
+    mirror = v - (two * dn)[:, None] * nrm
+    hidden = ok & ((result.flags & HIDDEN) != 0)
+    out = np.where(ok[:, None], mirror, v)
+    if result.inverse == "plane":
+        eq1 = p + nrm * (two * dn)[:, None] - d
+        out = np.where(hidden[:, None], eq1, out)
+    elif result.inverse == "search":
+        out = np.where(hidden[:, None], v, out)
+    return (out.astype(np.float64) + o).astype(dt)
+
+
+from .trace import Trace, trace_search  # noqa: E402  (uses the names above)

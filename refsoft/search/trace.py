@@ -1,0 +1,159 @@
+"""Step-by-step replay of one search: the kernel's own code run with a record buffer.
+
+A :class:`Trace` prints as a table, saves as JSON (what a port author diffs against) and draws
+the vertex's score field over the reflector with the path (``trace.png``) and one frame per
+step (``trace.gif``).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import RefsoftError
+from ..raster._kernels import to_float32, to_float64
+from . import _kernels
+
+CANDIDATE_NAMES = ("current", "left", "up", "right", "down", "up-left", "up-right", "down-right", "down-left")
+_STATUS = {_kernels.EVALUATED: "evaluated", _kernels.UNCOVERED: "uncovered", _kernels.OUTSIDE: "outside"}
+
+
+@dataclass
+class Trace:
+    """One search, step by step.
+
+    Attributes
+    ----------
+    steps : list of dict
+        Per iteration: ``phase`` ("standard" or "inverse"), ``pixel`` [row, col], ``candidates``
+        (name, pixel, status, score or None, in visiting order) and ``move_to`` (pixel or None).
+    pixel, score, margin, iterations, flags : the search's result (equal to :func:`search`'s).
+    start : [row, col]; restarted : bool (a coherence start that was not covered).
+    score_map : ndarray, shape (H, W)
+        The standard score of this vertex at every covered pixel (NaN elsewhere).
+    """
+
+    vertex: np.ndarray
+    eye: np.ndarray
+    neighbourhood: str
+    inverse: str
+    cap: int
+    start: list
+    restarted: bool
+    steps: list
+    pixel: list
+    score: float
+    margin: float
+    iterations: int
+    flags: int
+    stop: str
+    score_map: np.ndarray = field(repr=False)
+    inverse_map: np.ndarray | None = field(default=None, repr=False)
+
+    def to_dict(self) -> dict:
+        from . import flag_names
+
+        return {
+            "vertex": [float(x) for x in self.vertex], "eye": [float(x) for x in self.eye],
+            "neighbourhood": self.neighbourhood, "inverse": self.inverse, "cap": self.cap,
+            "start": self.start, "restarted": self.restarted, "steps": self.steps,
+            "result": {"pixel": self.pixel, "score": self.score, "margin": self.margin,
+                       "iterations": self.iterations, "flags": self.flags, "flag_names": flag_names(self.flags),
+                       "stop": self.stop},
+        }
+
+    def to_json(self) -> str:
+        return json.dumps(self.to_dict(), indent=1)
+
+    def table(self) -> str:
+        """The steps as a text table: one row per iteration, one column per candidate."""
+        from . import flag_names
+
+        n_cand = 5 if self.neighbourhood == "cross" else 9
+        names = CANDIDATE_NAMES[:n_cand]
+        head = f"{'step':>4} {'phase':<8} {'pixel':<12}" + "".join(f"{n:>11}" for n in names) + "  move"
+        lines = [head, "-" * len(head)]
+        for i, s in enumerate(self.steps, 1):
+            cells = []
+            chosen = None if s["move_to"] is None else s["move_to"]
+            for cand in s["candidates"]:
+                if cand["status"] != "evaluated":
+                    cells.append(f"{cand['status'][:9]:>11}")
+                else:
+                    mark = "*" if chosen is not None and cand["pixel"] == chosen else " "
+                    cells.append(f"{cand['score']:>10.6f}{mark}")
+            move = "stop" if chosen is None else f"-> ({chosen[0]}, {chosen[1]})"
+            pix = f"({s['pixel'][0]}, {s['pixel'][1]})"
+            lines.append(f"{i:>4} {s['phase']:<8} {pix:<12}" + "".join(cells) + "  " + move)
+        lines.append(f"result: pixel ({self.pixel[0]}, {self.pixel[1]}), score {self.score:.8f}, margin "
+                     f"{self.margin:.3g}, {self.iterations} iterations, stop: {self.stop}, flags: "
+                     f"{', '.join(flag_names(self.flags)) or 'none'}")
+        return "\n".join(lines)
+
+    def path(self) -> np.ndarray:
+        """Pixels visited, in order, shape (S, 2) (the end pixel last)."""
+        pts = [s["pixel"] for s in self.steps]
+        return np.array(pts, dtype=np.int64).reshape(-1, 2)
+
+
+def trace_search(gbuffer, eye, vertex, neighbourhood="cross", inverse="plane", previous=None, cap=None) -> Trace:
+    """Replay the search of one vertex (same arguments as :func:`refsoft.search.search`, for a
+    single vertex, ``vertex`` shape (3,), ``previous`` a pixel or None)."""
+    from . import INVERSE_MODES, NEIGHBOURHOODS, _check_gbuffer, _points, default_cap, start_pixel
+
+    dt = _check_gbuffer(gbuffer)
+    if neighbourhood not in NEIGHBOURHOODS:
+        raise RefsoftError(f"neighbourhood must be one of {list(NEIGHBOURHOODS)}, got {neighbourhood!r}")
+    if inverse not in INVERSE_MODES:
+        raise RefsoftError(f"inverse must be one of {list(INVERSE_MODES)}, got {inverse!r}")
+    v = _points(np.reshape(vertex, (1, 3)) if np.size(vertex) == 3 else vertex, "vertex", 1)[0]
+    e = _points(np.reshape(eye, (1, 3)) if np.size(eye) == 3 else eye, "eye", 1)[0]
+    h, w = gbuffer.mask.shape
+    cap = default_cap((h, w)) if cap is None else int(cap)
+    start = start_pixel(gbuffer.mask)
+    if start is None:
+        raise RefsoftError("the reflector covers no pixel of its G-buffer: there is nothing to search")
+    restarted = False
+    if previous is not None and tuple(previous) != (-1, -1):
+        pr, pc = int(previous[0]), int(previous[1])
+        if not (0 <= pr < h and 0 <= pc < w):
+            raise RefsoftError(f"previous pixel {previous} is outside the {h}x{w} G-buffer")
+        if gbuffer.mask[pr, pc]:
+            start = (pr, pc)
+        else:
+            restarted = True
+    conv = to_float32 if dt is np.float32 else to_float64
+    o = gbuffer.origin
+    P, N, M = (np.ascontiguousarray(a) for a in (gbuffer.position, gbuffer.normal, gbuffer.mask))
+    eye_rel, v_rel = (e - o).astype(dt), (v - o).astype(dt)
+    record = np.zeros((2 * cap + 2, _kernels.RECORD_WIDTH), dtype=np.float64)
+    n_cand = NEIGHBOURHOODS[neighbourhood]
+    r, c, s, m, it, fl, n_rec = _kernels.search_one(P, N, M, eye_rel, v_rel, start[0], start[1], n_cand, cap,
+                                                    inverse == "search", conv, record)
+    if restarted:
+        fl |= _kernels.RESTARTED
+    steps = []
+    for row in record[:n_rec]:
+        pr, pc = int(row[1]), int(row[2])
+        cands = []
+        for k in range(n_cand):
+            status = int(row[4 + k])
+            pix = [pr + int(_kernels.OFFSETS[k, 0]), pc + int(_kernels.OFFSETS[k, 1])]
+            cands.append({"name": CANDIDATE_NAMES[k], "pixel": pix, "status": _STATUS[status],
+                          "score": float(row[4 + 9 + k]) if status == _kernels.EVALUATED else None})
+        chosen = int(row[3])
+        move = None if chosen < 0 else cands[chosen]["pixel"]
+        steps.append({"phase": "standard" if row[0] == 0 else "inverse", "pixel": [pr, pc], "candidates": cands,
+                      "move_to": move})
+    capped_last = bool(steps) and steps[-1]["move_to"] is not None
+    field_std = np.full((h, w), np.nan, dtype=dt)
+    _kernels.score_field(P, N, M, eye_rel, v_rel, False, conv, field_std)
+    field_inv = None
+    if any(st["phase"] == "inverse" for st in steps):
+        field_inv = np.full((h, w), np.nan, dtype=dt)
+        _kernels.score_field(P, N, M, eye_rel, v_rel, True, conv, field_inv)
+    return Trace(v, e, neighbourhood, inverse, cap, [int(start[0]), int(start[1])], restarted, steps,
+                 [int(r), int(c)], float(s), float(m), int(it), int(fl), "capped" if capped_last else "converged",
+                 field_std, field_inv)
