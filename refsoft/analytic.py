@@ -149,4 +149,5 @@ def reflection_residual(centre, eye, points, reflection_points) -> np.ndarray:
     w = np.asarray(points, dtype=np.float64) - r
     h = u / np.linalg.norm(u, axis=1, keepdims=True) + w / np.linalg.norm(w, axis=1, keepdims=True)
     h /= np.linalg.norm(h, axis=1, keepdims=True)
-    return np.arccos(np.clip(np.sum(h * n, axis=1), -1.0, 1.0))
+    # atan2(|h x n|, h . n): accurate for tiny angles, where arccos(h . n) is not
+    return np.arctan2(np.linalg.norm(np.cross(h, n), axis=1), np.sum(h * n, axis=1))
