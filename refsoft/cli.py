@@ -68,6 +68,54 @@ def cmd_gbuffer(args) -> int:
     return 0
 
 
+def cmd_trace(args) -> int:
+    from . import search as search_mod
+    from .errors import RefsoftError
+    from .io import atomic_path, write_json, write_png
+    from .reflect import reflector_gbuffer, scene_vertices
+    from .search.pictures import trace_frames, trace_picture, write_trace_gif
+
+    scene = _scene_from_args(args)
+    if args.frame < 0 or args.frame >= scene.n_frames:
+        raise RefsoftError(f"--frame must be in [0, {scene.n_frames - 1}], got {args.frame}")
+    if not scene.reflector_ids:
+        raise RefsoftError(f"scene {scene.name!r} has no reflector")
+    k = scene.reflector_ids[0] if args.reflector is None else args.reflector
+    if k not in scene.reflector_ids:
+        raise RefsoftError(f"object {k} of scene {scene.name!r} is not a reflector (reflectors: {scene.reflector_ids})")
+    verts, owner = scene_vertices(scene, args.frame)
+    if not 0 <= args.vertex < len(verts):
+        raise RefsoftError(f"--vertex must be in [0, {len(verts) - 1}] (vertices of the non-reflector objects), "
+                           f"got {args.vertex}")
+    opts = dict(neighbourhood=args.search, inverse=args.inverse)
+    previous = None
+    if not args.no_coherence:  # replay this vertex's searches of the earlier frames
+        for f in range(args.frame):
+            gb = reflector_gbuffer(scene, k, f, args.widen, None, args.precision)
+            v_f, _ = scene_vertices(scene, f)
+            res = search_mod.search(gb, scene.camera_at(f).eye, v_f[args.vertex:args.vertex + 1],
+                                    previous=None if previous is None else previous[None], **opts)
+            previous = res.pixel[0]
+    gb = reflector_gbuffer(scene, k, args.frame, args.widen, None, args.precision)
+    tr = search_mod.trace_search(gb, scene.camera_at(args.frame).eye, verts[args.vertex], previous=previous, **opts)
+    obj = scene.object_by_id(int(owner[args.vertex]))
+    first = int(np.argmax(owner == owner[args.vertex]))
+    print(f"vertex {args.vertex} (object {int(owner[args.vertex])} {obj.name!r}, its vertex {args.vertex - first}) "
+          f"in reflector {k} ({scene.object_by_id(k).name!r}), frame {args.frame}, {args.search}, start "
+          f"({tr.start[0]}, {tr.start[1]}){' after a restart' if tr.restarted else ''}")
+    print(tr.table())
+    os.makedirs(args.out, exist_ok=True)
+    data = tr.to_dict()
+    data.update(scene=scene.name, reflector=k, frame=args.frame, vertex_index=args.vertex,
+                vertex_object=int(owner[args.vertex]))
+    write_json(os.path.join(args.out, "trace.json"), data)
+    write_png(os.path.join(args.out, "trace.png"), trace_picture(tr, gb.mask))
+    write_trace_gif(os.path.join(args.out, "trace.gif"), trace_frames(tr, gb.mask))
+    print(f"wrote {args.out}/trace.json, trace.png (score field -log10(1 - s), path, start green, end red) "
+          f"and trace.gif ({len(tr.steps)} steps)")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     from . import __version__
 
@@ -88,6 +136,22 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--precision", choices=["float32", "float64"], default="float32")
     g.add_argument("--out", default="out", help="output folder (default: out)")
     g.set_defaults(func=cmd_gbuffer)
+
+    t = sub.add_parser("trace", help="replay one vertex's reflection-point search step by step")
+    t.add_argument("scene", help="built-in scene name or TOML file")
+    t.add_argument("--vertex", type=int, required=True,
+                   help="index into the vertices of the non-reflector objects, in scene order")
+    t.add_argument("--reflector", type=int, default=None, help="object id of the reflector (default: the first)")
+    t.add_argument("--frame", type=int, default=0)
+    t.add_argument("--search", choices=["cross", "box"], default="cross")
+    t.add_argument("--inverse", choices=["plane", "search", "discard"], default="plane")
+    t.add_argument("--widen", type=float, default=1.0)
+    t.add_argument("--precision", choices=["float32", "float64"], default="float32")
+    t.add_argument("--no-coherence", action="store_true", help="start cold even at frame > 0")
+    t.add_argument("--width", type=int, default=None)
+    t.add_argument("--height", type=int, default=None)
+    t.add_argument("--out", default="out/trace", help="output folder (default: out/trace)")
+    t.set_defaults(func=cmd_trace)
     return p
 
 

@@ -80,3 +80,82 @@ def test_readme_opens_with_two_commands_that_ci_runs():
     assert "pytest" in commands[1] and "pip install" in commands[1]
     ci = open(os.path.join(ROOT, ".ci", "run")).read()
     assert "README.md" in ci  # .ci/run executes exactly the README's first code block
+
+
+def test_trace_command_writes_table_json_png_gif(tmp_path, capsys):
+    import json
+
+    import imageio.v3 as iio
+
+    out = tmp_path / "t"
+    assert cli.main(["trace", "sphere", "--vertex", "1500", "--width", "160", "--height", "120", "--search", "box",
+                     "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "result: pixel" in text and "up-left" in text
+    data = json.loads((out / "trace.json").read_text())
+    assert data["vertex_index"] == 1500 and data["reflector"] == 1
+    assert len(data["steps"]) == data["result"]["iterations"]
+    png = iio.imread(out / "trace.png")
+    assert png.ndim == 3 and png.shape[2] == 3 and min(png.shape[:2]) >= 100
+    # start marker green, end marker red are drawn
+    assert np.any(np.all(png == [40, 220, 60], axis=-1)) and np.any(np.all(png == [230, 30, 30], axis=-1))
+    gif = iio.imread(out / "trace.gif", index=None)
+    assert len(gif) == min(len(data["steps"]), 150) + 1
+    assert oct(os.stat(out / "trace.png").st_mode & 0o777) != "0o600"
+
+
+ANIMATED = """
+[camera]
+eye = [0.0, 1.0, 5.0]
+target = [0.0, 0.0, 0.0]
+width = 160
+height = 120
+[[objects]]
+name = "ball"
+primitive = { type = "icosphere", subdivisions = 4 }
+reflector = true
+[[objects]]
+name = "box"
+primitive = { type = "box", subdivisions = 2 }
+translate = [1.5, 0.0, 1.0]
+[animation]
+frames = 3
+[[animation.camera]]
+frame = 0
+eye = [0.0, 1.0, 5.0]
+[[animation.camera]]
+frame = 2
+eye = [0.6, 1.2, 4.6]
+"""
+
+
+def test_trace_command_coherent_frame_starts_at_previous_pixel(tmp_path, capsys):
+    import json
+
+    import refsoft
+    from refsoft.reflect import reflect
+
+    (tmp_path / "anim.toml").write_text(ANIMATED)
+    scene = refsoft.load_scene(tmp_path / "anim.toml")
+    prev = None
+    for f in range(2):
+        _, _, r = reflect(scene, f, previous=prev)
+        prev = {1: r[1].result.pixel}
+    _, _, r2 = reflect(scene, 2, previous=prev)
+    vertex = 7
+    assert cli.main(["trace", str(tmp_path / "anim.toml"), "--vertex", str(vertex), "--frame", "2",
+                     "--out", str(tmp_path / "a")]) == 0
+    data = json.loads((tmp_path / "a" / "trace.json").read_text())
+    assert data["start"] == list(prev[1][vertex])  # frame 1's pixel, still covered
+    assert data["result"]["pixel"] == list(r2[1].result.pixel[vertex])
+    assert data["result"]["iterations"] == r2[1].result.iterations[vertex]
+
+
+@pytest.mark.parametrize("args, message", [
+    (["trace", "sphere", "--vertex", "999999"], "--vertex must be in"),
+    (["trace", "sphere", "--vertex", "1", "--reflector", "3"], "not a reflector"),
+    (["trace", "sphere", "--vertex", "1", "--frame", "2"], "--frame must be in"),
+])
+def test_trace_bad_input(tmp_path, args, message):
+    r = run_cli(*args, "--out", str(tmp_path / "o"), cwd=tmp_path)
+    assert r.returncode == 2 and message in r.stderr and "Traceback" not in r.stderr
