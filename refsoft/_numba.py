@@ -1,6 +1,9 @@
 """Shared Numba settings: every kernel is compiled with these flags (DESIGN section 2)."""
 
 import numba
+import numpy as np
+from numba import types
+from numba.extending import overload
 
 #: fastmath=False: no reassociation, no FMA contraction. error_model="numpy": inf/NaN like a GPU.
 KERNEL_OPTIONS = dict(cache=True, fastmath=False, error_model="numpy", nogil=True)
@@ -13,3 +16,20 @@ def kernel(fn=None, *, parallel=False):
         return numba.njit(parallel=parallel, **KERNEL_OPTIONS)(f)
 
     return wrap(fn) if fn is not None else wrap
+
+
+def like(value, prototype):
+    """``value`` converted to the float type of ``prototype`` (a float32 or float64 scalar).
+
+    Kernels take a prototype scalar to choose their precision; the conversion is resolved when
+    the kernel is compiled (no call at run time), unlike a function passed as an argument."""
+    return type(prototype)(value)
+
+
+@overload(like, inline="always")
+def _like_impl(value, prototype):
+    if prototype == types.float32:
+        return lambda value, prototype: np.float32(value)
+    if prototype == types.float64:
+        return lambda value, prototype: np.float64(value)
+    return None

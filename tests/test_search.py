@@ -12,7 +12,6 @@ import refsoft
 from naive import naive_scores, naive_search
 from refsoft import Camera, Mesh, Scene, SceneObject, Transform, primitives, raster, search
 from refsoft.analytic import sphere_reflection_points
-from refsoft.raster._kernels import to_float32, to_float64
 from refsoft.reflect import reflect, reflector_gbuffer, scene_vertices
 from refsoft.search import _kernels
 
@@ -37,13 +36,12 @@ def ellipsoid_scene(scale=(1.4, 1.0, 0.8), rotate=(0, 30, 0)):
 def exhaustive(gb, eye, verts, inverse=False):
     """Best score over the whole G-buffer per vertex (the kernel's own score, checked elsewhere)."""
     dt = gb.position.dtype.type
-    conv = to_float32 if dt is np.float32 else to_float64
+    G, mask, conv = search.packed(gb, eye)
     best = np.empty(len(verts), dtype=dt)
     where = np.empty((len(verts), 2), dtype=np.int64)
     field = np.full(gb.mask.shape, -np.inf, dtype=dt)
     for i, v in enumerate(verts):
-        _kernels.score_field(gb.position, gb.normal, gb.mask, (eye - gb.origin).astype(dt),
-                             (v - gb.origin).astype(dt), inverse, conv, field)
+        _kernels.score_field(G, mask, (v - gb.origin).astype(dt), inverse, conv, field)
         k = int(np.argmax(field))
         best[i] = field.flat[k]
         where[i] = divmod(k, field.shape[1])
@@ -78,12 +76,13 @@ def test_score_is_float32_arithmetic_bit_for_bit(sphere_case):
     scene, verts, gb = sphere_case
     eye = (scene.camera.eye - gb.origin).astype(np.float32)
     P, N = gb.position[gb.mask], gb.normal[gb.mask]
+    G, mask, conv = search.packed(gb, scene.camera.eye)
     differs = 0
     for inverse in (False, True):
         for v in verts[::400]:
             vr = (v - gb.origin).astype(np.float32)
             field = np.full(gb.mask.shape, np.nan, dtype=np.float32)
-            _kernels.score_field(gb.position, gb.normal, gb.mask, eye, vr, inverse, to_float32, field)
+            _kernels.score_field(G, mask, vr, inverse, conv, field)
             ref = naive_scores(P, N, eye, vr, np.float32, inverse)
             np.testing.assert_array_equal(field[gb.mask], ref)
             in64 = naive_scores(P.astype(np.float64), N.astype(np.float64), eye.astype(np.float64),

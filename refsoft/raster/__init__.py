@@ -25,8 +25,8 @@ __all__ = ["Fragments", "GBuffer", "ColorPass", "rasterize", "interpolate", "gbu
 
 #: Accepted precision names and their dtypes.
 PRECISIONS = {"float32": np.float32, "float64": np.float64}
-#: The kernels' precision is chosen by the conversion function they are given.
-_CONVERT = {np.float32: _kernels.to_float32, np.float64: _kernels.to_float64}
+#: The kernels' precision is chosen by a prototype scalar of that type.
+_CONVERT = {np.float32: np.float32(0), np.float64: np.float64(0)}
 
 
 def _dtype(precision) -> type:

@@ -9,7 +9,7 @@ not depend on the thread count.
 import numpy as np
 from numba import prange
 
-from .._numba import kernel
+from .._numba import kernel, like
 
 
 #: Triangles are binned in this many contiguous chunks, in parallel; the result does not
@@ -119,30 +119,19 @@ def raster_tiles(starts, items, X, Y, Z, tri, bbox, area, bias, width, height, t
 
 
 @kernel
-def to_float32(x):
-    """Round to float32 (passed to the interpolation kernels to pick their precision)."""
-    return np.float32(x)
-
-
-@kernel
-def to_float64(x):
-    """Convert to float64 (passed to the interpolation kernels to pick their precision)."""
-    return np.float64(x)
-
-
-@kernel
 def _barycentrics(t, r, c, height, X, Y, IW, slot, B, conv):
     """Perspective-correct barycentrics of pixel (r, c) w.r.t. the input triangle of clip
-    triangle ``t``, computed in the precision of ``conv`` (``IW`` and ``B`` already in it).
+    triangle ``t``, computed in the precision of the scalar ``conv`` (``IW`` and ``B`` already
+    in it).
     An unclipped triangle maps through the identity (``slot == -1``) or swaps vertices 1 and 2
     (``slot == -2``): both exact, equal to multiplying by the permutation matrix."""
     py = np.int64(height - 1 - r) * 256 + 128
     px = np.int64(c) * 256 + 128
     x0, x1, x2 = np.int64(X[t, 0]), np.int64(X[t, 1]), np.int64(X[t, 2])
     y0, y1, y2 = np.int64(Y[t, 0]), np.int64(Y[t, 1]), np.int64(Y[t, 2])
-    a0 = conv((x2 - x1) * (py - y1) - (y2 - y1) * (px - x1)) * IW[t, 0]
-    a1 = conv((x0 - x2) * (py - y2) - (y0 - y2) * (px - x2)) * IW[t, 1]
-    a2 = conv((x1 - x0) * (py - y0) - (y1 - y0) * (px - x0)) * IW[t, 2]
+    a0 = like((x2 - x1) * (py - y1) - (y2 - y1) * (px - x1), conv) * IW[t, 0]
+    a1 = like((x0 - x2) * (py - y2) - (y0 - y2) * (px - x2), conv) * IW[t, 1]
+    a2 = like((x1 - x0) * (py - y0) - (y1 - y0) * (px - x0), conv) * IW[t, 2]
     s = a0 + a1 + a2
     l0 = a0 / s
     l1 = a1 / s
@@ -162,8 +151,8 @@ def _barycentrics(t, r, c, height, X, Y, IW, slot, B, conv):
 def interpolate_rows(index, X, Y, IW, slot, B, tri, faces, attributes, height, normalize, conv, out):
     """Perspective-correct attributes of the visible triangle at every covered pixel.
 
-    In the precision of ``conv`` (:func:`to_float32` or :func:`to_float64`, matching the dtype
-    of ``attributes``, ``IW``, ``B`` and ``out``): ``a_i = e_i * (1 / w_i)``,
+    In the precision of the scalar ``conv`` (``np.float32(0)`` or ``np.float64(0)``, matching
+    the dtype of ``attributes``, ``IW``, ``B`` and ``out``): ``a_i = e_i * (1 / w_i)``,
     ``l_i = a_i / (a0 + a1 + a2)``, original barycentrics
     ``b_j = l0 B[0, j] + l1 B[1, j] + l2 B[2, j]`` (``B`` the clip vertices' barycentrics,
     the identity for unclipped triangles) and ``out = b0 A[v0] + b1 A[v1] + b2 A[v2]``;

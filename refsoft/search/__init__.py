@@ -14,11 +14,10 @@ import numpy as np
 
 from ..errors import RefsoftError
 from ..raster import GBuffer
-from ..raster._kernels import to_float32, to_float64
 from . import _kernels
 from ._kernels import BORDER, CAPPED, CULLED, HIDDEN, RESTARTED
 
-__all__ = ["search", "virtual_vertices", "start_pixel", "SearchResult", "trace_search", "Trace",
+__all__ = ["search", "virtual_vertices", "start_pixel", "packed", "SearchResult", "trace_search", "Trace",
            "HIDDEN", "BORDER", "CAPPED", "RESTARTED", "CULLED", "NEIGHBOURHOODS", "INVERSE_MODES",
            "flag_names", "default_cap"]
 
@@ -105,6 +104,20 @@ def _check_gbuffer(gbuffer):
     return dt.type
 
 
+def packed(gbuffer: GBuffer, eye):
+    """The G-buffer packed for the kernels: (G (H, W, 9), mask, conv), relative to its origin.
+
+    ``G`` holds P, N and ``U = normalize(O - P)`` per covered pixel (the eye direction does not
+    depend on the vertex, so it is computed once per pixel, with the same arithmetic)."""
+    dt = _check_gbuffer(gbuffer)
+    conv = dt(0)  # prototype scalar: the kernels compute in its precision
+    mask = np.ascontiguousarray(gbuffer.mask)
+    eye_rel = (np.asarray(eye, dtype=np.float64) - gbuffer.origin).astype(dt)
+    G = _kernels.pack(np.ascontiguousarray(gbuffer.position), np.ascontiguousarray(gbuffer.normal), mask,
+                      eye_rel, conv)
+    return G, mask, conv
+
+
 def _points(x, name, n=None):
     a = np.asarray(x, dtype=np.float64)
     if a.ndim != 2 or a.shape[1] != 3 or (n is not None and len(a) != n):
@@ -171,13 +184,10 @@ def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", invers
     flags = np.full(n, CULLED, dtype=np.uint8)
     start = start_pixel(gbuffer.mask)
     if start is not None and n:
-        o = gbuffer.origin
-        _kernels.search_all(np.ascontiguousarray(gbuffer.position), np.ascontiguousarray(gbuffer.normal),
-                            np.ascontiguousarray(gbuffer.mask), (eye - o).astype(dt),
-                            np.ascontiguousarray((verts - o).astype(dt)), np.ascontiguousarray(starts),
-                            start[0], start[1], NEIGHBOURHOODS[neighbourhood], int(cap), inverse == "search",
-                            to_float32 if dt is np.float32 else to_float64, pixel, score, margin, iterations,
-                            flags)
+        G, mask, conv = packed(gbuffer, eye)
+        _kernels.search_all(G, mask, np.ascontiguousarray((verts - gbuffer.origin).astype(dt)),
+                            np.ascontiguousarray(starts), start[0], start[1], NEIGHBOURHOODS[neighbourhood],
+                            int(cap), inverse == "search", conv, pixel, score, margin, iterations, flags)
     return SearchResult(pixel, score, margin, iterations, flags, neighbourhood, inverse, int(cap))
 
 

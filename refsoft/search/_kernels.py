@@ -12,7 +12,7 @@ Arithmetic, in the precision of ``conv`` (float32 by default):
 import numpy as np
 from numba import prange
 
-from .._numba import kernel
+from .._numba import kernel, like
 
 HIDDEN = 1
 BORDER = 2
@@ -37,54 +37,95 @@ RECORD_WIDTH = 4 + 9 + 9
 @kernel
 def _normalize(x, y, z, conv):
     length = np.sqrt((x * x + y * y) + z * z)
-    if length > conv(0.0):
-        inv = conv(1.0) / length
+    if length > like(0.0, conv):
+        inv = like(1.0, conv) / length
         return x * inv, y * inv, z * inv
-    return conv(0.0), conv(0.0), conv(0.0)
+    return like(0.0, conv), like(0.0, conv), like(0.0, conv)
+
+
+# Packed G-buffer channels: position P (0-2), normal N (3-5), and the unit direction to the eye
+# U = normalize(O - P) (6-8), which does not depend on the vertex and is computed once per pixel.
+PACKED = 9
+
+
+@kernel(parallel=True)
+def pack(P, N, mask, eye, conv):
+    """(H, W, 9) array of P, N and U = normalize(O - P) at covered pixels (zeros elsewhere)."""
+    h, w = mask.shape
+    G = np.zeros((h, w, PACKED), dtype=P.dtype)
+    for r in prange(h):
+        for c in range(w):
+            if mask[r, c]:
+                for k in range(3):
+                    G[r, c, k] = P[r, c, k]
+                    G[r, c, 3 + k] = N[r, c, k]
+                ux, uy, uz = _normalize(eye[0] - P[r, c, 0], eye[1] - P[r, c, 1], eye[2] - P[r, c, 2], conv)
+                G[r, c, 6] = ux
+                G[r, c, 7] = uy
+                G[r, c, 8] = uz
+    return G
 
 
 @kernel
-def score(px, py, pz, nx, ny, nz, ox, oy, oz, vx, vy, vz, conv):
-    """``dot(N, normalize(normalize(O - P) + normalize(V - P)))`` (DESIGN 4.1)."""
-    ax, ay, az = _normalize(ox - px, oy - py, oz - pz, conv)
-    bx, by, bz = _normalize(vx - px, vy - py, vz - pz, conv)
-    hx, hy, hz = _normalize(ax + bx, ay + by, az + bz, conv)
-    return (nx * hx + ny * hy) + nz * hz
+def score_from(g, vx, vy, vz, conv):
+    """``dot(N, normalize(U + normalize(V - P)))`` at packed pixel ``g`` (DESIGN 4.1, with
+    ``U = normalize(O - P)`` precomputed: the same arithmetic as computing it here)."""
+    bx, by, bz = _normalize(vx - g[0], vy - g[1], vz - g[2], conv)
+    hx, hy, hz = _normalize(g[6] + bx, g[7] + by, g[8] + bz, conv)
+    return (g[3] * hx + g[4] * hy) + g[5] * hz
 
 
 @kernel
-def inverse_score(px, py, pz, nx, ny, nz, ox, oy, oz, vx, vy, vz, conv):
-    """The score with ``W = V - 2 dot(V - P, N) N`` in place of ``V`` (DESIGN 4.6, ``search``)."""
-    k = conv(2.0) * (((vx - px) * nx + (vy - py) * ny) + (vz - pz) * nz)
-    return score(px, py, pz, nx, ny, nz, ox, oy, oz, vx - k * nx, vy - k * ny, vz - k * nz, conv)
-
-
-@kernel
-def _evaluate(P, N, r, c, eye, v, inverse, conv):
+def _evaluate(G, r, c, v, inverse, conv):
+    g = G[r, c]
     if inverse:
-        return inverse_score(P[r, c, 0], P[r, c, 1], P[r, c, 2], N[r, c, 0], N[r, c, 1], N[r, c, 2],
-                             eye[0], eye[1], eye[2], v[0], v[1], v[2], conv)
-    return score(P[r, c, 0], P[r, c, 1], P[r, c, 2], N[r, c, 0], N[r, c, 1], N[r, c, 2],
-                 eye[0], eye[1], eye[2], v[0], v[1], v[2], conv)
+        # the inverse score: W = V - 2 dot(V - P, N) N in place of V (DESIGN 4.6, ``search``)
+        k = like(2.0, conv) * (((v[0] - g[0]) * g[3] + (v[1] - g[1]) * g[4]) + (v[2] - g[2]) * g[5])
+        return score_from(g, v[0] - k * g[3], v[1] - k * g[4], v[2] - k * g[5], conv)
+    return score_from(g, v[0], v[1], v[2], conv)
+
+
+def _reuse_table():
+    """REUSE[m, j]: after moving by candidate m's offset, the index the new candidate j had in
+    the old neighbourhood (-1 if it was not in it). Reusing a known score changes nothing."""
+    off = [tuple(o) for o in OFFSETS]
+    table = np.full((9, 9), -1, dtype=np.int64)
+    for m in range(9):
+        for j in range(9):
+            old = (off[j][0] + off[m][0], off[j][1] + off[m][1])
+            if old in off:
+                table[m, j] = off.index(old)
+    return table
+
+
+REUSE = _reuse_table()
 
 
 @kernel
-def walk(P, N, mask, eye, v, r, c, n_candidates, cap, inverse, conv, record, n_record, phase):
+def walk(G, mask, v, r, c, n_candidates, cap, inverse, conv, record, n_record, phase):
     """Hill-climb from (r, c) until the current pixel scores highest among its candidates.
 
     Returns ``(r, c, best, margin, iterations, stop, border, n_record)``: the end pixel, its
     score, best minus second-best score in its final neighbourhood (2 when it has no other
     covered candidate), neighbourhoods evaluated, CONVERGED or STOP_CAPPED, whether a neighbour
     is uncovered or outside, and the number of rows written to ``record`` (which may have zero
-    rows: nothing is recorded then).
+    rows: nothing is recorded then). Scores of candidates that were already in the previous
+    neighbourhood are reused, not recomputed (same values).
     """
     h, w = mask.shape
+    scores = np.empty(9, dtype=G.dtype)
+    known = np.zeros(9, dtype=np.bool_)
+    prev = np.empty(9, dtype=G.dtype)
+    prev_known = np.zeros(9, dtype=np.bool_)
     it = 0
-    best = _evaluate(P, N, r, c, eye, v, inverse, conv)
+    moved = -1
+    scores[0] = _evaluate(G, r, c, v, inverse, conv)
+    known[0] = True
     while True:
         it += 1
+        best = scores[0]
         best_k = 0
-        second = conv(-3.0)
+        second = like(-3.0, conv)
         border = False
         rec = n_record < record.shape[0]
         if rec:
@@ -97,6 +138,7 @@ def walk(P, N, mask, eye, v, r, c, n_candidates, cap, inverse, conv, record, n_r
         for k in range(1, n_candidates):
             rr = r + OFFSETS[k, 0]
             cc = c + OFFSETS[k, 1]
+            known[k] = False
             if rr < 0 or rr >= h or cc < 0 or cc >= w:
                 border = True
                 if rec:
@@ -107,7 +149,13 @@ def walk(P, N, mask, eye, v, r, c, n_candidates, cap, inverse, conv, record, n_r
                 if rec:
                     record[n_record, 4 + k] = UNCOVERED
                 continue
-            s = _evaluate(P, N, rr, cc, eye, v, inverse, conv)
+            j = REUSE[moved, k] if moved > 0 else -1
+            if j >= 0 and j < n_candidates and prev_known[j]:
+                s = prev[j]
+            else:
+                s = _evaluate(G, rr, cc, v, inverse, conv)
+            scores[k] = s
+            known[k] = True
             if rec:
                 record[n_record, 4 + k] = EVALUATED
                 record[n_record, 4 + 9 + k] = s
@@ -124,30 +172,38 @@ def walk(P, N, mask, eye, v, r, c, n_candidates, cap, inverse, conv, record, n_r
             record[n_record, 3] = best_k if best_k > 0 else -1
             n_record += 1
         if best_k == 0:
-            margin = best - second if second > conv(-3.0) else conv(2.0)
+            margin = best - second if second > like(-3.0, conv) else like(2.0, conv)
             return r, c, best, margin, it, CONVERGED, border, n_record
         if it >= cap:
             # capped: the search keeps the pixel whose neighbourhood it evaluated last
-            s_cur = _evaluate(P, N, r, c, eye, v, inverse, conv)
-            return r, c, s_cur, best - s_cur, it, STOP_CAPPED, border, n_record
+            return r, c, scores[0], best - scores[0], it, STOP_CAPPED, border, n_record
+        for k in range(n_candidates):
+            prev[k] = scores[k]
+            prev_known[k] = known[k]
+        # the new current pixel's score is known: candidate best_k of this neighbourhood
+        scores[0] = prev[best_k]
+        known[0] = True
+        moved = best_k
         r, c = best_r, best_c
 
 
 @kernel
-def search_one(P, N, mask, eye, v, start_r, start_c, n_candidates, cap, inverse_search, conv, record):
-    """Standard search from (start_r, start_c), then the inverse search for a hidden vertex when
-    ``inverse_search``. Returns ``(r, c, score, margin, iterations, flags, n_record)``."""
-    r, c, best, margin, it, stop, border, n_rec = walk(P, N, mask, eye, v, start_r, start_c, n_candidates,
+def search_one(G, mask, v, start_r, start_c, n_candidates, cap, inverse_search, conv, record):
+    """Standard search from (start_r, start_c) in the packed G-buffer ``G``, then the inverse
+    search for a hidden vertex when ``inverse_search``. Returns
+    ``(r, c, score, margin, iterations, flags, n_record)``."""
+    r, c, best, margin, it, stop, border, n_rec = walk(G, mask, v, start_r, start_c, n_candidates,
                                                       cap, False, conv, record, 0, 0)
     flags = 0
     if stop == STOP_CAPPED:
         flags |= CAPPED
     # hidden: V behind the tangent plane at the end pixel (dot(V - P_R, N_R) < 0)
-    d = ((v[0] - P[r, c, 0]) * N[r, c, 0] + (v[1] - P[r, c, 1]) * N[r, c, 1]) + (v[2] - P[r, c, 2]) * N[r, c, 2]
-    if d < conv(0.0):
+    g = G[r, c]
+    d = ((v[0] - g[0]) * g[3] + (v[1] - g[1]) * g[4]) + (v[2] - g[2]) * g[5]
+    if d < like(0.0, conv):
         flags |= HIDDEN
         if inverse_search:
-            r, c, best, margin, it2, stop, border, n_rec = walk(P, N, mask, eye, v, r, c, n_candidates, cap,
+            r, c, best, margin, it2, stop, border, n_rec = walk(G, mask, v, r, c, n_candidates, cap,
                                                                 True, conv, record, n_rec, 1)
             it += it2
             if stop == STOP_CAPPED:
@@ -158,7 +214,7 @@ def search_one(P, N, mask, eye, v, start_r, start_c, n_candidates, cap, inverse_
 
 
 @kernel(parallel=True)
-def search_all(P, N, mask, eye, vertices, starts, default_r, default_c, n_candidates, cap, inverse_search, conv,
+def search_all(G, mask, vertices, starts, default_r, default_c, n_candidates, cap, inverse_search, conv,
                pixel, best, margin, iterations, flags):
     """Search every vertex (parallel, each writes only its own outputs).
 
@@ -175,7 +231,7 @@ def search_all(P, N, mask, eye, vertices, starts, default_r, default_c, n_candid
         elif not mask[r0, c0]:
             r0, c0 = default_r, default_c
             extra = RESTARTED
-        r, c, s, m, it, fl, _ = search_one(P, N, mask, eye, vertices[i], r0, c0, n_candidates, cap,
+        r, c, s, m, it, fl, _ = search_one(G, mask, vertices[i], r0, c0, n_candidates, cap,
                                            inverse_search, conv, empty)
         pixel[i, 0] = r
         pixel[i, 1] = c
@@ -186,11 +242,11 @@ def search_all(P, N, mask, eye, vertices, starts, default_r, default_c, n_candid
 
 
 @kernel(parallel=True)
-def score_field(P, N, mask, eye, v, inverse, conv, out):
-    """The (inverse) score of vertex ``v`` at every covered pixel; ``out`` (H, W) stays as given
-    elsewhere. For pictures and the exhaustive checks."""
+def score_field(G, mask, v, inverse, conv, out):
+    """The (inverse) score of vertex ``v`` at every covered pixel of the packed G-buffer;
+    ``out`` (H, W) stays as given elsewhere. For pictures and the exhaustive checks."""
     h, w = mask.shape
     for r in prange(h):
         for c in range(w):
             if mask[r, c]:
-                out[r, c] = _evaluate(P, N, r, c, eye, v, inverse, conv)
+                out[r, c] = _evaluate(G, r, c, v, inverse, conv)

@@ -13,7 +13,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import RefsoftError
-from ..raster._kernels import to_float32, to_float64
 from . import _kernels
 
 CANDIDATE_NAMES = ("current", "left", "up", "right", "down", "up-left", "up-right", "down-right", "down-left")
@@ -101,7 +100,7 @@ class Trace:
 def trace_search(gbuffer, eye, vertex, neighbourhood="cross", inverse="plane", previous=None, cap=None) -> Trace:
     """Replay the search of one vertex (same arguments as :func:`refsoft.search.search`, for a
     single vertex, ``vertex`` shape (3,), ``previous`` a pixel or None)."""
-    from . import INVERSE_MODES, NEIGHBOURHOODS, _check_gbuffer, _points, default_cap, start_pixel
+    from . import INVERSE_MODES, NEIGHBOURHOODS, _check_gbuffer, _points, default_cap, packed, start_pixel
 
     dt = _check_gbuffer(gbuffer)
     if neighbourhood not in NEIGHBOURHOODS:
@@ -124,13 +123,11 @@ def trace_search(gbuffer, eye, vertex, neighbourhood="cross", inverse="plane", p
             start = (pr, pc)
         else:
             restarted = True
-    conv = to_float32 if dt is np.float32 else to_float64
-    o = gbuffer.origin
-    P, N, M = (np.ascontiguousarray(a) for a in (gbuffer.position, gbuffer.normal, gbuffer.mask))
-    eye_rel, v_rel = (e - o).astype(dt), (v - o).astype(dt)
+    G, M, conv = packed(gbuffer, e)
+    v_rel = (v - gbuffer.origin).astype(dt)
     record = np.zeros((2 * cap + 2, _kernels.RECORD_WIDTH), dtype=np.float64)
     n_cand = NEIGHBOURHOODS[neighbourhood]
-    r, c, s, m, it, fl, n_rec = _kernels.search_one(P, N, M, eye_rel, v_rel, start[0], start[1], n_cand, cap,
+    r, c, s, m, it, fl, n_rec = _kernels.search_one(G, M, v_rel, start[0], start[1], n_cand, cap,
                                                     inverse == "search", conv, record)
     if restarted:
         fl |= _kernels.RESTARTED
@@ -149,11 +146,11 @@ def trace_search(gbuffer, eye, vertex, neighbourhood="cross", inverse="plane", p
                       "move_to": move})
     capped_last = bool(steps) and steps[-1]["move_to"] is not None
     field_std = np.full((h, w), np.nan, dtype=dt)
-    _kernels.score_field(P, N, M, eye_rel, v_rel, False, conv, field_std)
+    _kernels.score_field(G, M, v_rel, False, conv, field_std)
     field_inv = None
     if any(st["phase"] == "inverse" for st in steps):
         field_inv = np.full((h, w), np.nan, dtype=dt)
-        _kernels.score_field(P, N, M, eye_rel, v_rel, True, conv, field_inv)
+        _kernels.score_field(G, M, v_rel, True, conv, field_inv)
     return Trace(v, e, neighbourhood, inverse, cap, [int(start[0]), int(start[1])], restarted, steps,
                  [int(r), int(c)], float(s), float(m), int(it), int(fl), "capped" if capped_last else "converged",
                  field_std, field_inv)
