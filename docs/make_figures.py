@@ -61,9 +61,27 @@ def fill_rule_figure():
     plt.close(fig)
 
 
+def trace_figure():
+    from refsoft import search
+    from refsoft.reflect import reflector_gbuffer, scene_vertices
+    from refsoft.search.pictures import trace_picture
+
+    scene = refsoft.load_scene("sphere", width=320, height=240)
+    gb = reflector_gbuffer(scene, 1)
+    verts, _ = scene_vertices(scene)
+    pics = []
+    for nb in ("cross", "box"):
+        tr = search.trace_search(gb, scene.camera.eye, verts[1500], nb)
+        pics.append(trace_picture(tr, gb.mask, size=300))
+        with open(os.path.join(FIG, f"trace_{nb}.txt"), "w") as fh:
+            fh.write(tr.table() + "\n")
+    write_png(os.path.join(FIG, "trace_sphere.png"), side_by_side(*pics))
+
+
 if __name__ == "__main__":
     os.makedirs(FIG, exist_ok=True)
     gbuffer_figure()
+    trace_figure()
     try:
         fill_rule_figure()
     except ImportError:

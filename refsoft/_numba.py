@@ -9,11 +9,13 @@ from numba.extending import overload
 KERNEL_OPTIONS = dict(cache=True, fastmath=False, error_model="numpy", nogil=True)
 
 
-def kernel(fn=None, *, parallel=False):
-    """``numba.njit`` with refsoft's fixed options (optionally ``parallel=True``)."""
+def kernel(fn=None, *, parallel=False, inline=False):
+    """``numba.njit`` with refsoft's fixed options (optionally ``parallel=True``; ``inline=True``
+    inlines a small helper into its callers at Numba's level)."""
 
     def wrap(f):
-        return numba.njit(parallel=parallel, **KERNEL_OPTIONS)(f)
+        extra = {"inline": "always"} if inline else {}
+        return numba.njit(parallel=parallel, **KERNEL_OPTIONS, **extra)(f)
 
     return wrap(fn) if fn is not None else wrap
 

@@ -423,3 +423,25 @@ def test_search_bit_identical_across_thread_counts():
         r = subprocess.run([sys.executable, "-c", SCRIPT], env=env, capture_output=True, text=True, check=True)
         out.append(r.stdout.strip().splitlines()[-1])
     assert len(out[0]) == 64 and out[0] == out[1] == out[2]
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    (dict(neighbourhood="hex"), "neighbourhood must be one of"),
+    (dict(inverse="mirror"), "inverse must be one of"),
+    (dict(cap=0), "cap must be a positive integer"),
+    (dict(cap=2.5), "cap must be a positive integer"),
+    (dict(eye=(0, 0)), "eye must be 3 numbers"),
+    (dict(eye=(0, np.nan, 0)), "non-finite"),
+])
+def test_bad_search_options(sphere_case, kwargs, message):
+    scene, verts, gb = sphere_case
+    args = dict(eye=scene.camera.eye, neighbourhood="cross", inverse="plane", cap=None)
+    args.update(kwargs)
+    with pytest.raises(refsoft.RefsoftError, match=message):
+        search.search(gb, args["eye"], verts[:5], args["neighbourhood"], args["inverse"], cap=args["cap"])
+    with pytest.raises(refsoft.RefsoftError, match=message):
+        search.trace_search(gb, args["eye"], verts[0], args["neighbourhood"], args["inverse"], cap=args["cap"])
+    with pytest.raises(refsoft.RefsoftError, match="vertices must have shape"):
+        search.search(gb, scene.camera.eye, verts[:, :2])
+    with pytest.raises(refsoft.RefsoftError, match="GBuffer"):
+        search.search(gb.position, scene.camera.eye, verts)

@@ -118,6 +118,27 @@ def packed(gbuffer: GBuffer, eye):
     return G, mask, conv
 
 
+def _check_options(gbuffer, neighbourhood, inverse, cap):
+    """Validate the options shared by :func:`search` and :func:`trace_search`; returns
+    (dtype, cap)."""
+    dt = _check_gbuffer(gbuffer)
+    if neighbourhood not in NEIGHBOURHOODS:
+        raise RefsoftError(f"neighbourhood must be one of {list(NEIGHBOURHOODS)}, got {neighbourhood!r}")
+    if inverse not in INVERSE_MODES:
+        raise RefsoftError(f"inverse must be one of {list(INVERSE_MODES)}, got {inverse!r}")
+    cap = default_cap(gbuffer.mask.shape) if cap is None else cap
+    if isinstance(cap, bool) or not isinstance(cap, (int, np.integer)) or cap < 1:
+        raise RefsoftError(f"cap must be a positive integer, got {cap!r}")
+    return dt, int(cap)
+
+
+def _point(x, name):
+    """One finite 3-vector as float64, shape (3,)."""
+    if np.size(x) != 3:
+        raise RefsoftError(f"{name} must be 3 numbers, got shape {np.shape(x)}")
+    return _points(np.reshape(x, (1, 3)), name, 1)[0]
+
+
 def _points(x, name, n=None):
     a = np.asarray(x, dtype=np.float64)
     if a.ndim != 2 or a.shape[1] != 3 or (n is not None and len(a) != n):
@@ -153,17 +174,10 @@ def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", invers
     -------
     SearchResult
     """
-    dt = _check_gbuffer(gbuffer)
-    if neighbourhood not in NEIGHBOURHOODS:
-        raise RefsoftError(f"neighbourhood must be one of {list(NEIGHBOURHOODS)}, got {neighbourhood!r}")
-    if inverse not in INVERSE_MODES:
-        raise RefsoftError(f"inverse must be one of {list(INVERSE_MODES)}, got {inverse!r}")
-    eye = _points(np.reshape(eye, (1, 3)) if np.size(eye) == 3 else eye, "eye", 1)[0]
+    dt, cap = _check_options(gbuffer, neighbourhood, inverse, cap)
+    eye = _point(eye, "eye")
     verts = _points(vertices, "vertices")
     h, w = gbuffer.mask.shape
-    cap = default_cap((h, w)) if cap is None else cap
-    if isinstance(cap, bool) or not isinstance(cap, (int, np.integer)) or cap < 1:
-        raise RefsoftError(f"cap must be a positive integer, got {cap!r}")
     n = len(verts)
     if previous is None:
         starts = np.full((n, 2), -1, dtype=np.int64)

@@ -34,7 +34,7 @@ STOP_CAPPED = 1
 RECORD_WIDTH = 4 + 9 + 9
 
 
-@kernel
+@kernel(inline=True)
 def _normalize(x, y, z, conv):
     length = np.sqrt((x * x + y * y) + z * z)
     if length > like(0.0, conv):
@@ -66,7 +66,7 @@ def pack(P, N, mask, eye, conv):
     return G
 
 
-@kernel
+@kernel(inline=True)
 def score_from(g, vx, vy, vz, conv):
     """``dot(N, normalize(U + normalize(V - P)))`` at packed pixel ``g`` (DESIGN 4.1, with
     ``U = normalize(O - P)`` precomputed: the same arithmetic as computing it here)."""
@@ -75,7 +75,7 @@ def score_from(g, vx, vy, vz, conv):
     return (g[3] * hx + g[4] * hy) + g[5] * hz
 
 
-@kernel
+@kernel(inline=True)
 def _evaluate(G, r, c, v, inverse, conv):
     g = G[r, c]
     if inverse:

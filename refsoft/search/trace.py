@@ -100,17 +100,12 @@ class Trace:
 def trace_search(gbuffer, eye, vertex, neighbourhood="cross", inverse="plane", previous=None, cap=None) -> Trace:
     """Replay the search of one vertex (same arguments as :func:`refsoft.search.search`, for a
     single vertex, ``vertex`` shape (3,), ``previous`` a pixel or None)."""
-    from . import INVERSE_MODES, NEIGHBOURHOODS, _check_gbuffer, _points, default_cap, packed, start_pixel
+    from . import NEIGHBOURHOODS, _check_options, _point, packed, start_pixel
 
-    dt = _check_gbuffer(gbuffer)
-    if neighbourhood not in NEIGHBOURHOODS:
-        raise RefsoftError(f"neighbourhood must be one of {list(NEIGHBOURHOODS)}, got {neighbourhood!r}")
-    if inverse not in INVERSE_MODES:
-        raise RefsoftError(f"inverse must be one of {list(INVERSE_MODES)}, got {inverse!r}")
-    v = _points(np.reshape(vertex, (1, 3)) if np.size(vertex) == 3 else vertex, "vertex", 1)[0]
-    e = _points(np.reshape(eye, (1, 3)) if np.size(eye) == 3 else eye, "eye", 1)[0]
+    dt, cap = _check_options(gbuffer, neighbourhood, inverse, cap)
+    v = _point(vertex, "vertex")
+    e = _point(eye, "eye")
     h, w = gbuffer.mask.shape
-    cap = default_cap((h, w)) if cap is None else int(cap)
     start = start_pixel(gbuffer.mask)
     if start is None:
         raise RefsoftError("the reflector covers no pixel of its G-buffer: there is nothing to search")
