@@ -110,15 +110,28 @@ def reflect(scene: Scene, frame: int = 0, reflectors=None, neighbourhood="cross"
         raise RefsoftError(f"frame must be in [0, {scene.n_frames - 1}], got {frame}")
     ids = scene.reflector_ids if reflectors is None else list(reflectors)
     verts, owner = scene_vertices(scene, frame)
-    eye = scene.camera_at(frame).eye
     out = {}
     for k in ids:
-        gb = reflector_gbuffer(scene, k, frame, widen, gbuffer_size, precision)
         prev = None if previous is None else previous.get(k)
-        if prev is not None and np.shape(prev) != (len(verts), 2):
-            prev = None
-        if prev is not None:
-            prev = np.where(np.any((prev < 0) | (prev >= np.array(gb.mask.shape)), axis=1)[:, None], -1, prev)
-        res = search(gb, eye, verts, neighbourhood, inverse, prev, cap)
-        out[k] = Reflection(k, gb, res, virtual_vertices(gb, res, verts))
+        out[k], _, _ = reflect_one(scene, k, frame, verts, neighbourhood, inverse, widen, gbuffer_size, precision,
+                                   prev, cap)
     return verts, owner, out
+
+
+def reflect_one(scene, k, frame, verts, neighbourhood, inverse, widen, gbuffer_size, precision, previous, cap):
+    """One reflector's G-buffer, search and virtual vertices. Returns (Reflection, G-buffer ms,
+    search ms). A previous pixel array of the wrong length (the vertex count changed) is
+    ignored; previous pixels outside the G-buffer restart."""
+    import time
+
+    t0 = time.perf_counter()
+    gb = reflector_gbuffer(scene, k, frame, widen, gbuffer_size, precision)
+    t1 = time.perf_counter()
+    prev = previous
+    if prev is not None and np.shape(prev) != (len(verts), 2):
+        prev = None
+    if prev is not None:
+        prev = np.where(np.any((prev < 0) | (prev >= np.array(gb.mask.shape)), axis=1)[:, None], -1, prev)
+    res = search(gb, scene.camera_at(frame).eye, verts, neighbourhood, inverse, prev, cap)
+    refl = Reflection(k, gb, res, virtual_vertices(gb, res, verts))
+    return refl, 1000 * (t1 - t0), 1000 * (time.perf_counter() - t1)

@@ -1,0 +1,270 @@
+"""The frame driver (DESIGN sections 1, 5 and 7): reflection stage, virtual raster inside each
+reflector's stencil, main pass and composite, frame after frame.
+
+Only :class:`FrameDriver` keeps state between frames: each reflector's reflection pixels of the
+previous frame (frame-to-frame coherence).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import constants
+from .errors import RefsoftError
+from .raster import _setup, color_pass, interpolate, rasterize, shade, to_uint8
+from .reflect import reflect_one, scene_vertices
+from .scene import Scene
+from .search import CULLED, HIDDEN, INVERSE_MODES, NEIGHBOURHOODS
+
+STAGES = ("gbuffer", "search", "virtual", "main", "composite")
+
+
+@dataclass(frozen=True)
+class RenderOptions:
+    """Options of :func:`render` (defaults reproduce the paper's method).
+
+    Parameters
+    ----------
+    neighbourhood : {"cross", "box"}
+    inverse : {"plane", "search", "discard"}
+    widen : float
+        Wider-frustum factor of the G-buffers (1.0: off).
+    gbuffer_size : (int, int), optional
+        G-buffer (width, height); default keeps the view's pixel density.
+    precision : {"float32", "float64"}
+    coherence : bool
+        Start each search at the vertex's previous reflection pixel.
+    cap : int, optional
+        Iteration cap per search.
+    """
+
+    neighbourhood: str = "cross"
+    inverse: str = "plane"
+    widen: float = 1.0
+    gbuffer_size: tuple | None = None
+    precision: str = "float32"
+    coherence: bool = True
+    cap: int | None = None
+
+    def __post_init__(self):
+        if self.neighbourhood not in NEIGHBOURHOODS:
+            raise RefsoftError(f"search must be one of {list(NEIGHBOURHOODS)}, got {self.neighbourhood!r}")
+        if self.inverse not in INVERSE_MODES:
+            raise RefsoftError(f"inverse must be one of {list(INVERSE_MODES)}, got {self.inverse!r}")
+        if self.precision not in ("float32", "float64"):
+            raise RefsoftError(f"precision must be float32 or float64, got {self.precision!r}")
+        if not (isinstance(self.widen, (int, float)) and np.isfinite(self.widen) and self.widen >= 1.0):
+            raise RefsoftError(f"widen must be a number >= 1, got {self.widen!r}")
+
+
+@dataclass
+class Frame:
+    """One rendered frame: the DESIGN section 7 arrays (``arrays``) and timings (ms)."""
+
+    index: int
+    arrays: dict
+    time_ms: dict
+    iterations: dict = field(default_factory=dict)
+
+    @property
+    def image(self) -> np.ndarray:
+        return self.arrays["image"]
+
+
+def _virtual_pass(scene, frame, camera, verts, owner, refl, stencil, inverse):
+    """Rasterize the virtual scene of one reflector with the view camera, inside its stencil.
+
+    Returns (colour (H, W, 3) float32, reflected object id (H, W) int32, covered (H, W) bool).
+    """
+    res = refl.result
+    virtual = refl.virtual.astype(np.float64)
+    faces, face_obj, normals = [], [], []
+    start = 0
+    for k, obj in enumerate(scene.objects, start=1):
+        if obj.reflector:
+            continue
+        mesh = scene.world_mesh(k, frame)
+        f = mesh.faces.astype(np.int64) + start
+        bad = CULLED | (HIDDEN if inverse == "discard" else 0)
+        keep = ~np.any(res.flags[f] & bad, axis=1)  # triangles whose vertices all have a V'
+        faces.append(f[keep])
+        face_obj.append(np.full(int(keep.sum()), k, dtype=np.int32))
+        normals.append(mesh.normals)
+        start += mesh.n_vertices
+    h, w = stencil.shape
+    colour = np.zeros((h, w, 3), dtype=np.float32)
+    rid = np.zeros((h, w), dtype=np.int32)
+    faces = np.concatenate(faces) if faces else np.zeros((0, 3), np.int64)
+    if len(faces) == 0:
+        return colour, rid, np.zeros((h, w), bool)
+    face_obj = np.concatenate(face_obj)
+    clip = _setup.transform_points(virtual, camera.view_proj())
+    frags = rasterize(clip, faces, w, h)
+    covered = frags.mask & stencil
+    nrm = interpolate(frags, np.concatenate(normals), faces, np.float32, normalize=True)
+    colors = np.vstack([np.zeros(3), [o.color for o in scene.objects]]).astype(np.float32)
+    obj = np.where(covered, face_obj[np.maximum(frags.triangle, 0)], 0)
+    colour[covered] = shade(nrm[covered], colors[obj[covered]])
+    rid[covered] = obj[covered]
+    return colour, rid, covered
+
+
+class FrameDriver:
+    """Renders a scene frame by frame, keeping each reflector's previous reflection pixels."""
+
+    def __init__(self, scene: Scene, options: RenderOptions | None = None):
+        if not isinstance(scene, Scene):
+            raise RefsoftError(f"scene must be a refsoft.Scene, got {type(scene).__name__}")
+        self.scene = scene
+        self.options = options or RenderOptions()
+        self.previous = {}
+
+    def render_frame(self, frame: int) -> Frame:
+        """Render one frame (with coherence from the last frame rendered by this driver)."""
+        scene, opt = self.scene, self.options
+        if scene.animation is not None and not 0 <= frame < scene.n_frames:
+            raise RefsoftError(f"frame must be in [0, {scene.n_frames - 1}], got {frame}")
+        times = dict.fromkeys(STAGES, 0.0)
+        t0 = time.perf_counter()
+        camera = scene.camera_at(frame)
+        t = time.perf_counter()
+        view = color_pass([scene.world_mesh(k + 1, frame) for k in range(len(scene.objects))],
+                          [o.color for o in scene.objects], camera)
+        times["main"] += 1000 * (time.perf_counter() - t)
+        verts, owner = scene_vertices(scene, frame)
+        colour = view.color.copy()
+        reflected = np.full(view.object_id.shape, -1, dtype=np.int32)
+        arrays = {}
+        iterations = {}
+        for k in scene.reflector_ids:
+            stencil = view.object_id == k
+            reflected[stencil] = 0
+            prev = self.previous.get(k) if opt.coherence else None
+            refl, t_gb, t_search = reflect_one(scene, k, frame, verts, opt.neighbourhood, opt.inverse, opt.widen,
+                                               opt.gbuffer_size, opt.precision, prev, opt.cap)
+            times["gbuffer"] += t_gb
+            times["search"] += t_search
+            self.previous[k] = refl.result.pixel
+            t = time.perf_counter()
+            if stencil.any():
+                vcol, vid, covered = _virtual_pass(scene, frame, camera, verts, owner, refl, stencil, opt.inverse)
+                times["virtual"] += 1000 * (time.perf_counter() - t)
+                t = time.perf_counter()
+                rho = np.float32(scene.object_by_id(k).reflectivity)
+                colour[covered] = rho * vcol[covered] + (np.float32(1) - rho) * view.color[covered]
+                reflected[covered] = vid[covered]
+                times["composite"] += 1000 * (time.perf_counter() - t)
+            gb, res = refl.gbuffer, refl.result
+            arrays.update({
+                f"gbuffer_position_{k}": (gb.position.astype(np.float64) + gb.origin).astype(np.float32),
+                f"gbuffer_normal_{k}": gb.normal.astype(np.float32),
+                f"gbuffer_mask_{k}": gb.mask,
+                f"gbuffer_view_proj_{k}": gb.view_proj,
+                f"reflection_pixel_{k}": res.pixel.astype(np.int32),
+                f"virtual_vertex_{k}": refl.virtual.astype(np.float32),
+                f"iterations_{k}": res.iterations.astype(np.int32),
+                f"flags_{k}": res.flags.astype(np.uint8),
+                f"vertex_object_{k}": owner.astype(np.int32),
+                f"score_{k}": res.score,
+                f"margin_{k}": res.margin,
+            })
+            it = res.iterations[(res.flags & CULLED) == 0]
+            iterations[str(k)] = {"mean": float(it.mean()) if len(it) else 0.0, "max": int(it.max()) if len(it) else 0}
+        t = time.perf_counter()
+        image = to_uint8(colour)
+        times["composite"] += 1000 * (time.perf_counter() - t)
+        times["total"] = 1000 * (time.perf_counter() - t0)
+        arrays.update(image=image, object_id=view.object_id.astype(np.int32), reflected_id=reflected)
+        return Frame(frame, arrays, times, iterations)
+
+
+def frame_stats(frames) -> dict:
+    """The ``stats.json`` content for rendered frames (DESIGN section 7)."""
+    out = {"frames": [{"frame": f.index, "time_ms": {k: round(v, 3) for k, v in f.time_ms.items()},
+                       "iterations": f.iterations} for f in frames]}
+    means = [np.mean([v["mean"] for v in f.iterations.values()]) for f in frames if f.iterations]
+    out["summary"] = {"max_frame_mean_iterations": float(max(means)) if means else 0.0,
+                      "total_mean_iterations": float(np.mean(means)) if means else 0.0,
+                      "frames": len(frames)}
+    return out
+
+
+def write_frame(out_dir, frame: Frame):
+    """Write ``frame_NNNN.npz`` (every array) and ``frame_NNNN.png`` atomically."""
+    import os
+
+    from .io import write_npz, write_png
+
+    base = os.path.join(os.fspath(out_dir), f"frame_{frame.index:04d}")
+    write_npz(base + ".npz", **frame.arrays)
+    write_png(base + ".png", frame.image)
+
+
+def render(scene, frames=None, out=None, progress=False, **options):
+    """Render frames of a scene (the Python face of ``refsoft render``).
+
+    Parameters
+    ----------
+    scene : Scene or str
+        A scene or a built-in name / TOML path.
+    frames : int or sequence of int, optional
+        A number of frames (0 .. n-1) or explicit frame indices (rendered in order, coherent
+        from one to the next). Default: every frame of the animation (1 for a static scene).
+    out : str or PathLike, optional
+        Folder to write ``frame_NNNN.npz``, ``frame_NNNN.png`` and ``stats.json`` into.
+    progress : bool
+        Show a tqdm progress bar.
+    **options
+        :class:`RenderOptions` fields (``neighbourhood``, ``inverse``, ``widen``, ...).
+
+    Returns
+    -------
+    frames : list of Frame
+    stats : dict
+        The ``stats.json`` content.
+    """
+    import os
+
+    from .io import write_json
+    from .scenes import load_scene
+
+    if not isinstance(scene, Scene):
+        scene = load_scene(scene)
+    opts = RenderOptions(**options)
+    if frames is None:
+        indices = list(range(scene.n_frames))
+    elif isinstance(frames, (int, np.integer)) and not isinstance(frames, bool):
+        if frames < 1:
+            raise RefsoftError(f"frames must be positive, got {frames}")
+        if scene.animation is not None and frames > scene.n_frames:
+            raise RefsoftError(f"scene {scene.name!r} has {scene.n_frames} frames, asked for {frames}")
+        indices = list(range(int(frames)))
+    else:
+        indices = [int(f) for f in frames]
+    if scene.animation is not None:
+        bad = [f for f in indices if not 0 <= f < scene.n_frames]
+        if bad:
+            raise RefsoftError(f"frame {bad[0]} is outside [0, {scene.n_frames - 1}]")
+    elif any(f < 0 for f in indices):
+        raise RefsoftError("frame indices must be >= 0")
+    if out is not None:
+        os.makedirs(out, exist_ok=True)
+    driver = FrameDriver(scene, opts)
+    done = []
+    it = indices
+    if progress and len(indices) > 1:
+        from tqdm import tqdm
+
+        it = tqdm(indices, desc=f"render {scene.name}", unit="frame")
+    for f in it:
+        fr = driver.render_frame(f)
+        if out is not None:
+            write_frame(out, fr)
+        done.append(fr)
+    stats = frame_stats(done)
+    if out is not None:
+        write_json(os.path.join(out, "stats.json"), stats)
+    return done, stats
