@@ -213,6 +213,8 @@ def main(argv=None) -> int:
     except RefsoftError as exc:
         print(f"refsoft: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:  # output piped into head and closed: not an error
+        return 0
     except OSError as exc:
         print(f"refsoft: error: {exc.strerror or exc}: {exc.filename or ''}".rstrip(": "), file=sys.stderr)
         return 2

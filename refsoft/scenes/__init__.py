@@ -6,11 +6,20 @@ import os
 
 from ..errors import SceneError
 from ..scene import Scene
-from .basic import sphere_scene
+from .basic import concave_scene, ellipsoid_scene, planar_scene, quad_scene, sphere_scene, torus_scene
+from .papers import ants_scene, kitchen_scene, ufo_scene
 
 #: name -> (builder, one-line description)
 BUILTIN_SCENES = {
+    "kitchen": (kitchen_scene, "a metal bowl (open, closed proxy) among kitchen objects; camera closes in"),
+    "ufo": (ufo_scene, "a big convex saucer lands over a city square; trucks drive through"),
+    "ants": (ants_scene, "four ants with two mirror eyes each among cans with subdivided long triangles"),
     "sphere": (sphere_scene, "a mirror ball among coloured objects on a floor (static)"),
+    "ellipsoid": (ellipsoid_scene, "an elongated mirror ellipsoid; the camera orbits"),
+    "planar": (planar_scene, "a flat mirror wall; the camera slides sideways"),
+    "concave": (concave_scene, "the inside of a mirror bowl seen from above"),
+    "torus": (torus_scene, "half a mirror torus: mixed curvature"),
+    "quad": (quad_scene, "a two-triangle quad reflected in a mirror ball"),
 }
 
 
