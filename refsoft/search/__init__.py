@@ -148,6 +148,30 @@ def _points(x, name, n=None):
     return a
 
 
+#: Edge, in pixels, of the cells vertices are grouped by before searching (cache locality).
+LOCALITY_CELL = 16
+
+
+def _locality_order(gbuffer, verts, starts) -> np.ndarray:
+    """A permutation grouping vertices by the G-buffer cell where their search starts (the
+    previous pixel) or, without one, where they project. Stable, so deterministic."""
+    h, w = gbuffer.mask.shape
+    clip = verts @ gbuffer.view_proj[:3, :3].T + gbuffer.view_proj[:3, 3]
+    wc = verts @ gbuffer.view_proj[3, :3] + gbuffer.view_proj[3, 3]
+    ok = wc > 0
+    x = np.where(ok, (clip[:, 0] / np.where(ok, wc, 1.0) + 1.0) * 0.5 * w, 0.0)
+    y = np.where(ok, (clip[:, 1] / np.where(ok, wc, 1.0) + 1.0) * 0.5 * h, 0.0)
+    col = np.clip(np.nan_to_num(x), 0, w - 1).astype(np.int64)
+    row = np.clip(h - 1 - np.nan_to_num(y), 0, h - 1).astype(np.int64)
+    has = starts[:, 0] >= 0
+    row = np.where(has, starts[:, 0], row)
+    col = np.where(has, starts[:, 1], col)
+    cells_x = -(-w // LOCALITY_CELL)
+    key = (row // LOCALITY_CELL) * cells_x + col // LOCALITY_CELL
+    key = key.astype(np.uint16 if key.max(initial=0) < 65536 else np.uint32)
+    return np.argsort(key, kind="stable")
+
+
 def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", inverse: str = "plane",
            previous=None, cap: int | None = None) -> SearchResult:
     """Find each vertex's reflection pixel in a reflector's G-buffer.
@@ -199,9 +223,16 @@ def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", invers
     start = start_pixel(gbuffer.mask)
     if start is not None and n:
         G, mask, conv = packed(gbuffer, eye)
-        _kernels.search_all(G, mask, np.ascontiguousarray((verts - gbuffer.origin).astype(dt)),
-                            np.ascontiguousarray(starts), start[0], start[1], NEIGHBOURHOODS[neighbourhood],
-                            int(cap), inverse == "search", conv, pixel, score, margin, iterations, flags)
+        # Search in an order where consecutive vertices walk nearby pixels (the G-buffer then
+        # stays in cache), and put the results back: each vertex's result is unchanged.
+        order = _locality_order(gbuffer, verts, starts)
+        out = (np.empty_like(pixel), np.empty_like(score), np.empty_like(margin), np.empty_like(iterations),
+               np.empty_like(flags))
+        _kernels.search_all(G, mask, np.ascontiguousarray((verts[order] - gbuffer.origin).astype(dt)),
+                            np.ascontiguousarray(starts[order]), start[0], start[1], NEIGHBOURHOODS[neighbourhood],
+                            int(cap), inverse == "search", conv, *out)
+        for dst, src in zip((pixel, score, margin, iterations, flags), out):
+            dst[order] = src
     return SearchResult(pixel, score, margin, iterations, flags, neighbourhood, inverse, int(cap))
 
 
