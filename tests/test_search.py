@@ -36,15 +36,16 @@ def ellipsoid_scene(scale=(1.4, 1.0, 0.8), rotate=(0, 30, 0)):
 def exhaustive(gb, eye, verts, inverse=False):
     """Best score over the whole G-buffer per vertex (the kernel's own score, checked elsewhere)."""
     dt = gb.position.dtype.type
-    G, mask, conv = search.packed(gb, eye)
+    G, mask, conv, (r0, c0) = search.packed(gb, eye)
     best = np.empty(len(verts), dtype=dt)
     where = np.empty((len(verts), 2), dtype=np.int64)
-    field = np.full(gb.mask.shape, -np.inf, dtype=dt)
+    field = np.full(mask.shape, -np.inf, dtype=dt)
     for i, v in enumerate(verts):
         _kernels.score_field(G, mask, (v - gb.origin).astype(dt), inverse, conv, field)
         k = int(np.argmax(field))
         best[i] = field.flat[k]
         where[i] = divmod(k, field.shape[1])
+    where += [r0, c0]
     return best, where
 
 
@@ -76,13 +77,13 @@ def test_score_is_float32_arithmetic_bit_for_bit(sphere_case):
     scene, verts, gb = sphere_case
     eye = (scene.camera.eye - gb.origin).astype(np.float32)
     P, N = gb.position[gb.mask], gb.normal[gb.mask]
-    G, mask, conv = search.packed(gb, scene.camera.eye)
+    G, mask, conv, (r0, c0) = search.packed(gb, scene.camera.eye)
     differs = 0
     for inverse in (False, True):
         for v in verts[::400]:
             vr = (v - gb.origin).astype(np.float32)
             field = np.full(gb.mask.shape, np.nan, dtype=np.float32)
-            _kernels.score_field(G, mask, vr, inverse, conv, field)
+            _kernels.score_field(G, mask, vr, inverse, conv, field[r0:r0 + mask.shape[0], c0:c0 + mask.shape[1]])
             ref = naive_scores(P, N, eye, vr, np.float32, inverse)
             np.testing.assert_array_equal(field[gb.mask], ref)
             in64 = naive_scores(P.astype(np.float64), N.astype(np.float64), eye.astype(np.float64),

@@ -105,17 +105,30 @@ def _check_gbuffer(gbuffer):
 
 
 def packed(gbuffer: GBuffer, eye):
-    """The G-buffer packed for the kernels: (G (H, W, 9), mask, conv), relative to its origin.
+    """The G-buffer packed for the kernels, cropped to the covered pixels.
 
-    ``G`` holds P, N and ``U = normalize(O - P)`` per covered pixel (the eye direction does not
-    depend on the vertex, so it is computed once per pixel, with the same arithmetic)."""
+    Returns ``(G, mask, conv, offset)``: ``G`` (h, w, 9) holds P, N and
+    ``U = normalize(O - P)`` per covered pixel (the eye direction does not depend on the vertex,
+    so it is computed once per pixel, with the same arithmetic), relative to the G-buffer's
+    origin; ``mask`` (h, w) the coverage; both cover the covered pixels' bounding box plus a
+    one-pixel margin (clipped to the buffer, so a neighbour outside the crop is outside the
+    buffer); ``offset`` = (row, col) of the crop's first pixel; ``conv`` a prototype scalar of
+    the precision."""
     dt = _check_gbuffer(gbuffer)
     conv = dt(0)  # prototype scalar: the kernels compute in its precision
-    mask = np.ascontiguousarray(gbuffer.mask)
+    h, w = gbuffer.mask.shape
+    rows = np.flatnonzero(gbuffer.mask.any(axis=1))
+    cols = np.flatnonzero(gbuffer.mask.any(axis=0))
+    if len(rows) == 0:
+        r0 = r1 = c0 = c1 = 0
+    else:
+        r0, r1 = max(int(rows[0]) - 1, 0), min(int(rows[-1]) + 2, h)
+        c0, c1 = max(int(cols[0]) - 1, 0), min(int(cols[-1]) + 2, w)
+    mask = np.ascontiguousarray(gbuffer.mask[r0:r1, c0:c1])
     eye_rel = (np.asarray(eye, dtype=np.float64) - gbuffer.origin).astype(dt)
-    G = _kernels.pack(np.ascontiguousarray(gbuffer.position), np.ascontiguousarray(gbuffer.normal), mask,
-                      eye_rel, conv)
-    return G, mask, conv
+    G = _kernels.pack(np.ascontiguousarray(gbuffer.position[r0:r1, c0:c1]),
+                      np.ascontiguousarray(gbuffer.normal[r0:r1, c0:c1]), mask, eye_rel, conv)
+    return G, mask, conv, (r0, c0)
 
 
 def _check_options(gbuffer, neighbourhood, inverse, cap):
@@ -222,17 +235,23 @@ def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", invers
     flags = np.full(n, CULLED, dtype=np.uint8)
     start = start_pixel(gbuffer.mask)
     if start is not None and n:
-        G, mask, conv = packed(gbuffer, eye)
+        G, mask, conv, (r0, c0) = packed(gbuffer, eye)
         # Search in an order where consecutive vertices walk nearby pixels (the G-buffer then
         # stays in cache), and put the results back: each vertex's result is unchanged.
         order = _locality_order(gbuffer, verts, starts)
+        has = starts[:, 0] >= 0
+        covered = has & gbuffer.mask[np.maximum(starts[:, 0], 0), np.maximum(starts[:, 1], 0)]
+        restart = has & ~covered  # a previous pixel no longer covered: start afresh, flagged
+        crop_starts = np.where(covered[:, None], starts - [r0, c0], -1)[order]
         out = (np.empty_like(pixel), np.empty_like(score), np.empty_like(margin), np.empty_like(iterations),
                np.empty_like(flags))
         _kernels.search_all(G, mask, np.ascontiguousarray((verts[order] - gbuffer.origin).astype(dt)),
-                            np.ascontiguousarray(starts[order]), start[0], start[1], NEIGHBOURHOODS[neighbourhood],
-                            int(cap), inverse == "search", conv, *out)
+                            np.ascontiguousarray(crop_starts), start[0] - r0, start[1] - c0,
+                            NEIGHBOURHOODS[neighbourhood], int(cap), inverse == "search", conv, *out)
+        out[0][:] += np.array([r0, c0], dtype=np.int32)
         for dst, src in zip((pixel, score, margin, iterations, flags), out):
             dst[order] = src
+        flags[restart] |= RESTARTED
     return SearchResult(pixel, score, margin, iterations, flags, neighbourhood, inverse, int(cap))
 
 
