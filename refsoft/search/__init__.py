@@ -165,26 +165,6 @@ def _points(x, name, n=None):
 LOCALITY_CELL = 16
 
 
-def _locality_order(gbuffer, verts, starts) -> np.ndarray:
-    """A permutation grouping vertices by the G-buffer cell where their search starts (the
-    previous pixel) or, without one, where they project. Stable, so deterministic."""
-    h, w = gbuffer.mask.shape
-    clip = verts @ gbuffer.view_proj[:3, :3].T + gbuffer.view_proj[:3, 3]
-    wc = verts @ gbuffer.view_proj[3, :3] + gbuffer.view_proj[3, 3]
-    ok = wc > 0
-    x = np.where(ok, (clip[:, 0] / np.where(ok, wc, 1.0) + 1.0) * 0.5 * w, 0.0)
-    y = np.where(ok, (clip[:, 1] / np.where(ok, wc, 1.0) + 1.0) * 0.5 * h, 0.0)
-    col = np.clip(np.nan_to_num(x), 0, w - 1).astype(np.int64)
-    row = np.clip(h - 1 - np.nan_to_num(y), 0, h - 1).astype(np.int64)
-    has = starts[:, 0] >= 0
-    row = np.where(has, starts[:, 0], row)
-    col = np.where(has, starts[:, 1], col)
-    cells_x = -(-w // LOCALITY_CELL)
-    key = (row // LOCALITY_CELL) * cells_x + col // LOCALITY_CELL
-    key = key.astype(np.uint16 if key.max(initial=0) < 65536 else np.uint32)
-    return np.argsort(key, kind="stable")
-
-
 def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", inverse: str = "plane",
            previous=None, cap: int | None = None) -> SearchResult:
     """Find each vertex's reflection pixel in a reflector's G-buffer.
@@ -236,21 +216,15 @@ def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", invers
     start = start_pixel(gbuffer.mask)
     if start is not None and n:
         G, mask, conv, (r0, c0) = packed(gbuffer, eye)
-        # Search in an order where consecutive vertices walk nearby pixels (the G-buffer then
-        # stays in cache), and put the results back: each vertex's result is unchanged.
-        order = _locality_order(gbuffer, verts, starts)
-        has = starts[:, 0] >= 0
-        covered = has & gbuffer.mask[np.maximum(starts[:, 0], 0), np.maximum(starts[:, 1], 0)]
-        restart = has & ~covered  # a previous pixel no longer covered: start afresh, flagged
-        crop_starts = np.where(covered[:, None], starts - [r0, c0], -1)[order]
-        out = (np.empty_like(pixel), np.empty_like(score), np.empty_like(margin), np.empty_like(iterations),
-               np.empty_like(flags))
-        _kernels.search_all(G, mask, np.ascontiguousarray((verts[order] - gbuffer.origin).astype(dt)),
-                            np.ascontiguousarray(crop_starts), start[0] - r0, start[1] - c0,
-                            NEIGHBOURHOODS[neighbourhood], int(cap), inverse == "search", conv, *out)
-        out[0][:] += np.array([r0, c0], dtype=np.int32)
-        for dst, src in zip((pixel, score, margin, iterations, flags), out):
-            dst[order] = src
+        # Search in an order where consecutive vertices start near each other (the G-buffer
+        # then stays in cache); each vertex's result is unchanged.
+        keys, crop_starts, restart = _kernels.prepare(verts, starts, np.ascontiguousarray(gbuffer.mask),
+                                                      gbuffer.view_proj, r0, c0, LOCALITY_CELL)
+        order = np.argsort(keys.astype(np.uint16) if keys.max(initial=0) < 65536 else keys, kind="stable")
+        _kernels.search_all(G, mask, np.ascontiguousarray(verts), gbuffer.origin, order, crop_starts, start[0] - r0, start[1] - c0,
+                            NEIGHBOURHOODS[neighbourhood], int(cap), inverse == "search", conv, pixel, score,
+                            margin, iterations, flags)
+        pixel += np.array([r0, c0], dtype=np.int32)
         flags[restart] |= RESTARTED
     return SearchResult(pixel, score, margin, iterations, flags, neighbourhood, inverse, int(cap))
 

@@ -99,10 +99,12 @@ def _reuse_table():
 
 
 REUSE = _reuse_table()
+#: Vertices searched one after another by one thread (the work arrays are allocated per group).
+SEARCH_GROUP = 256
 
 
 @kernel
-def walk(G, mask, v, r, c, n_candidates, cap, inverse, conv, record, n_record, phase):
+def walk(G, mask, v, r, c, n_candidates, cap, inverse, conv, record, n_record, phase, scratch, seen):
     """Hill-climb from (r, c) until the current pixel scores highest among its candidates.
 
     Returns ``(r, c, best, margin, iterations, stop, border, n_record)``: the end pixel, its
@@ -110,13 +112,16 @@ def walk(G, mask, v, r, c, n_candidates, cap, inverse, conv, record, n_record, p
     covered candidate), neighbourhoods evaluated, CONVERGED or STOP_CAPPED, whether a neighbour
     is uncovered or outside, and the number of rows written to ``record`` (which may have zero
     rows: nothing is recorded then). Scores of candidates that were already in the previous
-    neighbourhood are reused, not recomputed (same values).
+    neighbourhood are reused, not recomputed (same values). ``scratch`` (2, 9) and ``seen``
+    (2, 9) bool are work arrays (allocated once per group of searches, not per search).
     """
     h, w = mask.shape
-    scores = np.empty(9, dtype=G.dtype)
-    known = np.zeros(9, dtype=np.bool_)
-    prev = np.empty(9, dtype=G.dtype)
-    prev_known = np.zeros(9, dtype=np.bool_)
+    scores = scratch[0]
+    prev = scratch[1]
+    known = seen[0]
+    prev_known = seen[1]
+    for k in range(9):
+        prev_known[k] = False
     it = 0
     moved = -1
     scores[0] = _evaluate(G, r, c, v, inverse, conv)
@@ -188,12 +193,12 @@ def walk(G, mask, v, r, c, n_candidates, cap, inverse, conv, record, n_record, p
 
 
 @kernel
-def search_one(G, mask, v, start_r, start_c, n_candidates, cap, inverse_search, conv, record):
+def search_one(G, mask, v, start_r, start_c, n_candidates, cap, inverse_search, conv, record, scratch, seen):
     """Standard search from (start_r, start_c) in the packed G-buffer ``G``, then the inverse
     search for a hidden vertex when ``inverse_search``. Returns
     ``(r, c, score, margin, iterations, flags, n_record)``."""
     r, c, best, margin, it, stop, border, n_rec = walk(G, mask, v, start_r, start_c, n_candidates,
-                                                      cap, False, conv, record, 0, 0)
+                                                      cap, False, conv, record, 0, 0, scratch, seen)
     flags = 0
     if stop == STOP_CAPPED:
         flags |= CAPPED
@@ -204,7 +209,7 @@ def search_one(G, mask, v, start_r, start_c, n_candidates, cap, inverse_search, 
         flags |= HIDDEN
         if inverse_search:
             r, c, best, margin, it2, stop, border, n_rec = walk(G, mask, v, r, c, n_candidates, cap,
-                                                                True, conv, record, n_rec, 1)
+                                                                True, conv, record, n_rec, 1, scratch, seen)
             it += it2
             if stop == STOP_CAPPED:
                 flags |= CAPPED
@@ -214,31 +219,78 @@ def search_one(G, mask, v, start_r, start_c, n_candidates, cap, inverse_search, 
 
 
 @kernel(parallel=True)
-def search_all(G, mask, vertices, starts, default_r, default_c, n_candidates, cap, inverse_search, conv,
-               pixel, best, margin, iterations, flags):
-    """Search every vertex (parallel, each writes only its own outputs).
+def prepare(vertices, starts, mask, view_proj, r0, c0, cell):
+    """Per vertex: the locality key (the ``cell`` x ``cell`` G-buffer cell where its search
+    starts: its previous pixel, else its projection, clamped), its start in the crop at
+    (r0, c0) (-1 for none), and whether a previous pixel is no longer covered (a restart)."""
+    n = vertices.shape[0]
+    h, w = mask.shape
+    cells_x = (w + cell - 1) // cell
+    keys = np.empty(n, dtype=np.int64)
+    crop = np.empty((n, 2), dtype=np.int64)
+    restart = np.zeros(n, dtype=np.bool_)
+    for i in prange(n):
+        r = starts[i, 0]
+        c = starts[i, 1]
+        crop[i, 0] = -1
+        crop[i, 1] = -1
+        if r >= 0:
+            if mask[r, c]:
+                crop[i, 0] = r - r0
+                crop[i, 1] = c - c0
+            else:
+                restart[i] = True
+        else:
+            x, y, z = vertices[i, 0], vertices[i, 1], vertices[i, 2]
+            cw = ((view_proj[3, 0] * x + view_proj[3, 1] * y) + view_proj[3, 2] * z) + view_proj[3, 3]
+            r = 0
+            c = 0
+            if cw > 0.0:
+                cx = ((view_proj[0, 0] * x + view_proj[0, 1] * y) + view_proj[0, 2] * z) + view_proj[0, 3]
+                cy = ((view_proj[1, 0] * x + view_proj[1, 1] * y) + view_proj[1, 2] * z) + view_proj[1, 3]
+                fx = (cx / cw + 1.0) * 0.5 * w
+                fy = (cy / cw + 1.0) * 0.5 * h
+                c = int(min(max(fx, 0.0), w - 1.0))
+                r = int(min(max(h - 1.0 - fy, 0.0), h - 1.0))
+        keys[i] = (r // cell) * cells_x + c // cell
+    return keys, crop, restart
 
-    ``starts[i]`` is the previous frame's pixel of vertex ``i`` or (-1, -1); a start that is not
-    covered restarts at (default_r, default_c) and is flagged RESTARTED.
+
+@kernel(parallel=True)
+def search_all(G, mask, vertices, origin, order, starts, default_r, default_c, n_candidates, cap, inverse_search,
+               conv, pixel, best, margin, iterations, flags):
+    """Search every vertex (parallel over groups of :data:`SEARCH_GROUP`), in the order
+    ``order`` (vertices whose searches start near each other come one after another, so the
+    G-buffer stays in cache). Vertex ``order[j]``'s results go to its own slot: the outputs
+    do not depend on the order or the thread count.
+
+    ``starts[i]`` is vertex ``i``'s start in the (cropped) G-buffer or (-1, -1) for the default
+    start; ``vertices`` are world positions, made relative to ``origin`` and rounded to the
+    working precision here (as ``(v - origin).astype(dtype)`` would).
     """
     empty = np.empty((0, 22), dtype=best.dtype)
-    for i in prange(vertices.shape[0]):
-        r0 = starts[i, 0]
-        c0 = starts[i, 1]
-        extra = 0
-        if r0 < 0:
-            r0, c0 = default_r, default_c
-        elif not mask[r0, c0]:
-            r0, c0 = default_r, default_c
-            extra = RESTARTED
-        r, c, s, m, it, fl, _ = search_one(G, mask, vertices[i], r0, c0, n_candidates, cap,
-                                           inverse_search, conv, empty)
-        pixel[i, 0] = r
-        pixel[i, 1] = c
-        best[i] = s
-        margin[i] = m
-        iterations[i] = it
-        flags[i] = fl | extra
+    n = vertices.shape[0]
+    n_groups = (n + SEARCH_GROUP - 1) // SEARCH_GROUP
+    for g in prange(n_groups):
+        scratch = np.empty((2, 9), dtype=best.dtype)  # one allocation per group, not per search
+        seen = np.zeros((2, 9), dtype=np.bool_)
+        v = np.empty(3, dtype=best.dtype)
+        for j in range(g * SEARCH_GROUP, min(n, (g + 1) * SEARCH_GROUP)):
+            i = order[j]
+            for k in range(3):
+                v[k] = like(vertices[i, k] - origin[k], conv)
+            r0 = starts[i, 0]
+            c0 = starts[i, 1]
+            if r0 < 0:
+                r0, c0 = default_r, default_c
+            r, c, s, m, it, fl, _ = search_one(G, mask, v, r0, c0, n_candidates, cap, inverse_search, conv,
+                                               empty, scratch, seen)
+            pixel[i, 0] = r
+            pixel[i, 1] = c
+            best[i] = s
+            margin[i] = m
+            iterations[i] = it
+            flags[i] = fl
 
 
 @kernel(parallel=True)

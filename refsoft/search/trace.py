@@ -123,7 +123,8 @@ def trace_search(gbuffer, eye, vertex, neighbourhood="cross", inverse="plane", p
     record = np.zeros((2 * cap + 2, _kernels.RECORD_WIDTH), dtype=np.float64)
     n_cand = NEIGHBOURHOODS[neighbourhood]
     r, c, s, m, it, fl, n_rec = _kernels.search_one(G, M, v_rel, start[0] - r0, start[1] - c0, n_cand, cap,
-                                                    inverse == "search", conv, record)
+                                                    inverse == "search", conv, record,
+                                                    np.empty((2, 9), dtype=dt), np.zeros((2, 9), dtype=bool))
     r, c = r + r0, c + c0
     record[:n_rec, 1] += r0
     record[:n_rec, 2] += c0
