@@ -18,8 +18,10 @@ from .scene import Scene
 from .search import SearchResult, search, virtual_vertices
 
 
-def scene_vertices(scene: Scene, frame: int = 0):
+def scene_vertices(scene: Scene, frame: int = 0, meshes=None):
     """World-space vertices of every non-reflector object.
+
+    ``meshes`` (optional) are the world meshes of all objects at ``frame``, already computed.
 
     Returns
     -------
@@ -31,7 +33,7 @@ def scene_vertices(scene: Scene, frame: int = 0):
     for k, obj in enumerate(scene.objects, start=1):
         if obj.reflector:
             continue
-        m = scene.world_mesh(k, frame)
+        m = scene.world_mesh(k, frame) if meshes is None else meshes[k - 1]
         verts.append(m.vertices)
         ids.append(np.full(m.n_vertices, k, dtype=np.int32))
     if not verts:

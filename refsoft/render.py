@@ -74,7 +74,7 @@ class Frame:
         return self.arrays["image"]
 
 
-def _virtual_pass(scene, frame, camera, verts, owner, refl, stencil, inverse):
+def _virtual_pass(scene, meshes, camera, refl, stencil, inverse):
     """Rasterize the virtual scene of one reflector with the view camera, inside its stencil.
 
     Returns (colour (H, W, 3) float32, reflected object id (H, W) int32, covered (H, W) bool).
@@ -86,7 +86,7 @@ def _virtual_pass(scene, frame, camera, verts, owner, refl, stencil, inverse):
     for k, obj in enumerate(scene.objects, start=1):
         if obj.reflector:
             continue
-        mesh = scene.world_mesh(k, frame)
+        mesh = meshes[k - 1]
         f = mesh.faces.astype(np.int64) + start
         bad = CULLED | (HIDDEN if inverse == "discard" else 0)
         keep = ~np.any(res.flags[f] & bad, axis=1)  # triangles whose vertices all have a V'
@@ -131,10 +131,10 @@ class FrameDriver:
         t0 = time.perf_counter()
         camera = scene.camera_at(frame)
         t = time.perf_counter()
-        view = color_pass([scene.world_mesh(k + 1, frame) for k in range(len(scene.objects))],
-                          [o.color for o in scene.objects], camera)
+        meshes = [scene.world_mesh(k + 1, frame) for k in range(len(scene.objects))]  # once per frame
+        view = color_pass(meshes, [o.color for o in scene.objects], camera)
         times["main"] += 1000 * (time.perf_counter() - t)
-        verts, owner = scene_vertices(scene, frame)
+        verts, owner = scene_vertices(scene, frame, meshes)
         colour = view.color.copy()
         reflected = np.full(view.object_id.shape, -1, dtype=np.int32)
         arrays = {}
@@ -150,7 +150,7 @@ class FrameDriver:
             self.previous[k] = refl.result.pixel
             t = time.perf_counter()
             if stencil.any():
-                vcol, vid, covered = _virtual_pass(scene, frame, camera, verts, owner, refl, stencil, opt.inverse)
+                vcol, vid, covered = _virtual_pass(scene, meshes, camera, refl, stencil, opt.inverse)
                 times["virtual"] += 1000 * (time.perf_counter() - t)
                 t = time.perf_counter()
                 rho = np.float32(scene.object_by_id(k).reflectivity)
