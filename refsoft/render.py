@@ -97,18 +97,24 @@ def _virtual_pass(scene, meshes, camera, refl, stencil, inverse):
     h, w = stencil.shape
     colour = np.zeros((h, w, 3), dtype=np.float32)
     rid = np.zeros((h, w), dtype=np.int32)
+    covered = np.zeros((h, w), dtype=bool)
     faces = np.concatenate(faces) if faces else np.zeros((0, 3), np.int64)
     if len(faces) == 0:
-        return colour, rid, np.zeros((h, w), bool)
+        return colour, rid, covered
     face_obj = np.concatenate(face_obj)
+    # only the stencil's bounding box is rasterized (the same pixels as the whole view, cropped)
+    rows = np.flatnonzero(stencil.any(axis=1))
+    cols = np.flatnonzero(stencil.any(axis=0))
+    r0, r1, c0, c1 = int(rows[0]), int(rows[-1]) + 1, int(cols[0]), int(cols[-1]) + 1
     clip = _setup.transform_points(virtual, camera.view_proj())
-    frags = rasterize(clip, faces, w, h)
-    covered = frags.mask & stencil
+    frags = rasterize(clip, faces, w, h, region=(r0, r1, c0, c1))
+    inside = frags.mask & stencil[r0:r1, c0:c1]
     nrm = interpolate(frags, np.concatenate(normals), faces, np.float32, normalize=True)
     colors = np.vstack([np.zeros(3), [o.color for o in scene.objects]]).astype(np.float32)
-    obj = np.where(covered, face_obj[np.maximum(frags.triangle, 0)], 0)
-    colour[covered] = shade(nrm[covered], colors[obj[covered]])
-    rid[covered] = obj[covered]
+    obj = np.where(inside, face_obj[np.maximum(frags.triangle, 0)], 0)
+    colour[r0:r1, c0:c1][inside] = shade(nrm[inside], colors[obj[inside]])
+    rid[r0:r1, c0:c1][inside] = obj[inside]
+    covered[r0:r1, c0:c1] = inside
     return colour, rid, covered
 
 

@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from naive import naive_interpolate, naive_rasterize
+import refsoft
 from refsoft import Camera, raster
 from refsoft.raster import _setup
 
@@ -102,3 +103,22 @@ def test_gbuffer_fused_pass_equals_separate_interpolation(precision):
     np.testing.assert_array_equal(gb.triangle, face)
     np.testing.assert_array_equal(gb.position, naive_interpolate(which, tris, mesh.vertices, faces, dt))
     np.testing.assert_array_equal(gb.normal, naive_interpolate(which, tris, mesh.normals, faces, dt, True))
+
+
+@pytest.mark.parametrize("region", [(10, 50, 20, 90), (0, 64, 0, 96), (33, 34, 7, 8), (0, 17, 80, 96)])
+def test_region_equals_the_cropped_full_raster(region):
+    rng = np.random.default_rng(21)
+    cam = CAMERAS["perspective"]
+    verts, faces = random_soup(rng, 60)
+    clip = _setup.transform_points(verts, cam.view_proj())
+    full = raster.rasterize(clip, faces, cam.width, cam.height)
+    part = raster.rasterize(clip, faces, cam.width, cam.height, region=region)
+    r0, r1, c0, c1 = region
+    np.testing.assert_array_equal(part.triangle, full.triangle[r0:r1, c0:c1])
+    np.testing.assert_array_equal(part.depth, full.depth[r0:r1, c0:c1])
+    attrs = np.c_[verts, rng.normal(size=(len(verts), 2))]
+    for normalize in (False, True):
+        np.testing.assert_array_equal(raster.interpolate(part, attrs, faces, normalize=normalize),
+                                      raster.interpolate(full, attrs, faces, normalize=normalize)[r0:r1, c0:c1])
+    with pytest.raises(refsoft.RefsoftError, match="region"):
+        raster.rasterize(clip, faces, cam.width, cam.height, region=(5, 5, 0, 10))

@@ -48,6 +48,9 @@ class Fragments:
         Index of the visible input triangle; -1 where nothing is drawn.
     index : ndarray, shape (H, W), int32
         Index of the visible *clip triangle* (internal; used by :func:`interpolate`).
+    origin : (int, int)
+        (row, col) of the first pixel of the rasterized region in the viewport ((0, 0) for the
+        whole viewport); the maps above cover that region only.
     setup : dict of ndarray
         Clip-triangle data: snapped ``X``, ``Y`` (T, 3) int32, ``Z``, ``IW`` (T, 3) float64,
         ``slot`` (T,) int32 row of ``B`` (K, 3, 3) float64, the clip vertices' barycentrics
@@ -62,6 +65,8 @@ class Fragments:
     index: np.ndarray
     setup: dict
     n_faces: int
+    height: int = 0
+    origin: tuple = (0, 0)
 
     @property
     def mask(self) -> np.ndarray:
@@ -82,7 +87,7 @@ def _check_faces(faces, n_vertices: int) -> np.ndarray:
     return np.ascontiguousarray(f, dtype=np.int32)
 
 
-def rasterize(clip, faces, width: int, height: int, peel_depth=None) -> Fragments:
+def rasterize(clip, faces, width: int, height: int, peel_depth=None, region=None) -> Fragments:
     """Rasterize clip-space triangles with OpenGL's rules (DESIGN section 2).
 
     Parameters
@@ -95,6 +100,11 @@ def rasterize(clip, faces, width: int, height: int, peel_depth=None) -> Fragment
         Viewport size in pixels.
     peel_depth : array_like, shape (H, W), float32, optional
         Depth peeling: keep only fragments strictly behind this depth (the previous layer).
+        With ``region``, shape (row1 - row0, col1 - col0).
+    region : (int, int, int, int), optional
+        ``(row0, row1, col0, col1)``: rasterize only these rows and columns of the viewport
+        (half-open). The result equals the whole viewport's, cropped; it is faster when the
+        region is small (e.g. a reflector's stencil).
 
     Returns
     -------
@@ -108,11 +118,20 @@ def rasterize(clip, faces, width: int, height: int, peel_depth=None) -> Fragment
         raise RefsoftError("clip coordinates are not finite")
     clip = np.ascontiguousarray(clip)
     faces = _check_faces(faces, len(clip))
+    if region is None:
+        region = (0, height, 0, width)
+    try:
+        r0, r1, c0, c1 = (int(x) for x in region)
+    except (TypeError, ValueError):
+        raise RefsoftError(f"region must be (row0, row1, col0, col1), got {region!r}") from None
+    if not (0 <= r0 < r1 <= height and 0 <= c0 < c1 <= width):
+        raise RefsoftError(f"region {region!r} is empty or outside the {width}x{height} viewport")
+    rh, rw = r1 - r0, c1 - c0
     use_peel = peel_depth is not None
     if use_peel:
         peel = np.ascontiguousarray(peel_depth, dtype=np.float32)
-        if peel.shape != (height, width):
-            raise RefsoftError(f"peel_depth must have shape {(height, width)}, got {peel.shape}")
+        if peel.shape != (rh, rw):
+            raise RefsoftError(f"peel_depth must have shape {(rh, rw)}, got {peel.shape}")
     else:
         peel = np.zeros((1, 1), dtype=np.float32)
     bad = (clip[:, 3] <= 0) & (clip[:, 2] + clip[:, 3] >= 0)
@@ -129,17 +148,18 @@ def rasterize(clip, faces, width: int, height: int, peel_depth=None) -> Fragment
     np.cumsum(clipped, out=clip_offsets[1:])
     win_xy, win_zw = _setup.vertex_window(clip, codes, width, height)
     X, Y, Z, IW, slot, B, tri, valid, bbox, area, bias = _setup.emit_clip_triangles(
-        clip, faces, codes, win_xy, win_zw, offsets, clip_offsets, gx, gy, width, height)
+        clip, faces, codes, win_xy, win_zw, offsets, clip_offsets, gx, gy, width, height,
+        np.array([r0, r1 - 1, c0, c1 - 1], dtype=np.int64))
     tile = constants.TILE_SIZE
-    tiles_x, tiles_y = -(-width // tile), -(-height // tile)
-    starts, items = _kernels.bin_triangles(valid, bbox, tile, tiles_x, tiles_y)
-    depth = np.full((height, width), constants.DEPTH_CLEAR, dtype=np.float32)
-    index = np.full((height, width), -1, dtype=np.int32)
-    triangle = np.full((height, width), -1, dtype=np.int32)
-    _kernels.raster_tiles(starts, items, X, Y, Z, tri, bbox, area, bias, width, height, tile, tiles_x,
+    tiles_x, tiles_y = -(-rw // tile), -(-rh // tile)
+    starts, items = _kernels.bin_triangles(valid, bbox, tile, tiles_x, tiles_y, r0, c0)
+    depth = np.full((rh, rw), constants.DEPTH_CLEAR, dtype=np.float32)
+    index = np.full((rh, rw), -1, dtype=np.int32)
+    triangle = np.full((rh, rw), -1, dtype=np.int32)
+    _kernels.raster_tiles(starts, items, X, Y, Z, tri, bbox, area, bias, width, height, tile, tiles_x, r0, c0,
                           depth, index, triangle, peel, use_peel)
     setup = {"X": X, "Y": Y, "Z": Z, "IW": IW, "slot": slot, "B": B, "tri": tri}
-    return Fragments(depth, triangle, index, setup, len(faces))
+    return Fragments(depth, triangle, index, setup, len(faces), height, (r0, c0))
 
 
 def interpolate(fragments: Fragments, attributes, faces, precision="float32", normalize=False) -> np.ndarray:
@@ -173,8 +193,10 @@ def interpolate(fragments: Fragments, attributes, faces, precision="float32", no
     s = fragments.setup
     h, w = fragments.shape
     out = np.zeros((h, w, attr.shape[1]), dtype=dt)
+    r0, c0 = fragments.origin
     _kernels.interpolate_rows(fragments.index, s["X"], s["Y"], s["IW"].astype(dt), s["slot"],
-                              s["B"].astype(dt), s["tri"], faces, attr, h, bool(normalize), _CONVERT[dt], out)
+                              s["B"].astype(dt), s["tri"], faces, attr, fragments.height, r0, c0, bool(normalize),
+                              _CONVERT[dt], out)
     return out
 
 
@@ -253,7 +275,7 @@ def gbuffer(mesh: Mesh, camera: Camera, precision="float32", origin=None) -> GBu
     s = frags.setup
     _kernels.interpolate_pair(frags.index, s["X"], s["Y"], s["IW"].astype(dt), s["slot"], s["B"].astype(dt), s["tri"],
                               mesh.faces, np.ascontiguousarray(mesh.vertices - o, dtype=dt),
-                              np.ascontiguousarray(mesh.normals, dtype=dt), h, _CONVERT[dt], pos, nrm)
+                              np.ascontiguousarray(mesh.normals, dtype=dt), h, 0, 0, _CONVERT[dt], pos, nrm)
     return GBuffer(pos, nrm, frags.mask, frags.depth, frags.triangle, vp, o)
 
 

@@ -18,8 +18,9 @@ BIN_CHUNKS = 16
 
 
 @kernel(parallel=True)
-def bin_triangles(valid, bbox, tile, tiles_x, tiles_y):
-    """Per-tile lists of clip triangles (in index order) whose pixel box meets the tile.
+def bin_triangles(valid, bbox, tile, tiles_x, tiles_y, r_org, c_org):
+    """Per-tile lists of clip triangles (in index order) whose pixel box meets the tile; tiles
+    cover the rasterized region, whose first pixel is (r_org, c_org).
 
     Returns ``(starts, items)``: tile ``k``'s triangles are ``items[starts[k]:starts[k+1]]``.
     """
@@ -31,8 +32,8 @@ def bin_triangles(valid, bbox, tile, tiles_x, tiles_y):
         for t in range(ch * chunk, min(n, (ch + 1) * chunk)):
             if not valid[t]:
                 continue
-            for ty in range(bbox[t, 2] // tile, bbox[t, 3] // tile + 1):
-                for tx in range(bbox[t, 0] // tile, bbox[t, 1] // tile + 1):
+            for ty in range((bbox[t, 2] - r_org) // tile, (bbox[t, 3] - r_org) // tile + 1):
+                for tx in range((bbox[t, 0] - c_org) // tile, (bbox[t, 1] - c_org) // tile + 1):
                     counts[ch, ty * tiles_x + tx] += 1
     # exclusive prefix sum in (tile, chunk) order: chunk ch of tile k starts at fill[ch, k]
     starts = np.empty(n_tiles + 1, dtype=np.int64)
@@ -49,8 +50,8 @@ def bin_triangles(valid, bbox, tile, tiles_x, tiles_y):
         for t in range(ch * chunk, min(n, (ch + 1) * chunk)):
             if not valid[t]:
                 continue
-            for ty in range(bbox[t, 2] // tile, bbox[t, 3] // tile + 1):
-                for tx in range(bbox[t, 0] // tile, bbox[t, 1] // tile + 1):
+            for ty in range((bbox[t, 2] - r_org) // tile, (bbox[t, 3] - r_org) // tile + 1):
+                for tx in range((bbox[t, 0] - c_org) // tile, (bbox[t, 1] - c_org) // tile + 1):
                     k = ty * tiles_x + tx
                     items[fill[ch, k]] = t
                     fill[ch, k] += 1
@@ -58,7 +59,7 @@ def bin_triangles(valid, bbox, tile, tiles_x, tiles_y):
 
 
 @kernel(parallel=True)
-def raster_tiles(starts, items, X, Y, Z, tri, bbox, area, bias, width, height, tile, tiles_x,
+def raster_tiles(starts, items, X, Y, Z, tri, bbox, area, bias, width, height, tile, tiles_x, r_org, c_org,
                  depth, index, triangle, peel, use_peel):
     """Depth-tested coverage. Writes ``depth`` (float32), ``index`` (clip triangle, int32) and
     ``triangle`` (input triangle, int32).
@@ -69,13 +70,14 @@ def raster_tiles(starts, items, X, Y, Z, tri, bbox, area, bias, width, height, t
     depth (and, when peeling, strictly greater than ``peel``).
     """
     n_tiles = starts.shape[0] - 1
+    rh, rw = depth.shape  # the region rasterized, whose first pixel is (r_org, c_org)
     for k in prange(n_tiles):
         ty = k // tiles_x
         tx = k - ty * tiles_x
-        r_lo = ty * tile
-        r_hi = min(r_lo + tile, height) - 1
-        c_lo = tx * tile
-        c_hi = min(c_lo + tile, width) - 1
+        r_lo = r_org + ty * tile
+        r_hi = min(r_lo + tile, r_org + rh) - 1
+        c_lo = c_org + tx * tile
+        c_hi = min(c_lo + tile, c_org + rw) - 1
         for s in range(starts[k], starts[k + 1]):
             t = items[s]
             r0 = max(bbox[t, 2], r_lo)
@@ -99,7 +101,7 @@ def raster_tiles(starts, items, X, Y, Z, tri, bbox, area, bias, width, height, t
                 e0 = (x2 - x1) * (py - y1) - (y2 - y1) * (px0 - x1) + b0
                 e1 = (x0 - x2) * (py - y2) - (y0 - y2) * (px0 - x2) + b1
                 e2 = (x1 - x0) * (py - y0) - (y1 - y0) * (px0 - x0) + b2
-                drow = depth[r]
+                drow = depth[r - r_org]
                 inside = False
                 for c in range(c0, c1 + 1):
                     if (e0 | e1 | e2) >= 0:
@@ -107,10 +109,10 @@ def raster_tiles(starts, items, X, Y, Z, tri, bbox, area, bias, width, height, t
                         z = ((np.float64(e0 - b0) * z0 + np.float64(e1 - b1) * z1)
                              + np.float64(e2 - b2) * z2) * inv_area
                         zf = np.float32(min(max(z, 0.0), 1.0))
-                        if zf < drow[c] and (not use_peel or zf > peel[r, c]):
-                            drow[c] = zf
-                            index[r, c] = t
-                            triangle[r, c] = face
+                        if zf < drow[c - c_org] and (not use_peel or zf > peel[r - r_org, c - c_org]):
+                            drow[c - c_org] = zf
+                            index[r - r_org, c - c_org] = t
+                            triangle[r - r_org, c - c_org] = face
                     elif inside:
                         break  # a triangle's covered pixels in a row are contiguous
                     e0 += s0
@@ -148,7 +150,7 @@ def _barycentrics(t, r, c, height, X, Y, IW, slot, B, conv):
 
 
 @kernel(parallel=True)
-def interpolate_rows(index, X, Y, IW, slot, B, tri, faces, attributes, height, normalize, conv, out):
+def interpolate_rows(index, X, Y, IW, slot, B, tri, faces, attributes, height, r_org, c_org, normalize, conv, out):
     """Perspective-correct attributes of the visible triangle at every covered pixel.
 
     In the precision of the scalar ``conv`` (``np.float32(0)`` or ``np.float64(0)``, matching
@@ -157,7 +159,8 @@ def interpolate_rows(index, X, Y, IW, slot, B, tri, faces, attributes, height, n
     ``b_j = l0 B[0, j] + l1 B[1, j] + l2 B[2, j]`` (``B`` the clip vertices' barycentrics,
     the identity for unclipped triangles) and ``out = b0 A[v0] + b1 A[v1] + b2 A[v2]``;
     with ``normalize``, ``out / |out|`` (zero stays zero). ``out`` must be zeroed: uncovered
-    pixels are not written.
+    pixels are not written. ``index`` covers the rasterized region, whose first pixel is
+    (``r_org``, ``c_org``) of a viewport ``height`` pixels high.
     """
     h, w = index.shape
     n_ch = attributes.shape[1]
@@ -169,7 +172,7 @@ def interpolate_rows(index, X, Y, IW, slot, B, tri, faces, attributes, height, n
             t = irow[c]
             if t < 0:
                 continue
-            b0, b1, b2 = _barycentrics(t, r, c, height, X, Y, IW, slot, B, conv)
+            b0, b1, b2 = _barycentrics(t, r + r_org, c + c_org, height, X, Y, IW, slot, B, conv)
             f = tri[t]
             v0, v1, v2 = faces[f, 0], faces[f, 1], faces[f, 2]
             for ch in range(n_ch):
@@ -188,7 +191,7 @@ def interpolate_rows(index, X, Y, IW, slot, B, tri, faces, attributes, height, n
 
 
 @kernel(parallel=True)
-def interpolate_pair(index, X, Y, IW, slot, B, tri, faces, attr_a, attr_b, height, conv, out_a, out_b):
+def interpolate_pair(index, X, Y, IW, slot, B, tri, faces, attr_a, attr_b, height, r_org, c_org, conv, out_a, out_b):
     """:func:`interpolate_rows` of two 3-vector attributes at once, the second renormalised (the
     G-buffer's positions and normals share each pixel's barycentrics). Same arithmetic."""
     h, w = index.shape
@@ -200,7 +203,7 @@ def interpolate_pair(index, X, Y, IW, slot, B, tri, faces, attr_a, attr_b, heigh
             t = irow[c]
             if t < 0:
                 continue
-            b0, b1, b2 = _barycentrics(t, r, c, height, X, Y, IW, slot, B, conv)
+            b0, b1, b2 = _barycentrics(t, r + r_org, c + c_org, height, X, Y, IW, slot, B, conv)
             f = tri[t]
             v0, v1, v2 = faces[f, 0], faces[f, 1], faces[f, 2]
             for ch in range(3):

@@ -171,7 +171,7 @@ def vertex_window(clip, codes, width, height):
 
 
 @kernel
-def _emit(t, f, x0, y0, z0, w0, x1, y1, z1, w1, x2, y2, z2, w2, width, height,
+def _emit(t, f, x0, y0, z0, w0, x1, y1, z1, w1, x2, y2, z2, w2, width, height, region,
           X, Y, Z, IW, tri, valid, bbox, area, bias):
     """Store clip triangle ``t`` of input triangle ``f`` counter-clockwise on screen, with its
     doubled area, edge biases and pixel box. Returns True when vertices 1 and 2 were swapped."""
@@ -209,16 +209,21 @@ def _emit(t, f, x0, y0, z0, w0, x1, y1, z1, w1, x2, y2, z2, w2, width, height,
     k1 = min((xmax - 128) >> 8, width - 1)
     j0 = max((ymin - 128 + 255) >> 8, 0)
     j1 = min((ymax - 128) >> 8, height - 1)
+    # clamp to the region rasterized (rows region[0]..region[1], cols region[2]..region[3])
+    top = max(height - 1 - j1, region[0])
+    bottom = min(height - 1 - j0, region[1])
+    k0 = max(k0, region[2])
+    k1 = min(k1, region[3])
     bbox[t, 0] = k0
     bbox[t, 1] = k1
-    bbox[t, 2] = height - 1 - j1  # top row
-    bbox[t, 3] = height - 1 - j0  # bottom row
-    valid[t] = a2 != 0 and k0 <= k1 and j0 <= j1
+    bbox[t, 2] = top
+    bbox[t, 3] = bottom
+    valid[t] = a2 != 0 and k0 <= k1 and top <= bottom
     return swapped
 
 
 @kernel(parallel=True)
-def emit_clip_triangles(clip, faces, codes, win_xy, win_zw, offsets, clip_offsets, gx, gy, width, height):
+def emit_clip_triangles(clip, faces, codes, win_xy, win_zw, offsets, clip_offsets, gx, gy, width, height, region):
     """Clip, snap and set up every triangle.
 
     ``offsets[f]`` is the first output slot of face f; ``clip_offsets[f]`` the first row of the
@@ -227,7 +232,8 @@ def emit_clip_triangles(clip, faces, codes, win_xy, win_zw, offsets, clip_offset
     = 1/w (T, 3) float64; ``slot`` (T,) int32, the row of ``B`` (K, 3, 3) float64 holding the
     clip vertices' barycentrics w.r.t. the input triangle, or for an unclipped triangle -1 (identity)
     or -2 (vertices 1 and 2 swapped); ``tri`` (T,) int32 input triangle; ``valid`` (T,) bool; pixel ``bbox`` (T, 4)
-    int32 (col min, col max, row min, row max); doubled ``area`` (T,) int64 > 0 when valid;
+    int32 (col min, col max, row min, row max), clamped to ``region`` (row min, row max, col
+    min, col max, inclusive: the part of the viewport rasterized); doubled ``area`` (T,) int64 > 0 when valid;
     edge ``bias`` (T, 3) int8 (0 inclusive, -1 exclusive).
     """
     total = offsets[-1]
@@ -254,7 +260,7 @@ def emit_clip_triangles(clip, faces, codes, win_xy, win_zw, offsets, clip_offset
                             np.int64(win_xy[v0, 0]), np.int64(win_xy[v0, 1]), win_zw[v0, 0], win_zw[v0, 1],
                             np.int64(win_xy[v1, 0]), np.int64(win_xy[v1, 1]), win_zw[v1, 0], win_zw[v1, 1],
                             np.int64(win_xy[v2, 0]), np.int64(win_xy[v2, 1]), win_zw[v2, 0], win_zw[v2, 1],
-                            width, height, X, Y, Z, IW, tri, valid, bbox, area, bias)
+                            width, height, region, X, Y, Z, IW, tri, valid, bbox, area, bias)
             slot[start] = -2 if swapped else -1
             continue
         poly_c = np.empty((MAX_POLY, 4))
@@ -266,7 +272,7 @@ def emit_clip_triangles(clip, faces, codes, win_xy, win_zw, offsets, clip_offset
             x0, y0, z0, w0 = _window(poly_c[0], width, height)
             x1, y1, z1, w1 = _window(poly_c[j + 1], width, height)
             x2, y2, z2, w2 = _window(poly_c[j + 2], width, height)
-            swapped = _emit(t, f, x0, y0, z0, w0, x1, y1, z1, w1, x2, y2, z2, w2, width, height,
+            swapped = _emit(t, f, x0, y0, z0, w0, x1, y1, z1, w1, x2, y2, z2, w2, width, height, region,
                             X, Y, Z, IW, tri, valid, bbox, area, bias)
             i1, i2 = (j + 2, j + 1) if swapped else (j + 1, j + 2)
             for k in range(3):
