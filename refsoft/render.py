@@ -127,6 +127,20 @@ class FrameDriver:
         self.scene = scene
         self.options = options or RenderOptions()
         self.previous = {}
+        self._static_meshes = {}  # world meshes of objects that do not move (reused, unchanged)
+
+    def _world_meshes(self, frame):
+        scene = self.scene
+        moving = set() if scene.animation is None else set(scene.animation.object_keys)
+        meshes = []
+        for k, obj in enumerate(scene.objects, start=1):
+            if obj.name in moving:
+                meshes.append(scene.world_mesh(k, frame))
+            else:
+                if k not in self._static_meshes:
+                    self._static_meshes[k] = scene.world_mesh(k, frame)
+                meshes.append(self._static_meshes[k])
+        return meshes
 
     def render_frame(self, frame: int) -> Frame:
         """Render one frame (with coherence from the last frame rendered by this driver)."""
@@ -137,7 +151,7 @@ class FrameDriver:
         t0 = time.perf_counter()
         camera = scene.camera_at(frame)
         t = time.perf_counter()
-        meshes = [scene.world_mesh(k + 1, frame) for k in range(len(scene.objects))]  # once per frame
+        meshes = self._world_meshes(frame)  # once per frame; static objects once per driver
         view = color_pass(meshes, [o.color for o in scene.objects], camera)
         times["main"] += 1000 * (time.perf_counter() - t)
         verts, owner = scene_vertices(scene, frame, meshes)
