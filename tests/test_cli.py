@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from refsoft import cli
+from scene_data import ANIMATED
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -104,29 +105,6 @@ def test_trace_command_writes_table_json_png_gif(tmp_path, capsys):
     assert oct(os.stat(out / "trace.png").st_mode & 0o777) != "0o600"
 
 
-ANIMATED = """
-[camera]
-eye = [0.0, 1.0, 5.0]
-target = [0.0, 0.0, 0.0]
-width = 160
-height = 120
-[[objects]]
-name = "ball"
-primitive = { type = "icosphere", subdivisions = 4 }
-reflector = true
-[[objects]]
-name = "box"
-primitive = { type = "box", subdivisions = 2 }
-translate = [1.5, 0.0, 1.0]
-[animation]
-frames = 3
-[[animation.camera]]
-frame = 0
-eye = [0.0, 1.0, 5.0]
-[[animation.camera]]
-frame = 2
-eye = [0.6, 1.2, 4.6]
-"""
 
 
 def test_trace_command_coherent_frame_starts_at_previous_pixel(tmp_path, capsys):
