@@ -278,7 +278,7 @@ def render(scene, frames=None, out=None, progress=False, **options):
     if progress and len(indices) > 1:
         from tqdm import tqdm
 
-        it = tqdm(indices, desc=f"render {scene.name}", unit="frame")
+        it = tqdm(indices, desc=f"render {scene.name}", unit="frame", disable=None)  # no bar off a terminal
     for f in it:
         fr = driver.render_frame(f)
         if out is not None:
