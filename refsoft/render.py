@@ -179,7 +179,9 @@ class FrameDriver:
                 times["composite"] += 1000 * (time.perf_counter() - t)
             gb, res = refl.gbuffer, refl.result
             arrays.update({
-                f"gbuffer_position_{k}": (gb.position.astype(np.float64) + gb.origin).astype(np.float32),
+                # world space, zero where not covered (as the rasterizer's maps)
+                f"gbuffer_position_{k}": np.where(gb.mask[..., None], gb.position.astype(np.float64) + gb.origin,
+                                                  0.0).astype(np.float32),
                 f"gbuffer_normal_{k}": gb.normal.astype(np.float32),
                 f"gbuffer_mask_{k}": gb.mask,
                 f"gbuffer_view_proj_{k}": gb.view_proj,

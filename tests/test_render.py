@@ -54,6 +54,7 @@ def test_output_keys_shapes_and_dtypes(tmp_path, animated):
     with np.load(tmp_path / "frame_0001.npz") as z:
         np.testing.assert_array_equal(z["gbuffer_mask_1"], gb.mask)
         np.testing.assert_allclose(z["gbuffer_position_1"][gb.mask], gb.position[gb.mask], atol=2e-6)
+        assert np.all(z["gbuffer_position_1"][~gb.mask] == 0) and np.all(z["gbuffer_normal_1"][~gb.mask] == 0)
 
 
 def test_reflected_id_is_minus_one_exactly_off_reflectors(animated):
