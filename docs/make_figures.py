@@ -78,10 +78,28 @@ def trace_figure():
     write_png(os.path.join(FIG, "trace_sphere.png"), side_by_side(*pics))
 
 
+def frame_figure():
+    """The sphere scene rendered with each hidden-vertex mode, and a kitchen frame."""
+    from refsoft.render import FrameDriver, RenderOptions
+
+    scene = refsoft.load_scene("sphere", width=320, height=240)
+    pics = [FrameDriver(scene, RenderOptions(inverse=mode)).render_frame(0).image
+            for mode in ("plane", "search", "discard")]
+    write_png(os.path.join(FIG, "frame_inverse_modes.png"), side_by_side(*pics))
+    kitchen = refsoft.load_scene("kitchen", width=480, height=360)
+    driver = FrameDriver(kitchen)
+    for f in range(kitchen.n_frames):
+        fr = driver.render_frame(f)
+        if f in (0, kitchen.n_frames - 1):
+            pics = pics + [fr.image] if f else [fr.image]
+    write_png(os.path.join(FIG, "frame_kitchen.png"), side_by_side(*pics))
+
+
 if __name__ == "__main__":
     os.makedirs(FIG, exist_ok=True)
     gbuffer_figure()
     trace_figure()
+    frame_figure()
     try:
         fill_rule_figure()
     except ImportError:
