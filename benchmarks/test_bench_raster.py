@@ -32,34 +32,32 @@ def test_refsoft_gbuffer(benchmark, size):
     assert 0.2 < gb.mask.mean() < 0.3
 
 
-@pytest.mark.parametrize("size", list(SIZES))
-def test_llvmpipe_gbuffer(benchmark, size):
+@pytest.fixture
+def llvmpipe_peer(request):
+    """An llvmpipe G-buffer drawer for the parametrized size, warmed up; skipped with the
+    reason when Mesa's EGL is not installed."""
     reason = llvmpipe_available()
     if reason:
         pytest.skip(f"llvmpipe peer not available: {reason}")
+    size = request.node.callspec.params["size"]
     peer = LlvmpipeGBuffer(sphere(size), CAMERA)
-    try:
-        peer.draw()
-        benchmark.group = f"gbuffer {size} tris 1024x768"
-        benchmark(peer.draw)
-        # same picture: coverage agrees except on a thin silhouette ring (different snapping/fill)
-        mask = peer.mask()
-        ours = raster.gbuffer(sphere(size), CAMERA).mask
-        benchmark.extra_info["mask_disagreement"] = int((mask != ours).sum())
-        assert (mask != ours).sum() < 0.002 * ours.sum()
-    finally:
-        peer.release()
+    peer.draw()
+    yield peer
+    peer.release()
+
+
+@pytest.mark.parametrize("size", list(SIZES))
+def test_llvmpipe_gbuffer(benchmark, size, llvmpipe_peer):
+    benchmark.group = f"gbuffer {size} tris 1024x768"
+    benchmark(llvmpipe_peer.draw)
+    # same picture: coverage agrees except on a thin silhouette ring (different snapping/fill)
+    mask = llvmpipe_peer.mask()
+    ours = raster.gbuffer(sphere(size), CAMERA).mask
+    benchmark.extra_info["mask_disagreement"] = int((mask != ours).sum())
+    assert (mask != ours).sum() < 0.002 * ours.sum()
 
 
 @pytest.mark.parametrize("size", ["20k"])
-def test_llvmpipe_gbuffer_with_readback(benchmark, size):
-    reason = llvmpipe_available()
-    if reason:
-        pytest.skip(f"llvmpipe peer not available: {reason}")
-    peer = LlvmpipeGBuffer(sphere(size), CAMERA)
-    try:
-        peer.draw()
-        benchmark.group = f"gbuffer {size} tris 1024x768"
-        benchmark(peer.draw_and_read)
-    finally:
-        peer.release()
+def test_llvmpipe_gbuffer_with_readback(benchmark, size, llvmpipe_peer):
+    benchmark.group = f"gbuffer {size} tris 1024x768"
+    benchmark(llvmpipe_peer.draw_and_read)
