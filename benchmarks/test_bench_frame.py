@@ -41,3 +41,24 @@ def test_frame_coherent(benchmark, name):
         return driver.render_frame(state["f"])
 
     _stages(benchmark, benchmark.pedantic(coherent, rounds=5))
+
+
+@pytest.mark.parametrize("name", SCENES)
+def test_frame_truth(benchmark, name):
+    """The ray-traced truth of the same frames as ``test_frame_coherent`` (frames 1, 2, ...):
+    the ratio of the two medians is the figure issue 4 asks for."""
+    from refsoft.truth import TruthRenderer
+
+    scene = refsoft.load_scene(name, width=1024, height=768)
+    renderer = TruthRenderer(scene, exact=False)
+    renderer.render_frame(0)  # Embree scene and kernels warmed up outside the timing
+    benchmark.group = f"frame {name} 1024x768"
+    state = {"f": 0}
+
+    def traced():
+        state["f"] = state["f"] % (scene.n_frames - 1) + 1
+        return renderer.render_frame(state["f"])
+
+    fr = benchmark.pedantic(traced, rounds=5)
+    _stages(benchmark, fr)
+    benchmark.extra_info["reflector_pixels"] = fr.counts["reflector_pixels"]

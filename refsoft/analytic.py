@@ -70,40 +70,77 @@ def sphere_reflection_points(centre, radius, eye, points) -> np.ndarray:
     c, rho, o, pts = _inputs(centre, radius, eye, points)
     out = np.full((len(pts), 3), np.nan)
     eye_dir = (o - c) / np.linalg.norm(o - c)
-    for i, v in enumerate(pts):
-        if np.linalg.norm(v - c) <= rho:
-            continue
-        a, b, phi = _arc(eye_dir, (v - c) / np.linalg.norm(v - c))
+    outside = np.flatnonzero(np.linalg.norm(pts - c, axis=1) > rho)
+    if len(outside) == 0:
+        return out
+    arcs = [_arc(eye_dir, (pts[i] - c) / np.linalg.norm(pts[i] - c)) for i in outside]
+    A = np.array([a for a, _, _ in arcs])
+    B = np.array([b for _, b, _ in arcs])
+    phi = np.array([p for _, _, p in arcs])
+    # bracket the roots of every point at once: f on ARC_SAMPLES + 1 samples of each arc
+    ts = phi[:, None] * np.linspace(0.0, 1.0, ARC_SAMPLES + 1)[None, :]
+    fs = _arc_function(ts[..., None], A[:, None], B[:, None], c, rho, o, pts[outside][:, None])
+    for j, i in enumerate(outside):
+        a, b, v = A[j], B[j], pts[i]
 
         def f(t):
-            n = np.cos(t) * a + np.sin(t) * b
-            r = c + rho * n
-            u = o - r
-            w = v - r
-            s = u / np.linalg.norm(u) + w / np.linalg.norm(w)
-            return s @ (-np.sin(t) * a + np.cos(t) * b)
+            return float(_arc_function(t, a, b, c, rho, o, v))
 
-        ts = np.linspace(0.0, phi, ARC_SAMPLES + 1)
-        fs = np.array([f(t) for t in ts])
-        for k in range(ARC_SAMPLES):
-            if fs[k] == 0.0:
-                t = ts[k]
-            elif fs[k] * fs[k + 1] < 0.0:
-                t = brentq(f, ts[k], ts[k + 1], xtol=1e-15, rtol=4 * np.finfo(float).eps, maxiter=200)
-            else:
-                continue
+        candidates = [ts[j, k] if fs[j, k] == 0.0 else (ts[j, k], ts[j, k + 1])
+                      for k in range(ARC_SAMPLES) if fs[j, k] == 0.0 or fs[j, k] * fs[j, k + 1] < 0.0]
+        if fs[j, -1] == 0.0 and phi[j] > 0:
+            candidates.append(ts[j, -1])
+        for cand in candidates:
+            t = cand if np.isscalar(cand) else brentq(f, cand[0], cand[1], xtol=1e-15,
+                                                       rtol=4 * np.finfo(float).eps, maxiter=200)
             n = np.cos(t) * a + np.sin(t) * b
             r = c + rho * n
             if (o - r) @ n > 0.0 and (v - r) @ n > 0.0:
                 out[i] = r
                 break
-        else:
-            if fs[-1] == 0.0 and phi > 0:
-                n = np.cos(phi) * a + np.sin(phi) * b
-                r = c + rho * n
-                if (o - r) @ n > 0.0 and (v - r) @ n > 0.0:
-                    out[i] = r
     return out
+
+
+def _arc_function(t, a, b, c, rho, o, v):
+    """``(u + v) . T`` at arc angle ``t`` (broadcasting over leading axes; last axis xyz)."""
+    n = np.cos(t) * a + np.sin(t) * b
+    r = c + rho * n
+    u = o - r
+    w = v - r
+    s = u / np.linalg.norm(u, axis=-1, keepdims=True) + w / np.linalg.norm(w, axis=-1, keepdims=True)
+    return np.sum(s * (-np.sin(t) * a + np.cos(t) * b), axis=-1)
+
+
+def fit_sphere(vertices, rtol=1e-9):
+    """The sphere all ``vertices`` lie on, if there is one (icosphere and uv-sphere meshes).
+
+    Parameters
+    ----------
+    vertices : array_like, shape (N, 3)
+    rtol : float
+        Largest accepted ``| |x - c| - r |`` relative to ``r``.
+
+    Returns
+    -------
+    (centre (3,) float64, radius float) or None
+    """
+    x = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
+    if len(x) < 4:
+        return None
+    shift = x.mean(axis=0)
+    y = x - shift
+    # |y|^2 = 2 c.y + k  (k = r^2 - |c|^2): linear least squares in (c, k)
+    lhs = np.c_[2.0 * y, np.ones(len(y))]
+    sol, *_ = np.linalg.lstsq(lhs, np.sum(y * y, axis=1), rcond=None)
+    centre = sol[:3]
+    r2 = sol[3] + centre @ centre
+    if not np.isfinite(r2) or r2 <= 0:
+        return None
+    radius = float(np.sqrt(r2))
+    dev = np.abs(np.linalg.norm(y - centre, axis=1) - radius)
+    if dev.max() > rtol * radius:
+        return None
+    return centre + shift, radius
 
 
 def sphere_reflection_points_quartic(centre, radius, eye, points) -> np.ndarray:

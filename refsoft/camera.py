@@ -173,7 +173,24 @@ class Camera:
         origins : ndarray, shape (height, width, 3), float64
         directions : ndarray, shape (height, width, 3), float64, unit length
         """
-        rows, cols = np.mgrid[0 : self.height, 0 : self.width].astype(np.float64)
+        rows, cols = np.mgrid[0 : self.height, 0 : self.width]
+        return self.rays(rows, cols)
+
+    def rays(self, rows, cols) -> tuple[np.ndarray, np.ndarray]:
+        """World-space rays through the centres of pixels ``(rows, cols)`` (row 0 at the top).
+
+        Parameters
+        ----------
+        rows, cols : array_like of int, same shape S
+
+        Returns
+        -------
+        origins : ndarray, shape S + (3,), float64
+            The eye (perspective) or the point on the near plane (orthographic).
+        directions : ndarray, shape S + (3,), float64, unit length
+        """
+        rows = np.asarray(rows, dtype=np.float64)
+        cols = np.asarray(cols, dtype=np.float64)
         x_ndc = (cols + 0.5) / self.width * 2.0 - 1.0
         y_ndc = (self.height - rows - 0.5) / self.height * 2.0 - 1.0
         inv = np.linalg.inv(self.view_proj())

@@ -150,6 +150,89 @@ def cmd_render(args) -> int:
     return 0
 
 
+def cmd_truth(args) -> int:
+    from .errors import RefsoftError
+    from .render import frame_indices
+    from .truth import truth
+
+    scene = _scene_from_args(args)
+    if args.frame is not None and args.frames is not None:
+        raise RefsoftError("give --frames N or --frame K, not both")
+    frames = [args.frame] if args.frame is not None else args.frames
+    frame_indices(scene, frames)  # checks the range before any work
+    t0 = time.perf_counter()
+    done, stats = truth(scene, frames=frames, out=args.out, progress=True, exact=not args.no_exact)
+    median_ms = stats["summary"]["median_total_ms"]
+    rays = sum(f.counts["reflector_pixels"] for f in done)
+    print(f"{scene.name}: {len(done)} truth frame(s) written to {args.out} in {time.perf_counter() - t0:.1f} s "
+          f"(median {median_ms:.0f} ms per frame; {rays} reflected rays)")
+    return 0
+
+
+def _frame_files(folder):
+    import glob
+
+    from .errors import RefsoftError
+
+    if not os.path.isdir(folder):
+        raise RefsoftError(f"{folder} is not a folder")
+    files = sorted(glob.glob(os.path.join(folder, "frame_[0-9][0-9][0-9][0-9].npz")))
+    return {os.path.basename(f)[6:10]: f for f in files}
+
+
+def cmd_compare(args) -> int:
+    from .errors import RefsoftError
+    from .io import write_json, write_png
+    from .metrics import frame_metrics
+    from .visualize import agreement_map, difference_image, side_by_side
+
+    render_files, truth_files = _frame_files(args.render_dir), _frame_files(args.truth_dir)
+    common = sorted(set(render_files) & set(truth_files))
+    if not common:
+        raise RefsoftError(f"no frame_NNNN.npz common to {args.render_dir} ({len(render_files)} frames) and "
+                           f"{args.truth_dir} ({len(truth_files)} frames)")
+    out = args.out or os.path.join(args.render_dir, "compare")
+    os.makedirs(out, exist_ok=True)
+    report = {"render": os.path.abspath(args.render_dir), "truth": os.path.abspath(args.truth_dir), "frames": []}
+    print(f"{'frame':>5} {'refl px':>8} {'id disagree':>11} {'interior':>9} {'colour mean':>11} {'colour p99':>10}"
+          f"  per-vertex (reflector: px mean/max, |V'-V'*| mean)")
+    for key in common:
+        with np.load(render_files[key]) as r, np.load(truth_files[key]) as t:
+            ra, ta = dict(r), dict(t)
+        if ra["reflected_id"].shape != ta["reflected_id"].shape:
+            raise RefsoftError(f"frame {key}: render is {ra['reflected_id'].shape[::-1]} pixels, truth "
+                               f"{ta['reflected_id'].shape[::-1]} (render both at the same --width/--height)")
+        m = frame_metrics(ra, ta)
+        m["frame"] = int(key)
+        report["frames"].append(m)
+        verts = "; ".join(f"{k}: {v['pixel_distance_mean']:.3f}/{v['pixel_distance_max']:.3f} px, "
+                          f"{v['virtual_distance_mean']:.2e}" for k, v in m.get("vertices", {}).items()
+                          if "pixel_distance_mean" in v)
+        print(f"{int(key):>5} {m['reflector_pixels']:>8} {100 * m['reflected_id_disagreement']:>10.2f}% "
+              f"{100 * m['interior_disagreement']:>8.2f}% {m['color_error']['mean']:>11.4f} "
+              f"{m['color_error']['p99']:>10.4f}  {verts}")
+        write_png(os.path.join(out, f"agreement_{key}.png"),
+                  agreement_map(ra["reflected_id"], ta["reflected_id"], ta["image"]))
+        write_png(os.path.join(out, f"side_{key}.png"),
+                  side_by_side(ra["image"], ta["image"], difference_image(ra["image"], ta["image"])))
+    frames = report["frames"]
+    px = np.array([f["reflector_pixels"] for f in frames], dtype=np.float64)
+    dis = np.array([f["reflected_id_disagreement"] for f in frames])
+    report["summary"] = {"frames": len(frames),
+                         "reflected_id_disagreement": float((dis * px).sum() / px.sum()) if px.sum() else 0.0,
+                         "only_in_render": sorted(set(render_files) - set(truth_files)),
+                         "only_in_truth": sorted(set(truth_files) - set(render_files))}
+    write_json(os.path.join(out, "metrics.json"), report)
+    s = report["summary"]
+    extra = ""
+    if s["only_in_render"] or s["only_in_truth"]:
+        extra = f" (not compared: {len(s['only_in_render'])} render-only, {len(s['only_in_truth'])} truth-only frames)"
+    print(f"{len(frames)} frame(s): reflected_id differs on {100 * s['reflected_id_disagreement']:.2f}% of reflector "
+          f"pixels{extra}; wrote {out}/metrics.json, agreement_NNNN.png (green agree, red differ) and side_NNNN.png "
+          f"(render | truth | 4x difference)")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     from . import __version__
 
@@ -200,6 +283,23 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--precision", choices=["float32", "float64"], default="float32")
     r.add_argument("--no-coherence", action="store_true", help="start every search cold")
     r.set_defaults(func=cmd_render)
+
+    tr = sub.add_parser("truth", help="ray-trace the reflections (Embree) as the reference for compare")
+    tr.add_argument("scene", help="built-in scene name or TOML file")
+    tr.add_argument("--frames", type=int, default=None, help="frames 0..N-1 (default: the whole animation)")
+    tr.add_argument("--frame", type=int, default=None, help="only frame K")
+    tr.add_argument("--width", type=int, default=None)
+    tr.add_argument("--height", type=int, default=None)
+    tr.add_argument("--out", default="out/truth", help="output folder (default: out/truth)")
+    tr.add_argument("--no-exact", action="store_true",
+                    help="skip the exact reflection points of spherical reflectors (per-vertex truth)")
+    tr.set_defaults(func=cmd_truth)
+
+    c = sub.add_parser("compare", help="metrics of a render against its truth, agreement maps, side-by-side pictures")
+    c.add_argument("render_dir", help="folder written by refsoft render")
+    c.add_argument("truth_dir", help="folder written by refsoft truth")
+    c.add_argument("--out", default=None, help="output folder (default: RENDER_DIR/compare)")
+    c.set_defaults(func=cmd_compare)
     return p
 
 

@@ -225,6 +225,28 @@ def write_frame(out_dir, frame: Frame):
     write_png(base + ".png", frame.image)
 
 
+def frame_indices(scene: Scene, frames=None) -> list:
+    """Frame indices from a ``frames`` argument: None (every frame), a count N (0 .. N-1) or a
+    sequence of indices; checked against the animation's length."""
+    if frames is None:
+        indices = list(range(scene.n_frames))
+    elif isinstance(frames, (int, np.integer)) and not isinstance(frames, bool):
+        if frames < 1:
+            raise RefsoftError(f"frames must be positive, got {frames}")
+        if scene.animation is not None and frames > scene.n_frames:
+            raise RefsoftError(f"scene {scene.name!r} has {scene.n_frames} frames, asked for {frames}")
+        indices = list(range(int(frames)))
+    else:
+        indices = [int(f) for f in frames]
+    if scene.animation is not None:
+        bad = [f for f in indices if not 0 <= f < scene.n_frames]
+        if bad:
+            raise RefsoftError(f"frame {bad[0]} is outside [0, {scene.n_frames - 1}]")
+    elif any(f < 0 for f in indices):
+        raise RefsoftError("frame indices must be >= 0")
+    return indices
+
+
 def render(scene, frames=None, out=None, progress=False, **options):
     """Render frames of a scene (the Python face of ``refsoft render``).
 
@@ -256,22 +278,7 @@ def render(scene, frames=None, out=None, progress=False, **options):
     if not isinstance(scene, Scene):
         scene = load_scene(scene)
     opts = RenderOptions(**options)
-    if frames is None:
-        indices = list(range(scene.n_frames))
-    elif isinstance(frames, (int, np.integer)) and not isinstance(frames, bool):
-        if frames < 1:
-            raise RefsoftError(f"frames must be positive, got {frames}")
-        if scene.animation is not None and frames > scene.n_frames:
-            raise RefsoftError(f"scene {scene.name!r} has {scene.n_frames} frames, asked for {frames}")
-        indices = list(range(int(frames)))
-    else:
-        indices = [int(f) for f in frames]
-    if scene.animation is not None:
-        bad = [f for f in indices if not 0 <= f < scene.n_frames]
-        if bad:
-            raise RefsoftError(f"frame {bad[0]} is outside [0, {scene.n_frames - 1}]")
-    elif any(f < 0 for f in indices):
-        raise RefsoftError("frame indices must be >= 0")
+    indices = frame_indices(scene, frames)
     if out is not None:
         os.makedirs(out, exist_ok=True)
     driver = FrameDriver(scene, opts)

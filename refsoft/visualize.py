@@ -35,3 +35,21 @@ def side_by_side(*images, gap: int = 4) -> np.ndarray:
         if i < len(images) - 1:
             parts.append(np.full((h, gap, 3), 255, dtype=np.uint8))
     return np.concatenate(parts, axis=1)
+
+
+def agreement_map(render_id, truth_id, image) -> np.ndarray:
+    """Reflector pixels green where ``reflected_id`` agrees with the truth, red where not; the
+    rest of ``image`` dimmed to grey. (H, W, 3) uint8."""
+    grey = np.asarray(image, dtype=np.float64).mean(axis=-1, keepdims=True) / 255.0
+    out = np.repeat(0.35 * grey, 3, axis=-1)
+    refl = np.asarray(truth_id) >= 0
+    agree = refl & (np.asarray(render_id) == np.asarray(truth_id))
+    out[agree] = (0.1, 0.75, 0.2)
+    out[refl & ~agree] = (0.9, 0.1, 0.1)
+    return to_uint8(out)
+
+
+def difference_image(a, b, gain: float = 4.0) -> np.ndarray:
+    """``gain * |a - b|`` per channel, clipped: a magnified difference of two uint8 images."""
+    d = np.abs(np.asarray(a, dtype=np.float64) - np.asarray(b, dtype=np.float64)) * gain / 255.0
+    return to_uint8(d)

@@ -87,12 +87,13 @@ def torus_scene() -> Scene:
 
 
 def quad_scene() -> Scene:
-    """A large two-triangle quad reflected in a mirror ball: each virtual triangle spans a big
-    curved image, where linear interpolation between reflected vertices is visibly wrong."""
+    """A large two-triangle quad just behind the camera, reflected in a mirror ball: each virtual
+    triangle spans a big curved image, where linear interpolation between reflected vertices is
+    visibly wrong (the straight virtual edges against the truth's curved ones)."""
     from .shapes import quad
 
     ball = SceneObject("ball", icosphere(5, 1.0), (0.9, 0.9, 0.9), Transform((0, 0, 0)), reflector=True)
-    q = SceneObject("quad", quad((3.0, 2.0)), (0.95, 0.55, 0.1), Transform((0.0, 0.2, 2.2), (0, 0, 0)))
+    q = SceneObject("quad", quad((6.0, 4.0)), (0.95, 0.55, 0.1), Transform((0.0, 0.6, 6.5), (0, 0, 0)))
     floor = SceneObject("floor", plane_grid((12.0, 12.0), (24, 24)), (0.35, 0.55, 0.35), Transform((0, -1.0, 0)))
     cam = Camera(eye=(0.0, 0.6, 5.5), target=(0.0, 0.0, 0.0), fov_y=35.0, width=640, height=480)
     anim = Animation(20, _orbit_keys(20, 5.53, 0.6, -8, 8))

@@ -1,0 +1,195 @@
+"""Error metrics of a render against the ray-traced truth (DESIGN section 6), all in one place.
+
+Per vertex (where an analytic truth exists): ``1 - score``, the pixel distance between the
+found reflection pixel and the projection of the exact reflection point, and the distance
+between the virtual vertex and the exact one. Per image: the share of reflector pixels whose
+``reflected_id`` differs from the truth, colour error (mean and 99th percentile), and FLIP
+(information only, when the ``flip-evaluator`` package is installed).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .errors import RefsoftError
+
+#: Pixels within this many pixels (8-neighbour steps) of a reflector's silhouette form its rim;
+#: ``interior_disagreement`` leaves them out (region-C effects concentrate there).
+RIM_PIXELS = 3
+
+
+def score_error(score) -> np.ndarray:
+    """``1 - s(R)`` per vertex (float64; 0 at an exact reflection point)."""
+    return 1.0 - np.asarray(score, dtype=np.float64)
+
+
+def window_to_pixel(points, view_proj, shape) -> np.ndarray:
+    """Continuous (row, col) pixel coordinates of world points (pixel centres at integers).
+
+    Parameters
+    ----------
+    points : array_like, shape (N, 3)
+    view_proj : array_like, shape (4, 4)
+        World-to-clip matrix of the buffer.
+    shape : (int, int)
+        Buffer (height, width).
+
+    Returns
+    -------
+    ndarray, shape (N, 2), float64
+    """
+    p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    clip = np.c_[p, np.ones(len(p))] @ np.asarray(view_proj, dtype=np.float64).T
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ndc = clip[:, :2] / clip[:, 3:]
+    h, w = shape
+    col = (ndc[:, 0] + 1.0) * 0.5 * w - 0.5
+    row = h - (ndc[:, 1] + 1.0) * 0.5 * h - 0.5
+    return np.c_[row, col]
+
+
+def pixel_distance(pixel, exact_points, view_proj, shape) -> np.ndarray:
+    """Distance in pixels between each found reflection pixel's centre and the projection of
+    the exact reflection point (NaN where there is no exact point). Shape (N,), float64."""
+    pix = np.asarray(pixel, dtype=np.float64).reshape(-1, 2)
+    ref = window_to_pixel(exact_points, view_proj, shape)
+    if len(pix) != len(ref):
+        raise RefsoftError(f"{len(pix)} reflection pixels but {len(ref)} exact points")
+    return np.hypot(pix[:, 0] - ref[:, 0], pix[:, 1] - ref[:, 1])
+
+
+def virtual_distance(virtual, exact_virtual) -> np.ndarray:
+    """Euclidean distance between virtual vertices and the exact ones. Shape (N,), float64."""
+    a = np.asarray(virtual, dtype=np.float64).reshape(-1, 3)
+    b = np.asarray(exact_virtual, dtype=np.float64).reshape(-1, 3)
+    if a.shape != b.shape:
+        raise RefsoftError(f"virtual vertices {a.shape} and exact ones {b.shape} differ in shape")
+    return np.linalg.norm(a - b, axis=1)
+
+
+def _check_ids(render_id, truth_id):
+    a = np.asarray(render_id)
+    b = np.asarray(truth_id)
+    if a.shape != b.shape:
+        raise RefsoftError(f"reflected_id shapes differ: render {a.shape}, truth {b.shape}")
+    return a, b
+
+
+def reflector_pixels(truth_id) -> np.ndarray:
+    """Pixels where a reflector is visible (``reflected_id >= 0``). (H, W) bool."""
+    return np.asarray(truth_id) >= 0
+
+
+def disagreement(render_id, truth_id, where=None) -> float:
+    """Share of reflector pixels (or of ``where & reflector pixels``) whose ``reflected_id``
+    differs from the truth; 0.0 when there are none."""
+    a, b = _check_ids(render_id, truth_id)
+    m = reflector_pixels(b)
+    if where is not None:
+        m &= where
+    n = int(m.sum())
+    return float(np.count_nonzero(a[m] != b[m]) / n) if n else 0.0
+
+
+def rim(mask, width: int = RIM_PIXELS) -> np.ndarray:
+    """Pixels of ``mask`` within ``width`` 8-neighbour steps of a pixel outside it (or of the
+    image border). (H, W) bool."""
+    mask = np.asarray(mask, dtype=bool)
+    inner = mask.copy()
+    for _ in range(width):
+        p = np.pad(inner, 1, constant_values=False)
+        shrunk = inner.copy()
+        for dr in (-1, 0, 1):
+            for dc in (-1, 0, 1):
+                shrunk &= p[1 + dr:1 + dr + mask.shape[0], 1 + dc:1 + dc + mask.shape[1]]
+        inner = shrunk
+    return mask & ~inner
+
+
+def interior_disagreement(render_id, truth_id, object_id, width: int = RIM_PIXELS) -> float:
+    """:func:`disagreement` leaving out each reflector's rim (``width`` pixels of its stencil's edge)."""
+    a, b = _check_ids(render_id, truth_id)
+    object_id = np.asarray(object_id)
+    edge = np.zeros(b.shape, dtype=bool)
+    for k in np.unique(object_id[b >= 0]):
+        edge |= rim(object_id == k, width)
+    return disagreement(a, b, where=~edge)
+
+
+def color_error(render_image, truth_image, where=None) -> dict:
+    """Per-pixel colour error: mean absolute channel difference in [0, 1] units.
+
+    Returns ``{"mean": ..., "p99": ..., "max": ...}`` over the pixels of ``where`` (default all).
+    """
+    a = np.asarray(render_image, dtype=np.float64)
+    b = np.asarray(truth_image, dtype=np.float64)
+    if a.shape != b.shape:
+        raise RefsoftError(f"image shapes differ: render {a.shape}, truth {b.shape}")
+    scale = 255.0 if np.asarray(render_image).dtype == np.uint8 else 1.0
+    err = np.abs(a - b).mean(axis=-1) / scale
+    e = err[where] if where is not None else err.ravel()
+    if e.size == 0:
+        return {"mean": 0.0, "p99": 0.0, "max": 0.0}
+    return {"mean": float(e.mean()), "p99": float(np.percentile(e, 99)), "max": float(e.max())}
+
+
+def flip_mean(render_image, truth_image):
+    """Mean FLIP error (information only) when ``flip-evaluator`` is installed, else None."""
+    try:
+        import flip_evaluator as flip
+    except ImportError:
+        return None
+    a = np.asarray(render_image, dtype=np.float32) / 255.0
+    b = np.asarray(truth_image, dtype=np.float32) / 255.0
+    _, mean, _ = flip.evaluate(b, a, "LDR")
+    return float(mean)
+
+
+def frame_metrics(render_arrays, truth_arrays) -> dict:
+    """Every metric of one frame from the DESIGN section 7 arrays of a render and its truth.
+
+    Per-vertex metrics are given per reflector ``k`` when the truth holds that reflector's exact
+    reflection points (spherical reflectors) and the render its search outputs.
+    """
+    for name, arr in (("render", render_arrays), ("truth", truth_arrays)):
+        missing = [k for k in ("image", "object_id", "reflected_id") if k not in arr]
+        if missing:
+            raise RefsoftError(f"{name} frame lacks {', '.join(missing)}")
+    rid, tid = render_arrays["reflected_id"], truth_arrays["reflected_id"]
+    refl = reflector_pixels(tid)
+    out = {
+        "reflector_pixels": int(refl.sum()),
+        "reflected_id_disagreement": disagreement(rid, tid),
+        "interior_disagreement": interior_disagreement(rid, tid, truth_arrays["object_id"]),
+        "color_error": color_error(render_arrays["image"], truth_arrays["image"], refl),
+        "object_id_mismatch": int(np.count_nonzero(np.asarray(render_arrays["object_id"])
+                                                   != np.asarray(truth_arrays["object_id"]))),
+    }
+    flip = flip_mean(render_arrays["image"], truth_arrays["image"])
+    if flip is not None:
+        out["flip_mean"] = flip
+    vertices = {}
+    for key in truth_arrays:
+        if not key.startswith("exact_reflection_point_"):
+            continue
+        k = key.rsplit("_", 1)[1]
+        if f"reflection_pixel_{k}" not in render_arrays:
+            continue
+        exact = np.asarray(truth_arrays[key])
+        flags = np.asarray(render_arrays[f"flags_{k}"])
+        ok = np.all(np.isfinite(exact), axis=1) & ((flags & 1) == 0)  # visible (not HIDDEN) vertices
+        shape = np.asarray(render_arrays[f"gbuffer_mask_{k}"]).shape
+        dist = pixel_distance(render_arrays[f"reflection_pixel_{k}"], exact, render_arrays[f"gbuffer_view_proj_{k}"],
+                              shape)[ok]
+        vdist = virtual_distance(render_arrays[f"virtual_vertex_{k}"], truth_arrays[f"exact_virtual_vertex_{k}"])[ok]
+        entry = {"vertices": int(ok.sum())}
+        if len(dist):
+            entry.update(pixel_distance_mean=float(dist.mean()), pixel_distance_max=float(dist.max()),
+                         virtual_distance_mean=float(vdist.mean()), virtual_distance_max=float(vdist.max()))
+        if f"score_{k}" in render_arrays and len(dist):
+            se = score_error(render_arrays[f"score_{k}"])[ok]
+            entry.update(score_error_mean=float(se.mean()), score_error_max=float(se.max()))
+        vertices[k] = entry
+    if vertices:
+        out["vertices"] = vertices
+    return out
