@@ -95,11 +95,27 @@ def frame_figure():
     write_png(os.path.join(FIG, "frame_kitchen.png"), side_by_side(*pics))
 
 
+def truth_figure():
+    """Render | truth | agreement map, for the sphere (discard) and the quad (search)."""
+    from refsoft.render import FrameDriver, RenderOptions
+    from refsoft.truth import TruthRenderer
+    from refsoft.visualize import agreement_map
+
+    rows = []
+    for name, mode in (("sphere", "discard"), ("quad", "search")):
+        scene = refsoft.load_scene(name, width=320, height=240)
+        r = FrameDriver(scene, RenderOptions(inverse=mode)).render_frame(0).arrays
+        t = TruthRenderer(scene, exact=False).render_frame(0).arrays
+        rows.append(side_by_side(r["image"], t["image"], agreement_map(r["reflected_id"], t["reflected_id"], t["image"])))
+    write_png(os.path.join(FIG, "truth_compare.png"), np.concatenate(rows, axis=0))
+
+
 if __name__ == "__main__":
     os.makedirs(FIG, exist_ok=True)
     gbuffer_figure()
     trace_figure()
     frame_figure()
+    truth_figure()
     try:
         fill_rule_figure()
     except ImportError:
