@@ -74,10 +74,19 @@ class Frame:
         return self.arrays["image"]
 
 
-def _virtual_pass(scene, meshes, camera, refl, stencil, inverse):
+def _stencil_box(stencil):
+    """(r0, r1, c0, c1): the bounding box of a non-empty stencil."""
+    rows = np.flatnonzero(stencil.any(axis=1))
+    cols = np.flatnonzero(stencil.any(axis=0))
+    return int(rows[0]), int(rows[-1]) + 1, int(cols[0]), int(cols[-1]) + 1
+
+
+def _virtual_pass(scene, meshes, camera, refl, stencil, box, inverse):
     """Rasterize the virtual scene of one reflector with the view camera, inside its stencil.
 
-    Returns (colour (H, W, 3) float32, reflected object id (H, W) int32, covered (H, W) bool).
+    Only the stencil's bounding box ``box = (r0, r1, c0, c1)`` is rasterized (the same pixels as
+    the whole view, cropped). Returns, over that box: colour (h, w, 3) float32, reflected object
+    id (h, w) int32, covered (h, w) bool.
     """
     res = refl.result
     virtual = refl.virtual.astype(np.float64)
@@ -94,28 +103,35 @@ def _virtual_pass(scene, meshes, camera, refl, stencil, inverse):
         face_obj.append(np.full(int(keep.sum()), k, dtype=np.int32))
         normals.append(mesh.normals)
         start += mesh.n_vertices
-    h, w = stencil.shape
+    r0, r1, c0, c1 = box
+    h, w = r1 - r0, c1 - c0
     colour = np.zeros((h, w, 3), dtype=np.float32)
     rid = np.zeros((h, w), dtype=np.int32)
-    covered = np.zeros((h, w), dtype=bool)
     faces = np.concatenate(faces) if faces else np.zeros((0, 3), np.int64)
     if len(faces) == 0:
-        return colour, rid, covered
+        return colour, rid, np.zeros((h, w), dtype=bool)
     face_obj = np.concatenate(face_obj)
-    # only the stencil's bounding box is rasterized (the same pixels as the whole view, cropped)
-    rows = np.flatnonzero(stencil.any(axis=1))
-    cols = np.flatnonzero(stencil.any(axis=0))
-    r0, r1, c0, c1 = int(rows[0]), int(rows[-1]) + 1, int(cols[0]), int(cols[-1]) + 1
     clip = _setup.transform_points(virtual, camera.view_proj())
-    frags = rasterize(clip, faces, w, h, region=(r0, r1, c0, c1))
+    frags = rasterize(clip, faces, camera.width, camera.height, region=box)
     inside = frags.mask & stencil[r0:r1, c0:c1]
     nrm = interpolate(frags, np.concatenate(normals), faces, np.float32, normalize=True)
     colors = np.vstack([np.zeros(3), [o.color for o in scene.objects]]).astype(np.float32)
     obj = np.where(inside, face_obj[np.maximum(frags.triangle, 0)], 0)
-    colour[r0:r1, c0:c1][inside] = shade(nrm[inside], colors[obj[inside]])
-    rid[r0:r1, c0:c1][inside] = obj[inside]
-    covered[r0:r1, c0:c1] = inside
-    return colour, rid, covered
+    colour[inside] = shade(nrm[inside], colors[obj[inside]])
+    rid[inside] = obj[inside]
+    return colour, rid, inside
+
+
+def _gbuffer_outputs(gb, k):
+    """The DESIGN section 7 G-buffer arrays of reflector ``k``: world-space float32 positions,
+    zero where not covered (as the rasterizer's maps), and float32 normals."""
+    position = np.zeros(gb.position.shape, dtype=np.float32)
+    if gb.mask.any():
+        r0, r1, c0, c1 = _stencil_box(gb.mask)  # only the covered box is converted
+        m = gb.mask[r0:r1, c0:c1, None]
+        world = gb.position[r0:r1, c0:c1].astype(np.float64) + gb.origin
+        position[r0:r1, c0:c1] = np.where(m, world, 0.0)
+    return {f"gbuffer_position_{k}": position, f"gbuffer_normal_{k}": np.asarray(gb.normal, dtype=np.float32)}
 
 
 class FrameDriver:
@@ -170,19 +186,19 @@ class FrameDriver:
             self.previous[k] = refl.result.pixel
             t = time.perf_counter()
             if stencil.any():
-                vcol, vid, covered = _virtual_pass(scene, meshes, camera, refl, stencil, opt.inverse)
+                box = _stencil_box(stencil)
+                r0, r1, c0, c1 = box
+                vcol, vid, covered = _virtual_pass(scene, meshes, camera, refl, stencil, box, opt.inverse)
                 times["virtual"] += 1000 * (time.perf_counter() - t)
                 t = time.perf_counter()
                 rho = np.float32(scene.object_by_id(k).reflectivity)
-                colour[covered] = rho * vcol[covered] + (np.float32(1) - rho) * view.color[covered]
-                reflected[covered] = vid[covered]
+                out_c = colour[r0:r1, c0:c1]
+                out_c[covered] = rho * vcol[covered] + (np.float32(1) - rho) * view.color[r0:r1, c0:c1][covered]
+                reflected[r0:r1, c0:c1][covered] = vid[covered]
                 times["composite"] += 1000 * (time.perf_counter() - t)
             gb, res = refl.gbuffer, refl.result
+            arrays.update(_gbuffer_outputs(gb, k))
             arrays.update({
-                # world space, zero where not covered (as the rasterizer's maps)
-                f"gbuffer_position_{k}": np.where(gb.mask[..., None], gb.position.astype(np.float64) + gb.origin,
-                                                  0.0).astype(np.float32),
-                f"gbuffer_normal_{k}": gb.normal.astype(np.float32),
                 f"gbuffer_mask_{k}": gb.mask,
                 f"gbuffer_view_proj_{k}": gb.view_proj,
                 f"reflection_pixel_{k}": res.pixel.astype(np.int32),
@@ -199,7 +215,7 @@ class FrameDriver:
         image = to_uint8(colour)
         times["composite"] += 1000 * (time.perf_counter() - t)
         times["total"] = 1000 * (time.perf_counter() - t0)
-        arrays.update(image=image, object_id=view.object_id.astype(np.int32), reflected_id=reflected)
+        arrays.update(image=image, object_id=np.asarray(view.object_id, dtype=np.int32), reflected_id=reflected)
         return Frame(frame, arrays, times, iterations)
 
 

@@ -51,6 +51,37 @@ def test_to_uint8_rounds_half_to_even_and_clips():
     np.testing.assert_array_equal(raster.to_uint8(c), [0, 0, 0, 2, 2, 255, 255])
 
 
+def test_to_uint8_kernel_equals_the_numpy_formula_bit_for_bit(rng):
+    for dtype in (np.float32, np.float64):
+        c = rng.uniform(-0.2, 1.2, (37, 41, 3)).astype(dtype)
+        c[0, :, 0] = (np.arange(41) + 0.5) / 255  # exact ties
+        c[1, 0] = np.nan
+        expected = np.rint(np.clip(c.astype(np.float64), 0.0, 1.0) * 255.0)
+        got = raster.to_uint8(c)
+        assert got.dtype == np.uint8 and got.shape == c.shape
+        ok = np.isfinite(c)
+        np.testing.assert_array_equal(got[ok], expected[ok].astype(np.uint8))
+        assert np.all(got[~ok] == 0)
+
+
+def test_color_pass_shading_kernel_equals_numpy_shade():
+    s = load_scene("sphere", width=96, height=72)
+    meshes = [s.world_mesh(i + 1) for i in range(len(s.objects))]
+    colors = np.array([o.color for o in s.objects])
+    cp = raster.color_pass(meshes, colors, s.camera)
+    # the same normals, shaded by the NumPy formula
+    verts = np.concatenate([m.vertices for m in meshes])
+    norms = np.concatenate([m.normals for m in meshes])
+    offs = np.cumsum([0] + [m.n_vertices for m in meshes])
+    faces = np.concatenate([m.faces.astype(np.int64) + offs[i] for i, m in enumerate(meshes)])
+    frags = raster.rasterize(_setup.transform_points(verts, s.camera.view_proj()), faces, 96, 72)
+    nrm = raster.interpolate(frags, norms, faces, np.float32, normalize=True)
+    table = np.vstack([constants.BACKGROUND_COLOR, colors]).astype(np.float32)
+    expected = raster.shade(nrm, table[cp.object_id])
+    expected[cp.object_id == 0] = table[0]
+    np.testing.assert_array_equal(cp.color, expected)
+
+
 def test_color_pass_ids_depth_order_and_shading():
     s = load_scene("sphere", width=160, height=120)
     meshes = [s.world_mesh(i + 1) for i in range(len(s.objects))]

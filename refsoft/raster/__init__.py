@@ -18,7 +18,7 @@ from .. import constants
 from ..camera import Camera, check_image_size
 from ..errors import RefsoftError
 from ..mesh import Mesh
-from . import _kernels, _setup
+from . import _kernels, _setup, _shading
 
 __all__ = ["Fragments", "GBuffer", "ColorPass", "rasterize", "interpolate", "gbuffer", "color_pass",
            "to_uint8", "PRECISIONS"]
@@ -280,9 +280,15 @@ def gbuffer(mesh: Mesh, camera: Camera, precision="float32", origin=None) -> GBu
 
 
 def to_uint8(color) -> np.ndarray:
-    """8-bit conversion of DESIGN section 5: ``round(clip(c, 0, 1) * 255)``, half to even."""
-    c = np.asarray(color, dtype=np.float64)
-    return np.rint(np.clip(c, 0.0, 1.0) * 255.0).astype(np.uint8)
+    """8-bit conversion of DESIGN section 5: ``round(clip(c, 0, 1) * 255)``, half to even, in
+    float64 (a Numba kernel; equal to ``np.rint(np.clip(c, 0, 1) * 255)`` bit for bit)."""
+    c = np.asarray(color)
+    if c.dtype not in (np.float32, np.float64):
+        c = c.astype(np.float64)
+    flat = np.ascontiguousarray(c).reshape(-1)
+    out = np.empty(flat.shape, dtype=np.uint8)
+    _shading.to_uint8_flat(flat, out)
+    return out.reshape(c.shape)
 
 
 @dataclass(frozen=True, eq=False)
@@ -291,7 +297,6 @@ class ColorPass:
 
     Attributes
     ----------
-    image : ndarray, shape (H, W, 3), uint8
     color : ndarray, shape (H, W, 3), float32
         Linear colour before 8-bit conversion (background colour where nothing is drawn).
     object_id : ndarray, shape (H, W), int32
@@ -299,13 +304,22 @@ class ColorPass:
     depth : ndarray, shape (H, W), float32
     triangle : ndarray, shape (H, W), int32
         Triangle index within the visible object; -1 for the background.
+    image : ndarray, shape (H, W, 3), uint8
+        ``to_uint8(color)``, made when first asked for.
     """
 
-    image: np.ndarray
     color: np.ndarray
     object_id: np.ndarray
     depth: np.ndarray
     triangle: np.ndarray
+
+    @property
+    def image(self) -> np.ndarray:
+        cached = self.__dict__.get("_image")
+        if cached is None:
+            cached = to_uint8(self.color)
+            self.__dict__["_image"] = cached
+        return cached
 
 
 def shade(normals, colors) -> np.ndarray:
@@ -358,11 +372,12 @@ def color_pass(meshes, colors, camera: Camera) -> ColorPass:
     clip = _setup.transform_points(verts, camera.view_proj())
     frags = rasterize(clip, faces, camera.width, camera.height)
     nrm = interpolate(frags, norms, faces, np.float32, normalize=True)
-    covered = frags.mask
-    tri = frags.triangle
-    object_id = np.where(covered, face_object[np.maximum(tri, 0)], 0).astype(np.int32)
-    local_tri = np.where(covered, tri - f_off[np.maximum(object_id - 1, 0)], -1).astype(np.int32)
+    object_id = np.empty(frags.triangle.shape, dtype=np.int32)
+    local_tri = np.empty(frags.triangle.shape, dtype=np.int32)
+    _shading.object_ids(frags.triangle, face_object, f_off.astype(np.int64), object_id, local_tri)
     table = np.vstack([constants.BACKGROUND_COLOR, colors]).astype(np.float32)
-    color = shade(nrm, table[object_id])
-    color[~covered] = constants.BACKGROUND_COLOR.astype(np.float32)
-    return ColorPass(to_uint8(color), color, object_id, frags.depth, local_tri)
+    color = np.empty(nrm.shape, dtype=np.float32)
+    # shade() of every pixel, and the background colour off the objects, in one pass
+    _shading.shade_ids(nrm, object_id, table, constants.LIGHT_DIRECTION.astype(np.float32),
+                       np.float32(constants.AMBIENT), np.float32(constants.DIFFUSE), table[0], color)
+    return ColorPass(color, object_id, frags.depth, local_tri)
