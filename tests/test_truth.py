@@ -225,3 +225,19 @@ def test_compare_errors_are_one_line(tmp_path, capsys):
     assert cli.main(["compare", str(tmp_path / "r"), str(tmp_path / "t")]) == 2
     assert "same --width/--height" in capsys.readouterr().err
     assert cli.main(["truth", "sphere", "--frame", "3", "--frames", "2"]) == 2
+
+
+def test_flip_is_information_only_and_called_reference_first(monkeypatch):
+    import sys
+    import types
+
+    a = np.zeros((4, 4, 3), np.uint8)
+    b = np.full((4, 4, 3), 255, np.uint8)
+    calls = []
+    fake = types.SimpleNamespace(evaluate=lambda ref, test, rng: calls.append((ref.max(), test.max(), rng)) or
+                                 (None, 0.25, {}))
+    monkeypatch.setitem(sys.modules, "flip_evaluator", fake)
+    assert metrics.flip_mean(a, b) == 0.25
+    assert calls == [(1.0, 0.0, "LDR")]  # the truth (second argument) is FLIP's reference, in [0, 1]
+    monkeypatch.setitem(sys.modules, "flip_evaluator", None)  # not installed
+    assert metrics.flip_mean(a, b) is None
