@@ -263,6 +263,27 @@ def frame_indices(scene: Scene, frames=None) -> list:
     return indices
 
 
+def run_frames(renderer, indices, out=None, progress=False, desc="frames") -> list:
+    """``renderer.render_frame(f)`` for each index in order, each frame written to ``out`` (when
+    given) as soon as it is done; a tqdm bar on a terminal when ``progress`` and several frames."""
+    import os
+
+    if out is not None:
+        os.makedirs(out, exist_ok=True)
+    it = indices
+    if progress and len(indices) > 1:
+        from tqdm import tqdm
+
+        it = tqdm(indices, desc=desc, unit="frame", disable=None)  # no bar off a terminal
+    done = []
+    for f in it:
+        fr = renderer.render_frame(f)
+        if out is not None:
+            write_frame(out, fr)
+        done.append(fr)
+    return done
+
+
 def render(scene, frames=None, out=None, progress=False, **options):
     """Render frames of a scene (the Python face of ``refsoft render``).
 
@@ -295,20 +316,7 @@ def render(scene, frames=None, out=None, progress=False, **options):
         scene = load_scene(scene)
     opts = RenderOptions(**options)
     indices = frame_indices(scene, frames)
-    if out is not None:
-        os.makedirs(out, exist_ok=True)
-    driver = FrameDriver(scene, opts)
-    done = []
-    it = indices
-    if progress and len(indices) > 1:
-        from tqdm import tqdm
-
-        it = tqdm(indices, desc=f"render {scene.name}", unit="frame", disable=None)  # no bar off a terminal
-    for f in it:
-        fr = driver.render_frame(f)
-        if out is not None:
-            write_frame(out, fr)
-        done.append(fr)
+    done = run_frames(FrameDriver(scene, opts), indices, out, progress, f"render {scene.name}")
     stats = frame_stats(done)
     if out is not None:
         write_json(os.path.join(out, "stats.json"), stats)

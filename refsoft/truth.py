@@ -278,26 +278,13 @@ def truth(scene, frames=None, out=None, progress=False, exact=True):
     stats : dict
     """
     from .io import write_json
-    from .render import frame_indices, write_frame
+    from .render import frame_indices, run_frames
     from .scenes import load_scene
 
     if not isinstance(scene, Scene):
         scene = load_scene(scene)
     indices = frame_indices(scene, frames)
-    if out is not None:
-        os.makedirs(out, exist_ok=True)
-    renderer = TruthRenderer(scene, exact=exact)
-    it = indices
-    if progress and len(indices) > 1:
-        from tqdm import tqdm
-
-        it = tqdm(indices, desc=f"truth {scene.name}", unit="frame", disable=None)
-    done = []
-    for f in it:
-        fr = renderer.render_frame(f)
-        if out is not None:
-            write_frame(out, fr)
-        done.append(fr)
+    done = run_frames(TruthRenderer(scene, exact=exact), indices, out, progress, f"truth {scene.name}")
     stats = truth_stats(done)
     if out is not None:
         write_json(os.path.join(out, "stats.json"), stats)
