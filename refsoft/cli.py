@@ -130,9 +130,13 @@ def cmd_render(args) -> int:
     else:
         frames = args.frames
     t0 = time.perf_counter()
+    from .render import SKIPS
+
+    off = set(SKIPS) if args.no_skips else {n.replace("-", "_") for n in args.no_skip or ()}
     done, stats = render(scene, frames=frames, out=None, progress=True, neighbourhood=args.search,
                          inverse=args.inverse, widen=args.widen, precision=args.precision,
-                         coherence=not args.no_coherence)
+                         coherence=not args.no_coherence, adaptive_widen=args.adaptive_widen,
+                         **{name: name not in off for name in SKIPS})
     from .io import write_json
     from .render import frame_stats, write_frame
 
@@ -282,6 +286,13 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--widen", type=float, default=1.0)
     r.add_argument("--precision", choices=["float32", "float64"], default="float32")
     r.add_argument("--no-coherence", action="store_true", help="start every search cold")
+    r.add_argument("--no-skip", action="append", metavar="NAME",
+                   choices=["cull-reflectors", "reuse", "cull-virtual", "crop-virtual"],
+                   help="turn one exact skip off (repeatable): cull-reflectors, reuse, cull-virtual, crop-virtual; "
+                        "outputs are identical either way, only the time changes")
+    r.add_argument("--no-skips", action="store_true", help="turn every exact skip off")
+    r.add_argument("--adaptive-widen", action="store_true",
+                   help="approximation: use --widen only on frames where a reflector is cut by the image border")
     r.set_defaults(func=cmd_render)
 
     tr = sub.add_parser("truth", help="ray-trace the reflections (Embree) as the reference for compare")

@@ -129,11 +129,17 @@ def reflect_one(scene, k, frame, verts, neighbourhood, inverse, widen, gbuffer_s
     t0 = time.perf_counter()
     gb = reflector_gbuffer(scene, k, frame, widen, gbuffer_size, precision)
     t1 = time.perf_counter()
-    prev = previous
-    if prev is not None and np.shape(prev) != (len(verts), 2):
-        prev = None
-    if prev is not None:
-        prev = np.where(np.any((prev < 0) | (prev >= np.array(gb.mask.shape)), axis=1)[:, None], -1, prev)
+    prev = coherent_starts(previous, len(verts), gb.mask.shape)
     res = search(gb, scene.camera_at(frame).eye, verts, neighbourhood, inverse, prev, cap)
     refl = Reflection(k, gb, res, virtual_vertices(gb, res, verts))
     return refl, 1000 * (t1 - t0), 1000 * (time.perf_counter() - t1)
+
+
+def coherent_starts(previous, n, shape):
+    """Last frame's reflection pixels as search starts: None when there are none or their
+    count is not ``n`` (the vertex count changed); pixels outside a G-buffer of ``shape``
+    (it changed size) become (-1, -1), a restart."""
+    if previous is None or np.shape(previous) != (n, 2):
+        return None
+    prev = np.asarray(previous)
+    return np.where(np.any((prev < 0) | (prev >= np.array(shape)), axis=1)[:, None], -1, prev)

@@ -8,18 +8,21 @@ previous frame (frame-to-frame coherence).
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from . import constants
+from . import constants, skips
 from .errors import RefsoftError
 from .raster import _setup, color_pass, interpolate, rasterize, shade, to_uint8
-from .reflect import reflect_one, scene_vertices
+from .raster import gbuffer
+from .reflect import Reflection, coherent_starts, gbuffer_camera, scene_vertices
 from .scene import Scene
-from .search import CULLED, HIDDEN, INVERSE_MODES, NEIGHBOURHOODS
+from .search import CULLED, HIDDEN, INVERSE_MODES, NEIGHBOURHOODS, SearchResult, search, virtual_vertices
 
 STAGES = ("gbuffer", "search", "virtual", "main", "composite")
+#: The exact skips of :class:`RenderOptions` (issue 10).
+SKIPS = ("cull_reflectors", "reuse", "cull_virtual", "crop_virtual")
 
 
 @dataclass(frozen=True)
@@ -39,6 +42,15 @@ class RenderOptions:
         Start each search at the vertex's previous reflection pixel.
     cap : int, optional
         Iteration cap per search.
+    cull_reflectors, reuse, cull_virtual, crop_virtual : bool
+        Exact skips (on by default; outputs are bit-identical with them off): no G-buffer and
+        no search for a reflector outside the G-buffer's frustum; G-buffer and search results
+        reused when the reflector, the camera and the vertex's object did not move; objects
+        whose virtual vertices all lie beyond one side of the stencil's box not rasterized; the
+        virtual raster restricted to that box.
+    adaptive_widen : bool
+        An approximation (off by default, changes results): use ``widen`` only on frames where
+        the reflector's projection is clipped by the view.
     """
 
     neighbourhood: str = "cross"
@@ -48,6 +60,11 @@ class RenderOptions:
     precision: str = "float32"
     coherence: bool = True
     cap: int | None = None
+    cull_reflectors: bool = True
+    reuse: bool = True
+    cull_virtual: bool = True
+    crop_virtual: bool = True
+    adaptive_widen: bool = False
 
     def __post_init__(self):
         if self.neighbourhood not in NEIGHBOURHOODS:
@@ -58,6 +75,14 @@ class RenderOptions:
             raise RefsoftError(f"precision must be float32 or float64, got {self.precision!r}")
         if not (isinstance(self.widen, (int, float)) and np.isfinite(self.widen) and self.widen >= 1.0):
             raise RefsoftError(f"widen must be a number >= 1, got {self.widen!r}")
+        for name in SKIPS + ("adaptive_widen", "coherence"):
+            if not isinstance(getattr(self, name), (bool, np.bool_)):
+                raise RefsoftError(f"{name} must be True or False, got {getattr(self, name)!r}")
+
+    def without_skips(self) -> "RenderOptions":
+        """The same options with every exact skip off (the reference the skips are tested
+        against)."""
+        return replace(self, **dict.fromkeys(SKIPS, False))
 
 
 @dataclass
@@ -68,6 +93,7 @@ class Frame:
     arrays: dict
     time_ms: dict
     iterations: dict = field(default_factory=dict)
+    skipped: dict = field(default_factory=dict)
 
     @property
     def image(self) -> np.ndarray:
@@ -81,45 +107,55 @@ def _stencil_box(stencil):
     return int(rows[0]), int(rows[-1]) + 1, int(cols[0]), int(cols[-1]) + 1
 
 
-def _virtual_pass(scene, meshes, camera, refl, stencil, box, inverse):
+def _virtual_pass(scene, meshes, camera, refl, stencil, box, inverse, cull=True):
     """Rasterize the virtual scene of one reflector with the view camera, inside its stencil.
 
     Only the stencil's bounding box ``box = (r0, r1, c0, c1)`` is rasterized (the same pixels as
-    the whole view, cropped). Returns, over that box: colour (h, w, 3) float32, reflected object
-    id (h, w) int32, covered (h, w) bool.
+    the whole view, cropped). With ``cull``, objects whose virtual vertices all lie beyond one
+    side of the box are left out (:func:`refsoft.skips.outside_box`: they cover none of its
+    pixels). Returns, over the box: colour (h, w, 3) float32, reflected object id (h, w) int32,
+    covered (h, w) bool, and the number of objects culled.
     """
     res = refl.result
     virtual = refl.virtual.astype(np.float64)
-    faces, face_obj, normals = [], [], []
+    clip_all = _setup.transform_points(virtual, camera.view_proj())
+    bounds = skips.box_planes(box, camera.width, camera.height)
+    bad = CULLED | (HIDDEN if inverse == "discard" else 0)
+    faces, face_obj, normals, clips = [], [], [], []
     start = 0
+    n_culled = 0
     for k, obj in enumerate(scene.objects, start=1):
         if obj.reflector:
             continue
         mesh = meshes[k - 1]
-        f = mesh.faces.astype(np.int64) + start
-        bad = CULLED | (HIDDEN if inverse == "discard" else 0)
-        keep = ~np.any(res.flags[f] & bad, axis=1)  # triangles whose vertices all have a V'
-        faces.append(f[keep])
+        n = mesh.n_vertices
+        clip = clip_all[start:start + n]
+        f = mesh.faces.astype(np.int64)
+        start += n
+        if cull and skips.outside_box(clip, bounds):
+            n_culled += 1
+            continue
+        keep = ~np.any(res.flags[f + (start - n)] & bad, axis=1)  # triangles whose vertices all have a V'
+        faces.append(f[keep] + sum(len(c) for c in clips))
         face_obj.append(np.full(int(keep.sum()), k, dtype=np.int32))
         normals.append(mesh.normals)
-        start += mesh.n_vertices
+        clips.append(clip)
     r0, r1, c0, c1 = box
     h, w = r1 - r0, c1 - c0
     colour = np.zeros((h, w, 3), dtype=np.float32)
     rid = np.zeros((h, w), dtype=np.int32)
     faces = np.concatenate(faces) if faces else np.zeros((0, 3), np.int64)
     if len(faces) == 0:
-        return colour, rid, np.zeros((h, w), dtype=bool)
+        return colour, rid, np.zeros((h, w), dtype=bool), n_culled
     face_obj = np.concatenate(face_obj)
-    clip = _setup.transform_points(virtual, camera.view_proj())
-    frags = rasterize(clip, faces, camera.width, camera.height, region=box)
+    frags = rasterize(np.concatenate(clips), faces, camera.width, camera.height, region=box)
     inside = frags.mask & stencil[r0:r1, c0:c1]
     nrm = interpolate(frags, np.concatenate(normals), faces, np.float32, normalize=True)
     colors = np.vstack([np.zeros(3), [o.color for o in scene.objects]]).astype(np.float32)
     obj = np.where(inside, face_obj[np.maximum(frags.triangle, 0)], 0)
     colour[inside] = shade(nrm[inside], colors[obj[inside]])
     rid[inside] = obj[inside]
-    return colour, rid, inside
+    return colour, rid, inside, n_culled
 
 
 def _gbuffer_outputs(gb, k):
@@ -134,15 +170,40 @@ def _gbuffer_outputs(gb, k):
     return {f"gbuffer_position_{k}": position, f"gbuffer_normal_{k}": np.asarray(gb.normal, dtype=np.float32)}
 
 
+@dataclass
+class _Last:
+    """What a driver remembers of a reflector's last frame, for the reuse skip."""
+
+    key: tuple  # (G-buffer camera key, reflector transform, widen used)
+    gbuffer: object
+    result: object
+    transforms: dict  # object id -> Transform of the vertices searched
+
+
+def _empty_gbuffer(camera, precision):
+    """The G-buffer the rasterizer makes of a mesh it draws no pixel of (the eye as origin)."""
+    from .raster import PRECISIONS, GBuffer
+
+    dt = PRECISIONS[precision]
+    h, w = camera.height, camera.width
+    return GBuffer(np.zeros((h, w, 3), dt), np.zeros((h, w, 3), dt), np.zeros((h, w), bool),
+                   np.full((h, w), constants.DEPTH_CLEAR, np.float32), np.full((h, w), -1, np.int32),
+                   camera.view_proj(), np.asarray(camera.eye, dtype=np.float64))
+
+
 class FrameDriver:
-    """Renders a scene frame by frame, keeping each reflector's previous reflection pixels."""
+    """Renders a scene frame by frame, keeping each reflector's previous reflection pixels (and,
+    for the reuse skip, its last G-buffer and search results)."""
 
     def __init__(self, scene: Scene, options: RenderOptions | None = None):
         if not isinstance(scene, Scene):
             raise RefsoftError(f"scene must be a refsoft.Scene, got {type(scene).__name__}")
+        if options is not None and not isinstance(options, RenderOptions):
+            raise RefsoftError(f"options must be a RenderOptions, got {type(options).__name__}")
         self.scene = scene
         self.options = options or RenderOptions()
         self.previous = {}
+        self._last = {}
         self._static_meshes = {}  # world meshes of objects that do not move (reused, unchanged)
 
     def _world_meshes(self, frame):
@@ -158,12 +219,73 @@ class FrameDriver:
                 meshes.append(self._static_meshes[k])
         return meshes
 
+    def _reflect(self, k, frame, camera, verts, owner, transforms, skipped):
+        """Reflector ``k``'s G-buffer, search and virtual vertices, with the exact skips.
+        Returns (Reflection, G-buffer ms, search ms)."""
+        scene, opt = self.scene, self.options
+        t0 = time.perf_counter()
+        proxy = scene.world_mesh(k, frame, proxy=True)
+        widen = opt.widen
+        if opt.adaptive_widen and widen != 1.0:
+            if not skips.projection_clipped(_setup.transform_points(proxy.vertices, camera.view_proj())):
+                widen = 1.0
+                skipped["widen_off"].append(k)
+        gcam = gbuffer_camera(scene, frame, widen, opt.gbuffer_size)
+        key = (skips.camera_key(gcam), transforms[k], widen)
+        last = self._last.get(k)
+        same = opt.reuse and last is not None and last.key == key and len(last.result) == len(verts)
+        if same:
+            gb = last.gbuffer
+            skipped["gbuffers_reused"].append(k)
+        elif opt.cull_reflectors and skips.outside_frustum(_setup.transform_points(proxy.vertices, gcam.view_proj())):
+            gb = _empty_gbuffer(gcam, opt.precision)
+            skipped["reflectors_outside_view"].append(k)
+        else:
+            gb = gbuffer(proxy, gcam, opt.precision, origin=gcam.eye)
+        t1 = time.perf_counter()
+        prev = self.previous.get(k) if opt.coherence else None
+        if last is not None and last.key[2] != widen:
+            prev = None  # the G-buffer's pixel grid changed: restart
+        prev = coherent_starts(prev, len(verts), gb.mask.shape)
+        eye = camera.eye
+        if same:
+            moved = [j for j, tr in transforms.items() if last.transforms.get(j) != tr]
+            reuse = ~np.isin(owner, moved) & skips.reusable(last.result, opt.coherence, opt.inverse)
+            res = self._merged_search(gb, eye, verts, prev, last.result, reuse)
+            skipped["searches_reused"][str(k)] = int(reuse.sum())
+        else:
+            res = search(gb, eye, verts, opt.neighbourhood, opt.inverse, prev, opt.cap)
+        refl = Reflection(k, gb, res, virtual_vertices(gb, res, verts))
+        if opt.reuse:
+            self._last[k] = _Last(key, gb, res, {j: transforms[j] for j in transforms})
+        return refl, 1000 * (t1 - t0), 1000 * (time.perf_counter() - t1)
+
+    def _merged_search(self, gb, eye, verts, prev, last, reuse):
+        """Search the vertices not in ``reuse``; the others keep ``last``'s pixel, score and
+        margin with the iterations and flags the search would give them."""
+        opt = self.options
+        todo = np.flatnonzero(~reuse)
+        it, fl = skips.reused_result(last, opt.coherence)
+        pixel, score, margin = last.pixel.copy(), last.score.copy(), last.margin.copy()
+        iterations, flags = it.copy(), fl.copy()
+        if len(todo):
+            new = search(gb, eye, verts[todo], opt.neighbourhood, opt.inverse,
+                         None if prev is None else prev[todo], opt.cap)
+            pixel[todo], score[todo], margin[todo] = new.pixel, new.score, new.margin
+            iterations[todo], flags[todo] = new.iterations, new.flags
+            cap = new.cap
+        else:
+            cap = last.cap
+        return SearchResult(pixel, score, margin, iterations, flags, opt.neighbourhood, opt.inverse, cap)
+
     def render_frame(self, frame: int) -> Frame:
         """Render one frame (with coherence from the last frame rendered by this driver)."""
         scene, opt = self.scene, self.options
         if scene.animation is not None and not 0 <= frame < scene.n_frames:
             raise RefsoftError(f"frame must be in [0, {scene.n_frames - 1}], got {frame}")
         times = dict.fromkeys(STAGES, 0.0)
+        skipped = {"reflectors_outside_view": [], "gbuffers_reused": [], "searches_reused": {},
+                   "virtual_objects_culled": {}, "widen_off": []}
         t0 = time.perf_counter()
         camera = scene.camera_at(frame)
         t = time.perf_counter()
@@ -171,24 +293,26 @@ class FrameDriver:
         view = color_pass(meshes, [o.color for o in scene.objects], camera)
         times["main"] += 1000 * (time.perf_counter() - t)
         verts, owner = scene_vertices(scene, frame, meshes)
+        transforms = {j: scene.transform_at(j, frame) for j in range(1, len(scene.objects) + 1)}
         colour = view.color.copy()
         reflected = np.full(view.object_id.shape, -1, dtype=np.int32)
+        full = (0, camera.height, 0, camera.width)
         arrays = {}
         iterations = {}
         for k in scene.reflector_ids:
             stencil = view.object_id == k
             reflected[stencil] = 0
-            prev = self.previous.get(k) if opt.coherence else None
-            refl, t_gb, t_search = reflect_one(scene, k, frame, verts, opt.neighbourhood, opt.inverse, opt.widen,
-                                               opt.gbuffer_size, opt.precision, prev, opt.cap)
+            refl, t_gb, t_search = self._reflect(k, frame, camera, verts, owner, transforms, skipped)
             times["gbuffer"] += t_gb
             times["search"] += t_search
             self.previous[k] = refl.result.pixel
             t = time.perf_counter()
             if stencil.any():
-                box = _stencil_box(stencil)
+                box = _stencil_box(stencil) if opt.crop_virtual else full
                 r0, r1, c0, c1 = box
-                vcol, vid, covered = _virtual_pass(scene, meshes, camera, refl, stencil, box, opt.inverse)
+                vcol, vid, covered, n_culled = _virtual_pass(scene, meshes, camera, refl, stencil, box, opt.inverse,
+                                                             opt.cull_virtual)
+                skipped["virtual_objects_culled"][str(k)] = n_culled
                 times["virtual"] += 1000 * (time.perf_counter() - t)
                 t = time.perf_counter()
                 rho = np.float32(scene.object_by_id(k).reflectivity)
@@ -216,13 +340,13 @@ class FrameDriver:
         times["composite"] += 1000 * (time.perf_counter() - t)
         times["total"] = 1000 * (time.perf_counter() - t0)
         arrays.update(image=image, object_id=np.asarray(view.object_id, dtype=np.int32), reflected_id=reflected)
-        return Frame(frame, arrays, times, iterations)
+        return Frame(frame, arrays, times, iterations, skipped)
 
 
 def frame_stats(frames) -> dict:
     """The ``stats.json`` content for rendered frames (DESIGN section 7)."""
     out = {"frames": [{"frame": f.index, "time_ms": {k: round(v, 3) for k, v in f.time_ms.items()},
-                       "iterations": f.iterations} for f in frames]}
+                       "iterations": f.iterations, "skipped": f.skipped} for f in frames]}
     means = [np.mean([v["mean"] for v in f.iterations.values()]) for f in frames if f.iterations]
     out["summary"] = {"max_frame_mean_iterations": float(max(means)) if means else 0.0,
                       "total_mean_iterations": float(np.mean(means)) if means else 0.0,

@@ -1,0 +1,111 @@
+"""Tests that let the frame driver skip work a frame does not need (issue 10).
+
+Every skip here is *exact*: the frame's outputs are bit for bit those of the full computation
+(tests/test_skips.py renders every built-in animation with each skip on and off). A skip that
+changes results by design is an approximation, named as such and off by default
+(:func:`projection_clipped`, used by ``RenderOptions.adaptive_widen``).
+
+- :func:`outside_frustum`: all of a mesh's vertices strictly outside one clip plane, so the
+  rasterizer draws no pixel of it: its G-buffer is empty and every search is CULLED.
+- :func:`camera_key` and :func:`reusable`: a G-buffer is reused when the reflector and the
+  G-buffer camera did not move; a vertex's search is reused when its object did not move either,
+  with the iterations and flags the search itself would give (see :func:`reused_result`).
+- :func:`outside_box`: per (reflector, object), virtual vertices that all lie beyond one side
+  of the stencil's box (with a margin wider than the rasterizer's snapping): the object's virtual
+  triangles cannot cover a stencil pixel, so they are not rasterized.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .search import BORDER, CAPPED, CULLED, HIDDEN
+
+#: Extra pixels around a stencil box before an object's virtual triangles count as outside it:
+#: more than the 1/512 px a snapped window coordinate can move (DESIGN section 2).
+BOX_MARGIN_PIXELS = 2.0
+
+
+def outside_frustum(clip) -> bool:
+    """True when every clip-space vertex is strictly outside the near plane or one of the four
+    side planes (the rasterizer does not clip at the far plane, so it is not tested).
+
+    A triangle's clipped polygon is a convex combination of its vertices, so it stays outside
+    that plane and covers no pixel centre (all of which lie inside the frustum).
+
+    Parameters
+    ----------
+    clip : ndarray, shape (V, 4), float64
+        ``view_proj @ [p, 1]`` of every vertex, as the rasterizer computes it.
+    """
+    x, y, z, w = clip[:, 0], clip[:, 1], clip[:, 2], clip[:, 3]
+    return bool(len(clip) == 0 or np.all(x > w) or np.all(x < -w) or np.all(y > w) or np.all(y < -w)
+                or np.all(z < -w))
+
+
+def projection_clipped(clip) -> bool:
+    """True when some vertex lies outside the view's side planes (its projection is cut by the
+    image border) or behind the near plane: where Estalella's wider frustum is needed."""
+    x, y, z, w = clip[:, 0], clip[:, 1], clip[:, 2], clip[:, 3]
+    return bool(np.any((np.abs(x) > w) | (np.abs(y) > w) | (z < -w)))
+
+
+def camera_key(camera) -> tuple:
+    """Everything a G-buffer raster reads from its camera: the world-to-clip matrix, the eye and
+    the viewport. Two cameras with equal keys give bit-identical G-buffers."""
+    return (camera.view_proj().tobytes(), np.asarray(camera.eye, dtype=np.float64).tobytes(),
+            int(camera.width), int(camera.height))
+
+
+def reusable(result, coherence: bool, inverse: str) -> np.ndarray:
+    """Vertices whose last result a new search would repeat, given the same G-buffer, eye and
+    vertex, shape (N,) bool.
+
+    Without coherence every search starts at the same pixel, so every result repeats. With
+    coherence a search starts at its last end pixel; the walk stops there at once (no neighbour
+    scores strictly higher) unless it was CAPPED (not a local optimum) or was an inverse search
+    (``inverse="search"`` and HIDDEN: the standard search would restart from ``R*``, not ``R``).
+    CULLED results repeat only without coherence (the G-buffer is the same empty one).
+    """
+    flags = result.flags
+    if not coherence:
+        return np.ones(len(flags), dtype=bool)
+    ok = (flags & (CAPPED | CULLED)) == 0
+    if inverse == "search":
+        ok &= (flags & HIDDEN) == 0
+    return ok
+
+
+def reused_result(result, coherence: bool):
+    """Iterations and flags of a reused search: unchanged without coherence; with coherence the
+    walk evaluates one neighbourhood and keeps HIDDEN and BORDER (both depend on the end pixel
+    only), RESTARTED is not set (the start was covered). Returns (iterations, flags)."""
+    if not coherence:
+        return result.iterations, result.flags
+    return np.ones(len(result.flags), dtype=np.int32), (result.flags & (HIDDEN | BORDER)).astype(np.uint8)
+
+
+def box_planes(box, width: int, height: int, margin: float = BOX_MARGIN_PIXELS):
+    """NDC bounds ``(x_lo, x_hi, y_lo, y_hi)`` of the pixel centres of ``box = (r0, r1, c0,
+    c1)``, widened by ``margin`` pixels (rows count down from the top; NDC y up)."""
+    r0, r1, c0, c1 = box
+    x_lo = 2.0 * (c0 + 0.5 - margin) / width - 1.0
+    x_hi = 2.0 * (c1 - 0.5 + margin) / width - 1.0
+    y_lo = 2.0 * (height - r1 + 0.5 - margin) / height - 1.0
+    y_hi = 2.0 * (height - r0 - 0.5 + margin) / height - 1.0
+    return x_lo, x_hi, y_lo, y_hi
+
+
+def outside_box(clip, bounds) -> bool:
+    """True when every clip vertex lies strictly beyond one side of the NDC ``bounds``
+    (:func:`box_planes`) or behind the near plane.
+
+    Each side is the clip-space half-space ``x > x_hi w`` (and the like): linear, so a clipped
+    polygon stays in it, and a visible point (w > 0) in it projects beyond that side.
+    """
+    if len(clip) == 0:
+        return True
+    x_lo, x_hi, y_lo, y_hi = bounds
+    x, y, z, w = clip[:, 0], clip[:, 1], clip[:, 2], clip[:, 3]
+    return bool(np.all(x > x_hi * w) or np.all(x < x_lo * w) or np.all(y > y_hi * w) or np.all(y < y_lo * w)
+                or np.all(z < -w))
