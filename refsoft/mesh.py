@@ -115,6 +115,19 @@ class Mesh:
     def n_faces(self) -> int:
         return len(self.faces)
 
+    def boundary_edges(self) -> int:
+        """Edges used by exactly one triangle once vertices at the same position are welded
+        (within 1e-9 of the mesh's extent: seams and hard-normal copies count as joined); 0 for
+        a closed surface. Degenerate edges (both ends welded together) are ignored."""
+        v = self.vertices
+        extent = float(np.max(v.max(axis=0) - v.min(axis=0))) or 1.0
+        _, weld = np.unique(np.round((v - v.min(axis=0)) / (extent * 1e-9)), axis=0, return_inverse=True)
+        f = weld.reshape(-1)[self.faces.astype(np.int64)]
+        e = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
+        e = e[e[:, 0] != e[:, 1]]
+        _, counts = np.unique(e, axis=0, return_counts=True)
+        return int(np.sum(counts == 1))
+
     def bounds(self) -> np.ndarray:
         """Axis-aligned bounds, shape (2, 3): min and max corners."""
         return np.stack([self.vertices.min(axis=0), self.vertices.max(axis=0)])

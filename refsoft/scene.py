@@ -71,6 +71,10 @@ class SceneObject:
         Watertight mesh for the G-buffer and the search of an open reflector.
     reflectivity : float
         Blend weight of the virtual scene at this reflector's pixels (DESIGN section 5).
+    open : bool
+        Search an open reflector's own mesh (a flat mirror, the inside of a bowl). An open
+        reflector needs either this or a ``closed_proxy`` (Estalella section 5.3): without
+        either, an open mesh is most likely a modelling mistake, and is refused.
     """
 
     name: str
@@ -80,6 +84,7 @@ class SceneObject:
     reflector: bool = False
     closed_proxy: Mesh | None = None
     reflectivity: float = 1.0
+    open: bool = False
 
     def __post_init__(self):
         c = np.asarray(self.color, dtype=np.float64)
@@ -92,6 +97,19 @@ class SceneObject:
             raise SceneError(f"object {self.name!r}: reflectivity must be in [0, 1], got {self.reflectivity!r}")
         if self.closed_proxy is not None and not self.reflector:
             raise SceneError(f"object {self.name!r}: closed_proxy given but the object is not a reflector")
+        if not isinstance(self.open, (bool, np.bool_)):
+            raise SceneError(f"object {self.name!r}: open must be true or false")
+        if self.open and not self.reflector:
+            raise SceneError(f"object {self.name!r}: open is only for reflectors")
+        if self.closed_proxy is not None:
+            n = self.closed_proxy.boundary_edges()
+            if n:
+                raise SceneError(f"object {self.name!r}: closed_proxy is not closed ({n} boundary edges)")
+        elif self.reflector and not self.open:
+            n = self.mesh.boundary_edges()
+            if n:
+                raise SceneError(f"object {self.name!r}: the reflector is an open mesh ({n} boundary edges) with no "
+                                 "closed_proxy; give one, or set open = true to search the open mesh itself")
 
 
 @dataclass(frozen=True)

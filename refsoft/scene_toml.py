@@ -26,7 +26,7 @@ else:  # pragma: no cover
 
 CAMERA_KEYS = {"eye", "target", "up", "fov_y", "width", "height", "near", "far", "projection", "ortho_height"}
 OBJECT_KEYS = {"name", "mesh", "primitive", "translate", "rotate_deg", "scale", "color", "reflector",
-               "closed_proxy", "reflectivity"}
+               "closed_proxy", "reflectivity", "open"}
 TOP_KEYS = {"name", "camera", "objects", "animation"}
 ANIMATION_KEYS = {"frames", "camera", "objects"}
 ANIM_CAMERA_KEYS = {"frame", "eye", "target", "up", "fov_y"}
@@ -150,8 +150,12 @@ def scene_from_dict(data: dict, path: str = "<scene>", base_dir: str = ".") -> S
         if not isinstance(reflector, bool):
             ctx.fail(f"{key}.reflector", f"must be true or false, got {reflector!r}")
         reflectivity = ctx.number(o["reflectivity"], f"{key}.reflectivity") if "reflectivity" in o else 1.0
+        is_open = o.get("open", False)
+        if not isinstance(is_open, bool):
+            ctx.fail(f"{key}.open", f"must be true or false, got {is_open!r}")
         try:
-            objects.append(SceneObject(name, mesh, tuple(color), _transform(ctx, o, key), reflector, proxy, reflectivity))
+            objects.append(SceneObject(name, mesh, tuple(color), _transform(ctx, o, key), reflector, proxy, reflectivity,
+                                       is_open))
         except SceneError as exc:
             if str(exc).startswith(str(path)):
                 raise

@@ -112,7 +112,7 @@ def test_several_reflectors_keep_to_their_stencils():
 def test_planar_mirror_equals_the_classic_planar_reflection():
     cam = Camera(eye=(0.4, 1.0, 4.0), target=(0, 0.2, -2), width=W, height=H, fov_y=55)
     mirror = SceneObject("mirror", primitives.plane_grid((8.0, 6.0), (2, 2)), (0.9, 0.9, 0.9),
-                         Transform((0, 0.5, -2.0), (90.0, 0, 0)), reflector=True)  # the plane z = -2
+                         Transform((0, 0.5, -2.0), (90.0, 0, 0)), reflector=True, open=True)  # the plane z = -2
     ball = SceneObject("ball", primitives.icosphere(3, 0.5), (1, 0, 0), Transform((0.6, -0.2, 0.5)))
     box = SceneObject("box", primitives.box((0.6, 0.6, 0.6), 4), (0, 0, 1), Transform((-0.8, 0.3, 0.2)))
     torus = SceneObject("torus", primitives.torus(0.5, 0.15, 48, 16), (1, 0.8, 0), Transform((0.2, 0.9, 1.5)))

@@ -148,7 +148,7 @@ def test_box_copes_with_diagonal_ridges_where_cross_does_not(scale, rotate):
 def test_planar_mirror_virtual_vertices_are_exact_mirror_images():
     cam = Camera(eye=(0.5, 1.0, 4.0), target=(0, 0, -2), width=W, height=H, fov_y=50)
     mirror = SceneObject("mirror", primitives.plane_grid((8.0, 6.0), (8, 6)), (0.9, 0.9, 0.9),
-                         Transform((0, 0, -2.0), (90.0, 0, 0)), reflector=True)  # faces +z
+                         Transform((0, 0, -2.0), (90.0, 0, 0)), reflector=True, open=True)  # faces +z
     thing = SceneObject("thing", primitives.icosphere(3, 0.5), (1, 0, 0), Transform((0.6, -0.2, 0.5)))
     box = SceneObject("box", primitives.box((0.6, 0.6, 0.6), 3), (0, 0, 1), Transform((-0.8, 0.3, 0.2)))
     scene = Scene((mirror, thing, box), cam, None, "planar")

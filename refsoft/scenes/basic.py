@@ -54,7 +54,7 @@ def ellipsoid_scene() -> Scene:
 def planar_scene() -> Scene:
     """A flat mirror (a wall at z = -2) with objects in front; the camera slides sideways."""
     mirror = SceneObject("mirror", plane_grid((8.0, 5.0), (4, 4)), (0.85, 0.85, 0.9),
-                         Transform((0, 1.0, -2.0), (90.0, 0, 0)), reflector=True)
+                         Transform((0, 1.0, -2.0), (90.0, 0, 0)), reflector=True, open=True)
     objs = (mirror,) + tuple(o for o in _surroundings() if o.name != "back_wall")
     cam = Camera(eye=(0.0, 1.2, 5.0), target=(0.0, 0.3, -2.0), fov_y=50.0, width=640, height=480)
     anim = Animation(30, ((0, {"eye": [-1.5, 1.2, 5.0]}), (29, {"eye": [1.5, 1.4, 4.5]})))
@@ -67,7 +67,7 @@ def concave_scene() -> Scene:
 
     inner, _ = bowl(1.5, 32, 96, inside=True)
     objs = (
-        SceneObject("bowl_inside", inner, (0.85, 0.85, 0.85), Transform((0, 0, 0)), reflector=True),
+        SceneObject("bowl_inside", inner, (0.85, 0.85, 0.85), Transform((0, 0, 0)), reflector=True, open=True),
         SceneObject("red_ball", icosphere(3, 0.25), (0.9, 0.2, 0.15), Transform((0.3, 0.5, 0.2))),
         SceneObject("blue_box", box((0.35, 0.35, 0.35), 3), (0.2, 0.3, 0.9), Transform((-0.5, 0.8, -0.3), (20, 30, 0))),
         SceneObject("floor", plane_grid((10.0, 10.0), (20, 20)), (0.35, 0.55, 0.35), Transform((0, -1.6, 0))),
@@ -80,7 +80,8 @@ def concave_scene() -> Scene:
 def torus_scene() -> Scene:
     """Half a mirror torus (mixed curvature: convex outside, saddle inside) among objects."""
     half = torus(1.2, 0.45, 96, 48, major_angle_deg=180.0)
-    refl = SceneObject("torus_section", half, (0.9, 0.9, 0.9), Transform((0, 0, 0), (0, 90, 0)), reflector=True)
+    refl = SceneObject("torus_section", half, (0.9, 0.9, 0.9), Transform((0, 0, 0), (0, 90, 0)), reflector=True,
+                       open=True)
     cam = Camera(eye=(0.0, 2.0, 5.0), target=(0.0, 0.0, 0.0), fov_y=45.0, width=640, height=480)
     anim = Animation(30, _orbit_keys(30, 5.4, 2.0, -25, 25))
     return Scene((refl,) + _surroundings(), cam, anim, "torus")
