@@ -48,6 +48,10 @@ def cmd_gbuffer(args) -> int:
     camera = scene.camera_at(args.frame)
     if args.widen != 1.0:
         camera = camera.widened(args.widen)
+    from .limits import check_frame_memory
+    from .render import RenderOptions
+
+    check_frame_memory(scene, RenderOptions(widen=args.widen, precision=args.precision), 1, args.memory_limit)
     os.makedirs(args.out, exist_ok=True)
     t0 = time.perf_counter()
     pictures = []
@@ -133,19 +137,13 @@ def cmd_render(args) -> int:
     from .render import SKIPS
 
     off = set(SKIPS) if args.no_skips else {n.replace("-", "_") for n in args.no_skip or ()}
-    done, stats = render(scene, frames=frames, out=None, progress=True, neighbourhood=args.search,
-                         inverse=args.inverse, widen=args.widen, precision=args.precision,
-                         coherence=not args.no_coherence, adaptive_widen=args.adaptive_widen,
-                         **{name: name not in off for name in SKIPS})
-    from .io import write_json
-    from .render import frame_stats, write_frame
-
-    os.makedirs(args.out, exist_ok=True)
+    # every frame is written as soon as it is rendered, then dropped (one frame in memory)
+    done, stats = render(scene, frames=frames, out=args.out, progress=True, memory_limit=args.memory_limit,
+                         keep=False, write=None if args.frame is None else {args.frame},
+                         neighbourhood=args.search, inverse=args.inverse, widen=args.widen,
+                         precision=args.precision, coherence=not args.no_coherence,
+                         adaptive_widen=args.adaptive_widen, **{name: name not in off for name in SKIPS})
     keep = done if args.frame is None else [f for f in done if f.index == args.frame]
-    for fr in keep:
-        write_frame(args.out, fr)
-    stats = frame_stats(keep) if args.frame is not None else stats
-    write_json(os.path.join(args.out, "stats.json"), stats)
     summ = stats["summary"]
     median_ms = np.median([f.time_ms["total"] for f in keep])
     print(f"{scene.name}: {len(keep)} frame(s) written to {args.out} in {time.perf_counter() - t0:.1f} s "
@@ -165,7 +163,8 @@ def cmd_truth(args) -> int:
     frames = [args.frame] if args.frame is not None else args.frames
     frame_indices(scene, frames)  # checks the range before any work
     t0 = time.perf_counter()
-    done, stats = truth(scene, frames=frames, out=args.out, progress=True, exact=not args.no_exact)
+    done, stats = truth(scene, frames=frames, out=args.out, progress=True, exact=not args.no_exact,
+                        memory_limit=args.memory_limit)
     median_ms = stats["summary"]["median_total_ms"]
     rays = sum(f.counts["reflector_pixels"] for f in done)
     print(f"{scene.name}: {len(done)} truth frame(s) written to {args.out} in {time.perf_counter() - t0:.1f} s "
@@ -256,6 +255,7 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--widen", type=float, default=1.0, help="wider-frustum factor (Estalella 5.2)")
     g.add_argument("--precision", choices=["float32", "float64"], default="float32")
     g.add_argument("--out", default="out", help="output folder (default: out)")
+    g.add_argument("--memory-limit", default=None, metavar="SIZE", help="refuse above this estimate (e.g. 4G)")
     g.set_defaults(func=cmd_gbuffer)
 
     t = sub.add_parser("trace", help="replay one vertex's reflection-point search step by step")
@@ -291,6 +291,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="turn one exact skip off (repeatable): cull-reflectors, reuse, cull-virtual, crop-virtual; "
                         "outputs are identical either way, only the time changes")
     r.add_argument("--no-skips", action="store_true", help="turn every exact skip off")
+    r.add_argument("--memory-limit", default=None, metavar="SIZE",
+                   help="refuse a render estimated to need more memory (e.g. 4G; default $REFSOFT_MEMORY_LIMIT or 4G)")
     r.add_argument("--adaptive-widen", action="store_true",
                    help="approximation: use --widen only on frames where a reflector is cut by the image border")
     r.set_defaults(func=cmd_render)
@@ -302,6 +304,7 @@ def build_parser() -> argparse.ArgumentParser:
     tr.add_argument("--width", type=int, default=None)
     tr.add_argument("--height", type=int, default=None)
     tr.add_argument("--out", default="out/truth", help="output folder (default: out/truth)")
+    tr.add_argument("--memory-limit", default=None, metavar="SIZE", help="refuse above this estimate (e.g. 4G)")
     tr.add_argument("--no-exact", action="store_true",
                     help="skip the exact reflection points of spherical reflectors (per-vertex truth)")
     tr.set_defaults(func=cmd_truth)

@@ -25,6 +25,9 @@ DEPTH_CLEAR = 1.0
 MAX_IMAGE_EDGE = 16384
 #: Largest image accepted, in pixels (width * height); about 1 GiB of G-buffer at float32.
 MAX_IMAGE_PIXELS = 1 << 26
+#: Default memory limit of a run (refsoft.limits): estimated bytes above this are refused.
+#: Override with ``--memory-limit`` or the environment variable ``REFSOFT_MEMORY_LIMIT``.
+MEMORY_LIMIT_BYTES = 4 << 30
 #: Largest mesh accepted.
 MAX_VERTICES = 1 << 26
 MAX_TRIANGLES = 1 << 26

@@ -195,13 +195,19 @@ class FrameDriver:
     """Renders a scene frame by frame, keeping each reflector's previous reflection pixels (and,
     for the reuse skip, its last G-buffer and search results)."""
 
-    def __init__(self, scene: Scene, options: RenderOptions | None = None):
+    def __init__(self, scene: Scene, options: RenderOptions | None = None, memory_limit=None):
+        from .limits import check_frame_memory
+
         if not isinstance(scene, Scene):
             raise RefsoftError(f"scene must be a refsoft.Scene, got {type(scene).__name__}")
         if options is not None and not isinstance(options, RenderOptions):
             raise RefsoftError(f"options must be a RenderOptions, got {type(options).__name__}")
+        if not scene.reflector_ids:
+            raise RefsoftError(f"scene {scene.name!r} has no reflector: nothing to reflect "
+                               "(mark an object with reflector = true)")
         self.scene = scene
         self.options = options or RenderOptions()
+        check_frame_memory(scene, self.options, 1, memory_limit)
         self.previous = {}
         self._last = {}
         self._static_meshes = {}  # world meshes of objects that do not move (reused, unchanged)
@@ -387,9 +393,12 @@ def frame_indices(scene: Scene, frames=None) -> list:
     return indices
 
 
-def run_frames(renderer, indices, out=None, progress=False, desc="frames") -> list:
+def run_frames(renderer, indices, out=None, progress=False, desc="frames", keep=True, write=None) -> list:
     """``renderer.render_frame(f)`` for each index in order, each frame written to ``out`` (when
-    given) as soon as it is done; a tqdm bar on a terminal when ``progress`` and several frames."""
+    given) as soon as it is done; a tqdm bar on a terminal when ``progress`` and several frames.
+
+    ``write``: the indices to write (default: all). ``keep=False`` drops each frame's arrays
+    once written (the returned frames keep their timings), so a long run holds one frame."""
     import os
 
     if out is not None:
@@ -402,13 +411,15 @@ def run_frames(renderer, indices, out=None, progress=False, desc="frames") -> li
     done = []
     for f in it:
         fr = renderer.render_frame(f)
-        if out is not None:
+        if out is not None and (write is None or f in write):
             write_frame(out, fr)
+        if not keep:
+            fr.arrays = {}
         done.append(fr)
     return done
 
 
-def render(scene, frames=None, out=None, progress=False, **options):
+def render(scene, frames=None, out=None, progress=False, memory_limit=None, keep=True, write=None, **options):
     """Render frames of a scene (the Python face of ``refsoft render``).
 
     Parameters
@@ -422,6 +433,14 @@ def render(scene, frames=None, out=None, progress=False, **options):
         Folder to write ``frame_NNNN.npz``, ``frame_NNNN.png`` and ``stats.json`` into.
     progress : bool
         Show a tqdm progress bar.
+    memory_limit : int or str, optional
+        Refuse (:class:`refsoft.errors.LimitError`) a render estimated to need more (e.g.
+        ``"4G"``; default ``$REFSOFT_MEMORY_LIMIT`` or 4 GiB; see :mod:`refsoft.limits`).
+    keep : bool
+        Keep every frame's arrays in the returned frames (``False``: only timings and stats,
+        so a long render to ``out`` holds one frame at a time).
+    write : set of int, optional
+        Frame indices to write to ``out`` (default all).
     **options
         :class:`RenderOptions` fields (``neighbourhood``, ``inverse``, ``widen``, ...).
 
@@ -429,7 +448,7 @@ def render(scene, frames=None, out=None, progress=False, **options):
     -------
     frames : list of Frame
     stats : dict
-        The ``stats.json`` content.
+        The ``stats.json`` content (of the written frames when ``write`` is given).
     """
     import os
 
@@ -438,10 +457,14 @@ def render(scene, frames=None, out=None, progress=False, **options):
 
     if not isinstance(scene, Scene):
         scene = load_scene(scene)
+    from .limits import check_frame_memory
+
     opts = RenderOptions(**options)
     indices = frame_indices(scene, frames)
-    done = run_frames(FrameDriver(scene, opts), indices, out, progress, f"render {scene.name}")
-    stats = frame_stats(done)
+    driver = FrameDriver(scene, opts, memory_limit)
+    check_frame_memory(scene, opts, len(indices) if keep else 1, memory_limit)
+    done = run_frames(driver, indices, out, progress, f"render {scene.name}", keep, write)
+    stats = frame_stats(done if write is None else [f for f in done if f.index in write])
     if out is not None:
         write_json(os.path.join(out, "stats.json"), stats)
     return done, stats

@@ -166,9 +166,17 @@ def exact_sphere_vertices(scene: Scene, reflector: int, frame: int, vertices):
 class TruthRenderer:
     """Ray-traces frames of a scene (caches the Embree scene while no reflected object moves)."""
 
-    def __init__(self, scene: Scene, exact: bool = True):
+    def __init__(self, scene: Scene, exact: bool = True, memory_limit=None):
+        from .limits import check_frame_memory
+        from .render import RenderOptions
+
         if not isinstance(scene, Scene):
             raise RefsoftError(f"scene must be a refsoft.Scene, got {type(scene).__name__}")
+        if not scene.reflector_ids:
+            raise RefsoftError(f"scene {scene.name!r} has no reflector: nothing to reflect "
+                               "(mark an object with reflector = true)")
+        # the render's estimate bounds the truth's: the same view, per-pixel rays instead of G-buffers
+        check_frame_memory(scene, RenderOptions(), 1, memory_limit)
         self.scene = scene
         self.exact = exact
         self._targets = None
@@ -256,7 +264,7 @@ def truth_stats(frames) -> dict:
                         "median_total_ms": float(np.median([f.time_ms["total"] for f in frames])) if frames else 0.0}}
 
 
-def truth(scene, frames=None, out=None, progress=False, exact=True):
+def truth(scene, frames=None, out=None, progress=False, exact=True, memory_limit=None):
     """Ray-trace frames of a scene (the Python face of ``refsoft truth``).
 
     Parameters
@@ -271,6 +279,8 @@ def truth(scene, frames=None, out=None, progress=False, exact=True):
         Show a tqdm progress bar.
     exact : bool
         Also solve the exact reflection points of spherical reflectors.
+    memory_limit : int or str, optional
+        As :func:`refsoft.render.render`.
 
     Returns
     -------
@@ -284,7 +294,8 @@ def truth(scene, frames=None, out=None, progress=False, exact=True):
     if not isinstance(scene, Scene):
         scene = load_scene(scene)
     indices = frame_indices(scene, frames)
-    done = run_frames(TruthRenderer(scene, exact=exact), indices, out, progress, f"truth {scene.name}")
+    done = run_frames(TruthRenderer(scene, exact=exact, memory_limit=memory_limit), indices, out, progress,
+                      f"truth {scene.name}")
     stats = truth_stats(done)
     if out is not None:
         write_json(os.path.join(out, "stats.json"), stats)

@@ -1,0 +1,135 @@
+"""The memory guard (DESIGN section 10): estimate what a run will hold before allocating it, and
+refuse clearly above a limit.
+
+The limit is, in order: the ``memory_limit`` argument (CLI ``--memory-limit``), the environment
+variable ``REFSOFT_MEMORY_LIMIT``, :data:`refsoft.constants.MEMORY_LIMIT_BYTES`. Sizes accept
+plain bytes or a suffix: ``512M``, ``4G``, ``1.5GiB``.
+
+The estimate counts the arrays a frame keeps (its section 7 outputs) and the largest working set
+of one stage (a reflector's G-buffer, packed copy and search arrays; the rasterizer's per-pixel
+and per-triangle buffers), from byte counts per pixel, vertex and triangle listed below. It is
+an estimate (within about 2x of the measured peak on the built-in scenes: tests/test_limits.py),
+meant to stop a typo like ``--width 100000`` before the machine swaps, not to budget tightly.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+
+from . import constants
+from .errors import LimitError, RefsoftError
+
+#: Bytes per view pixel: colour (float32 x 3, twice: view and composite), object id, reflected
+#: id, depth, clip triangle and input triangle ids, interpolated normals (float32 x 3), 8-bit image.
+VIEW_BYTES_PER_PIXEL = 12 * 2 + 4 * 5 + 12 + 3
+#: Bytes per G-buffer pixel kept in a frame's outputs: float32 positions and normals, mask.
+GBUFFER_OUTPUT_BYTES_PER_PIXEL = 12 + 12 + 1
+#: Bytes per G-buffer pixel the driver keeps for the reuse skip, at a precision of ``p`` bytes:
+#: the last G-buffer's positions and normals (3p each), mask, depth and triangle ids.
+GBUFFER_REUSE_BYTES = {4: 6 * 4 + 9, 8: 6 * 8 + 9}
+#: Working bytes per G-buffer pixel at a precision of ``p`` bytes: positions and normals (3p
+#: each), packed P, N, U (9p), depth, triangle and clip-triangle ids.
+GBUFFER_WORK_BYTES = {4: 15 * 4 + 12, 8: 15 * 8 + 12}
+#: Bytes per searched vertex and reflector kept in the outputs: pixel (2 int32), virtual vertex
+#: (3 float32), iterations, flags, object id, score and margin (float64 at most).
+VERTEX_OUTPUT_BYTES = 8 + 12 + 4 + 1 + 4 + 16
+#: Working bytes per vertex: world position (float64 x 3), clip coordinates (4 float64), search
+#: keys and starts, virtual vertices in float64.
+VERTEX_WORK_BYTES = 24 + 32 + 24 + 24
+#: Working bytes per triangle in the rasterizer's setup (snapped coordinates, depths, 1/w,
+#: bounding box, edge biases, bins).
+TRIANGLE_WORK_BYTES = 24 + 48 + 32 + 16 + 24 + 16
+
+_UNITS = {"": 1, "b": 1, "k": 1 << 10, "kb": 1 << 10, "kib": 1 << 10, "m": 1 << 20, "mb": 1 << 20, "mib": 1 << 20,
+          "g": 1 << 30, "gb": 1 << 30, "gib": 1 << 30, "t": 1 << 40, "tb": 1 << 40, "tib": 1 << 40}
+
+
+def parse_bytes(text) -> int:
+    """``"4G"`` -> 4294967296. Accepts an int, or a number with an optional unit (k, M, G, T,
+    optionally followed by B or iB; powers of 1024)."""
+    if isinstance(text, bool):
+        raise RefsoftError(f"memory limit must be a size like 4G or 512M, got {text!r}")
+    if isinstance(text, int):
+        value = text
+    else:
+        m = re.fullmatch(r"\s*([0-9]*\.?[0-9]+)\s*([a-zA-Z]*)\s*", str(text))
+        if not m or m.group(2).lower() not in _UNITS:
+            raise RefsoftError(f"memory limit must be a size like 4G or 512M, got {text!r}")
+        value = int(float(m.group(1)) * _UNITS[m.group(2).lower()])
+    if value <= 0:
+        raise RefsoftError(f"memory limit must be positive, got {text!r}")
+    return value
+
+
+def memory_limit(limit=None) -> int:
+    """The limit in bytes: ``limit`` if given, else ``$REFSOFT_MEMORY_LIMIT``, else the default."""
+    if limit is not None:
+        return parse_bytes(limit)
+    env = os.environ.get("REFSOFT_MEMORY_LIMIT")
+    if env:
+        return parse_bytes(env)
+    return constants.MEMORY_LIMIT_BYTES
+
+
+def human(n: float) -> str:
+    """Bytes in a short human form: ``1.5 GiB``."""
+    for unit in ("B", "KiB", "MiB", "GiB"):
+        if n < 1024 or unit == "GiB":
+            return f"{n:.0f} {unit}" if unit == "B" else f"{n:.1f} {unit}"
+        n /= 1024
+    return f"{n:.1f} TiB"  # pragma: no cover
+
+
+def frame_bytes(scene, options, frames_kept: int = 1) -> dict:
+    """Estimated bytes of a render: what ``frames_kept`` frames keep and the largest stage.
+
+    Parameters
+    ----------
+    scene : Scene
+    options : RenderOptions
+    frames_kept : int
+        Frames whose arrays stay in memory (all of them for ``render(out=None)``).
+
+    Returns
+    -------
+    dict
+        ``view``, ``gbuffers``, ``vertices`` (kept per frame), ``cache`` (the driver's last
+        G-buffers and results, for the reuse skip), ``work`` (transient buffers of the stages)
+        and ``total``, in bytes.
+    """
+    import math
+
+    cam = scene.camera
+    view_px = cam.width * cam.height
+    if options.gbuffer_size is not None:
+        g_px = int(options.gbuffer_size[0]) * int(options.gbuffer_size[1])
+    else:
+        g_px = math.ceil(cam.width * options.widen) * math.ceil(cam.height * options.widen)
+    p = 8 if options.precision == "float64" else 4
+    n_refl = len(scene.reflector_ids)
+    n_verts = sum(o.mesh.n_vertices for o in scene.objects if not o.reflector)
+    n_tris = sum(o.mesh.n_faces for o in scene.objects)
+    kept_view = view_px * VIEW_BYTES_PER_PIXEL
+    kept_gb = n_refl * g_px * GBUFFER_OUTPUT_BYTES_PER_PIXEL
+    kept_v = n_refl * n_verts * VERTEX_OUTPUT_BYTES
+    cache = n_refl * (g_px * GBUFFER_REUSE_BYTES[p] + n_verts * VERTEX_OUTPUT_BYTES) if options.reuse else 0
+    work = g_px * GBUFFER_WORK_BYTES[p] + n_verts * VERTEX_WORK_BYTES + n_tris * TRIANGLE_WORK_BYTES + view_px * 16
+    kept = (kept_view + kept_gb + kept_v) * max(int(frames_kept), 1)
+    return {"view": kept_view, "gbuffers": kept_gb, "vertices": kept_v, "cache": cache, "work": work,
+            "total": kept + cache + work}
+
+
+def check_frame_memory(scene, options, frames_kept: int = 1, limit=None) -> dict:
+    """Raise :class:`LimitError` when :func:`frame_bytes` exceeds the limit; return the estimate."""
+    est = frame_bytes(scene, options, frames_kept)
+    lim = memory_limit(limit)
+    if est["total"] > lim:
+        kept = f" x {frames_kept} frames kept" if frames_kept > 1 else ""
+        raise LimitError(
+            f"this render needs about {human(est['total'])} (view {human(est['view'])}, G-buffers "
+            f"{human(est['gbuffers'])}, vertices {human(est['vertices'])}{kept}, reuse cache {human(est['cache'])}, "
+            f"working set {human(est['work'])}), "
+            f"above the memory limit of {human(lim)}: lower --width/--height or --widen, or raise --memory-limit "
+            f"(or REFSOFT_MEMORY_LIMIT)")
+    return est

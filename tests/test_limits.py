@@ -1,0 +1,95 @@
+"""The memory guard (refsoft.limits): sizes, the limit's sources, refusals, and the estimate
+against what a frame really allocates."""
+
+import tracemalloc
+
+import pytest
+
+import refsoft
+from refsoft import cli
+from refsoft.errors import LimitError, RefsoftError
+from refsoft.limits import check_frame_memory, frame_bytes, memory_limit, parse_bytes
+from refsoft.render import FrameDriver, RenderOptions, render
+from refsoft.truth import truth
+
+
+@pytest.mark.parametrize("text, value", [("4G", 4 << 30), ("512M", 512 << 20), ("1.5GiB", 3 << 29), ("100", 100),
+                                         (2048, 2048), ("64kb", 64 << 10), (" 2 g ", 2 << 30)])
+def test_parse_bytes(text, value):
+    assert parse_bytes(text) == value
+
+
+@pytest.mark.parametrize("text", ["", "G", "4X", "-1G", "0", "four", True, "1e9"])
+def test_parse_bytes_refuses(text):
+    with pytest.raises(RefsoftError, match="memory limit"):
+        parse_bytes(text)
+
+
+def test_limit_sources(monkeypatch):
+    monkeypatch.delenv("REFSOFT_MEMORY_LIMIT", raising=False)
+    assert memory_limit() == refsoft.constants.MEMORY_LIMIT_BYTES
+    monkeypatch.setenv("REFSOFT_MEMORY_LIMIT", "3G")
+    assert memory_limit() == 3 << 30
+    assert memory_limit("1G") == 1 << 30  # the argument wins
+
+
+def test_estimate_grows_with_what_it_counts():
+    scene = refsoft.load_scene("ants", width=160, height=120)
+    base = frame_bytes(scene, RenderOptions())
+    assert frame_bytes(scene, RenderOptions(precision="float64"))["total"] > base["total"]
+    assert frame_bytes(scene, RenderOptions(widen=2.0))["gbuffers"] == pytest.approx(4 * base["gbuffers"], rel=0.05)
+    assert frame_bytes(scene, RenderOptions(), frames_kept=10)["total"] > 9 * (base["view"] + base["gbuffers"])
+    assert frame_bytes(scene, RenderOptions(reuse=False))["cache"] == 0 < base["cache"]
+
+
+@pytest.mark.parametrize("name", ["sphere", "ants"])
+def test_estimate_bounds_the_traced_peak(name):
+    """The estimate is above what NumPy allocates for one frame (tracemalloc's peak) and within
+    3x of it (measured 1.3x-2.3x at 640x480 on sphere, kitchen, ufo, ants)."""
+    scene = refsoft.load_scene(name, width=320, height=240)
+    FrameDriver(scene).render_frame(0)  # compiled, caches warm
+    tracemalloc.start()
+    try:
+        FrameDriver(scene).render_frame(0)
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    est = frame_bytes(scene, RenderOptions())["total"]
+    assert peak < est < 3 * peak, (peak, est)
+
+
+def test_render_over_the_limit_is_refused_before_any_work(tmp_path):
+    with pytest.raises(LimitError, match=r"needs about .* above the memory limit of 1.0 MiB"):
+        render("sphere", frames=1, out=tmp_path / "o", memory_limit="1M")
+    assert not (tmp_path / "o").exists()
+    scene = refsoft.load_scene("sphere", width=64, height=48)
+    with pytest.raises(LimitError):
+        check_frame_memory(scene, RenderOptions(), frames_kept=1, limit=1000)
+    with pytest.raises(LimitError):
+        truth(scene, frames=1, memory_limit=1000)
+
+
+def test_keeping_every_frame_counts_every_frame():
+    scene = refsoft.load_scene("quad", width=64, height=48)
+    est = frame_bytes(scene, RenderOptions())
+    limit = int(est["total"] + 1.5 * (est["view"] + est["gbuffers"] + est["vertices"]))
+    render(scene, frames=4, keep=False, memory_limit=limit)  # one frame at a time: fits
+    with pytest.raises(LimitError, match="x 4 frames kept"):
+        render(scene, frames=4, keep=True, memory_limit=limit)
+
+
+def test_cli_huge_image_is_refused_by_the_guard(tmp_path, capsys):
+    out = tmp_path / "o"
+    out.mkdir()
+    (out / "frame_0000.png").write_bytes(b"keep me")
+    assert cli.main(["render", "sphere", "--width", "16000", "--height", "4000", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "needs about" in err[0] and "--memory-limit" in err[0]
+    assert (out / "frame_0000.png").read_bytes() == b"keep me" and sorted(p.name for p in out.iterdir()) == ["frame_0000.png"]
+    assert cli.main(["render", "sphere", "--width", "64", "--height", "48", "--memory-limit", "64k",
+                     "--out", str(out)]) == 2
+    assert cli.main(["truth", "sphere", "--width", "64", "--height", "48", "--memory-limit", "lots",
+                     "--out", str(out)]) == 2
+    assert cli.main(["gbuffer", "sphere", "--width", "64", "--height", "48", "--memory-limit", "64k",
+                     "--out", str(out)]) == 2
+    assert sorted(p.name for p in out.iterdir()) == ["frame_0000.png"]
