@@ -419,7 +419,8 @@ def run_frames(renderer, indices, out=None, progress=False, desc="frames", keep=
     return done
 
 
-def render(scene, frames=None, out=None, progress=False, memory_limit=None, keep=True, write=None, **options):
+def render(scene, frames=None, out=None, progress=False, memory_limit=None, keep=True, write=None,
+           width=None, height=None, **options):
     """Render frames of a scene (the Python face of ``refsoft render``).
 
     Parameters
@@ -433,6 +434,8 @@ def render(scene, frames=None, out=None, progress=False, memory_limit=None, keep
         Folder to write ``frame_NNNN.npz``, ``frame_NNNN.png`` and ``stats.json`` into.
     progress : bool
         Show a tqdm progress bar.
+    width, height : int, optional
+        Image size (replaces the scene camera's).
     memory_limit : int or str, optional
         Refuse (:class:`refsoft.errors.LimitError`) a render estimated to need more (e.g.
         ``"4G"``; default ``$REFSOFT_MEMORY_LIMIT`` or 4 GiB; see :mod:`refsoft.limits`).
@@ -456,7 +459,12 @@ def render(scene, frames=None, out=None, progress=False, memory_limit=None, keep
     from .scenes import load_scene
 
     if not isinstance(scene, Scene):
-        scene = load_scene(scene)
+        scene = load_scene(scene, width=width, height=height)
+    elif width is not None or height is not None:
+        from dataclasses import replace as _replace
+
+        scene = _replace(scene, camera=_replace(scene.camera, **{k: v for k, v in (("width", width),
+                                                                                  ("height", height)) if v is not None}))
     from .limits import check_frame_memory
 
     opts = RenderOptions(**options)

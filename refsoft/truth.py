@@ -264,7 +264,8 @@ def truth_stats(frames) -> dict:
                         "median_total_ms": float(np.median([f.time_ms["total"] for f in frames])) if frames else 0.0}}
 
 
-def truth(scene, frames=None, out=None, progress=False, exact=True, memory_limit=None):
+def truth(scene, frames=None, out=None, progress=False, exact=True, memory_limit=None, width=None,
+          height=None):
     """Ray-trace frames of a scene (the Python face of ``refsoft truth``).
 
     Parameters
@@ -281,6 +282,8 @@ def truth(scene, frames=None, out=None, progress=False, exact=True, memory_limit
         Also solve the exact reflection points of spherical reflectors.
     memory_limit : int or str, optional
         As :func:`refsoft.render.render`.
+    width, height : int, optional
+        Image size (replaces the scene camera's).
 
     Returns
     -------
@@ -292,7 +295,12 @@ def truth(scene, frames=None, out=None, progress=False, exact=True, memory_limit
     from .scenes import load_scene
 
     if not isinstance(scene, Scene):
-        scene = load_scene(scene)
+        scene = load_scene(scene, width=width, height=height)
+    elif width is not None or height is not None:
+        from dataclasses import replace as _replace
+
+        scene = _replace(scene, camera=_replace(scene.camera, **{k: v for k, v in (("width", width),
+                                                                                  ("height", height)) if v is not None}))
     indices = frame_indices(scene, frames)
     done = run_frames(TruthRenderer(scene, exact=exact, memory_limit=memory_limit), indices, out, progress,
                       f"truth {scene.name}")
