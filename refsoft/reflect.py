@@ -73,13 +73,17 @@ class Reflection:
     gbuffer : GBuffer
     result : SearchResult
     virtual : ndarray, shape (N, 3)
-        Virtual vertices, world space, in the G-buffer's precision.
+        Virtual vertices, world space, in the G-buffer's precision (the output).
+    virtual64 : ndarray, shape (N, 3), float64, optional
+        The same, computed relative to the G-buffer's origin and moved to world space in
+        float64 (no rounding of large world coordinates): what the virtual raster draws.
     """
 
     reflector: int
     gbuffer: GBuffer
     result: SearchResult
     virtual: np.ndarray
+    virtual64: np.ndarray | None = None
 
 
 def reflect(scene: Scene, frame: int = 0, reflectors=None, neighbourhood="cross", inverse="plane", widen=1.0,

@@ -117,7 +117,9 @@ def _virtual_pass(scene, meshes, camera, refl, stencil, box, inverse, cull=True)
     covered (h, w) bool, and the number of objects culled.
     """
     res = refl.result
-    virtual = refl.virtual.astype(np.float64)
+    # eye-relative virtual vertices moved to world space in float64: far from the origin the
+    # float32 world output would round them (1/16 unit at 1e6)
+    virtual = refl.virtual64 if refl.virtual64 is not None else refl.virtual.astype(np.float64)
     clip_all = _setup.transform_points(virtual, camera.view_proj())
     bounds = skips.box_planes(box, camera.width, camera.height)
     bad = CULLED | (HIDDEN if inverse == "discard" else 0)
@@ -261,7 +263,9 @@ class FrameDriver:
             skipped["searches_reused"][str(k)] = int(reuse.sum())
         else:
             res = search(gb, eye, verts, opt.neighbourhood, opt.inverse, prev, opt.cap)
-        refl = Reflection(k, gb, res, virtual_vertices(gb, res, verts))
+        rel = virtual_vertices(gb, res, verts, relative=True)
+        world64 = rel.astype(np.float64) + gb.origin
+        refl = Reflection(k, gb, res, world64.astype(rel.dtype), world64)
         if opt.reuse:
             self._last[k] = _Last(key, gb, res, {j: transforms[j] for j in transforms})
         return refl, 1000 * (t1 - t0), 1000 * (time.perf_counter() - t1)

@@ -229,7 +229,7 @@ def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", invers
     return SearchResult(pixel, score, margin, iterations, flags, neighbourhood, inverse, int(cap))
 
 
-def virtual_vertices(gbuffer: GBuffer, result: SearchResult, vertices) -> np.ndarray:
+def virtual_vertices(gbuffer: GBuffer, result: SearchResult, vertices, relative: bool = False) -> np.ndarray:
     """Virtual vertices V' (DESIGN 4.6), world space.
 
     With ``d = V - P_R`` and ``N_R`` at the reflection pixel: a visible vertex (``d.N >= 0``)
@@ -237,11 +237,13 @@ def virtual_vertices(gbuffer: GBuffer, result: SearchResult, vertices) -> np.nda
     ``P_R + 2 N (d.N) - d`` (Estalella's equation 1, verbatim), ``search`` ``V`` itself (the
     inverse search found where V is seen), ``discard`` ``V - 2 (d.N) N`` (its triangles are not
     drawn). CULLED vertices give ``V``. Arithmetic in the G-buffer's precision, relative to its
-    origin.
+    origin; ``relative=True`` returns that result as it is (``origin + result`` in float64 is
+    then the virtual vertex without the rounding of large world coordinates to float32).
 
     Returns
     -------
     ndarray, shape (N, 3), float32 or float64 (the G-buffer's dtype)
+        World space, or relative to ``gbuffer.origin`` when ``relative``.
     """
     dt = _check_gbuffer(gbuffer)
     verts = _points(vertices, "vertices", len(result))
@@ -263,6 +265,8 @@ def virtual_vertices(gbuffer: GBuffer, result: SearchResult, vertices) -> np.nda
         out = np.where(hidden[:, None], eq1, out)
     elif result.inverse == "search":
         out = np.where(hidden[:, None], v, out)
+    if relative:
+        return out
     return (out.astype(np.float64) + o).astype(dt)
 
 
