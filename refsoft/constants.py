@@ -45,3 +45,8 @@ BACKGROUND_COLOR = np.array([0.08, 0.09, 0.12])
 # --- Camera validation ---------------------------------------------------------------------
 #: |cross(forward, up)| below this means up is parallel to the view direction.
 CAMERA_PARALLEL_TOL = 1e-9
+
+# --- Conformance (DESIGN section 8) --------------------------------------------------------
+#: Two reflection pixels are a tie when the oracle's scores differ by at most this many float32
+#: ULP of the better one (``refsoft check``, ``refsoft.precision``).
+TIE_ULPS = 8

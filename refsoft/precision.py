@@ -1,0 +1,82 @@
+"""float32 against float64: the same search run in both precisions, and where they part.
+
+The G-buffer's coverage does not depend on the precision (it comes from snapped integer edge
+functions), so both searches walk the same pixel grid. For every vertex searched in both:
+
+- ``identical``: the same reflection pixel;
+- ``tie``: different pixels whose float64 scores differ by at most :data:`TIE_ULPS` float32 ULP
+  of the better one (the rule ``refsoft check`` accepts, DESIGN section 8): a near-tie that
+  float32 rounding decides either way;
+- ``diverged``: different pixels further apart in score: float32 rounding decided a near-tie
+  earlier on the walk (or at a coherence restart), and the two walks then reached different
+  local optima (only where the score has several: concave, saddle-shaped or occluded mirrors).
+
+The float64 scores are computed here in NumPy with the formula of DESIGN 4.1, from the float64
+G-buffer.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import constants
+from .reflect import reflect
+from .search import CULLED
+
+
+def scores64(gbuffer, eye, vertices, pixels) -> np.ndarray:
+    """``s`` of DESIGN 4.1 in float64 for each vertex at its pixel (row, col) of a float64
+    G-buffer (positions relative to its origin), shape (N,)."""
+    r, c = pixels[:, 0], pixels[:, 1]
+    p = gbuffer.position[r, c].astype(np.float64)
+    n = gbuffer.normal[r, c].astype(np.float64)
+    o = gbuffer.origin
+    u = (np.asarray(eye, dtype=np.float64) - o) - p
+    b = (np.asarray(vertices, dtype=np.float64) - o) - p
+
+    def unit(x):
+        length = np.linalg.norm(x, axis=1, keepdims=True)
+        return np.divide(x, length, out=np.zeros_like(x), where=length > 0)
+
+    h = unit(unit(u) + unit(b))
+    return np.einsum("ij,ij->i", n, h)
+
+
+def compare_precisions(scene, frame: int = 0, **options) -> dict:
+    """Search every reflector of ``scene`` at ``frame`` in float32 and in float64 (cold, the
+    other options as :func:`refsoft.reflect.reflect`) and classify the differences.
+
+    Returns
+    -------
+    dict
+        Per reflector id: ``n`` (vertices searched in both), ``identical``, ``tie``, ``diverged``
+        (counts), ``identical_share``, ``max_distance`` (pixels, among differing vertices) and
+        ``median_margin_differing`` / ``median_margin_all`` (the float32 search's margins).
+    """
+    verts, _, r32 = reflect(scene, frame, precision="float32", **options)
+    _, _, r64 = reflect(scene, frame, precision="float64", **options)
+    eye = scene.camera_at(frame).eye
+    out = {}
+    for k in r32:
+        a, b = r32[k].result, r64[k].result
+        ok = ((a.flags | b.flags) & CULLED) == 0
+        if not np.array_equal(r32[k].gbuffer.mask, r64[k].gbuffer.mask):  # pragma: no cover - a rasterizer bug
+            raise AssertionError("float32 and float64 G-buffers cover different pixels")
+        same = ok & np.all(a.pixel == b.pixel, axis=1)
+        diff = ok & ~same
+        gb = r64[k].gbuffer
+        s_a = scores64(gb, eye, verts[diff], a.pixel[diff])
+        s_b = scores64(gb, eye, verts[diff], b.pixel[diff])
+        best = np.maximum(s_a, s_b).astype(np.float32)
+        ulp = np.spacing(np.abs(best)).astype(np.float64)
+        tie = np.abs(s_a - s_b) <= constants.TIE_ULPS * ulp
+        dist = np.linalg.norm((a.pixel[diff] - b.pixel[diff]).astype(np.float64), axis=1)
+        margins = a.margin.astype(np.float64)
+        out[k] = {
+            "n": int(ok.sum()), "identical": int(same.sum()), "tie": int(tie.sum()), "diverged": int((~tie).sum()),
+            "identical_share": float(same.sum() / max(ok.sum(), 1)),
+            "max_distance": float(dist.max()) if len(dist) else 0.0,
+            "median_margin_differing": float(np.median(margins[diff])) if diff.any() else 0.0,
+            "median_margin_all": float(np.median(margins[ok])) if ok.any() else 0.0,
+        }
+    return out
