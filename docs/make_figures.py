@@ -110,12 +110,44 @@ def truth_figure():
     write_png(os.path.join(FIG, "truth_compare.png"), np.concatenate(rows, axis=0))
 
 
+def check_figure():
+    """What `refsoft check` draws for a port whose search ends one pixel off on every 40th
+    vertex and whose image is off by 3 levels in a band: the reflection-pixel map (green
+    pass, red fail, on the grey mirror) and the image's error mask and 16x difference."""
+    import shutil
+    import tempfile
+
+    import imageio.v3 as iio
+
+    from refsoft.check import check
+    from refsoft.golden import write_golden
+    from refsoft.io import write_npz
+
+    with tempfile.TemporaryDirectory() as tmp:
+        gold, cand = os.path.join(tmp, "golden"), os.path.join(tmp, "cand")
+        write_golden(gold, ["sphere"])
+        shutil.copytree(gold, cand)
+        path = os.path.join(cand, "sphere", "frame_0000.npz")
+        with np.load(path) as z:
+            a = {k: z[k] for k in z.files}
+        a["reflection_pixel_1"][::40, 1] += 1
+        a["image"][40:48] = np.clip(a["image"][40:48].astype(int) + 3, 0, 255).astype(np.uint8)
+        write_npz(path, **a)
+        report = os.path.join(tmp, "report")
+        check(gold, cand, out=report, cases=["sphere"])
+        pics = [iio.imread(os.path.join(report, f"sphere_frame_0000_{k}.png"))
+                for k in ("reflection_pixel_1", "image", "image_diff")]
+    pics = [np.repeat(np.repeat(p[..., :3], 3, axis=0), 3, axis=1) for p in pics]  # 3x, nearest: pixels stay visible
+    write_png(os.path.join(FIG, "check_report.png"), side_by_side(*pics))
+
+
 if __name__ == "__main__":
     os.makedirs(FIG, exist_ok=True)
     gbuffer_figure()
     trace_figure()
     frame_figure()
     truth_figure()
+    check_figure()
     try:
         fill_rule_figure()
     except ImportError:

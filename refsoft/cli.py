@@ -172,6 +172,39 @@ def cmd_truth(args) -> int:
     return 0
 
 
+def cmd_golden(args) -> int:
+    from .golden import CASES, GOLDEN_SIZE, write_golden
+
+    if args.list:
+        for c in CASES:
+            opts = ", ".join(f"{k}={v}" for k, v in c.options.items()) or "defaults"
+            print(f"{c.name:<24} {c.scene:<10} frames {list(c.frames)}  {opts}")
+        return 0
+    t0 = time.perf_counter()
+    m = write_golden(args.out, args.case, progress=True)
+    print(f"golden set: {len(m['cases'])} cases, {len(m['files'])} files at {GOLDEN_SIZE[0]}x{GOLDEN_SIZE[1]} "
+          f"written to {args.out} in {time.perf_counter() - t0:.1f} s (manifest.json lists their SHA-256)")
+    return 0
+
+
+def cmd_check(args) -> int:
+    from .check import check
+
+    out = args.out or os.path.join(args.candidate, "check")
+    summary = check(args.golden, args.candidate, loose=args.loose, out=out, cases=args.case, progress=True)
+    findings = summary.pop("_findings")
+    shown = [f for f in findings if f.status != "pass" or args.verbose]
+    for f in shown:
+        print(f.line())
+        for d in f.details[:5]:
+            print(f"           {d}")
+    c = summary["counts"]
+    verdict = "PASSED" if summary["passed"] else "FAILED"
+    print(f"{verdict}: {c['pass']} pass, {c['accepted']} accepted (yellow), {c['fail']} fail, {c['missing']} missing; "
+          f"error masks, difference images and summary.json in {out}")
+    return 0 if summary["passed"] else 1
+
+
 def _frame_files(folder):
     import glob
 
@@ -296,6 +329,21 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--adaptive-widen", action="store_true",
                    help="approximation: use --widen only on frames where a reflector is cut by the image border")
     r.set_defaults(func=cmd_render)
+
+    go = sub.add_parser("golden", help="write the golden set for ports (DESIGN section 8)")
+    go.add_argument("--out", default="golden", help="output folder (default: golden)")
+    go.add_argument("--case", action="append", default=None, help="only this case (repeatable; --list shows them)")
+    go.add_argument("--list", action="store_true", help="list the canonical cases and exit")
+    go.set_defaults(func=cmd_golden)
+
+    ck = sub.add_parser("check", help="compare a port's outputs with a golden set; exit 1 on failure")
+    ck.add_argument("golden", help="golden folder (from refsoft golden)")
+    ck.add_argument("candidate", help="the port's outputs in the same layout")
+    ck.add_argument("--loose", action="store_true", help="images: 4 per channel, 1-pixel window, 0.1%% may fail")
+    ck.add_argument("--out", default=None, help="report folder (default: CANDIDATE/check)")
+    ck.add_argument("--case", action="append", default=None, help="only this case (repeatable)")
+    ck.add_argument("--verbose", action="store_true", help="also print the outputs that pass")
+    ck.set_defaults(func=cmd_check)
 
     tr = sub.add_parser("truth", help="ray-trace the reflections (Embree) as the reference for compare")
     tr.add_argument("scene", help="built-in scene name or TOML file")

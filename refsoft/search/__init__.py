@@ -17,7 +17,7 @@ from ..raster import GBuffer
 from . import _kernels
 from ._kernels import BORDER, CAPPED, CULLED, HIDDEN, RESTARTED
 
-__all__ = ["search", "virtual_vertices", "start_pixel", "packed", "SearchResult", "trace_search", "Trace",
+__all__ = ["search", "virtual_vertices", "start_pixel", "packed", "SearchResult", "trace_search", "Trace", "scores_at",
            "HIDDEN", "BORDER", "CAPPED", "RESTARTED", "CULLED", "NEIGHBOURHOODS", "INVERSE_MODES",
            "flag_names", "default_cap"]
 
@@ -268,6 +268,25 @@ def virtual_vertices(gbuffer: GBuffer, result: SearchResult, vertices, relative:
     if relative:
         return out
     return (out.astype(np.float64) + o).astype(dt)
+
+
+def scores_at(gbuffer: GBuffer, eye, vertices, pixels, inverse=None) -> np.ndarray:
+    """The search's score (float32 or float64, its own arithmetic) of each vertex at a given
+    pixel; ``inverse`` (N,) bool picks the inverse score of DESIGN 4.6 per vertex. -3 where the
+    pixel is not covered. Shape (N,)."""
+    dt = _check_gbuffer(gbuffer)
+    verts = _points(vertices, "vertices")
+    pix = np.asarray(pixels, dtype=np.int64).reshape(-1, 2)
+    if len(pix) != len(verts):
+        raise RefsoftError(f"pixels ({len(pix)}) and vertices ({len(verts)}) differ in number")
+    inv = np.zeros(len(verts), dtype=bool) if inverse is None else np.asarray(inverse, dtype=bool)
+    out = np.zeros(len(verts), dtype=dt)
+    if not gbuffer.mask.any() or not len(verts):
+        out[:] = -3
+        return out
+    G, mask, conv, (r0, c0) = packed(gbuffer, _point(eye, "eye"))
+    _kernels.scores_at(G, mask, np.ascontiguousarray(verts), gbuffer.origin, pix - [r0, c0], inv, conv, out)
+    return out
 
 
 from .trace import Trace, trace_search  # noqa: E402  (uses the names above)

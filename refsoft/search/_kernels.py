@@ -302,3 +302,21 @@ def score_field(G, mask, v, inverse, conv, out):
         for c in range(w):
             if mask[r, c]:
                 out[r, c] = _evaluate(G, r, c, v, inverse, conv)
+
+
+@kernel(parallel=True)
+def scores_at(G, mask, vertices, origin, pixels, inverse, conv, out):
+    """The (inverse, where ``inverse[i]``) score of vertex ``i`` at crop pixel ``pixels[i]``,
+    with the search's own arithmetic; ``-3`` where that pixel is outside the crop or uncovered.
+    For ``refsoft check``'s tie rule."""
+    h, w = mask.shape
+    for i in prange(vertices.shape[0]):
+        r = pixels[i, 0]
+        c = pixels[i, 1]
+        if r < 0 or r >= h or c < 0 or c >= w or not mask[r, c]:
+            out[i] = like(-3.0, conv)
+            continue
+        v = np.empty(3, dtype=out.dtype)
+        for k in range(3):
+            v[k] = like(vertices[i, k] - origin[k], conv)
+        out[i] = _evaluate(G, r, c, v, inverse[i], conv)

@@ -1,0 +1,522 @@
+"""``refsoft check GOLDEN CANDIDATE``: a port's outputs against the golden set (DESIGN section 8).
+
+Each output is compared by the rule of its kind and gets a status:
+
+- ``pass``: identical;
+- ``accepted``: different within the rule's tolerance (ULP, ties, ambiguous edge pixels); shown
+  yellow and counted, never a failure;
+- ``fail``: beyond the tolerance; ``refsoft check`` then exits with status 1;
+- ``missing``: the candidate lacks it (listed, never silently passed); a missing or altered
+  *reference* file is a failure.
+
+Rules (tolerances in :mod:`refsoft.constants`, the kinds in the table of ``docs/ports.md``):
+shapes, dtypes and non-finite masks identical; G-buffer coverage identical except pixels whose
+centre lies within 1e-4 px of an edge of the oracle's projected (unsnapped) triangles; positions,
+normals, view-projection, scores and virtual vertices within 4 float32 ULP or 1e-6 of the scene's
+extent (normals also by angle, 1e-4 rad); reflection pixels identical, a differing pixel accepted
+as a tie when the oracle's own scores of both pixels differ by at most 8 float32 ULP of the
+better (the oracle's G-buffer is rebuilt for this), failing beyond 1% ties; virtual vertices of
+ties recomputed from the candidate's pixel; flags and vertex objects identical where the pixels
+agree, iterations likewise up to 1% of vertices; 8-bit images within 1 per channel (``loose``:
+4, with a 1-pixel window and at most 0.1% of pixels failing). ``object_id`` and
+``reflected_id`` are reported, not judged. Candidate traces (``traces_NNNN.json``, see
+:mod:`refsoft.golden`) are compared step by step with the oracle's walk of the same vertex.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import constants
+from .errors import RefsoftError
+
+STATUSES = ("pass", "accepted", "fail", "missing")
+F32_ULP_TOL = 4
+EXTENT_TOL = 1e-6
+NORMAL_ANGLE_TOL = 1e-4
+EDGE_AMBIGUITY_PX = 1e-4
+TIE_SHARE_MAX = 0.01
+ITERATION_SHARE_MAX = 0.01
+IMAGE_TOL, IMAGE_TOL_LOOSE, IMAGE_LOOSE_SHARE = 1, 4, 0.001
+
+
+@dataclass
+class Finding:
+    """One output of one case and frame, judged by its rule."""
+
+    case: str
+    frame: int
+    key: str
+    kind: str
+    status: str
+    message: str = ""
+    count: int = 0
+    total: int = 0
+    worst: str = ""
+    details: list = field(default_factory=list)
+
+    def line(self) -> str:
+        share = f" ({self.count}/{self.total}, {100 * self.count / max(self.total, 1):.3g}%)" if self.total else ""
+        worst = f"; worst {self.worst}" if self.worst else ""
+        return f"{self.status.upper():8s} {self.case} frame {self.frame} {self.key} [{self.kind}]: {self.message}{share}{worst}"
+
+    def to_dict(self) -> dict:
+        return {k: getattr(self, k) for k in ("case", "frame", "key", "kind", "status", "message", "count", "total",
+                                              "worst", "details")}
+
+
+def _f32_ulp(x):
+    return np.spacing(np.abs(np.asarray(x, dtype=np.float32))).astype(np.float64)
+
+
+def _float_close(g, c, extent):
+    """Elementwise: within 4 float32 ULP of the reference or 1e-6 x extent."""
+    g64, c64 = np.asarray(g, dtype=np.float64), np.asarray(c, dtype=np.float64)
+    err = np.abs(g64 - c64)
+    return (err <= F32_ULP_TOL * _f32_ulp(g64)) | (err <= EXTENT_TOL * extent), err
+
+
+def _where(idx) -> str:
+    return "(" + ", ".join(str(int(i)) for i in idx) + ")"
+
+
+class _Oracle:
+    """What the rules need from the oracle itself for one case and frame (built on demand):
+    the scene, vertices, extent, and each reflector's G-buffer as the search saw it."""
+
+    def __init__(self, entry, frame):
+        from .golden import Case
+        from .reflect import scene_vertices
+
+        self.entry, self.frame = entry, frame
+        self.case = Case(entry["name"], entry["scene"], tuple(entry["frames"]), _options(entry["options"]))
+        self.scene = self.case.load()
+        self.verts, _ = scene_vertices(self.scene, frame)
+        allv = np.concatenate([self.scene.world_mesh(k, frame).vertices for k in range(1, len(self.scene.objects) + 1)])
+        self.extent = float(np.linalg.norm(allv.max(axis=0) - allv.min(axis=0)))
+        self._gb = {}
+
+    def gbuffer(self, k):
+        from .reflect import reflector_gbuffer
+
+        if k not in self._gb:
+            o = self.case.options
+            self._gb[k] = reflector_gbuffer(self.scene, k, self.frame, o.get("widen", 1.0), o.get("gbuffer_size"),
+                                            o.get("precision", "float32"))
+        return self._gb[k]
+
+    def edge_distance(self, k, pixels):
+        """Distance (px) from each pixel centre (row, col) to the nearest edge of the reflector's
+        projected triangles, unsnapped float64 window coordinates."""
+        from .reflect import gbuffer_camera
+
+        o = self.case.options
+        cam = gbuffer_camera(self.scene, self.frame, o.get("widen", 1.0), o.get("gbuffer_size"))
+        mesh = self.scene.world_mesh(k, self.frame, proxy=True)
+        clip = np.c_[mesh.vertices, np.ones(mesh.n_vertices)] @ cam.view_proj().T
+        front = clip[:, 3] > 0
+        win = np.zeros((mesh.n_vertices, 2))
+        win[front] = np.c_[(clip[front, 0] / clip[front, 3] + 1) * 0.5 * cam.width,
+                           (clip[front, 1] / clip[front, 3] + 1) * 0.5 * cam.height]
+        f = mesh.faces[np.all(front[mesh.faces], axis=1)]
+        a = np.concatenate([win[f[:, 0]], win[f[:, 1]], win[f[:, 2]]])
+        b = np.concatenate([win[f[:, 1]], win[f[:, 2]], win[f[:, 0]]])
+        out = np.full(len(pixels), np.inf)
+        for i, (r, c) in enumerate(pixels):
+            p = np.array([c + 0.5, cam.height - 1 - r + 0.5])
+            ab = b - a
+            t = np.clip(np.einsum("ij,ij->i", p - a, ab) / np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300), 0, 1)
+            out[i] = np.min(np.linalg.norm(a + t[:, None] * ab - p, axis=1)) if len(a) else np.inf
+        return out
+
+
+def _options(d):
+    return {k: (tuple(v) if isinstance(v, list) else v) for k, v in d.items()}
+
+
+def _compare_mask(ctx, key, g, c, k):
+    diff = np.argwhere(g != c)
+    if len(diff) == 0:
+        return [ctx.finding(key, "coverage", "pass", "identical")]
+    dist = ctx.oracle().edge_distance(k, diff)
+    amb = dist <= EDGE_AMBIGUITY_PX
+    fails = diff[~amb]
+    ctx.paint(key, g.shape, diff[amb], diff[~amb])
+    worst = ""
+    if len(fails):
+        r, cc = fails[0]
+        worst = f"at {_where(fails[0])}: expected {bool(g[r, cc])} / observed {bool(c[r, cc])} ({dist[~amb][0]:.3g} px from an edge)"
+        return [ctx.finding(key, "coverage", "fail", f"{len(fails)} pixels differ away from edges "
+                            f"({int(amb.sum())} ambiguous within {EDGE_AMBIGUITY_PX} px)", len(fails), g.size, worst)]
+    return [ctx.finding(key, "coverage", "accepted", f"only ambiguous edge pixels differ (centre within "
+                        f"{EDGE_AMBIGUITY_PX} px of an edge)", int(amb.sum()), g.size)]
+
+
+def _compare_float_field(ctx, key, g, c, cover, extent, normals=False):
+    gg, cc = g[cover], c[cover]
+    ok, err = _float_close(gg, cc, extent)
+    ok = ok.all(axis=-1) if ok.ndim > 1 else ok
+    if normals:
+        cosang = np.einsum("ij,ij->i", gg.astype(np.float64), cc.astype(np.float64)) / np.maximum(
+            np.linalg.norm(gg, axis=1) * np.linalg.norm(cc, axis=1), 1e-300)
+        ok |= np.arccos(np.clip(cosang, -1, 1)) <= NORMAL_ANGLE_TOL
+    same = np.all(gg == cc, axis=-1) if gg.ndim > 1 else gg == cc
+    n = len(ok)
+    if same.all():
+        return [ctx.finding(key, "float", "pass", "identical", 0, n)]
+    e = err.max(axis=-1) if err.ndim > 1 else err
+    i = int(np.argmax(np.where(ok, -1, e))) if (~ok).any() else int(np.argmax(e))
+    locs = np.argwhere(cover)
+    where = locs[i] if len(locs) == n else [i]
+    worst = f"at {_where(where)}: expected {np.round(gg[i], 9).tolist()} / observed {np.round(cc[i], 9).tolist()}"
+    if (~ok).any():
+        return [ctx.finding(key, "float", "fail", f"beyond {F32_ULP_TOL} float32 ULP and {EXTENT_TOL} x extent "
+                            f"{extent:.4g}", int((~ok).sum()), n, worst)]
+    return [ctx.finding(key, "float", "accepted", f"within {F32_ULP_TOL} float32 ULP or {EXTENT_TOL} x extent",
+                        int((~same).sum()), n, worst)]
+
+
+class _Context:
+    def __init__(self, case, frame, entry, out):
+        self.case, self.frame, self.entry, self.out = case, frame, entry, out
+        self.findings = []
+        self._oracle = None
+
+    def oracle(self):
+        if self._oracle is None:
+            self._oracle = _Oracle(self.entry, self.frame)
+        return self._oracle
+
+    def finding(self, key, kind, status, message="", count=0, total=0, worst="", details=None):
+        f = Finding(self.case, self.frame, key, kind, status, message, int(count), int(total), worst, details or [])
+        self.findings.append(f)
+        return f
+
+    def paint(self, key, shape, yellow, red, green=None):
+        """An error mask over a (H, W) grid: green pass, yellow accepted, red fail."""
+        if self.out is None:
+            return
+        from .io import write_png
+
+        img = np.zeros(tuple(shape[:2]) + (3,), np.uint8)
+        if green is not None:
+            img[green] = (0, 160, 0)
+        for idx, col in ((yellow, (230, 200, 0)), (red, (220, 0, 0))):
+            idx = np.asarray(idx, dtype=np.int64).reshape(-1, 2)
+            img[idx[:, 0], idx[:, 1]] = col
+        write_png(os.path.join(self.out, f"{self.case}_frame_{self.frame:04d}_{key}.png"), img)
+
+
+def _compare_image(ctx, g, c, loose):
+    d = np.abs(g.astype(np.int16) - c.astype(np.int16)).max(axis=2)
+    tol = IMAGE_TOL_LOOSE if loose else IMAGE_TOL
+    bad = d > tol
+    if loose and bad.any():  # a 1-pixel window: the candidate may match a neighbour of the reference
+        h, w = d.shape
+        best = d.copy()
+        for dr in (-1, 0, 1):
+            for dc in (-1, 0, 1):
+                sh = np.full_like(g, 0)
+                rs, re_ = max(dr, 0), h + min(dr, 0)
+                cs, ce = max(dc, 0), w + min(dc, 0)
+                sh[rs:re_, cs:ce] = g[rs - dr:re_ - dr, cs - dc:ce - dc]
+                best = np.minimum(best, np.abs(sh.astype(np.int16) - c.astype(np.int16)).max(axis=2))
+        bad = best > tol
+    if ctx.out is not None:
+        from .io import write_png
+
+        green = (d == 0)
+        ctx.paint("image", d.shape, np.argwhere((d > 0) & ~bad), np.argwhere(bad), green)
+        write_png(os.path.join(ctx.out, f"{ctx.case}_frame_{ctx.frame:04d}_image_diff.png"),
+                  np.clip(np.abs(g.astype(np.int16) - c.astype(np.int16)) * 16, 0, 255).astype(np.uint8))
+    n = d.size
+    worst = ""
+    if d.max() > 0:
+        r, cc = np.unravel_index(int(np.argmax(d)), d.shape)
+        worst = f"at ({r}, {cc}): expected {g[r, cc].tolist()} / observed {c[r, cc].tolist()}"
+    if not d.any():
+        return [ctx.finding("image", "image", "pass", "identical", 0, n)]
+    nbad = int(bad.sum())
+    if nbad and (not loose or nbad > IMAGE_LOOSE_SHARE * n):
+        return [ctx.finding("image", "image", "fail", f"channels differ by more than {tol}", nbad, n, worst)]
+    return [ctx.finding("image", "image", "accepted", f"within {tol} per channel" + (" (loose)" if loose else ""),
+                        int((d > 0).sum()), n, worst)]
+
+
+def _load_traces(path):
+    if not os.path.isfile(path):
+        return None
+    try:
+        with open(path) as fh:
+            t = json.load(fh)
+        return {int(k): {int(rec["vertex"]): rec for rec in v} for k, v in t["reflectors"].items()}
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise RefsoftError(f"{path}: not a traces file: {exc}") from None
+
+
+def _oracle_trace(ctx, k, i, prev_pixel):
+    from .search import trace_search
+
+    o = ctx.oracle()
+    opts = o.case.options
+    tr = trace_search(o.gbuffer(k), o.scene.camera_at(ctx.frame).eye, o.verts[i], opts.get("neighbourhood", "cross"),
+                      opts.get("inverse", "plane"), prev_pixel, opts.get("cap"))
+    return [[int(x) for x in s["pixel"]] for s in tr.steps]
+
+
+def _first_divergence(expected, observed):
+    for j, (a, b) in enumerate(zip(expected, observed)):
+        if list(a) != list(b):
+            return j, a, b
+    if len(expected) != len(observed):
+        j = min(len(expected), len(observed))
+        return j, (expected[j] if j < len(expected) else None), (observed[j] if j < len(observed) else None)
+    return None
+
+
+def _compare_vertices(ctx, k, G, C, cand_traces, prev_pixels):
+    """reflection_pixel_k, virtual_vertex_k, flags_k, iterations_k, score_k, vertex_object_k."""
+    from .search import CULLED, HIDDEN, SearchResult, scores_at, virtual_vertices
+
+    findings = []
+    gp, cp = G[f"reflection_pixel_{k}"], C[f"reflection_pixel_{k}"]
+    gflags = G[f"flags_{k}"]
+    live = (gflags & CULLED) == 0
+    n = int(live.sum())
+    agree = live & np.all(gp == cp, axis=1)
+    differ = np.flatnonzero(live & ~agree)
+    tie = np.zeros(len(gp), dtype=bool)
+    details = []
+    extent = None
+    if len(differ):
+        o = ctx.oracle()
+        extent = o.extent
+        gb = o.gbuffer(k)
+        eye = o.scene.camera_at(ctx.frame).eye
+        inverse = (o.case.options.get("inverse") == "search") & ((gflags[differ] & HIDDEN) != 0)
+        s_g = scores_at(gb, eye, o.verts[differ], gp[differ], inverse).astype(np.float64)
+        s_c = scores_at(gb, eye, o.verts[differ], cp[differ], inverse).astype(np.float64)
+        covered = s_c > -3
+        best = np.maximum(s_g, s_c)
+        ok = covered & (np.abs(s_g - s_c) <= constants.TIE_ULPS * _f32_ulp(best))
+        tie[differ[ok]] = True
+        for j, i in enumerate(differ[:5]):
+            msg = (f"vertex {int(i)}: expected {_where(gp[i])} / observed {_where(cp[i])}, oracle scores "
+                   f"{s_g[j]:.9g} / {s_c[j]:.9g}" + (" (tie)" if ok[j] else ""))
+            if cand_traces is not None and i in cand_traces.get(k, {}):
+                prev = None if prev_pixels is None else prev_pixels[i]
+                path = cand_traces[k][i].get("path", [])
+                div = _first_divergence(_oracle_trace(ctx, k, int(i), prev), path)
+                if div:
+                    msg += f"; traces part at step {div[0]}: expected {div[1]} / observed {div[2]}"
+                elif path and list(path[-1]) != [int(x) for x in cp[i]]:
+                    msg += f"; the supplied trace follows the oracle's walk but ends at {path[-1]}, not at the reported pixel"
+                else:
+                    msg += "; the supplied trace follows the oracle's walk step for step"
+            details.append(msg)
+    nfail = len(differ) - int(tie.sum())
+    key = f"reflection_pixel_{k}"
+    if nfail or tie.sum() > TIE_SHARE_MAX * max(n, 1):
+        findings.append(ctx.finding(key, "pixel", "fail", f"{nfail} differ beyond ties, {int(tie.sum())} ties "
+                                    f"(at most {TIE_SHARE_MAX:.0%} allowed)", len(differ), n, details=details))
+    elif tie.any():
+        findings.append(ctx.finding(key, "pixel", "accepted", "differing pixels are ties (oracle scores within "
+                                    f"{constants.TIE_ULPS} float32 ULP)", int(tie.sum()), n, details=details))
+    else:
+        findings.append(ctx.finding(key, "pixel", "pass", "identical", 0, n))
+    if ctx.out is not None:
+        gbm = G.get(f"gbuffer_mask_{k}")
+        if gbm is not None:
+            from .io import write_png
+
+            img = np.where(gbm[..., None], 60, 0).astype(np.uint8) * np.ones(3, np.uint8)
+            for sel, col in ((agree, (0, 160, 0)), (tie, (230, 200, 0)), (live & ~agree & ~tie, (220, 0, 0))):
+                pix = gp[sel]
+                img[pix[:, 0], pix[:, 1]] = col
+            write_png(os.path.join(ctx.out, f"{ctx.case}_frame_{ctx.frame:04d}_{key}.png"), img)
+    # virtual vertices: the float rule where the pixels agree, recomputed from the candidate's pixel at ties
+    vk = f"virtual_vertex_{k}"
+    if vk in G and vk in C and G[vk].shape == C[vk].shape:
+        gv, cv = G[vk].astype(np.float64), C[vk].astype(np.float64)
+        if tie.any():
+            o = ctx.oracle()
+            gb = o.gbuffer(k)
+            sub = np.flatnonzero(tie)
+            res = SearchResult(cp[sub].astype(np.int32), np.zeros(len(sub)), np.zeros(len(sub)), np.ones(len(sub), np.int32),
+                               gflags[sub], o.case.options.get("neighbourhood", "cross"),
+                               o.case.options.get("inverse", "plane"), 1)
+            gv[sub] = virtual_vertices(gb, res, o.verts[sub]).astype(np.float64)
+        if extent is None:
+            extent = ctx.oracle().extent if not np.array_equal(gv[agree | tie], cv[agree | tie]) else 1.0
+        findings += _compare_float_field(ctx, vk, gv, cv, agree | tie, extent)
+    for name, kind in ((f"flags_{k}", "flags"), (f"vertex_object_{k}", "ids")):
+        if name in G and name in C and G[name].shape == C[name].shape:
+            bad = agree & (G[name] != C[name])
+            if bad.any():
+                i = int(np.flatnonzero(bad)[0])
+                findings.append(ctx.finding(name, kind, "fail", "differ where the pixels agree", int(bad.sum()), n,
+                                            f"vertex {i}: expected {G[name][i]} / observed {C[name][i]}"))
+            else:
+                findings.append(ctx.finding(name, kind, "pass", "identical where the pixels agree", 0, n))
+    name = f"iterations_{k}"
+    if name in G and name in C and G[name].shape == C[name].shape:
+        bad = agree & (G[name] != C[name])
+        i = int(np.flatnonzero(bad)[0]) if bad.any() else None
+        worst = f"vertex {i}: expected {G[name][i]} / observed {C[name][i]}" if bad.any() else ""
+        status = "pass" if not bad.any() else ("accepted" if bad.sum() <= ITERATION_SHARE_MAX * max(n, 1) else "fail")
+        findings.append(ctx.finding(name, "iterations", status, f"differ where the pixels agree (at most "
+                                    f"{ITERATION_SHARE_MAX:.0%} allowed)" if bad.any() else "identical", int(bad.sum()), n,
+                                    worst))
+    name = f"score_{k}"
+    if name in G and name in C and G[name].shape == C[name].shape:
+        findings += _compare_float_field(ctx, name, G[name], C[name], agree, 0.0)
+    # traces the candidate supplies: the first step at which each walk leaves the oracle's
+    if cand_traces is not None and k in cand_traces:
+        parted = []
+        for i, rec in sorted(cand_traces[k].items()):
+            if not (0 <= i < len(gp)) or not live[i]:
+                continue
+            prev = None if prev_pixels is None else prev_pixels[i]
+            div = _first_divergence(_oracle_trace(ctx, k, i, prev), rec.get("path", []))
+            if div:
+                parted.append(f"vertex {i}: step {div[0]}, expected {div[1]} / observed {div[2]}")
+        status = "fail" if parted else "pass"
+        findings.append(ctx.finding(f"traces_{k}", "trace", status, "walks part from the oracle's" if parted
+                                    else "every supplied walk follows the oracle's", len(parted), len(cand_traces[k]),
+                                    details=parted[:5]))
+    return findings
+
+
+def _vertex_keys(k):
+    return {f"reflection_pixel_{k}", f"virtual_vertex_{k}", f"flags_{k}", f"iterations_{k}", f"score_{k}",
+            f"vertex_object_{k}", f"margin_{k}"}
+
+
+def check_frame(ctx, G, C, loose, cand_traces=None, prev_pixels=None):
+    """Judge every output of one frame; appends to ``ctx.findings``."""
+    reflectors = sorted(int(key.rsplit("_", 1)[1]) for key in G if key.startswith("reflection_pixel_"))
+    vertex_keys = set().union(*[_vertex_keys(k) for k in reflectors]) if reflectors else set()
+    broken = set()
+    for key in sorted(G):
+        if key not in C:
+            ctx.finding(key, "presence", "missing", "not in the candidate's outputs")
+            broken.add(key)
+            continue
+        g, c = G[key], C[key]
+        if g.shape != c.shape or g.dtype != c.dtype:
+            ctx.finding(key, "shape/dtype", "fail", f"expected {g.dtype}{list(g.shape)} / observed {c.dtype}{list(c.shape)}")
+            broken.add(key)
+            continue
+        if g.dtype.kind == "f" and not np.array_equal(np.isfinite(g), np.isfinite(c)):
+            bad = np.argwhere(np.isfinite(g) != np.isfinite(c))
+            ctx.finding(key, "non-finite", "fail", "non-finite values at other places", len(bad), g.size,
+                        f"at {_where(bad[0])}")
+            broken.add(key)
+    for key in sorted(G):
+        if key in broken:
+            continue
+        g, c = G[key], C[key]
+        if key.startswith("gbuffer_mask_"):
+            _compare_mask(ctx, key, g, c, int(key.rsplit("_", 1)[1]))
+        elif key.startswith(("gbuffer_position_", "gbuffer_normal_")):
+            k = key.rsplit("_", 1)[1]
+            mk = f"gbuffer_mask_{k}"
+            cover = G[mk] & C[mk] if mk in C and C[mk].shape == G[mk].shape else G[mk]
+            extent = ctx.oracle().extent if not np.array_equal(g[cover], c[cover]) else 1.0
+            _compare_float_field(ctx, key, g, c, cover, extent, normals=key.startswith("gbuffer_normal_"))
+        elif key.startswith("gbuffer_view_proj_"):
+            _compare_float_field(ctx, key, g.reshape(1, -1), c.reshape(1, -1), np.ones(1, bool), 1.0)
+        elif key == "image":
+            _compare_image(ctx, g, c, loose)
+        elif key in ("object_id", "reflected_id"):
+            d = int((g != c).sum())
+            ctx.finding(key, "ids (reported)", "pass" if d == 0 else "accepted",
+                        "identical" if d == 0 else "differ (reported, not judged)", d, g.size)
+        elif key in vertex_keys:
+            continue
+        else:
+            same = np.array_equal(g, c, equal_nan=True)
+            ctx.finding(key, "other", "pass" if same else "accepted", "identical" if same else "differs (not judged)")
+    for k in reflectors:
+        if f"reflection_pixel_{k}" in broken or f"flags_{k}" in broken:
+            continue
+        _compare_vertices(ctx, k, G, C, cand_traces, prev_pixels.get(k) if prev_pixels else None)
+
+
+def check(golden, candidate, loose=False, out=None, cases=None, progress=False) -> dict:
+    """Compare a candidate folder with a golden set; returns the summary (also written to
+    ``out/summary.json`` when ``out`` is given).
+
+    Parameters
+    ----------
+    golden, candidate : str or PathLike
+    loose : bool
+        The loose image rule.
+    out : str or PathLike, optional
+        Folder for error masks, difference images and ``summary.json``.
+    cases : list of str, optional
+        Only these cases.
+    """
+    from .golden import read_manifest, sha256
+    from .io import write_json
+
+    golden, candidate = os.fspath(golden), os.fspath(candidate)
+    manifest = read_manifest(golden)
+    if not os.path.isdir(candidate):
+        raise RefsoftError(f"{candidate} is not a folder")
+    entries = manifest["cases"]
+    if cases is not None:
+        names = {e["name"] for e in entries}
+        unknown = [c for c in cases if c not in names]
+        if unknown:
+            raise RefsoftError(f"unknown case {unknown[0]!r} (the golden set has: {', '.join(sorted(names))})")
+        entries = [e for e in entries if e["name"] in cases]
+    if out is not None:
+        os.makedirs(out, exist_ok=True)
+    findings, missing_cases = [], []
+    todo = [(e, f) for e in entries for f in e["frames"]]
+    it = todo
+    if progress and len(todo) > 1:
+        from tqdm import tqdm
+
+        it = tqdm(todo, desc="check", unit="frame", disable=None)
+    prev = {}
+    for entry, f in it:
+        name = entry["name"]
+        ctx = _Context(name, f, entry, out)
+        rel = f"{name}/frame_{f:04d}.npz"
+        gpath = os.path.join(golden, rel)
+        if not os.path.isfile(gpath) or manifest["files"].get(rel) != sha256(gpath):
+            ctx.finding("*", "reference", "fail", f"golden file {rel} is missing or altered (SHA-256)")
+            findings += ctx.findings
+            continue
+        cpath = os.path.join(candidate, rel)
+        if not os.path.isfile(cpath):
+            ctx.finding("*", "presence", "missing", f"{rel} not in the candidate")
+            missing_cases.append(rel)
+            findings += ctx.findings
+            continue
+        try:
+            with np.load(gpath) as zg, np.load(cpath) as zc:
+                G = {k: zg[k] for k in zg.files}
+                C = {k: zc[k] for k in zc.files}
+        except (OSError, ValueError) as exc:
+            raise RefsoftError(f"cannot read {cpath}: {exc}") from None
+        traces = _load_traces(os.path.join(candidate, name, f"traces_{f:04d}.json"))
+        coherent = entry["options"].get("coherence", True)
+        check_frame(ctx, G, C, loose, traces, prev.get(name) if coherent else None)
+        prev[name] = {int(k.rsplit("_", 1)[1]): G[k] for k in G if k.startswith("reflection_pixel_")}
+        findings += ctx.findings
+    counts = {s: sum(1 for f in findings if f.status == s) for s in STATUSES}
+    summary = {"golden": os.path.abspath(golden), "candidate": os.path.abspath(candidate), "loose": bool(loose),
+               "golden_refsoft": manifest.get("refsoft"), "golden_git": manifest.get("git"),
+               "passed": counts["fail"] == 0, "counts": counts, "missing_files": missing_cases,
+               "findings": [f.to_dict() for f in findings]}
+    if out is not None:
+        write_json(os.path.join(out, "summary.json"), summary)
+    summary["_findings"] = findings
+    return summary

@@ -1,0 +1,249 @@
+"""`refsoft golden` and `refsoft check`: the oracle checked against itself passes with nothing
+flagged, and every mutation a buggy port could make is flagged (issue 7's mutation suite)."""
+
+import json
+import os
+import shutil
+
+import numpy as np
+import pytest
+
+import naive
+from refsoft import cli
+from refsoft.check import check
+from refsoft.golden import case_by_name, write_golden
+from refsoft.io import write_npz
+from refsoft.reflect import reflector_gbuffer, scene_vertices
+from refsoft.search import start_pixel
+
+CASES = ["sphere", "pixel_grid", "planar_cold", "sphere_float64"]
+
+
+@pytest.fixture(scope="module")
+def golden(tmp_path_factory):
+    out = tmp_path_factory.mktemp("golden")
+    write_golden(out, CASES)
+    return out
+
+
+def _candidate(golden, tmp_path, case, frame, mutate, traces=None):
+    """A copy of the golden set with one frame's arrays changed by ``mutate(arrays)``."""
+    cand = tmp_path / "cand"
+    shutil.copytree(golden, cand)
+    path = cand / case / f"frame_{frame:04d}.npz"
+    with np.load(path) as z:
+        arrays = {k: z[k] for k in z.files}
+    mutate(arrays)
+    write_npz(path, **arrays)
+    for f in (cand / case).glob("traces_*.json"):
+        f.unlink()  # the golden's own traces are not a port's
+    if traces is not None:
+        (cand / case / f"traces_{frame:04d}.json").write_text(json.dumps(traces))
+    return cand
+
+
+def _statuses(summary, key=None):
+    return {(f.key, f.status) for f in summary["_findings"] if key is None or f.key == key}
+
+
+def _flagged(summary):
+    return [f for f in summary["_findings"] if f.status != "pass"]
+
+
+def test_oracle_against_itself_passes_with_nothing_flagged(golden, tmp_path):
+    s = check(golden, golden, out=tmp_path / "report")
+    assert s["passed"] and _flagged(s) == [] and s["counts"]["pass"] >= 60
+    assert (tmp_path / "report" / "summary.json").exists()
+    assert (tmp_path / "report" / "sphere_frame_0000_image.png").exists()
+
+
+def test_regenerating_gives_identical_files(golden, tmp_path):
+    again = tmp_path / "again"
+    write_golden(again, ["sphere", "pixel_grid"])
+    for case in ("sphere", "pixel_grid"):
+        for f in os.listdir(golden / case):
+            assert (again / case / f).read_bytes() == (golden / case / f).read_bytes(), f
+    m1 = json.loads((golden / "manifest.json").read_text())
+    m2 = json.loads((again / "manifest.json").read_text())
+    assert {k: v for k, v in m1["files"].items() if k.split("/")[0] in ("sphere", "pixel_grid")} == m2["files"]
+    assert m2["numpy"] == np.__version__ and m2["refsoft"] and "options" in m2["cases"][0]
+
+
+def _walk(P, N, mask, eye, v, start, offsets, cap):
+    """A plain hill climb with any visiting order, recording the path (float32, the search's
+    arithmetic through tests/naive.py)."""
+    h, w = mask.shape
+    r, c = start
+    path = []
+
+    def s(rr, cc):
+        return naive.naive_scores(P[rr, cc], N[rr, cc], eye, v, np.float32)[()]
+
+    for _ in range(cap):
+        path.append([int(r), int(c)])
+        best, best_rc = s(r, c), (r, c)
+        for dr, dc in offsets:
+            rr, cc = r + dr, c + dc
+            if 0 <= rr < h and 0 <= cc < w and mask[rr, cc]:
+                sc = s(rr, cc)
+                if sc > best:
+                    best, best_rc = sc, (rr, cc)
+        if best_rc == (r, c):
+            break
+        r, c = best_rc
+    return (r, c), path
+
+
+def _port_search(case_name, offsets, shift=(0, 0), every=7):
+    """What a port with another visiting order or start rule computes for every ``every``-th
+    vertex of a cold frame 0: pixels, iterations and traces."""
+    case = case_by_name(case_name)
+    scene = case.load()
+    gb = reflector_gbuffer(scene, 1, 0)
+    verts, _ = scene_vertices(scene, 0)
+    eye = scene.camera_at(0).eye - gb.origin
+    start = tuple(np.add(start_pixel(gb.mask), shift))
+    out = {}
+    for i in range(0, len(verts), every):
+        end, path = _walk(gb.position, gb.normal, gb.mask, eye, verts[i] - gb.origin, start, offsets, 400)
+        out[i] = (end, path)
+    return out
+
+
+def _apply_port(arrays, port):
+    traces = {"format": "refsoft-traces-1", "reflectors": {"1": []}}
+    for i, (end, path) in port.items():
+        arrays["reflection_pixel_1"][i] = end
+        arrays["iterations_1"][i] = len(path)
+        traces["reflectors"]["1"].append({"vertex": i, "path": path})
+    return traces
+
+
+def test_mutation_neighbour_order_changed(golden, tmp_path):
+    order = [(1, 0), (0, 1), (-1, 0), (0, -1)]  # down, right, up, left instead of left, up, right, down
+    port = _port_search("pixel_grid", order, every=3)
+    traces = {}
+    cand = _candidate(golden, tmp_path, "pixel_grid", 0, lambda a: traces.update(_apply_port(a, port)))
+    (cand / "pixel_grid" / "traces_0000.json").write_text(json.dumps(traces))
+    s = check(golden, cand, cases=["pixel_grid"])
+    assert ("traces_1", "fail") in _statuses(s)
+    f = [f for f in s["_findings"] if f.key == "traces_1"][0]
+    assert "step" in f.details[0]
+
+
+def test_mutation_start_pixel_shifted_by_one(golden, tmp_path):
+    port = _port_search("sphere", [(0, -1), (-1, 0), (0, 1), (1, 0)], shift=(1, 0), every=5)
+    traces = {}
+    cand = _candidate(golden, tmp_path, "sphere", 0, lambda a: traces.update(_apply_port(a, port)))
+    s = check(golden, cand, cases=["sphere"])
+    assert not s["passed"] and ("iterations_1", "fail") in _statuses(s)
+    (cand / "sphere" / "traces_0000.json").write_text(json.dumps(traces))
+    s = check(golden, cand, cases=["sphere"])
+    f = [f for f in s["_findings"] if f.key == "traces_1"][0]
+    assert f.status == "fail" and f.details[0].split(": step ")[1].startswith("0,")  # they part at the start
+
+
+def test_mutation_fill_rule_flipped(golden, tmp_path, monkeypatch):
+    """A port with the opposite fill rule (bottom-right instead of top-left) covers the mirror's
+    pixels whose centres lie exactly on its horizontal edges the other way."""
+    case = case_by_name("pixel_grid")
+    scene = case.load()
+    cam = scene.camera_at(0)
+    mesh = scene.world_mesh(1, 0, proxy=True)
+    clip = np.c_[mesh.vertices, np.ones(mesh.n_vertices)] @ cam.view_proj().T
+    monkeypatch.setattr(naive, "is_inclusive", lambda ax, ay, bx, by: not ((by - ay) < 0 or ((by - ay) == 0 and (bx - ax) > 0)))
+    _, face, _, _ = naive.naive_rasterize(clip, mesh.faces, cam.width, cam.height)
+    flipped = face >= 0
+
+    def mutate(a):
+        assert (a["gbuffer_mask_1"] != flipped).sum() > 0
+        a["gbuffer_mask_1"] = flipped
+
+    cand = _candidate(golden, tmp_path, "pixel_grid", 0, mutate)
+    s = check(golden, cand, cases=["pixel_grid"], out=tmp_path / "r")
+    f = [f for f in s["_findings"] if f.key == "gbuffer_mask_1"][0]
+    assert f.status == "accepted" and f.count > 0 and "ambiguous" in f.message  # flagged: centres on edges
+    assert (tmp_path / "r" / "pixel_grid_frame_0000_gbuffer_mask_1.png").exists()
+
+
+def test_mutation_float64_arithmetic(golden, tmp_path):
+    with np.load(golden / "sphere_float64" / "frame_0000.npz") as z:
+        f64 = {k: z[k] for k in z.files}
+    cand = _candidate(golden, tmp_path, "sphere", 0, lambda a: a.update(f64))
+    s = check(golden, cand, cases=["sphere"])
+    assert not s["passed"] and ("score_1", "fail") in _statuses(s)  # float64 scores where float32 are due
+
+
+def test_mutation_fma_like_score(golden, tmp_path):
+    def mutate(a):
+        s = a["score_1"]
+        a["score_1"] = np.nextafter(s, np.float32(2.0)).astype(np.float32)  # one ULP up, as a fused multiply-add
+
+    s = check(golden, _candidate(golden, tmp_path, "sphere", 0, mutate), cases=["sphere"])
+    assert ("score_1", "accepted") in _statuses(s)  # within 4 ULP: accepted, but flagged yellow
+
+
+def test_mutation_y_flipped_image(golden, tmp_path):
+    s = check(golden, _candidate(golden, tmp_path, "sphere", 0, lambda a: a.update(image=a["image"][::-1].copy())),
+              cases=["sphere"])
+    assert not s["passed"] and ("image", "fail") in _statuses(s)
+
+
+def test_mutation_dropped_vertex(golden, tmp_path):
+    def mutate(a):
+        for k in list(a):
+            if k.endswith("_1") and not k.startswith("gbuffer"):
+                a[k] = a[k][:-1]
+
+    s = check(golden, _candidate(golden, tmp_path, "sphere", 0, mutate), cases=["sphere"])
+    assert not s["passed"] and ("reflection_pixel_1", "fail") in _statuses(s)
+
+
+def test_mutation_transposed_gbuffer(golden, tmp_path):
+    def mutate(a):
+        a["gbuffer_position_1"] = np.ascontiguousarray(a["gbuffer_position_1"].transpose(1, 0, 2))
+        a["gbuffer_mask_1"] = np.ascontiguousarray(a["gbuffer_mask_1"].T)
+
+    s = check(golden, _candidate(golden, tmp_path, "sphere", 0, mutate), cases=["sphere"])
+    assert not s["passed"] and ("gbuffer_position_1", "fail") in _statuses(s)
+
+
+def test_mutation_pixel_moved_off_the_optimum(golden, tmp_path):
+    """A port that ends one pixel away from the oracle where the scores are not tied fails, and
+    the report says where, with the oracle's scores of both pixels."""
+    def mutate(a):
+        a["reflection_pixel_1"][::50, 1] += 2
+
+    s = check(golden, _candidate(golden, tmp_path, "sphere", 0, mutate), cases=["sphere"])
+    f = [f for f in s["_findings"] if f.key == "reflection_pixel_1"][0]
+    assert f.status == "fail" and "oracle scores" in f.details[0]
+
+
+def test_missing_outputs_and_references(golden, tmp_path):
+    cand = tmp_path / "cand"
+    shutil.copytree(golden, cand)
+    os.remove(cand / "sphere" / "frame_0000.npz")
+    s = check(golden, cand, cases=["sphere", "pixel_grid"])
+    assert s["passed"] and s["missing_files"] == ["sphere/frame_0000.npz"]  # listed, not failed
+    with np.load(cand / "pixel_grid" / "frame_0000.npz") as z:
+        part = {k: z[k] for k in z.files if k != "image"}
+    write_npz(cand / "pixel_grid" / "frame_0000.npz", **part)
+    s = check(golden, cand, cases=["pixel_grid"])
+    assert ("image", "missing") in _statuses(s)
+    bad_golden = tmp_path / "bad_golden"
+    shutil.copytree(golden, bad_golden)
+    os.remove(bad_golden / "pixel_grid" / "frame_0000.npz")
+    s = check(bad_golden, golden, cases=["pixel_grid"])
+    assert not s["passed"] and ("*", "fail") in _statuses(s)  # a missing reference fails
+
+
+def test_cli_exit_codes(golden, tmp_path, capsys):
+    assert cli.main(["check", str(golden), str(golden), "--case", "sphere", "--out", str(tmp_path / "r")]) == 0
+    assert "PASSED" in capsys.readouterr().out
+    cand = _candidate(golden, tmp_path, "sphere", 0, lambda a: a.update(image=a["image"][::-1].copy()))
+    assert cli.main(["check", str(golden), str(cand), "--case", "sphere"]) == 1
+    out = capsys.readouterr().out
+    assert "FAIL" in out and "expected" in out and (cand / "check" / "summary.json").exists()
+    assert cli.main(["check", str(tmp_path / "nope"), str(cand)]) == 2
+    assert cli.main(["check", str(golden), str(cand), "--case", "nosuch"]) == 2
+    assert cli.main(["golden", "--list"]) == 0 and "pixel_grid" in capsys.readouterr().out
