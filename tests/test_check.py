@@ -16,13 +16,11 @@ from refsoft.io import write_npz
 from refsoft.reflect import reflector_gbuffer, scene_vertices
 from refsoft.search import start_pixel
 
-CASES = ["sphere", "pixel_grid", "planar_cold", "sphere_float64"]
-
-
 @pytest.fixture(scope="module")
 def golden(tmp_path_factory):
+    """The whole golden set, every canonical case (about a minute)."""
     out = tmp_path_factory.mktemp("golden")
-    write_golden(out, CASES)
+    write_golden(out)
     return out
 
 
@@ -51,8 +49,11 @@ def _flagged(summary):
 
 
 def test_oracle_against_itself_passes_with_nothing_flagged(golden, tmp_path):
+    from refsoft.golden import CASES
+
     s = check(golden, golden, out=tmp_path / "report")
-    assert s["passed"] and _flagged(s) == [] and s["counts"]["pass"] >= 60
+    assert s["passed"] and _flagged(s) == [] and s["counts"]["pass"] >= 400
+    assert {f.case for f in s["_findings"]} == {c.name for c in CASES}
     assert (tmp_path / "report" / "summary.json").exists()
     assert (tmp_path / "report" / "sphere_frame_0000_image.png").exists()
 
