@@ -205,6 +205,38 @@ def cmd_check(args) -> int:
     return 0 if summary["passed"] else 1
 
 
+def cmd_bench(args) -> int:
+    from . import bench
+    from .errors import RefsoftError
+
+    out = args.out or os.path.join("out", "bench", args.what)
+    t0 = time.perf_counter()
+    if args.what == "sweep":
+        scenes = args.scenes or ["sphere", "quad", "kitchen"]
+        rows = bench.sweep(scenes, out, args.width or 320, args.height or 240, args.frames or 3, args.repeats,
+                           args.knob, progress_bar=True)
+        print(f"sweep: {len(rows)} settings over {len(scenes)} scenes in {time.perf_counter() - t0:.0f} s; "
+              f"{out}/sweep.csv, sweep.md, pareto.png")
+    elif args.what == "scaling":
+        if args.scenes or args.knob:
+            raise RefsoftError("bench scaling takes no --scenes or --knob")
+        r = bench.scaling(out, args.width or 1024, args.height or 768, args.max_vertices, args.max_subdivisions,
+                          args.max_width, args.repeats, progress_bar=True)
+        slopes = ", ".join(f"{k} {v:.2f}" for k, v in r["slopes"].items())
+        print(f"scaling in {time.perf_counter() - t0:.0f} s; fitted slopes: {slopes}; {out}/scaling.csv, .md, .png")
+    else:
+        if args.knob:
+            raise RefsoftError("bench table1 takes no --knob")
+        rows = bench.table1(args.scenes or ["kitchen", "ufo", "ants"], out, args.width or 1024, args.height or 768,
+                            args.frames, progress_bar=True)
+        for r in rows:
+            print(f"{r['scene']:<8} max frame mean {r['max_frame_mean']:6.2f} (paper {r['paper_max_frame_mean']}), "
+                  f"total mean {r['total_mean']:5.2f} (paper {r['paper_total_mean']}), {r['ms_per_frame']} ms/frame "
+                  f"(paper {r['paper_ms_per_frame']})")
+        print(f"{out}/table1.csv, table1.md")
+    return 0
+
+
 def _frame_files(folder):
     import glob
 
@@ -344,6 +376,22 @@ def build_parser() -> argparse.ArgumentParser:
     ck.add_argument("--case", action="append", default=None, help="only this case (repeatable)")
     ck.add_argument("--verbose", action="store_true", help="also print the outputs that pass")
     ck.set_defaults(func=cmd_check)
+
+    b = sub.add_parser("bench", help="run time against error: sweep, scaling, table1 (docs/benchmarks.md)")
+    b.add_argument("what", choices=["sweep", "scaling", "table1"])
+    b.add_argument("--scenes", nargs="+", default=None, help="built-in scenes (sweep: sphere quad kitchen; "
+                   "table1: kitchen ufo ants)")
+    b.add_argument("--out", default=None, help="output folder (default: out/bench/WHAT)")
+    b.add_argument("--width", type=int, default=None)
+    b.add_argument("--height", type=int, default=None)
+    b.add_argument("--frames", type=int, default=None, help="frames per scene (sweep: 3; table1: all)")
+    b.add_argument("--repeats", type=int, default=3, help="timed runs per setting (median)")
+    b.add_argument("--knob", action="append", default=None, help="sweep only these knobs (repeatable): "
+                   "gbuffer_scale, widen, neighbourhood, precision, inverse")
+    b.add_argument("--max-vertices", type=int, default=1 << 20, help="scaling: largest vertex count")
+    b.add_argument("--max-subdivisions", type=int, default=7, help="scaling: largest icosphere subdivision")
+    b.add_argument("--max-width", type=int, default=2048, help="scaling: largest image width")
+    b.set_defaults(func=cmd_bench)
 
     tr = sub.add_parser("truth", help="ray-trace the reflections (Embree) as the reference for compare")
     tr.add_argument("scene", help="built-in scene name or TOML file")

@@ -1,0 +1,164 @@
+"""``refsoft bench sweep``: run time against error over the knobs that trade one for the other.
+
+One factor at a time around the defaults (the paper's method): each knob takes each of its
+values while the others keep theirs. For every scene and setting: the median run time of
+``repeats`` coherent renders of frames 0..F-1 (a fresh driver each time, JIT warmed up before),
+and the error of the last render against the ray-traced truth of the same frames (computed once
+per scene): reflected-id disagreement (all and interior), mean colour error, and for spherical
+reflectors the mean distance of the virtual vertices and reflection pixels from the exact ones.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+
+import numpy as np
+
+from ..errors import RefsoftError
+from ._common import machine, markdown_table, median_time, plt_or_none, progress, write_csv, write_text
+
+#: The knobs and their values; the first value of each is the default.
+KNOBS = {
+    "gbuffer_scale": (1.0, 0.5, 2.0),
+    "widen": (1.0, 1.25, 1.5),
+    "neighbourhood": ("cross", "box"),
+    "precision": ("float32", "float64"),
+    "inverse": ("plane", "search", "discard"),
+}
+COLUMNS = ["scene", "setting", "knob", "value", "time_ms", "disagreement", "interior_disagreement",
+           "color_error_mean", "virtual_distance_mean", "pixel_distance_mean", "iterations_mean", "pareto"]
+
+
+def settings(knobs=None) -> list:
+    """``[(name, knob, value, options)]``: the defaults, then each knob's other values."""
+    knobs = KNOBS if knobs is None else {k: v for k, v in KNOBS.items() if k in knobs}
+    out = [("default", "", "", {})]
+    for knob, values in knobs.items():
+        for v in values[1:]:
+            out.append((f"{knob}={v}", knob, v, {knob: v}))
+    return out
+
+
+def _options(setting, width, height):
+    from ..render import RenderOptions
+
+    opts = dict(setting)
+    scale = opts.pop("gbuffer_scale", 1.0)
+    widen = opts.get("widen", 1.0)
+    if scale != 1.0:
+        opts["gbuffer_size"] = (max(1, math.ceil(width * widen * scale)), max(1, math.ceil(height * widen * scale)))
+    return RenderOptions(**opts)
+
+
+def _errors(frames, truths) -> dict:
+    from ..metrics import frame_metrics
+
+    ms = [frame_metrics(f.arrays, t.arrays) for f, t in zip(frames, truths)]
+    row = {"disagreement": float(np.mean([m["reflected_id_disagreement"] for m in ms])),
+           "interior_disagreement": float(np.mean([m["interior_disagreement"] for m in ms])),
+           "color_error_mean": float(np.mean([m["color_error"]["mean"] for m in ms]))}
+    vd = [v["virtual_distance_mean"] for m in ms for v in m.get("vertices", {}).values() if "virtual_distance_mean" in v]
+    pd = [v["pixel_distance_mean"] for m in ms for v in m.get("vertices", {}).values() if "pixel_distance_mean" in v]
+    row["virtual_distance_mean"] = float(np.mean(vd)) if vd else None
+    row["pixel_distance_mean"] = float(np.mean(pd)) if pd else None
+    its = [v["mean"] for f in frames for v in f.iterations.values()]
+    row["iterations_mean"] = float(np.mean(its)) if its else 0.0
+    return row
+
+
+def pareto_front(times, errors) -> np.ndarray:
+    """True for the settings no other setting beats in both time and error."""
+    t, e = np.asarray(times, float), np.asarray(errors, float)
+    front = np.ones(len(t), dtype=bool)
+    for i in range(len(t)):
+        better = (t <= t[i]) & (e <= e[i]) & ((t < t[i]) | (e < e[i]))
+        front[i] = not better.any()
+    return front
+
+
+def sweep(scenes=("sphere", "quad", "kitchen"), out=None, width=320, height=240, frames=3, repeats=3, knobs=None,
+          progress_bar=False) -> list:
+    """Run the sweep; returns the rows (also written to ``out``: ``sweep.csv``, ``sweep.md`` and,
+    with matplotlib, ``pareto.png``)."""
+    from ..render import FrameDriver
+    from ..scenes import load_scene
+    from ..truth import TruthRenderer
+
+    if knobs is not None:
+        unknown = [k for k in knobs if k not in KNOBS]
+        if unknown:
+            raise RefsoftError(f"unknown knob {unknown[0]!r} (knobs: {', '.join(KNOBS)})")
+    if frames < 1 or repeats < 1:
+        raise RefsoftError("frames and repeats must be at least 1")
+    plan = settings(knobs)
+    rows = []
+    work = [(s, p) for s in scenes for p in plan]
+    loaded, truths = {}, {}
+    for name, (label, knob, value, setting) in progress(work, "sweep", progress_bar):
+        if name not in loaded:
+            scene = load_scene(name, width=width, height=height)
+            n = min(frames, scene.n_frames)
+            tr = TruthRenderer(scene, exact=True)
+            loaded[name] = (scene, n)
+            truths[name] = [tr.render_frame(f) for f in range(n)]
+        scene, n = loaded[name]
+        opts = _options(setting, width, height)
+
+        def run():
+            d = FrameDriver(scene, opts)
+            return [d.render_frame(f) for f in range(n)]
+
+        run()  # compile and warm up outside the timing
+        t, done = median_time(run, repeats)
+        row = {"scene": name, "setting": label, "knob": knob, "value": value, "time_ms": t / n}
+        row.update(_errors(done, truths[name]))
+        rows.append(row)
+    for name in scenes:
+        sel = [r for r in rows if r["scene"] == name]
+        front = pareto_front([r["time_ms"] for r in sel], [r["disagreement"] for r in sel])
+        for r, f in zip(sel, front):
+            r["pareto"] = bool(f)
+    if out is not None:
+        _write(out, rows, scenes, width, height, frames, repeats)
+    return rows
+
+
+def _write(out, rows, scenes, width, height, frames, repeats):
+    os.makedirs(out, exist_ok=True)
+    write_csv(os.path.join(out, "sweep.csv"), rows, COLUMNS)
+    m = machine()
+    text = [f"# Sweep: run time against error\n\n{width}x{height}, frames 0-{frames - 1} (coherent), median of "
+            f"{repeats} runs per setting; {m['cpu']}, {m['cores']} cores, numpy {m['numpy']}, numba {m['numba']}.\n"
+            "Time is per frame; disagreement is the share of reflector pixels whose reflected object differs "
+            "from the ray-traced truth; * marks the Pareto front (no setting is both faster and closer).\n"]
+    cols = ["setting", "time_ms", "disagreement", "interior_disagreement", "color_error_mean", "virtual_distance_mean",
+            "iterations_mean"]
+    for name in scenes:
+        sel = [dict(r, setting=("* " if r["pareto"] else "") + r["setting"]) for r in rows if r["scene"] == name]
+        text.append(f"\n## {name}\n\n" + markdown_table(sel, cols, ["setting", "ms/frame", "disagreement", "interior",
+                                                                     "colour error", "V' distance", "iterations"]))
+    write_text(os.path.join(out, "sweep.md"), "".join(text))
+    plt = plt_or_none()
+    if plt is None:
+        return
+    fig, axes = plt.subplots(1, len(scenes), figsize=(4.2 * len(scenes), 3.6), squeeze=False)
+    for ax, name in zip(axes[0], scenes):
+        sel = [r for r in rows if r["scene"] == name]
+        t = np.array([r["time_ms"] for r in sel])
+        e = np.array([r["disagreement"] for r in sel])
+        f = np.array([r["pareto"] for r in sel])
+        ax.scatter(t[~f], e[~f], c="0.6", s=18)
+        order = np.argsort(t[f])
+        ax.plot(t[f][order], e[f][order], "o-", c="tab:red", ms=4)
+        for r, x, y in zip(sel, t, e):
+            ax.annotate(r["setting"], (x, y), fontsize=6, xytext=(3, 2), textcoords="offset points")
+        ax.set_title(name)
+        ax.set_xlabel("ms per frame")
+        ax.set_ylabel("reflected-id disagreement")
+    fig.tight_layout()
+    from ..io import atomic_path
+
+    with atomic_path(os.path.join(out, "pareto.png"), ".png") as tmp:
+        fig.savefig(tmp, dpi=110, format="png")
+    plt.close(fig)

@@ -1,0 +1,75 @@
+"""`refsoft bench sweep | scaling | table1` at tiny sizes (the CI smoke run of issue 6): the
+files are written with the expected rows and columns; no time is asserted."""
+
+import csv
+
+import numpy as np
+import pytest
+
+from refsoft import cli
+from refsoft.bench import KNOBS, PAPER_TABLE1
+from refsoft.bench.scaling import fit_slope
+from refsoft.bench.sweep import pareto_front, settings
+
+
+def _csv(path):
+    with open(path) as fh:
+        return list(csv.DictReader(fh))
+
+
+def test_pareto_front_hand_case():
+    t = [1.0, 2.0, 3.0, 2.0, 1.0]
+    e = [0.5, 0.2, 0.1, 0.3, 0.5]
+    np.testing.assert_array_equal(pareto_front(t, e), [True, True, True, False, True])  # equal points: both kept
+
+
+def test_fit_slope_recovers_exponents():
+    n = np.array([1e3, 1e4, 1e5, 1e6])
+    assert fit_slope(n, 3e-6 * n) == pytest.approx(1.0)
+    assert fit_slope(n, 2e-9 * n ** 1.5) == pytest.approx(1.5)
+
+
+def test_settings_are_one_factor_at_a_time():
+    s = settings()
+    assert s[0][0] == "default" and len(s) == 1 + sum(len(v) - 1 for v in KNOBS.values())
+    assert all(len(opts) == 1 for _, _, _, opts in s[1:])
+
+
+def test_sweep_smoke(tmp_path, capsys):
+    out = tmp_path / "sweep"
+    assert cli.main(["bench", "sweep", "--scenes", "sphere", "planar", "--width", "48", "--height", "36", "--frames", "2",
+                     "--repeats", "1", "--knob", "inverse", "--knob", "gbuffer_scale", "--out", str(out)]) == 0
+    rows = _csv(out / "sweep.csv")
+    assert [r["setting"] for r in rows[:5]] == ["default", "gbuffer_scale=0.5", "gbuffer_scale=2.0", "inverse=search",
+                                                "inverse=discard"]
+    assert len(rows) == 10 and {r["scene"] for r in rows} == {"sphere", "planar"}
+    for r in rows:
+        assert float(r["time_ms"]) > 0 and 0 <= float(r["disagreement"]) <= 1
+        assert r["pareto"] in ("True", "False")
+    sphere = [r for r in rows if r["scene"] == "sphere"]
+    assert all(r["virtual_distance_mean"] for r in sphere)  # exact points on the ball
+    assert any(r["pareto"] == "True" for r in sphere)
+    assert "## sphere" in (out / "sweep.md").read_text() and (out / "pareto.png").stat().st_size > 1000
+    assert cli.main(["bench", "sweep", "--knob", "colour", "--out", str(out)]) == 2
+
+
+def test_scaling_smoke(tmp_path):
+    out = tmp_path / "scaling"
+    assert cli.main(["bench", "scaling", "--width", "64", "--height", "48", "--max-vertices", "4096",
+                     "--max-subdivisions", "2", "--max-width", "256", "--repeats", "1", "--out", str(out)]) == 0
+    rows = _csv(out / "scaling.csv")
+    series = [r["series"] for r in rows]
+    assert series.count("search_cold") == 2 and series.count("raster_triangles") == 2
+    assert series.count("raster_resolution") == 2
+    assert "slope" in (out / "scaling.md").read_text() and (out / "scaling.png").exists()
+
+
+def test_table1_smoke(tmp_path, capsys):
+    out = tmp_path / "t1"
+    assert cli.main(["bench", "table1", "--scenes", "kitchen", "ants", "--width", "48", "--height", "36",
+                     "--frames", "2", "--out", str(out)]) == 0
+    rows = _csv(out / "table1.csv")
+    assert [r["scene"] for r in rows] == ["kitchen", "ants"]
+    assert float(rows[0]["paper_max_frame_mean"]) == PAPER_TABLE1["kitchen"][0]
+    assert float(rows[0]["max_frame_mean"]) >= float(rows[0]["total_mean"]) > 0
+    assert "paper" in capsys.readouterr().out
