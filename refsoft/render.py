@@ -160,6 +160,28 @@ def _virtual_pass(scene, meshes, camera, refl, stencil, box, inverse, cull=True)
     return colour, rid, inside, n_culled
 
 
+def composite(colour, reflected, view_color, vcol, vid, covered, box, reflectivity):
+    """DESIGN section 5's composite over ``box = (r0, r1, c0, c1)``, in place: where the virtual
+    scene covers the stencil, ``colour = rho * virtual + (1 - rho) * reflector`` (float32) and
+    ``reflected`` takes the virtual object id.
+
+    Parameters
+    ----------
+    colour : ndarray (H, W, 3) float32, written
+    reflected : ndarray (H, W) int32, written
+    view_color : ndarray (H, W, 3) float32
+        The main view's colour (the reflector's own).
+    vcol, vid, covered : ndarray (h, w, 3) float32, (h, w) int32, (h, w) bool
+        The virtual pass over the box.
+    reflectivity : float
+    """
+    r0, r1, c0, c1 = box
+    rho = np.float32(reflectivity)
+    out_c = colour[r0:r1, c0:c1]
+    out_c[covered] = rho * vcol[covered] + (np.float32(1) - rho) * view_color[r0:r1, c0:c1][covered]
+    reflected[r0:r1, c0:c1][covered] = vid[covered]
+
+
 def _gbuffer_outputs(gb, k):
     """The DESIGN section 7 G-buffer arrays of reflector ``k``: world-space float32 positions,
     zero where not covered (as the rasterizer's maps), and float32 normals."""
@@ -319,16 +341,12 @@ class FrameDriver:
             t = time.perf_counter()
             if stencil.any():
                 box = _stencil_box(stencil) if opt.crop_virtual else full
-                r0, r1, c0, c1 = box
                 vcol, vid, covered, n_culled = _virtual_pass(scene, meshes, camera, refl, stencil, box, opt.inverse,
                                                              opt.cull_virtual)
                 skipped["virtual_objects_culled"][str(k)] = n_culled
                 times["virtual"] += 1000 * (time.perf_counter() - t)
                 t = time.perf_counter()
-                rho = np.float32(scene.object_by_id(k).reflectivity)
-                out_c = colour[r0:r1, c0:c1]
-                out_c[covered] = rho * vcol[covered] + (np.float32(1) - rho) * view.color[r0:r1, c0:c1][covered]
-                reflected[r0:r1, c0:c1][covered] = vid[covered]
+                composite(colour, reflected, view.color, vcol, vid, covered, box, scene.object_by_id(k).reflectivity)
                 times["composite"] += 1000 * (time.perf_counter() - t)
             gb, res = refl.gbuffer, refl.result
             arrays.update(_gbuffer_outputs(gb, k))
