@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+import refsoft
 from refsoft import Camera, CameraError, Mesh, RefsoftError, constants, load_scene, primitives, raster
 from refsoft.raster import _setup
 
@@ -116,3 +117,30 @@ def test_degenerate_meshes_and_empty_views_do_not_crash():
     assert not raster.gbuffer(behind, cam).mask.any()
     with pytest.raises(CameraError):
         Camera(eye=(0, 0, 3), target=(0, 0, 3))
+
+
+@pytest.mark.parametrize("name", ["sphere", "planar", "kitchen", "ants", "concave"])
+@pytest.mark.parametrize("precision", ["float32", "float64"])
+def test_cropped_gbuffer_equals_the_full_one(name, precision):
+    """The G-buffer rasterized over the reflector's projected box equals the whole view's, bit
+    for bit, for mirrors wholly in view, cut by the border, and tiny (the ants' eyes)."""
+    scene = refsoft.load_scene(name, width=96, height=72)
+    for frame in (0, scene.n_frames - 1):
+        cam = scene.camera_at(frame)
+        for k in scene.reflector_ids:
+            mesh = scene.world_mesh(k, frame, proxy=True)
+            a = raster.gbuffer(mesh, cam, precision, origin=cam.eye)
+            b = raster.gbuffer(mesh, cam, precision, origin=cam.eye, crop=False)
+            for field in ("position", "normal", "mask", "depth", "triangle"):
+                np.testing.assert_array_equal(getattr(a, field), getattr(b, field), err_msg=f"{name} {k} {field}")
+
+
+def test_coverage_region_cases():
+    from refsoft.raster import coverage_region
+
+    inside = np.array([[0.0, 0.0, 0.5, 1.0], [0.5, 0.5, 0.5, 1.0], [0.0, 0.5, 0.5, 1.0]])
+    r = coverage_region(inside, 64, 48)
+    assert r[0] <= 12 and r[1] >= 24 and r[2] <= 32 and r[3] >= 48  # contains x 32-48, rows 12-24
+    assert coverage_region(inside + [3.0, 0, 0, 0], 64, 48) == ()  # wholly right of the view
+    assert coverage_region(np.array([[0.0, 0.0, -2.0, 1.0]] * 3), 64, 48) is None  # before the near plane
+    assert coverage_region(np.array([[0.0, 0.0, 0.5, -1.0]] * 3), 64, 48) is None  # behind the eye
