@@ -150,7 +150,13 @@ def _virtual_pass(scene, meshes, camera, refl, stencil, box, inverse, cull=True)
     if len(faces) == 0:
         return colour, rid, np.zeros((h, w), dtype=bool), n_culled
     face_obj = np.concatenate(face_obj)
-    frags = rasterize(np.concatenate(clips), faces, camera.width, camera.height, region=box)
+    clip = np.concatenate(clips)
+    if cull:  # triangles beyond one side of the box: not set up (the order of the others is kept)
+        keep = ~skips.triangles_outside_box(clip, np.ascontiguousarray(faces, dtype=np.int64), *bounds)
+        faces, face_obj = faces[keep], face_obj[keep]
+        if len(faces) == 0:
+            return colour, rid, np.zeros((h, w), dtype=bool), n_culled
+    frags = rasterize(clip, faces, camera.width, camera.height, region=box)
     inside = frags.mask & stencil[r0:r1, c0:c1]
     nrm = interpolate(frags, np.concatenate(normals), faces, np.float32, normalize=True)
     colors = np.vstack([np.zeros(3), [o.color for o in scene.objects]]).astype(np.float32)

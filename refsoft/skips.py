@@ -19,6 +19,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from numba import prange
+
+from ._numba import kernel
 from .search import BORDER, CAPPED, CULLED, HIDDEN
 
 #: Extra pixels around a stencil box before an object's virtual triangles count as outside it:
@@ -109,3 +112,27 @@ def outside_box(clip, bounds) -> bool:
     x, y, z, w = clip[:, 0], clip[:, 1], clip[:, 2], clip[:, 3]
     return bool(np.all(x > x_hi * w) or np.all(x < x_lo * w) or np.all(y > y_hi * w) or np.all(y < y_lo * w)
                 or np.all(z < -w))
+
+
+@kernel(parallel=True)
+def triangles_outside_box(clip, faces, x_lo, x_hi, y_lo, y_hi):
+    """Per triangle, :func:`outside_box` of its three clip vertices (the same half-space tests),
+    bool (F,): those triangles cover no pixel of the box and need not be set up at all."""
+    n = faces.shape[0]
+    out = np.zeros(n, dtype=np.bool_)
+    for t in prange(n):
+        right = True
+        left = True
+        above = True
+        below = True
+        near = True
+        for j in range(3):
+            v = clip[faces[t, j]]
+            x, y, z, w = v[0], v[1], v[2], v[3]
+            right = right and x > x_hi * w
+            left = left and x < x_lo * w
+            above = above and y > y_hi * w
+            below = below and y < y_lo * w
+            near = near and z < -w
+        out[t] = right or left or above or below or near
+    return out

@@ -195,3 +195,16 @@ def test_cli_skip_switches_give_identical_files_and_report_skips(tmp_path):
     assert json.loads((tmp_path / "off" / "stats.json").read_text())["frames"][1]["skipped"]["gbuffers_reused"] == []
     with pytest.raises(SystemExit):
         cli.main(["render", "sphere", "--no-skip", "everything"])
+
+
+def test_triangle_kernel_agrees_with_outside_box():
+    rng = np.random.default_rng(3)
+    w = rng.uniform(0.2, 3.0, 600)
+    clip = np.c_[rng.uniform(-2, 2, (600, 3)) * w[:, None], w]
+    clip[::7, 3] *= -1  # some behind the eye
+    faces = rng.integers(0, 600, (400, 3))
+    bounds = skips.box_planes((10, 30, 20, 50), 64, 48)
+    got = skips.triangles_outside_box(clip, faces, *bounds)
+    expect = [skips.outside_box(clip[f], bounds) for f in faces]
+    np.testing.assert_array_equal(got, expect)
+    assert 0 < got.sum() < len(got)
