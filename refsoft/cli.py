@@ -91,6 +91,8 @@ def cmd_trace(args) -> int:
     if not 0 <= args.vertex < len(verts):
         raise RefsoftError(f"--vertex must be in [0, {len(verts) - 1}] (vertices of the non-reflector objects), "
                            f"got {args.vertex}")
+    if args.search == "hierarchy":
+        return _trace_hierarchy(args, scene, k, verts, owner)
     opts = dict(neighbourhood=args.search, inverse=args.inverse)
     previous = None
     if not args.no_coherence:  # replay this vertex's searches of the earlier frames
@@ -117,6 +119,45 @@ def cmd_trace(args) -> int:
     write_trace_gif(os.path.join(args.out, "trace.gif"), trace_frames(tr, gb.mask))
     print(f"wrote {args.out}/trace.json, trace.png (score field -log10(1 - s), path, start green, end red) "
           f"and trace.gif ({len(tr.steps)} steps)")
+    return 0
+
+
+def _trace_hierarchy(args, scene, k, verts, owner):
+    """``refsoft trace --search hierarchy``: the texels the traversal popped and tested, a table,
+    trace.json and trace.png (the footprints of the popped texels, finer levels brighter; the
+    chosen pixel red)."""
+    from .io import write_json, write_png
+    from .reflect import reflector_gbuffer
+    from .search import trace_hierarchy
+
+    gb = reflector_gbuffer(scene, k, args.frame, args.widen, None, args.precision)
+    tr = trace_hierarchy(gb, scene.camera_at(args.frame).eye, verts[args.vertex])
+    print(f"vertex {args.vertex} in reflector {k} ({scene.object_by_id(k).name!r}), frame {args.frame}, ray-cone "
+          f"hierarchy of {tr['levels']} levels over {tr['base_size']}x{tr['base_size']} pixels at {tuple(tr['origin'])}")
+    print(f"{'#':>4} {'attempt':>7} {'level':>5} {'texel':>12}  event")
+    for n, st in enumerate(tr["steps"]):
+        if st["event"] in ("popped", "chosen"):
+            print(f"{n:>4} {st['attempt']:>7} {st['level']:>5} {str(tuple(st['texel'])):>12}  {st['event']}")
+    print(f"result: pixel {tr['pixel']} after {tr['tests']} texel tests")
+    os.makedirs(args.out, exist_ok=True)
+    tr.update(scene=scene.name, reflector=k, frame=args.frame, vertex_index=args.vertex,
+              vertex_object=int(owner[args.vertex]), method="hierarchy")
+    write_json(os.path.join(args.out, "trace.json"), tr)
+    img = np.where(gb.mask[..., None], 70, 0).astype(np.uint8) * np.ones(3, np.uint8)
+    r0, c0 = tr["origin"]
+    for st in tr["steps"]:
+        if st["event"] != "popped":
+            continue
+        lv, (i, j) = st["level"], st["texel"]
+        side = 1 << lv
+        shade = int(90 + 150 * (1 - lv / max(tr["levels"] - 1, 1)))
+        rs, cs = r0 + i * side, c0 + j * side
+        region = img[rs:rs + side, cs:cs + side]
+        region[gb.mask[rs:rs + side, cs:cs + side]] = (0, shade, shade)
+    if tr["pixel"] is not None:
+        img[tr["pixel"][0], tr["pixel"][1]] = (255, 0, 0)
+    write_png(os.path.join(args.out, "trace.png"), np.repeat(np.repeat(img, 2, axis=0), 2, axis=1))
+    print(f"wrote {args.out}/trace.json and trace.png")
     return 0
 
 
@@ -329,7 +370,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="index into the vertices of the non-reflector objects, in scene order")
     t.add_argument("--reflector", type=int, default=None, help="object id of the reflector (default: the first)")
     t.add_argument("--frame", type=int, default=0)
-    t.add_argument("--search", choices=["cross", "box"], default="cross")
+    t.add_argument("--search", choices=["cross", "box", "hierarchy"], default="cross")
     t.add_argument("--inverse", choices=["plane", "search", "discard"], default="plane")
     t.add_argument("--widen", type=float, default=1.0)
     t.add_argument("--precision", choices=["float32", "float64"], default="float32")
@@ -346,7 +387,8 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--width", type=int, default=None)
     r.add_argument("--height", type=int, default=None)
     r.add_argument("--out", default="out/render", help="output folder (default: out/render)")
-    r.add_argument("--search", choices=["cross", "box"], default="cross")
+    r.add_argument("--search", choices=["cross", "box", "hierarchy"], default="cross",
+                   help="crosshair or 3x3 walk (the paper), or Szabo's ray-cone hierarchy")
     r.add_argument("--inverse", choices=["plane", "search", "discard"], default="plane")
     r.add_argument("--widen", type=float, default=1.0)
     r.add_argument("--precision", choices=["float32", "float64"], default="float32")

@@ -18,7 +18,7 @@ from .raster import _setup, color_pass, interpolate, rasterize, shade, to_uint8
 from .raster import gbuffer
 from .reflect import Reflection, coherent_starts, gbuffer_camera, scene_vertices
 from .scene import Scene
-from .search import CULLED, HIDDEN, INVERSE_MODES, NEIGHBOURHOODS, SearchResult, search, virtual_vertices
+from .search import CULLED, HIDDEN, INVERSE_MODES, SEARCH_METHODS, SearchResult, search, virtual_vertices
 
 STAGES = ("gbuffer", "search", "virtual", "main", "composite")
 #: The exact skips of :class:`RenderOptions` (issue 10).
@@ -31,7 +31,8 @@ class RenderOptions:
 
     Parameters
     ----------
-    neighbourhood : {"cross", "box"}
+    neighbourhood : {"cross", "box", "hierarchy"}
+        The search method (``hierarchy``: Szabo's ray-cone pyramid, no coherence).
     inverse : {"plane", "search", "discard"}
     widen : float
         Wider-frustum factor of the G-buffers (1.0: off).
@@ -67,8 +68,8 @@ class RenderOptions:
     adaptive_widen: bool = False
 
     def __post_init__(self):
-        if self.neighbourhood not in NEIGHBOURHOODS:
-            raise RefsoftError(f"search must be one of {list(NEIGHBOURHOODS)}, got {self.neighbourhood!r}")
+        if self.neighbourhood not in SEARCH_METHODS:
+            raise RefsoftError(f"search must be one of {list(SEARCH_METHODS)}, got {self.neighbourhood!r}")
         if self.inverse not in INVERSE_MODES:
             raise RefsoftError(f"inverse must be one of {list(INVERSE_MODES)}, got {self.inverse!r}")
         if self.precision not in ("float32", "float64"):

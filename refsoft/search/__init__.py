@@ -19,10 +19,12 @@ from ._kernels import BORDER, CAPPED, CULLED, HIDDEN, RESTARTED
 
 __all__ = ["search", "virtual_vertices", "start_pixel", "packed", "SearchResult", "trace_search", "Trace", "scores_at",
            "HIDDEN", "BORDER", "CAPPED", "RESTARTED", "CULLED", "NEIGHBOURHOODS", "INVERSE_MODES",
-           "flag_names", "default_cap"]
+           "flag_names", "default_cap", "SEARCH_METHODS", "trace_hierarchy"]
 
 #: Neighbourhood name -> candidates per iteration (current pixel included).
 NEIGHBOURHOODS = {"cross": 5, "box": 9}
+#: Search methods: the two neighbourhoods of the linear search and Szabo's ray-cone hierarchy.
+SEARCH_METHODS = ("cross", "box", "hierarchy")
 #: Hidden-vertex modes (DESIGN 4.6).
 INVERSE_MODES = ("plane", "search", "discard")
 _FLAG_NAMES = ((HIDDEN, "HIDDEN"), (BORDER, "BORDER"), (CAPPED, "CAPPED"), (RESTARTED, "RESTARTED"),
@@ -135,8 +137,8 @@ def _check_options(gbuffer, neighbourhood, inverse, cap):
     """Validate the options shared by :func:`search` and :func:`trace_search`; returns
     (dtype, cap)."""
     dt = _check_gbuffer(gbuffer)
-    if neighbourhood not in NEIGHBOURHOODS:
-        raise RefsoftError(f"neighbourhood must be one of {list(NEIGHBOURHOODS)}, got {neighbourhood!r}")
+    if neighbourhood not in SEARCH_METHODS:
+        raise RefsoftError(f"neighbourhood must be one of {list(SEARCH_METHODS)}, got {neighbourhood!r}")
     if inverse not in INVERSE_MODES:
         raise RefsoftError(f"inverse must be one of {list(INVERSE_MODES)}, got {inverse!r}")
     cap = default_cap(gbuffer.mask.shape) if cap is None else cap
@@ -166,7 +168,8 @@ LOCALITY_CELL = 16
 
 
 def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", inverse: str = "plane",
-           previous=None, cap: int | None = None) -> SearchResult:
+           previous=None, cap: int | None = None, cone_factor: float = 1.5, sphere_factor: float = 2.0,
+           break_level: int = 0) -> SearchResult:
     """Find each vertex's reflection pixel in a reflector's G-buffer.
 
     Parameters
@@ -177,8 +180,10 @@ def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", invers
         The eye, world space.
     vertices : array_like, shape (N, 3)
         Vertices to reflect, world space.
-    neighbourhood : {"cross", "box"}
-        Candidates per step: the crosshair (left, up, right, down) or the 3x3 box.
+    neighbourhood : {"cross", "box", "hierarchy"}
+        Candidates per step: the crosshair (left, up, right, down) or the 3x3 box; or Szabo's
+        ray-cone hierarchy (:mod:`refsoft.search.hierarchy`: no coherence, ``iterations``
+        counts the texels tested).
     inverse : {"plane", "search", "discard"}
         Hidden-vertex mode; only ``"search"`` changes the search (an inverse search follows).
     previous : array_like, shape (N, 2), int, optional
@@ -186,12 +191,17 @@ def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", invers
         coherence. A previous pixel that is no longer covered restarts (flag RESTARTED).
     cap : int, optional
         Iteration cap per search (default ``2 * (width + height)``).
+    cone_factor, sphere_factor, break_level
+        The hierarchy's error corrections (enlargement after a failed traversal; levels above
+        the base where the descent stops).
 
     Returns
     -------
     SearchResult
     """
     dt, cap = _check_options(gbuffer, neighbourhood, inverse, cap)
+    if neighbourhood == "hierarchy":
+        return _hierarchy_search(gbuffer, eye, vertices, inverse, cap, cone_factor, sphere_factor, break_level)
     eye = _point(eye, "eye")
     verts = _points(vertices, "vertices")
     h, w = gbuffer.mask.shape
@@ -227,6 +237,65 @@ def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", invers
         pixel += np.array([r0, c0], dtype=np.int32)
         flags[restart] |= RESTARTED
     return SearchResult(pixel, score, margin, iterations, flags, neighbourhood, inverse, int(cap))
+
+
+def _hierarchy_search(gbuffer, eye, vertices, inverse, cap, cone_factor, sphere_factor, break_level):
+    from . import _hierarchy, hierarchy
+
+    hierarchy.check_factors(cone_factor, sphere_factor, break_level)
+    eye = _point(eye, "eye")
+    verts = _points(vertices, "vertices")
+    dt = gbuffer.position.dtype.type
+    n = len(verts)
+    pixel = np.full((n, 2), -1, dtype=np.int32)
+    score = np.zeros(n, dtype=dt)
+    margin = np.zeros(n, dtype=dt)
+    iterations = np.zeros(n, dtype=np.int32)
+    flags = np.full(n, CULLED, dtype=np.uint8)
+    start = start_pixel(gbuffer.mask)
+    if start is not None and n:
+        G, mask, conv, (r0, c0) = packed(gbuffer, eye)
+        sph, cone, offsets, sizes = hierarchy.build(G, mask, conv)
+        _hierarchy.search_all(G, mask, sph, cone, offsets, sizes, len(sizes), np.ascontiguousarray(verts),
+                              gbuffer.origin, dt(cone_factor), dt(sphere_factor), int(break_level), int(cap),
+                              inverse == "search", start[0] - r0, start[1] - c0, conv, pixel, score, margin,
+                              iterations, flags)
+        pixel += np.array([r0, c0], dtype=np.int32)
+    return SearchResult(pixel, score, margin, iterations, flags, "hierarchy", inverse, int(cap))
+
+
+def trace_hierarchy(gbuffer: GBuffer, eye, vertex, cone_factor: float = 1.5, sphere_factor: float = 2.0,
+                    break_level: int = 0, cap: int | None = None) -> dict:
+    """Replay one hierarchy traversal (the kernel's own, with a record): every texel popped and
+    every child tested, in order. Returns ``{"steps": [{"attempt", "level", "texel", "event"}],
+    "pixel": [row, col] or None, "tests": n}``; events are ``popped``, ``pushed`` (its cone
+    contains the vertex), ``rejected`` and ``chosen`` (the base pixel)."""
+    from . import _hierarchy, hierarchy
+
+    hierarchy.check_factors(cone_factor, sphere_factor, break_level)
+    dt, cap = _check_options(gbuffer, "hierarchy", "plane", cap)
+    v = _point(vertex, "vertex")
+    e = _point(eye, "eye")
+    if start_pixel(gbuffer.mask) is None:
+        raise RefsoftError("the reflector covers no pixel of its G-buffer: there is nothing to search")
+    G, mask, conv, (r0, c0) = packed(gbuffer, e)
+    sph, cone, offsets, sizes = hierarchy.build(G, mask, conv)
+    record = np.zeros((8 * cap + 64, _hierarchy.RECORD_WIDTH), dtype=np.float64)
+    stack = np.empty((3 * len(sizes) + 4, 3), dtype=np.int64)
+    v_rel = (v - gbuffer.origin).astype(dt)
+    r, c, tests, found, n_rec = _hierarchy.traverse(G, sph, cone, offsets, sizes, len(sizes), v_rel, dt(1.0), dt(1.0),
+                                                    dt(cone_factor), dt(sphere_factor), int(break_level), int(cap),
+                                                    conv, stack, record, 0)
+    names = {0: "rejected", 1: "pushed", 2: "popped", 3: "chosen"}
+    steps = []
+    for a, lvl, i, j, ev in record[:n_rec]:
+        lvl = int(lvl)
+        texel = [int(i), int(j)]
+        if lvl == 0:
+            texel = [int(i) + r0, int(j) + c0]  # base texels as G-buffer pixels
+        steps.append({"attempt": int(a), "level": lvl, "texel": texel, "event": names[int(ev)]})
+    return {"steps": steps, "pixel": [int(r) + r0, int(c) + c0] if found else None, "tests": int(tests),
+            "levels": len(sizes), "base_size": int(sizes[0]), "origin": [r0, c0]}
 
 
 def virtual_vertices(gbuffer: GBuffer, result: SearchResult, vertices, relative: bool = False) -> np.ndarray:

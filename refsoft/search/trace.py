@@ -102,6 +102,9 @@ def trace_search(gbuffer, eye, vertex, neighbourhood="cross", inverse="plane", p
     single vertex, ``vertex`` shape (3,), ``previous`` a pixel or None)."""
     from . import NEIGHBOURHOODS, _check_options, _point, packed, start_pixel
 
+    if neighbourhood == "hierarchy":
+        raise RefsoftError("trace_search replays the linear search; for the hierarchy use "
+                           "refsoft.search.trace_hierarchy")
     dt, cap = _check_options(gbuffer, neighbourhood, inverse, cap)
     v = _point(vertex, "vertex")
     e = _point(eye, "eye")
