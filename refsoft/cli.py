@@ -256,15 +256,19 @@ def cmd_bench(args) -> int:
         scenes = args.scenes or ["sphere", "quad", "kitchen"]
         rows = bench.sweep(scenes, out, args.width or 320, args.height or 240, args.frames or 3, args.repeats,
                            args.knob, progress_bar=True)
+        plot = "pareto.png" if os.path.exists(os.path.join(out, "pareto.png")) else \
+            "no plot (pip install '.[plot]' for matplotlib)"
         print(f"sweep: {len(rows)} settings over {len(scenes)} scenes in {time.perf_counter() - t0:.0f} s; "
-              f"{out}/sweep.csv, sweep.md, pareto.png")
+              f"{out}/sweep.csv, sweep.md, {plot}")
     elif args.what == "scaling":
         if args.scenes or args.knob:
             raise RefsoftError("bench scaling takes no --scenes or --knob")
         r = bench.scaling(out, args.width or 1024, args.height or 768, args.max_vertices, args.max_subdivisions,
                           args.max_width, args.repeats, progress_bar=True)
         slopes = ", ".join(f"{k} {v:.2f}" for k, v in r["slopes"].items())
-        print(f"scaling in {time.perf_counter() - t0:.0f} s; fitted slopes: {slopes}; {out}/scaling.csv, .md, .png")
+        plot = ".png" if os.path.exists(os.path.join(out, "scaling.png")) else \
+            " (no plot: pip install '.[plot]' for matplotlib)"
+        print(f"scaling in {time.perf_counter() - t0:.0f} s; fitted slopes: {slopes}; {out}/scaling.csv, .md{plot}")
     else:
         if args.knob:
             raise RefsoftError("bench table1 takes no --knob")

@@ -73,3 +73,15 @@ def test_table1_smoke(tmp_path, capsys):
     assert float(rows[0]["paper_max_frame_mean"]) == PAPER_TABLE1["kitchen"][0]
     assert float(rows[0]["max_frame_mean"]) >= float(rows[0]["total_mean"]) > 0
     assert "paper" in capsys.readouterr().out
+
+
+def test_without_matplotlib_the_tables_are_still_written(tmp_path, capsys, monkeypatch):
+    import importlib
+
+    sweep_mod = importlib.import_module("refsoft.bench.sweep")  # the package's `sweep` is the function
+    monkeypatch.setattr(sweep_mod, "plt_or_none", lambda: None)
+    out = tmp_path / "s"
+    assert cli.main(["bench", "sweep", "--scenes", "planar", "--width", "32", "--height", "24", "--frames", "1",
+                     "--repeats", "1", "--knob", "precision", "--out", str(out)]) == 0
+    assert (out / "sweep.csv").exists() and not (out / "pareto.png").exists()
+    assert "pip install '.[plot]'" in capsys.readouterr().out
