@@ -12,7 +12,7 @@ import pytest
 import refsoft
 from refsoft.raster import color_pass
 from refsoft.reflect import reflect, reflector_gbuffer, scene_vertices
-from refsoft.render import _stencil_box, _virtual_pass, composite
+from refsoft.render import _stencil_box, _virtual_parts, _virtual_pass, composite
 from refsoft.search import search
 
 SCENES = ["kitchen", "ufo", "ants"]
@@ -45,11 +45,11 @@ def test_stage(benchmark, case, stage):
     elif stage == "search_coherent":
         fn = lambda: search(gb, eye, case["verts"], previous=case["prev"])  # noqa: E731
     elif stage == "virtual":
-        fn = lambda: _virtual_pass(scene, case["meshes"], scene.camera_at(1), refl, case["stencil"], case["box"],  # noqa: E731
-                                   "plane")
+        fn = lambda: _virtual_pass(scene, _virtual_parts(scene, case["meshes"], refl), scene.camera_at(1),  # noqa: E731
+                                   case["stencil"], case["box"], "plane")
     elif stage == "composite":
-        vcol, vid, covered, _ = _virtual_pass(scene, case["meshes"], scene.camera_at(1), refl, case["stencil"],
-                                              case["box"], "plane")
+        vcol, vid, covered, _ = _virtual_pass(scene, _virtual_parts(scene, case["meshes"], refl), scene.camera_at(1),
+                                              case["stencil"], case["box"], "plane")
         colour = case["view"].color.copy()
         reflected = np.full(colour.shape[:2], -1, np.int32)
         fn = lambda: composite(colour, reflected, case["view"].color, vcol, vid, covered, case["box"], 1.0)  # noqa: E731

@@ -108,41 +108,54 @@ def _stencil_box(stencil):
     return int(rows[0]), int(rows[-1]) + 1, int(cols[0]), int(cols[-1]) + 1
 
 
-def _virtual_pass(scene, meshes, camera, refl, stencil, box, inverse, cull=True):
-    """Rasterize the virtual scene of one reflector with the view camera, inside its stencil.
-
-    Only the stencil's bounding box ``box = (r0, r1, c0, c1)`` is rasterized (the same pixels as
-    the whole view, cropped). With ``cull``, objects whose virtual vertices all lie beyond one
-    side of the box are left out (:func:`refsoft.skips.outside_box`: they cover none of its
-    pixels). Returns, over the box: colour (h, w, 3) float32, reflected object id (h, w) int32,
-    covered (h, w) bool, and the number of objects culled.
-    """
-    res = refl.result
+def _virtual_parts(scene, meshes, refl):
+    """The reflected geometry of one reflector, one part per non-reflector object:
+    ``(virtual (n, 3) float64, normals (n, 3), faces (m, 3) int64 local, face_obj (m,) int32,
+    flags (n,) uint8)``."""
     # eye-relative virtual vertices moved to world space in float64: far from the origin the
     # float32 world output would round them (1/16 unit at 1e6)
     virtual = refl.virtual64 if refl.virtual64 is not None else refl.virtual.astype(np.float64)
-    clip_all = _setup.transform_points(virtual, camera.view_proj())
-    bounds = skips.box_planes(box, camera.width, camera.height)
-    bad = CULLED | (HIDDEN if inverse == "discard" else 0)
-    faces, face_obj, normals, clips = [], [], [], []
-    start = 0
-    n_culled = 0
+    flags = refl.result.flags
+    parts, start = [], 0
     for k, obj in enumerate(scene.objects, start=1):
         if obj.reflector:
             continue
         mesh = meshes[k - 1]
         n = mesh.n_vertices
-        clip = clip_all[start:start + n]
-        f = mesh.faces.astype(np.int64)
+        parts.append((virtual[start:start + n], mesh.normals, mesh.faces.astype(np.int64),
+                      np.full(mesh.n_faces, k, dtype=np.int32), flags[start:start + n]))
         start += n
+    return parts
+
+
+def _virtual_pass(scene, parts, camera, stencil, box, inverse, cull=True):
+    """Rasterize the virtual scene of one reflector with the view camera, inside its stencil.
+
+    ``parts`` (:func:`_virtual_parts`, or one part of tessellated geometry) hold virtual
+    vertices, normals, faces, face object ids and flags. Only the stencil's bounding box
+    ``box = (r0, r1, c0, c1)`` is rasterized (the same pixels as the whole view, cropped). With
+    ``cull``, parts whose virtual vertices all lie beyond one side of the box are left out
+    (:func:`refsoft.skips.outside_box`: they cover none of its pixels), and so are such
+    triangles. Returns, over the box: colour (h, w, 3) float32, reflected object id (h, w)
+    int32, covered (h, w) bool, and the number of parts culled.
+    """
+    vp = camera.view_proj()
+    bounds = skips.box_planes(box, camera.width, camera.height)
+    bad = CULLED | (HIDDEN if inverse == "discard" else 0)
+    faces, face_obj, normals, clips = [], [], [], []
+    n_culled = 0
+    offset = 0
+    for virtual, nrm_v, f, fobj, flags in parts:
+        clip = _setup.transform_points(virtual, vp)
         if cull and skips.outside_box(clip, bounds):
             n_culled += 1
             continue
-        keep = ~np.any(res.flags[f + (start - n)] & bad, axis=1)  # triangles whose vertices all have a V'
-        faces.append(f[keep] + sum(len(c) for c in clips))
-        face_obj.append(np.full(int(keep.sum()), k, dtype=np.int32))
-        normals.append(mesh.normals)
+        keep = ~np.any(flags[f] & bad, axis=1)  # triangles whose vertices all have a V'
+        faces.append(f[keep] + offset)
+        face_obj.append(fobj[keep])
+        normals.append(nrm_v)
         clips.append(clip)
+        offset += len(clip)
     r0, r1, c0, c1 = box
     h, w = r1 - r0, c1 - c0
     colour = np.zeros((h, w, 3), dtype=np.float32)
@@ -348,7 +361,8 @@ class FrameDriver:
             t = time.perf_counter()
             if stencil.any():
                 box = _stencil_box(stencil) if opt.crop_virtual else full
-                vcol, vid, covered, n_culled = _virtual_pass(scene, meshes, camera, refl, stencil, box, opt.inverse,
+                parts = _virtual_parts(scene, meshes, refl)
+                vcol, vid, covered, n_culled = _virtual_pass(scene, parts, camera, stencil, box, opt.inverse,
                                                              opt.cull_virtual)
                 skipped["virtual_objects_culled"][str(k)] = n_culled
                 times["virtual"] += 1000 * (time.perf_counter() - t)

@@ -1,0 +1,161 @@
+"""Crack-free adaptive tessellation of reflected geometry (Szabo 2013, chapter 5).
+
+The rasterizer joins reflected vertices with straight edges, where the reflection of a straight
+edge in a curved mirror is curved. Per triangle edge A-B with reflection pixels R_A, R_B, the
+thesis's error is ``1 - (dot(N, b) + 1) / 2`` where, at the pixel halfway between R_A and R_B
+(rounded down), N is the mirror's normal and b the normalised bisector of the directions from
+that surface point to the eye and to the edge's midpoint (A + B) / 2: 0 when that pixel is where
+the midpoint reflects. A triangle whose largest edge error exceeds the threshold is split 1-to-4
+at its edge midpoints; the new vertices are searched, starting from their parents' pixels.
+
+Crack-free (the thesis's version leaves holes): an edge split for one triangle is split for its
+neighbours too, which are then split 1-to-2, 1-to-3 or 1-to-4 by how many of their edges were
+split (red-green refinement), so no vertex lies on another triangle's edge. Every level splits
+only triangles created by the previous one, up to ``max_level`` levels.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .errors import RefsoftError
+from .mesh import normalize_rows
+from .search import CULLED, HIDDEN, search
+
+
+def edge_errors(gbuffer, eye, a_world, b_world, pa, pb) -> np.ndarray:
+    """The thesis's reflection error of edges A-B (world endpoints (E, 3) float64, reflection
+    pixels (E, 2)); 1 where a pixel is missing (-1) or the midpoint pixel is uncovered."""
+    e = len(a_world)
+    out = np.ones(e)
+    ok = np.all(pa >= 0, axis=1) & np.all(pb >= 0, axis=1)
+    mid = (pa + pb) // 2
+    r, c = np.where(ok, mid[:, 0], 0), np.where(ok, mid[:, 1], 0)
+    ok &= gbuffer.mask[r, c]
+    p = gbuffer.position[r, c].astype(np.float64) + gbuffer.origin
+    n = gbuffer.normal[r, c].astype(np.float64)
+    m = 0.5 * (np.asarray(a_world) + np.asarray(b_world))
+    v = normalize_rows(np.asarray(eye, dtype=np.float64) - p)
+    w = normalize_rows(m - p)
+    b = normalize_rows(v + w)
+    err = 1.0 - (np.einsum("ij,ij->i", n, b) + 1.0) / 2.0
+    out[ok] = err[ok]
+    return out
+
+
+def _split(faces, split_edges, midpoint):
+    """Red-green refinement of ``faces`` (T, 3): a triangle whose three edges are split gives 4,
+    two edges 3, one edge 2; ``midpoint[(i, j)]`` (i < j) is the new vertex of a split edge.
+    Returns (faces, parent) with each new face's source triangle."""
+    out, parent = [], []
+    for t, (a, b, c) in enumerate(faces):
+        e = [(a, b), (b, c), (c, a)]
+        s = [tuple(sorted(x)) in split_edges for x in e]
+        m = [midpoint[tuple(sorted(x))] if s[k] else -1 for k, x in enumerate(e)]
+        n = sum(s)
+        if n == 0:
+            new = [(a, b, c)]
+        elif n == 3:
+            ab, bc, ca = m
+            new = [(a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca)]
+        elif n == 1:
+            k = s.index(True)
+            v0, v1 = e[k]
+            opp = [a, b, c][(k + 2) % 3]
+            new = [(v0, m[k], opp), (m[k], v1, opp)]
+        else:  # two edges split: the unsplit edge keeps a triangle of its own
+            k = s.index(False)
+            v0, v1 = e[k]  # unsplit edge v0 -> v1; the third vertex opp
+            opp = [a, b, c][(k + 2) % 3]
+            m1 = m[(k + 1) % 3]  # on v1 -> opp
+            m2 = m[(k + 2) % 3]  # on opp -> v0
+            new = [(v0, v1, m1), (v0, m1, m2), (m2, m1, opp)]
+        out += new
+        parent += [t] * len(new)
+    return np.array(out, dtype=np.int64).reshape(-1, 3), np.array(parent, dtype=np.int64)
+
+
+def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, threshold, max_level,
+               neighbourhood="cross", inverse="plane", cap=None):
+    """Refine the reflected triangles of one reflector until every triangle's largest edge error
+    is at most ``threshold`` (0: every triangle, i.e. full tessellation) or ``max_level`` levels.
+
+    Parameters
+    ----------
+    gbuffer : GBuffer
+    eye : (3,)
+    vertices, normals : ndarray (N, 3) float64
+        World positions and normals of the reflected vertices (scene order).
+    faces : ndarray (T, 3) int
+    face_obj : ndarray (T,) int32
+    pixel, flags : ndarray (N, 2) int32, (N,) uint8
+        Their search results in this G-buffer.
+    threshold : float
+    max_level : int
+
+    Returns
+    -------
+    dict
+        ``vertices``, ``normals`` (N', 3), ``pixel`` (N', 2), ``flags`` (N',), ``faces`` (T', 3),
+        ``face_obj`` (T',), ``result`` (the SearchResult of the new vertices or None),
+        ``searched`` (new vertices searched), ``levels`` (levels done).
+    """
+    if not (isinstance(threshold, (int, float)) and np.isfinite(threshold) and threshold >= 0):
+        raise RefsoftError(f"tessellation threshold must be a number >= 0, got {threshold!r}")
+    if isinstance(max_level, bool) or not isinstance(max_level, (int, np.integer)) or max_level < 0:
+        raise RefsoftError(f"max_level must be a non-negative integer, got {max_level!r}")
+    verts = [np.asarray(vertices, dtype=np.float64)]
+    norms = [np.asarray(normals, dtype=np.float64)]
+    pix = [np.asarray(pixel, dtype=np.int32)]
+    fl = [np.asarray(flags, dtype=np.uint8)]
+    faces = np.asarray(faces, dtype=np.int64)
+    face_obj = np.asarray(face_obj, dtype=np.int32)
+    active = np.ones(len(faces), dtype=bool)  # triangles made by the last level (candidates)
+    n_total = len(verts[0])
+    searched = 0
+    levels = 0
+    for _ in range(max_level):
+        allv, allp, allf = np.concatenate(verts), np.concatenate(pix), np.concatenate(fl)
+        cand = np.flatnonzero(active)
+        if len(cand) == 0:
+            break
+        f = faces[cand]
+        e0, e1 = f.reshape(-1), f[:, [1, 2, 0]].reshape(-1)
+        err = edge_errors(gbuffer, eye, allv[e0], allv[e1], allp[e0], allp[e1]).reshape(-1, 3)
+        bad = ((allf[f] & CULLED) != 0).any(axis=1)  # no reflection to refine
+        split_tri = cand[(err.max(axis=1) > threshold) & ~bad]
+        if len(split_tri) == 0:
+            break
+        ends = faces[split_tri]
+        edges = {tuple(sorted(e)) for t in ends for e in ((t[0], t[1]), (t[1], t[2]), (t[2], t[0]))}
+        edges = sorted(edges)
+        midpoint = {e: n_total + i for i, e in enumerate(edges)}
+        ea = np.array([e[0] for e in edges])
+        eb = np.array([e[1] for e in edges])
+        new_v = 0.5 * (allv[ea] + allv[eb])
+        new_n = normalize_rows(np.concatenate(norms)[ea] + np.concatenate(norms)[eb])
+        # each new vertex starts from its parents' pixels: their midpoint, else the first parent's
+        pa, pb = allp[ea].astype(np.int64), allp[eb].astype(np.int64)
+        start = (pa + pb) // 2
+        h, w = gbuffer.mask.shape
+        okm = np.all(pa >= 0, axis=1) & np.all(pb >= 0, axis=1)
+        okm &= gbuffer.mask[np.clip(start[:, 0], 0, h - 1), np.clip(start[:, 1], 0, w - 1)]
+        start = np.where(okm[:, None], start, pa)
+        start = np.where(np.all(start >= 0, axis=1)[:, None], start, -1)
+        res = search(gbuffer, eye, new_v, neighbourhood, inverse, start, cap)
+        searched += len(new_v)
+        verts.append(new_v)
+        norms.append(new_n)
+        pix.append(res.pixel)
+        fl.append(res.flags)
+        n_total += len(new_v)
+        # neighbours of split triangles that share a split edge are refined too (crack-free)
+        new_faces, parent = _split(faces, set(edges), midpoint)
+        touched = np.zeros(len(faces), dtype=bool)
+        touched[np.unique(parent[np.bincount(parent, minlength=len(faces))[parent] > 1])] = True
+        active = touched[parent]
+        face_obj = face_obj[parent]
+        faces = new_faces
+        levels += 1
+    return {"vertices": np.concatenate(verts), "normals": np.concatenate(norms), "pixel": np.concatenate(pix),
+            "flags": np.concatenate(fl), "faces": faces, "face_obj": face_obj, "searched": searched, "levels": levels}
