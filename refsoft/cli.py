@@ -183,7 +183,8 @@ def cmd_render(args) -> int:
                          keep=False, write=None if args.frame is None else {args.frame},
                          neighbourhood=args.search, inverse=args.inverse, widen=args.widen,
                          precision=args.precision, coherence=not args.no_coherence,
-                         adaptive_widen=args.adaptive_widen, **{name: name not in off for name in SKIPS})
+                         adaptive_widen=args.adaptive_widen, tessellate=args.tessellate, max_level=args.max_level,
+                         **{name: name not in off for name in SKIPS})
     keep = done if args.frame is None else [f for f in done if f.index == args.frame]
     summ = stats["summary"]
     median_ms = np.median([f.time_ms["total"] for f in keep])
@@ -404,6 +405,10 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--no-skips", action="store_true", help="turn every exact skip off")
     r.add_argument("--memory-limit", default=None, metavar="SIZE",
                    help="refuse a render estimated to need more memory (e.g. 4G; default $REFSOFT_MEMORY_LIMIT or 4G)")
+    r.add_argument("--tessellate", type=float, default=None, metavar="THRESHOLD",
+                   help="Szabo's adaptive tessellation of reflected triangles whose edge error exceeds THRESHOLD "
+                        "(e.g. 1e-3; 0 = full tessellation), crack-free")
+    r.add_argument("--max-level", type=int, default=3, help="tessellation levels at most (default 3)")
     r.add_argument("--adaptive-widen", action="store_true",
                    help="approximation: use --widen only on frames where a reflector is cut by the image border")
     r.set_defaults(func=cmd_render)

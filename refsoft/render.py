@@ -52,6 +52,11 @@ class RenderOptions:
     adaptive_widen : bool
         An approximation (off by default, changes results): use ``widen`` only on frames where
         the reflector's projection is clipped by the view.
+    tessellate : float, optional
+        Szabo's adaptive tessellation of the reflected geometry (:mod:`refsoft.tessellate`):
+        split triangles whose largest edge error exceeds this threshold (0: every triangle, full
+        tessellation), crack-free, up to ``max_level`` levels. Default: off.
+    max_level : int
     """
 
     neighbourhood: str = "cross"
@@ -66,6 +71,8 @@ class RenderOptions:
     cull_virtual: bool = True
     crop_virtual: bool = True
     adaptive_widen: bool = False
+    tessellate: float | None = None
+    max_level: int = 3
 
     def __post_init__(self):
         if self.neighbourhood not in SEARCH_METHODS:
@@ -76,6 +83,13 @@ class RenderOptions:
             raise RefsoftError(f"precision must be float32 or float64, got {self.precision!r}")
         if not (isinstance(self.widen, (int, float)) and np.isfinite(self.widen) and self.widen >= 1.0):
             raise RefsoftError(f"widen must be a number >= 1, got {self.widen!r}")
+        if self.tessellate is not None and not (isinstance(self.tessellate, (int, float))
+                                                and not isinstance(self.tessellate, bool)
+                                                and np.isfinite(self.tessellate) and self.tessellate >= 0):
+            raise RefsoftError(f"tessellate must be a threshold >= 0 (or None), got {self.tessellate!r}")
+        if isinstance(self.max_level, bool) or not isinstance(self.max_level, (int, np.integer)) \
+                or not 0 <= self.max_level <= 8:
+            raise RefsoftError(f"max_level must be an integer in [0, 8], got {self.max_level!r}")
         for name in SKIPS + ("adaptive_widen", "coherence"):
             if not isinstance(getattr(self, name), (bool, np.bool_)):
                 raise RefsoftError(f"{name} must be True or False, got {getattr(self, name)!r}")
@@ -126,6 +140,34 @@ def _virtual_parts(scene, meshes, refl):
                       np.full(mesh.n_faces, k, dtype=np.int32), flags[start:start + n]))
         start += n
     return parts
+
+
+def _tessellated_parts(scene, meshes, refl, verts, opt, eye):
+    """One part holding the reflected geometry after :func:`refsoft.tessellate.tessellate`, and
+    that function's counts."""
+    from .tessellate import tessellate
+
+    faces, face_obj, normals, start = [], [], [], 0
+    for k, obj in enumerate(scene.objects, start=1):
+        if obj.reflector:
+            continue
+        mesh = meshes[k - 1]
+        faces.append(mesh.faces.astype(np.int64) + start)
+        face_obj.append(np.full(mesh.n_faces, k, dtype=np.int32))
+        normals.append(mesh.normals)
+        start += mesh.n_vertices
+    res = refl.result
+    t = tessellate(refl.gbuffer, eye, verts, np.concatenate(normals), np.concatenate(faces), np.concatenate(face_obj),
+                   res.pixel, res.flags, opt.tessellate, opt.max_level, opt.neighbourhood, opt.inverse, opt.cap)
+    n0 = len(verts)
+    new = t["vertices"][n0:]
+    m = len(new)
+    res_new = SearchResult(t["pixel"][n0:], np.zeros(m), np.zeros(m), np.ones(m, np.int32), t["flags"][n0:],
+                           res.neighbourhood, res.inverse, res.cap)
+    rel = virtual_vertices(refl.gbuffer, res_new, new, relative=True)
+    virtual = np.concatenate([refl.virtual64, rel.astype(np.float64) + refl.gbuffer.origin])
+    counts = {"vertices_searched": int(t["searched"]), "levels": int(t["levels"]), "triangles": int(len(t["faces"]))}
+    return [(virtual, t["normals"], t["faces"], t["face_obj"], t["flags"])], counts
 
 
 def _virtual_pass(scene, parts, camera, stencil, box, inverse, cull=True):
@@ -351,6 +393,7 @@ class FrameDriver:
         full = (0, camera.height, 0, camera.width)
         arrays = {}
         iterations = {}
+        tessellation = {}
         for k in scene.reflector_ids:
             stencil = view.object_id == k
             reflected[stencil] = 0
@@ -361,7 +404,13 @@ class FrameDriver:
             t = time.perf_counter()
             if stencil.any():
                 box = _stencil_box(stencil) if opt.crop_virtual else full
-                parts = _virtual_parts(scene, meshes, refl)
+                if opt.tessellate is None:
+                    parts = _virtual_parts(scene, meshes, refl)
+                else:
+                    parts, counts = _tessellated_parts(scene, meshes, refl, verts, opt, camera.eye)
+                    tessellation[str(k)] = counts
+                    times["tessellate"] = times.get("tessellate", 0.0) + 1000 * (time.perf_counter() - t)
+                    t = time.perf_counter()
                 vcol, vid, covered, n_culled = _virtual_pass(scene, parts, camera, stencil, box, opt.inverse,
                                                              opt.cull_virtual)
                 skipped["virtual_objects_culled"][str(k)] = n_culled
@@ -389,6 +438,8 @@ class FrameDriver:
         times["composite"] += 1000 * (time.perf_counter() - t)
         times["total"] = 1000 * (time.perf_counter() - t0)
         arrays.update(image=image, object_id=np.asarray(view.object_id, dtype=np.int32), reflected_id=reflected)
+        if opt.tessellate is not None:
+            skipped["tessellation"] = tessellation  # reported beside the skips (what was added, not skipped)
         return Frame(frame, arrays, times, iterations, skipped)
 
 

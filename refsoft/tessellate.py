@@ -43,14 +43,19 @@ def edge_errors(gbuffer, eye, a_world, b_world, pa, pb) -> np.ndarray:
     return out
 
 
-def _split(faces, split_edges, midpoint):
+def _split(faces, split_edges, midpoint, only=None):
     """Red-green refinement of ``faces`` (T, 3): a triangle whose three edges are split gives 4,
     two edges 3, one edge 2; ``midpoint[(i, j)]`` (i < j) is the new vertex of a split edge.
-    Returns (faces, parent) with each new face's source triangle."""
+    Returns (faces, parent) with each new face's source triangle. ``only`` (a set of triangle
+    indices): split just these 1-to-4 and leave the others whole, T-junctions and all (the
+    thesis's rule, for comparison)."""
     out, parent = [], []
     for t, (a, b, c) in enumerate(faces):
         e = [(a, b), (b, c), (c, a)]
-        s = [tuple(sorted(x)) in split_edges for x in e]
+        if only is not None and t not in only:
+            s = [False, False, False]
+        else:
+            s = [tuple(sorted(x)) in split_edges for x in e]
         m = [midpoint[tuple(sorted(x))] if s[k] else -1 for k, x in enumerate(e)]
         n = sum(s)
         if n == 0:
@@ -76,7 +81,7 @@ def _split(faces, split_edges, midpoint):
 
 
 def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, threshold, max_level,
-               neighbourhood="cross", inverse="plane", cap=None):
+               neighbourhood="cross", inverse="plane", cap=None, crack_free=True):
     """Refine the reflected triangles of one reflector until every triangle's largest edge error
     is at most ``threshold`` (0: every triangle, i.e. full tessellation) or ``max_level`` levels.
 
@@ -92,6 +97,9 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
         Their search results in this G-buffer.
     threshold : float
     max_level : int
+    crack_free : bool
+        Refine the neighbours of split triangles along the split edges (default); ``False``
+        reproduces the thesis's rule, which leaves cracks.
 
     Returns
     -------
@@ -150,7 +158,7 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
         fl.append(res.flags)
         n_total += len(new_v)
         # neighbours of split triangles that share a split edge are refined too (crack-free)
-        new_faces, parent = _split(faces, set(edges), midpoint)
+        new_faces, parent = _split(faces, set(edges), midpoint, None if crack_free else set(split_tri.tolist()))
         touched = np.zeros(len(faces), dtype=bool)
         touched[np.unique(parent[np.bincount(parent, minlength=len(faces))[parent] > 1])] = True
         active = touched[parent]
