@@ -22,6 +22,9 @@ from .errors import RefsoftError
 from .mesh import normalize_rows
 from .search import CULLED, HIDDEN, search
 
+#: Edge keys are ``min * KEY_BASE + max`` of vertex indices (room for 2^31 vertices).
+KEY_BASE = np.int64(1) << 31
+
 
 def edge_errors(gbuffer, eye, a_world, b_world, pa, pb) -> np.ndarray:
     """The thesis's reflection error of edges A-B (world endpoints (E, 3) float64, reflection
@@ -43,41 +46,69 @@ def edge_errors(gbuffer, eye, a_world, b_world, pa, pb) -> np.ndarray:
     return out
 
 
-def _split(faces, split_edges, midpoint, only=None):
-    """Red-green refinement of ``faces`` (T, 3): a triangle whose three edges are split gives 4,
-    two edges 3, one edge 2; ``midpoint[(i, j)]`` (i < j) is the new vertex of a split edge.
-    Returns (faces, parent) with each new face's source triangle. ``only`` (a set of triangle
-    indices): split just these 1-to-4 and leave the others whole, T-junctions and all (the
-    thesis's rule, for comparison)."""
-    out, parent = [], []
-    for t, (a, b, c) in enumerate(faces):
-        e = [(a, b), (b, c), (c, a)]
-        if only is not None and t not in only:
-            s = [False, False, False]
-        else:
-            s = [tuple(sorted(x)) in split_edges for x in e]
-        m = [midpoint[tuple(sorted(x))] if s[k] else -1 for k, x in enumerate(e)]
-        n = sum(s)
-        if n == 0:
-            new = [(a, b, c)]
-        elif n == 3:
-            ab, bc, ca = m
-            new = [(a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca)]
-        elif n == 1:
-            k = s.index(True)
-            v0, v1 = e[k]
-            opp = [a, b, c][(k + 2) % 3]
-            new = [(v0, m[k], opp), (m[k], v1, opp)]
-        else:  # two edges split: the unsplit edge keeps a triangle of its own
-            k = s.index(False)
-            v0, v1 = e[k]  # unsplit edge v0 -> v1; the third vertex opp
-            opp = [a, b, c][(k + 2) % 3]
-            m1 = m[(k + 1) % 3]  # on v1 -> opp
-            m2 = m[(k + 2) % 3]  # on opp -> v0
-            new = [(v0, v1, m1), (v0, m1, m2), (m2, m1, opp)]
-        out += new
-        parent += [t] * len(new)
-    return np.array(out, dtype=np.int64).reshape(-1, 3), np.array(parent, dtype=np.int64)
+def _edge_keys(u, v, n):
+    """Undirected edge keys ``min * n + max`` (int64)."""
+    lo, hi = np.minimum(u, v), np.maximum(u, v)
+    return lo.astype(np.int64) * n + hi
+
+
+def _split(faces, edge_keys, edge_mid, n_vertices, only=None):
+    """Red-green refinement of ``faces`` (T, 3), vectorised: a triangle whose three edges are
+    split gives 4, two edges 3, one edge 2; ``edge_keys`` (sorted, :func:`_edge_keys`) are the
+    split edges and ``edge_mid`` their new vertices. Children come in the parents' order.
+    Returns (faces, parent). ``only`` (bool (T,)): split just these 1-to-4 and leave the others
+    whole, T-junctions and all (the thesis's rule, for comparison)."""
+    f = np.asarray(faces, dtype=np.int64)
+    t = len(f)
+    a, b, c = f[:, 0], f[:, 1], f[:, 2]
+    ends = [(a, b), (b, c), (c, a)]
+    has = np.zeros((t, 3), dtype=bool)
+    mid = np.full((t, 3), -1, dtype=np.int64)
+    for k, (u, v) in enumerate(ends):
+        key = _edge_keys(u, v, n_vertices)
+        pos = np.clip(np.searchsorted(edge_keys, key), 0, max(len(edge_keys) - 1, 0))
+        hit = (edge_keys[pos] == key) if len(edge_keys) else np.zeros(t, dtype=bool)
+        has[:, k] = hit
+        mid[:, k] = np.where(hit, edge_mid[pos] if len(edge_mid) else -1, -1)
+    if only is not None:
+        has &= np.asarray(only, dtype=bool)[:, None]
+        mid = np.where(has, mid, -1)
+    n = has.sum(axis=1)
+    count = np.choose(n, [1, 2, 3, 4])
+    start = np.concatenate([[0], np.cumsum(count)[:-1]])
+    out = np.empty((int(count.sum()), 3), dtype=np.int64)
+    parent = np.repeat(np.arange(t), count)
+    v = f  # v[:, k] = vertex k
+    rows = np.arange(t)
+    # no split: the triangle itself
+    s0 = n == 0
+    out[start[s0]] = f[s0]
+    # three: corners, then the middle
+    s3 = n == 3
+    ab, bc, ca = mid[s3, 0], mid[s3, 1], mid[s3, 2]
+    st = start[s3]
+    out[st] = np.c_[a[s3], ab, ca]
+    out[st + 1] = np.c_[ab, b[s3], bc]
+    out[st + 2] = np.c_[ca, bc, c[s3]]
+    out[st + 3] = np.c_[ab, bc, ca]
+    # one: the split edge k from v_k to v_k+1, the opposite vertex v_k+2
+    s1 = n == 1
+    k = np.argmax(has[s1], axis=1)
+    r1 = rows[s1]
+    v0, v1, opp = v[r1, k], v[r1, (k + 1) % 3], v[r1, (k + 2) % 3]
+    m = mid[r1, k]
+    out[start[s1]] = np.c_[v0, m, opp]
+    out[start[s1] + 1] = np.c_[m, v1, opp]
+    # two: the unsplit edge k keeps a triangle of its own
+    s2 = n == 2
+    k = np.argmin(has[s2], axis=1)
+    r2 = rows[s2]
+    v0, v1, opp = v[r2, k], v[r2, (k + 1) % 3], v[r2, (k + 2) % 3]
+    m1, m2 = mid[r2, (k + 1) % 3], mid[r2, (k + 2) % 3]
+    out[start[s2]] = np.c_[v0, v1, m1]
+    out[start[s2] + 1] = np.c_[v0, m1, m2]
+    out[start[s2] + 2] = np.c_[m2, m1, opp]
+    return out, parent
 
 
 def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, threshold, max_level,
@@ -135,11 +166,9 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
         if len(split_tri) == 0:
             break
         ends = faces[split_tri]
-        edges = {tuple(sorted(e)) for t in ends for e in ((t[0], t[1]), (t[1], t[2]), (t[2], t[0]))}
-        edges = sorted(edges)
-        midpoint = {e: n_total + i for i, e in enumerate(edges)}
-        ea = np.array([e[0] for e in edges])
-        eb = np.array([e[1] for e in edges])
+        keys = np.unique(np.concatenate([_edge_keys(ends[:, i], ends[:, (i + 1) % 3], KEY_BASE) for i in range(3)]))
+        ea, eb = keys // KEY_BASE, keys % KEY_BASE
+        mids = n_total + np.arange(len(keys), dtype=np.int64)
         new_v = 0.5 * (allv[ea] + allv[eb])
         new_n = normalize_rows(np.concatenate(norms)[ea] + np.concatenate(norms)[eb])
         # each new vertex starts from its parents' pixels: their midpoint, else the first parent's
@@ -158,7 +187,11 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
         fl.append(res.flags)
         n_total += len(new_v)
         # neighbours of split triangles that share a split edge are refined too (crack-free)
-        new_faces, parent = _split(faces, set(edges), midpoint, None if crack_free else set(split_tri.tolist()))
+        only = None
+        if not crack_free:
+            only = np.zeros(len(faces), dtype=bool)
+            only[split_tri] = True
+        new_faces, parent = _split(faces, keys, mids, KEY_BASE, only)
         touched = np.zeros(len(faces), dtype=bool)
         touched[np.unique(parent[np.bincount(parent, minlength=len(faces))[parent] > 1])] = True
         active = touched[parent]

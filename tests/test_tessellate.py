@@ -7,7 +7,7 @@ import pytest
 import refsoft
 from refsoft import primitives
 from refsoft.render import FrameDriver, RenderOptions
-from refsoft.tessellate import _split
+from refsoft.tessellate import KEY_BASE, _edge_keys, _split
 
 
 def _edge_uses(faces):
@@ -22,12 +22,35 @@ def test_conforming_split_keeps_a_closed_mesh_closed(seed):
     faces = ball.faces.astype(np.int64)
     rng = np.random.default_rng(seed)
     chosen = rng.choice(len(faces), 30, replace=False)
-    edges = sorted({tuple(sorted(e)) for t in faces[chosen] for e in ((t[0], t[1]), (t[1], t[2]), (t[2], t[0]))})
-    midpoint = {e: ball.n_vertices + i for i, e in enumerate(edges)}
-    new, parent = _split(faces, set(edges), midpoint)
+    ends = faces[chosen]
+    keys = np.unique(np.concatenate([_edge_keys(ends[:, i], ends[:, (i + 1) % 3], KEY_BASE) for i in range(3)]))
+    mids = ball.n_vertices + np.arange(len(keys))
+    new, parent = _split(faces, keys, mids, KEY_BASE)
     assert np.all(_edge_uses(new) == 2)  # every edge shared by exactly two triangles: no T-junction
     assert len(new) > len(faces) + 3 * 30 and np.all(np.bincount(parent)[chosen] == 4)
-    thesis, _ = _split(faces, set(edges), midpoint, only=set(chosen.tolist()))
+    # the same as a plain loop over the triangles (the red-green rule written out)
+    split = {(int(k // KEY_BASE), int(k % KEY_BASE)): int(m) for k, m in zip(keys, mids)}
+    expect = []
+    for a, b, c in faces:
+        e = [(a, b), (b, c), (c, a)]
+        m = [split.get((min(x), max(x)), -1) for x in e]
+        n = sum(x >= 0 for x in m)
+        if n == 0:
+            expect.append((a, b, c))
+        elif n == 3:
+            expect += [(a, m[0], m[2]), (m[0], b, m[1]), (m[2], m[1], c), (m[0], m[1], m[2])]
+        elif n == 1:
+            k = [x >= 0 for x in m].index(True)
+            expect += [(e[k][0], m[k], e[(k + 1) % 3][1]), (m[k], e[k][1], e[(k + 1) % 3][1])]
+        else:
+            k = [x >= 0 for x in m].index(False)
+            v0, v1, opp = e[k][0], e[k][1], e[(k + 1) % 3][1]
+            expect += [(v0, v1, m[(k + 1) % 3]), (v0, m[(k + 1) % 3], m[(k + 2) % 3]),
+                       (m[(k + 2) % 3], m[(k + 1) % 3], opp)]
+    np.testing.assert_array_equal(new, np.array(expect))
+    only = np.zeros(len(faces), dtype=bool)
+    only[chosen] = True
+    thesis, _ = _split(faces, keys, mids, KEY_BASE, only)
     assert np.any(_edge_uses(thesis) == 1)  # the thesis's rule leaves edges used once: cracks
 
 
