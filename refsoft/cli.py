@@ -438,7 +438,7 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--frames", type=int, default=None, help="frames per scene (sweep: 3; table1: all)")
     b.add_argument("--repeats", type=int, default=3, help="timed runs per setting (median)")
     b.add_argument("--knob", action="append", default=None, help="sweep only these knobs (repeatable): "
-                   "gbuffer_scale, widen, neighbourhood, precision, inverse")
+                   "gbuffer_scale, widen, neighbourhood, precision, inverse, tessellate")
     b.add_argument("--max-vertices", type=int, default=1 << 20, help="scaling: largest vertex count")
     b.add_argument("--max-subdivisions", type=int, default=7, help="scaling: largest icosphere subdivision")
     b.add_argument("--max-width", type=int, default=2048, help="scaling: largest image width")

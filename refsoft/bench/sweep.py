@@ -1,7 +1,9 @@
 """``refsoft bench sweep``: run time against error over the knobs that trade one for the other.
 
 One factor at a time around the defaults (the paper's method): each knob takes each of its
-values while the others keep theirs. For every scene and setting: the median run time of
+values while the others keep theirs. The knobs: G-buffer resolution scale, widen factor, search
+method (crosshair, box, Szabo's hierarchy), precision, hidden-vertex mode and Szabo's adaptive
+tessellation (threshold 1e-3, 3 levels). For every scene and setting: the median run time of
 ``repeats`` coherent renders of frames 0..F-1 (a fresh driver each time, JIT warmed up before),
 and the error of the last render against the ray-traced truth of the same frames (computed once
 per scene): reflected-id disagreement (all and interior), mean colour error, and for spherical
@@ -22,9 +24,10 @@ from ._common import machine, markdown_table, median_time, plt_or_none, progress
 KNOBS = {
     "gbuffer_scale": (1.0, 0.5, 2.0),
     "widen": (1.0, 1.25, 1.5),
-    "neighbourhood": ("cross", "box"),
+    "neighbourhood": ("cross", "box", "hierarchy"),
     "precision": ("float32", "float64"),
     "inverse": ("plane", "search", "discard"),
+    "tessellate": (None, 1e-3),
 }
 COLUMNS = ["scene", "setting", "knob", "value", "time_ms", "disagreement", "interior_disagreement",
            "color_error_mean", "virtual_distance_mean", "pixel_distance_mean", "iterations_mean", "pareto"]
