@@ -263,6 +263,12 @@ def _oracle_trace(ctx, k, i, prev_pixel):
 
     o = ctx.oracle()
     opts = o.case.options
+    if opts.get("neighbourhood") == "hierarchy":
+        from .golden import hierarchy_path
+        from .search import trace_hierarchy
+
+        return hierarchy_path(trace_hierarchy(o.gbuffer(k), o.scene.camera_at(ctx.frame).eye, o.verts[i],
+                                              cap=opts.get("cap")))
     tr = trace_search(o.gbuffer(k), o.scene.camera_at(ctx.frame).eye, o.verts[i], opts.get("neighbourhood", "cross"),
                       opts.get("inverse", "plane"), prev_pixel, opts.get("cap"))
     return [[int(x) for x in s["pixel"]] for s in tr.steps]

@@ -84,7 +84,7 @@ def pixel_grid_scene():
 
 #: The canonical cases: every built-in scene with the default options (three coherent frames of
 #: each animation), both neighbourhoods, every hidden-vertex mode, the wider frustum, float64,
-#: cold searches, and the pixel-grid conformance scene.
+#: cold searches, the pixel-grid conformance scene, and Szabo's hierarchy search.
 CASES = (
     Case("sphere", "sphere", (0,)),
     Case("ellipsoid", "ellipsoid", (0, 1, 2)),
@@ -104,6 +104,7 @@ CASES = (
     Case("torus_search_box", "torus", (0, 1), {"inverse": "search", "neighbourhood": "box"}),
     Case("kitchen_widen", "kitchen", (20, 21), {"widen": 1.3}),
     Case("planar_cold", "planar", (0, 1), {"coherence": False}),
+    Case("sphere_hierarchy", "sphere", (0,), {"neighbourhood": "hierarchy"}),
 )
 
 
@@ -142,6 +143,22 @@ def trace_record(trace, vertex_index: int) -> dict:
             "stop": trace.stop}
 
 
+def hierarchy_path(trace) -> list:
+    """The walk of a hierarchy search as ``[level, row, col]`` of every texel popped, then the
+    chosen base pixel ``[0, row, col]`` (level-0 entries in G-buffer pixels; higher levels in the
+    pyramid over the mirror's cropped box, whose origin the trace gives)."""
+    return [[s["level"], *s["texel"]] for s in trace["steps"] if s["event"] in ("popped", "chosen")]
+
+
+def hierarchy_record(gbuffer, eye, vertex, index, cap=None) -> dict:
+    """One vertex's hierarchy search in the trace format (``path`` as :func:`hierarchy_path`)."""
+    from .search import trace_hierarchy
+
+    tr = trace_hierarchy(gbuffer, eye, vertex, cap=cap)
+    return {"vertex": int(index), "path": hierarchy_path(tr), "pixel": tr["pixel"], "iterations": tr["tests"],
+            "origin": tr["origin"]}
+
+
 def traced_vertices(n: int) -> np.ndarray:
     """The vertex indices traced among ``n``: evenly spaced, first and last included."""
     return np.unique(np.linspace(0, n - 1, min(TRACED_VERTICES, n)).astype(np.int64)) if n else np.zeros(0, int)
@@ -171,6 +188,9 @@ def render_case(case: Case):
                     continue
                 prev = previous.get(k)
                 start = None if (prev is None or not opts.coherence) else prev[i]
+                if opts.neighbourhood == "hierarchy":
+                    records.append(hierarchy_record(gb, eye, verts[i], i, opts.cap))
+                    continue
                 tr = trace_search(gb, eye, verts[i], opts.neighbourhood, opts.inverse, start, opts.cap)
                 if list(tr.pixel) != [int(x) for x in frame.arrays[f"reflection_pixel_{k}"][i]]:
                     raise AssertionError(f"case {case.name}: trace of vertex {i} disagrees with the kernel")  # pragma: no cover

@@ -248,3 +248,16 @@ def test_cli_exit_codes(golden, tmp_path, capsys):
     assert cli.main(["check", str(tmp_path / "nope"), str(cand)]) == 2
     assert cli.main(["check", str(golden), str(cand), "--case", "nosuch"]) == 2
     assert cli.main(["golden", "--list"]) == 0 and "pixel_grid" in capsys.readouterr().out
+
+
+def test_hierarchy_traces_are_replayed(golden, tmp_path):
+    traces = json.loads((golden / "sphere_hierarchy" / "traces_0000.json").read_text())
+    cand = _candidate(golden, tmp_path, "sphere_hierarchy", 0, lambda a: None, traces=traces)
+    s = check(golden, cand, cases=["sphere_hierarchy"])
+    assert ("traces_1", "pass") in _statuses(s)  # the oracle's own walks follow themselves
+    rec = traces["reflectors"]["1"][0]
+    rec["path"][1] = [rec["path"][1][0], rec["path"][1][1] + 1, rec["path"][1][2]]
+    (cand / "sphere_hierarchy" / "traces_0000.json").write_text(json.dumps(traces))
+    s = check(golden, cand, cases=["sphere_hierarchy"])
+    f = [f for f in s["_findings"] if f.key == "traces_1"][0]
+    assert f.status == "fail" and ": step 1," in f.details[0]
