@@ -163,6 +163,13 @@ def _points(x, name, n=None):
     return a
 
 
+def _culled_results(n, dt):
+    """The output arrays of a search of ``n`` vertices before any runs: pixel (-1, -1), score,
+    margin and iterations 0, flags CULLED (what a vertex keeps when there is nothing to search)."""
+    return (np.full((n, 2), -1, dtype=np.int32), np.zeros(n, dtype=dt), np.zeros(n, dtype=dt),
+            np.zeros(n, dtype=np.int32), np.full(n, CULLED, dtype=np.uint8))
+
+
 #: Edge, in pixels, of the cells vertices are grouped by before searching (cache locality).
 LOCALITY_CELL = 16
 
@@ -218,11 +225,7 @@ def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", invers
         if bad.any():
             raise RefsoftError(f"previous pixel of vertex {int(np.argmax(bad))} is outside the {h}x{w} G-buffer")
         starts = np.where(none[:, None], -1, starts)
-    pixel = np.full((n, 2), -1, dtype=np.int32)
-    score = np.zeros(n, dtype=dt)
-    margin = np.zeros(n, dtype=dt)
-    iterations = np.zeros(n, dtype=np.int32)
-    flags = np.full(n, CULLED, dtype=np.uint8)
+    pixel, score, margin, iterations, flags = _culled_results(n, dt)
     start = start_pixel(gbuffer.mask)
     if start is not None and n:
         G, mask, conv, (r0, c0) = packed(gbuffer, eye)
@@ -247,11 +250,7 @@ def _hierarchy_search(gbuffer, eye, vertices, inverse, cap, cone_factor, sphere_
     verts = _points(vertices, "vertices")
     dt = gbuffer.position.dtype.type
     n = len(verts)
-    pixel = np.full((n, 2), -1, dtype=np.int32)
-    score = np.zeros(n, dtype=dt)
-    margin = np.zeros(n, dtype=dt)
-    iterations = np.zeros(n, dtype=np.int32)
-    flags = np.full(n, CULLED, dtype=np.uint8)
+    pixel, score, margin, iterations, flags = _culled_results(n, dt)
     start = start_pixel(gbuffer.mask)
     if start is not None and n:
         G, mask, conv, (r0, c0) = packed(gbuffer, eye)

@@ -97,6 +97,14 @@ def _bound_cone(a, b, conv):
     return sx / n, sy / n, sz / n, ang * like(0.5, conv) + max(a[3], b[3])
 
 
+@kernel(inline=True)
+def _store(dst, x):
+    dst[0] = x[0]
+    dst[1] = x[1]
+    dst[2] = x[2]
+    dst[3] = x[3]
+
+
 @kernel(parallel=True)
 def next_level(sph, cone, conv):
     """Level l+1 (half the size) from level l."""
@@ -108,24 +116,13 @@ def next_level(sph, cone, conv):
         tb = np.empty(4, dtype=sph.dtype)
         for j in range(size):
             r, c = 2 * i, 2 * j
-            x = _bound_sphere(sph[r, c], sph[r, c + 1], conv)
-            for k in range(4):
-                ta[k] = x[k]
-            x = _bound_sphere(sph[r + 1, c], sph[r + 1, c + 1], conv)
-            for k in range(4):
-                tb[k] = x[k]
-            x = _bound_sphere(ta, tb, conv)
-            for k in range(4):
-                s_out[i, j, k] = x[k]
-            x = _bound_cone(cone[r, c], cone[r, c + 1], conv)
-            for k in range(4):
-                ta[k] = x[k]
-            x = _bound_cone(cone[r + 1, c], cone[r + 1, c + 1], conv)
-            for k in range(4):
-                tb[k] = x[k]
-            x = _bound_cone(ta, tb, conv)
-            for k in range(4):
-                c_out[i, j, k] = x[k]
+            # (top-left, top-right), (bottom-left, bottom-right), then the two results
+            _store(ta, _bound_sphere(sph[r, c], sph[r, c + 1], conv))
+            _store(tb, _bound_sphere(sph[r + 1, c], sph[r + 1, c + 1], conv))
+            _store(s_out[i, j], _bound_sphere(ta, tb, conv))
+            _store(ta, _bound_cone(cone[r, c], cone[r, c + 1], conv))
+            _store(tb, _bound_cone(cone[r + 1, c], cone[r + 1, c + 1], conv))
+            _store(c_out[i, j], _bound_cone(ta, tb, conv))
     return s_out, c_out
 
 
