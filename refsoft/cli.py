@@ -184,7 +184,7 @@ def cmd_render(args) -> int:
                          neighbourhood=args.search, inverse=args.inverse, widen=args.widen,
                          precision=args.precision, coherence=not args.no_coherence,
                          adaptive_widen=args.adaptive_widen, tessellate=args.tessellate, max_level=args.max_level,
-                         **{name: name not in off for name in SKIPS})
+                         refine=args.refine, **{name: name not in off for name in SKIPS})
     keep = done if args.frame is None else [f for f in done if f.index == args.frame]
     summ = stats["summary"]
     median_ms = np.median([f.time_ms["total"] for f in keep])
@@ -409,6 +409,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="Szabo's adaptive tessellation of reflected triangles whose edge error exceeds THRESHOLD "
                         "(e.g. 1e-3; 0 = full tessellation), crack-free")
     r.add_argument("--max-level", type=int, default=3, help="tessellation levels at most (default 3)")
+    r.add_argument("--refine", action="store_true",
+                   help="beyond the paper: sub-texel reflection points (one Gauss-Newton step from the texel found); "
+                        "with --tessellate, edge errors between refined points")
     r.add_argument("--adaptive-widen", action="store_true",
                    help="approximation: use --widen only on frames where a reflector is cut by the image border")
     r.set_defaults(func=cmd_render)
@@ -438,7 +441,7 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--frames", type=int, default=None, help="frames per scene (sweep: 3; table1: all)")
     b.add_argument("--repeats", type=int, default=3, help="timed runs per setting (median)")
     b.add_argument("--knob", action="append", default=None, help="sweep only these knobs (repeatable): "
-                   "gbuffer_scale, widen, neighbourhood, precision, inverse, tessellate")
+                   "gbuffer_scale, widen, neighbourhood, precision, inverse, tessellate, refine")
     b.add_argument("--max-vertices", type=int, default=1 << 20, help="scaling: largest vertex count")
     b.add_argument("--max-subdivisions", type=int, default=7, help="scaling: largest icosphere subdivision")
     b.add_argument("--max-width", type=int, default=2048, help="scaling: largest image width")

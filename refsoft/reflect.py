@@ -77,6 +77,8 @@ class Reflection:
     virtual64 : ndarray, shape (N, 3), float64, optional
         The same, computed relative to the G-buffer's origin and moved to world space in
         float64 (no rounding of large world coordinates): what the virtual raster draws.
+    surface : (P, N, offset), optional
+        Sub-texel reflection points when refined (:func:`refsoft.search.refine.refine`).
     """
 
     reflector: int
@@ -84,6 +86,7 @@ class Reflection:
     result: SearchResult
     virtual: np.ndarray
     virtual64: np.ndarray | None = None
+    surface: tuple | None = None
 
 
 def reflect(scene: Scene, frame: int = 0, reflectors=None, neighbourhood="cross", inverse="plane", widen=1.0,

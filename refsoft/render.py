@@ -18,6 +18,7 @@ from .raster import _setup, color_pass, interpolate, rasterize, shade, to_uint8
 from .raster import gbuffer
 from .reflect import Reflection, coherent_starts, gbuffer_camera, scene_vertices
 from .scene import Scene
+from .search.refine import refine as refine_points
 from .search import CULLED, HIDDEN, INVERSE_MODES, SEARCH_METHODS, SearchResult, search, virtual_vertices
 
 STAGES = ("gbuffer", "search", "virtual", "main", "composite")
@@ -57,6 +58,9 @@ class RenderOptions:
         split triangles whose largest edge error exceeds this threshold (0: every triangle, full
         tessellation), crack-free, up to ``max_level`` levels. Default: off.
     max_level : int
+    refine : bool
+        Sub-texel reflection points (:mod:`refsoft.search.refine`, beyond the paper; off by
+        default): one Gauss-Newton step from the texel found before mirroring the vertex.
     """
 
     neighbourhood: str = "cross"
@@ -73,6 +77,7 @@ class RenderOptions:
     adaptive_widen: bool = False
     tessellate: float | None = None
     max_level: int = 3
+    refine: bool = False
 
     def __post_init__(self):
         if self.neighbourhood not in SEARCH_METHODS:
@@ -90,7 +95,7 @@ class RenderOptions:
         if isinstance(self.max_level, bool) or not isinstance(self.max_level, (int, np.integer)) \
                 or not 0 <= self.max_level <= 8:
             raise RefsoftError(f"max_level must be an integer in [0, 8], got {self.max_level!r}")
-        for name in SKIPS + ("adaptive_widen", "coherence"):
+        for name in SKIPS + ("adaptive_widen", "coherence", "refine"):
             if not isinstance(getattr(self, name), (bool, np.bool_)):
                 raise RefsoftError(f"{name} must be True or False, got {getattr(self, name)!r}")
 
@@ -158,16 +163,27 @@ def _tessellated_parts(scene, meshes, refl, verts, opt, eye):
         start += mesh.n_vertices
     res = refl.result
     t = tessellate(refl.gbuffer, eye, verts, np.concatenate(normals), np.concatenate(faces), np.concatenate(face_obj),
-                   res.pixel, res.flags, opt.tessellate, opt.max_level, opt.neighbourhood, opt.inverse, opt.cap)
+                   res.pixel, res.flags, opt.tessellate, opt.max_level, opt.neighbourhood, opt.inverse, opt.cap,
+                   surface=refl.surface)
     n0 = len(verts)
     new = t["vertices"][n0:]
     m = len(new)
     res_new = SearchResult(t["pixel"][n0:], np.zeros(m), np.zeros(m), np.ones(m, np.int32), t["flags"][n0:],
                            res.neighbourhood, res.inverse, res.cap)
-    rel = virtual_vertices(refl.gbuffer, res_new, new, relative=True)
+    surface = None if refl.surface is None else tuple(a[n0:] for a in t["surface"][:2])
+    rel = virtual_vertices(refl.gbuffer, res_new, new, relative=True, surface=surface)
     virtual = np.concatenate([refl.virtual64, rel.astype(np.float64) + refl.gbuffer.origin])
     counts = {"vertices_searched": int(t["searched"]), "levels": int(t["levels"]), "triangles": int(len(t["faces"]))}
     return [(virtual, t["normals"], t["faces"], t["face_obj"], t["flags"])], counts
+
+
+def _virtual_relative(gb, res, verts, eye, refine):
+    """Virtual vertices relative to the G-buffer's origin, from sub-texel points if ``refine``;
+    and those points (P, N, offset) or None."""
+    if not (refine and len(verts) and gb.mask.any()):
+        return virtual_vertices(gb, res, verts, relative=True), None
+    surface = refine_points(gb, eye, verts, res)
+    return virtual_vertices(gb, res, verts, relative=True, surface=surface[:2]), surface
 
 
 def _virtual_pass(scene, parts, camera, stencil, box, inverse, cull=True):
@@ -347,9 +363,9 @@ class FrameDriver:
             skipped["searches_reused"][str(k)] = int(reuse.sum())
         else:
             res = search(gb, eye, verts, opt.neighbourhood, opt.inverse, prev, opt.cap)
-        rel = virtual_vertices(gb, res, verts, relative=True)
+        rel, surface = _virtual_relative(gb, res, verts, eye, opt.refine)
         world64 = rel.astype(np.float64) + gb.origin
-        refl = Reflection(k, gb, res, world64.astype(rel.dtype), world64)
+        refl = Reflection(k, gb, res, world64.astype(rel.dtype), world64, surface)
         if opt.reuse:
             self._last[k] = _Last(key, gb, res, {j: transforms[j] for j in transforms})
         return refl, 1000 * (t1 - t0), 1000 * (time.perf_counter() - t1)

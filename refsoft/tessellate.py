@@ -26,17 +26,47 @@ from .search import CULLED, HIDDEN, search
 KEY_BASE = np.int64(1) << 31
 
 
-def edge_errors(gbuffer, eye, a_world, b_world, pa, pb) -> np.ndarray:
+def edge_errors(gbuffer, eye, a_world, b_world, pa, pb, oa=None, ob=None) -> np.ndarray:
     """The thesis's reflection error of edges A-B (world endpoints (E, 3) float64, reflection
-    pixels (E, 2)); 1 where a pixel is missing (-1) or the midpoint pixel is uncovered."""
+    pixels (E, 2)); 1 where a pixel is missing (-1) or the midpoint pixel is uncovered.
+
+    With sub-texel offsets ``oa``, ``ob`` (E, 2) of the endpoints' reflection points
+    (:func:`refsoft.search.refine.refine`), the error is taken at the exact midpoint of the
+    refined points, P and N there by the refinement's first-order model at the nearest texel,
+    instead of at the texel halfway (rounded down): the thesis's error then no longer includes
+    up to a texel of rounding, and small thresholds stop splitting edges that are already
+    straight in the image."""
     e = len(a_world)
     out = np.ones(e)
     ok = np.all(pa >= 0, axis=1) & np.all(pb >= 0, axis=1)
-    mid = (pa + pb) // 2
-    r, c = np.where(ok, mid[:, 0], 0), np.where(ok, mid[:, 1], 0)
-    ok &= gbuffer.mask[r, c]
-    p = gbuffer.position[r, c].astype(np.float64) + gbuffer.origin
-    n = gbuffer.normal[r, c].astype(np.float64)
+    h, w = gbuffer.mask.shape
+    if oa is None:
+        mid = (pa + pb) // 2
+        r, c = np.where(ok, mid[:, 0], 0), np.where(ok, mid[:, 1], 0)
+        ok &= gbuffer.mask[r, c]
+        p = gbuffer.position[r, c].astype(np.float64) + gbuffer.origin
+        n = gbuffer.normal[r, c].astype(np.float64)
+    else:
+        from .search.refine import surface_at
+
+        mid = 0.5 * ((pa + np.asarray(oa, dtype=np.float64)) + (pb + np.asarray(ob, dtype=np.float64)))
+        # the model is taken at the texel nearest the midpoint, else (beside the mirror's
+        # outline) at the thesis's texel halfway
+        near = np.floor(mid + 0.5).astype(np.int64)
+        r, c = np.clip(near[:, 0], 0, h - 1), np.clip(near[:, 1], 0, w - 1)
+        use = ok & (near[:, 0] == r) & (near[:, 1] == c) & gbuffer.mask[r, c]
+        half = (pa + pb) // 2
+        hr, hc = np.where(ok, half[:, 0], 0), np.where(ok, half[:, 1], 0)
+        alt = ok & ~use & gbuffer.mask[hr, hc]
+        near = np.where(alt[:, None], np.c_[hr, hc], near)
+        r, c = np.where(alt, hr, r), np.where(alt, hc, c)
+        ok = use | alt
+        p = np.zeros((e, 3))
+        n = np.zeros((e, 3))
+        sel = np.flatnonzero(ok)
+        ps, ns = surface_at(gbuffer, np.c_[r[sel], c[sel]], mid[sel] - near[sel])
+        p[sel] = ps.astype(np.float64) + gbuffer.origin
+        n[sel] = ns
     m = 0.5 * (np.asarray(a_world) + np.asarray(b_world))
     v = normalize_rows(np.asarray(eye, dtype=np.float64) - p)
     w = normalize_rows(m - p)
@@ -112,7 +142,7 @@ def _split(faces, edge_keys, edge_mid, n_vertices, only=None):
 
 
 def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, threshold, max_level,
-               neighbourhood="cross", inverse="plane", cap=None, crack_free=True):
+               neighbourhood="cross", inverse="plane", cap=None, crack_free=True, surface=None):
     """Refine the reflected triangles of one reflector until every triangle's largest edge error
     is at most ``threshold`` (0: every triangle, i.e. full tessellation) or ``max_level`` levels.
 
@@ -131,13 +161,17 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
     crack_free : bool
         Refine the neighbours of split triangles along the split edges (default); ``False``
         reproduces the thesis's rule, which leaves cracks.
+    surface : (P, N, offset), optional
+        Sub-texel reflection points of the vertices (:func:`refsoft.search.refine.refine`):
+        edge errors are then taken between refined points (:func:`edge_errors`) and the new
+        vertices are refined too.
 
     Returns
     -------
     dict
         ``vertices``, ``normals`` (N', 3), ``pixel`` (N', 2), ``flags`` (N',), ``faces`` (T', 3),
-        ``face_obj`` (T',), ``result`` (the SearchResult of the new vertices or None),
-        ``searched`` (new vertices searched), ``levels`` (levels done).
+        ``face_obj`` (T',), ``searched`` (new vertices searched), ``levels`` (levels done),
+        and with ``surface``, ``surface`` (P, N, offset) of all N' vertices.
     """
     if not (isinstance(threshold, (int, float)) and np.isfinite(threshold) and threshold >= 0):
         raise RefsoftError(f"tessellation threshold must be a number >= 0, got {threshold!r}")
@@ -147,6 +181,7 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
     norms = [np.asarray(normals, dtype=np.float64)]
     pix = [np.asarray(pixel, dtype=np.int32)]
     fl = [np.asarray(flags, dtype=np.uint8)]
+    surf = None if surface is None else [[np.asarray(a)] for a in surface]
     faces = np.asarray(faces, dtype=np.int64)
     face_obj = np.asarray(face_obj, dtype=np.int32)
     active = np.ones(len(faces), dtype=bool)  # triangles made by the last level (candidates)
@@ -160,8 +195,17 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
             break
         f = faces[cand]
         e0, e1 = f.reshape(-1), f[:, [1, 2, 0]].reshape(-1)
-        err = edge_errors(gbuffer, eye, allv[e0], allv[e1], allp[e0], allp[e1]).reshape(-1, 3)
+        if surf is None:
+            err = edge_errors(gbuffer, eye, allv[e0], allv[e1], allp[e0], allp[e1])
+        else:
+            allo = np.concatenate(surf[2])
+            err = edge_errors(gbuffer, eye, allv[e0], allv[e1], allp[e0], allp[e1], allo[e0], allo[e1])
+        err = err.reshape(-1, 3)
         bad = ((allf[f] & CULLED) != 0).any(axis=1)  # no reflection to refine
+        if threshold > 0:
+            # adaptive: a triangle all of whose vertices are hidden has no visible reflection
+            # whose error could be measured (full tessellation still splits it)
+            bad |= ((allf[f] & HIDDEN) != 0).all(axis=1)
         split_tri = cand[(err.max(axis=1) > threshold) & ~bad]
         if len(split_tri) == 0:
             break
@@ -185,6 +229,11 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
         norms.append(new_n)
         pix.append(res.pixel)
         fl.append(res.flags)
+        if surf is not None:
+            from .search.refine import refine
+
+            for lst, a in zip(surf, refine(gbuffer, eye, new_v, res)):
+                lst.append(a)
         n_total += len(new_v)
         # neighbours of split triangles that share a split edge are refined too (crack-free)
         only = None
@@ -198,5 +247,8 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
         face_obj = face_obj[parent]
         faces = new_faces
         levels += 1
-    return {"vertices": np.concatenate(verts), "normals": np.concatenate(norms), "pixel": np.concatenate(pix),
-            "flags": np.concatenate(fl), "faces": faces, "face_obj": face_obj, "searched": searched, "levels": levels}
+    out = {"vertices": np.concatenate(verts), "normals": np.concatenate(norms), "pixel": np.concatenate(pix),
+           "flags": np.concatenate(fl), "faces": faces, "face_obj": face_obj, "searched": searched, "levels": levels}
+    if surf is not None:
+        out["surface"] = tuple(np.concatenate(lst) for lst in surf)
+    return out

@@ -213,3 +213,66 @@ def naive_search(P, N, mask, eye, v, start, neighbourhood, cap, dt, inverse_sear
             flags |= 4 if capped else 0
     flags |= 2 if border else 0
     return (r, c), best, margin, it, flags
+
+
+def naive_refine(P, N, mask, vertices, eye, pixel, flags, hidden_bit, culled_bit, max_offset=1.0):
+    """One Gauss-Newton step on N(x) - h(x) = 0 per vertex, float64, written out: derivatives of
+    the residual, P and N by central differences (one-sided beside an uncovered texel, none
+    when both neighbours are uncovered), the 2x2 normal equations solved by Cramer's rule
+    (one axis alone when the other has no derivative, nothing when nearly singular), the step
+    clamped to [-max_offset, max_offset], P and N (renormalised) by the first-order model.
+    Returns (P, N, offset)."""
+    P = np.asarray(P, np.float64)
+    N = np.asarray(N, np.float64)
+    h, w = mask.shape
+    n = len(vertices)
+    out_p, out_n, out_o = np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 2))
+
+    def covered(r, c):
+        return 0 <= r < h and 0 <= c < w and bool(mask[r, c])
+
+    def residual(r, c, v):
+        u = (eye - P[r, c]) / np.linalg.norm(eye - P[r, c])
+        b = (v - P[r, c]) / np.linalg.norm(v - P[r, c])
+        hh = (u + b) / np.linalg.norm(u + b)
+        return N[r, c] - hh
+
+    def derivative(field, r, c, dr, dc):
+        plus, minus = covered(r + dr, c + dc), covered(r - dr, c - dc)
+        if plus and minus:
+            return (field(r + dr, c + dc) - field(r - dr, c - dc)) / 2.0
+        if plus:
+            return field(r + dr, c + dc) - field(r, c)
+        if minus:
+            return field(r, c) - field(r - dr, c - dc)
+        return np.zeros(3)
+
+    for i in range(n):
+        r, c = int(pixel[i, 0]), int(pixel[i, 1])
+        if flags[i] & culled_bit:
+            continue
+        if flags[i] & hidden_bit:
+            out_p[i], out_n[i] = P[r, c], N[r, c]
+            continue
+        v = np.asarray(vertices[i], np.float64)
+        d0 = residual(r, c, v)
+        jr = derivative(lambda a, b: residual(a, b, v), r, c, 1, 0)
+        jc = derivative(lambda a, b: residual(a, b, v), r, c, 0, 1)
+        a00, a01, a11 = jr @ jr, jr @ jc, jc @ jc
+        b0, b1 = -(jr @ d0), -(jc @ d0)
+        det = a00 * a11 - a01 * a01
+        t = np.zeros(2)
+        if det > 1e-6 * a00 * a11:
+            t = np.array([a11 * b0 - a01 * b1, a00 * b1 - a01 * b0]) / det
+        elif a11 == 0 and a00 > 0:
+            t[0] = b0 / a00
+        elif a00 == 0 and a11 > 0:
+            t[1] = b1 / a11
+        t = np.clip(t, -max_offset, max_offset)
+        out_o[i] = t
+        out_p[i] = P[r, c] + t[0] * derivative(lambda a, b: P[a, b], r, c, 1, 0) \
+            + t[1] * derivative(lambda a, b: P[a, b], r, c, 0, 1)
+        nn = N[r, c] + t[0] * derivative(lambda a, b: N[a, b], r, c, 1, 0) \
+            + t[1] * derivative(lambda a, b: N[a, b], r, c, 0, 1)
+        out_n[i] = nn / np.linalg.norm(nn)
+    return out_p, out_n, out_o

@@ -405,13 +405,15 @@ def test_multiple_reflectors_are_independent_and_use_closed_proxies():
 SCRIPT = r"""
 import hashlib, numpy as np, refsoft
 from refsoft.reflect import reflect
+from refsoft.search.refine import refine
 s = refsoft.load_scene("sphere", width=200, height=150)
 h = hashlib.sha256()
 for nb in ("cross", "box"):
     for inv in ("plane", "search"):
         v, o, r = reflect(s, neighbourhood=nb, inverse=inv)
         res = r[1].result
-        for a in (res.pixel, res.score, res.margin, res.iterations, res.flags, r[1].virtual):
+        refined = refine(r[1].gbuffer, s.camera.eye, v, res)
+        for a in (res.pixel, res.score, res.margin, res.iterations, res.flags, r[1].virtual) + refined:
             h.update(np.ascontiguousarray(a).tobytes())
 print(h.hexdigest())
 """

@@ -3,7 +3,8 @@
 One factor at a time around the defaults (the paper's method): each knob takes each of its
 values while the others keep theirs. The knobs: G-buffer resolution scale, widen factor, search
 method (crosshair, box, Szabo's hierarchy), precision, hidden-vertex mode and Szabo's adaptive
-tessellation (threshold 1e-3, 3 levels). For every scene and setting: the median run time of
+tessellation (threshold 1e-3, 3 levels), and sub-texel
+reflection points (``refine``). For every scene and setting: the median run time of
 ``repeats`` coherent renders of frames 0..F-1 (a fresh driver each time, JIT warmed up before),
 and the error of the last render against the ray-traced truth of the same frames (computed once
 per scene): reflected-id disagreement (all and interior), mean colour error, and for spherical
@@ -28,6 +29,7 @@ KNOBS = {
     "precision": ("float32", "float64"),
     "inverse": ("plane", "search", "discard"),
     "tessellate": (None, 1e-3),
+    "refine": (False, True),
 }
 COLUMNS = ["scene", "setting", "knob", "value", "time_ms", "disagreement", "interior_disagreement",
            "color_error_mean", "virtual_distance_mean", "pixel_distance_mean", "iterations_mean", "pareto"]

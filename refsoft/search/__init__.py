@@ -297,7 +297,8 @@ def trace_hierarchy(gbuffer: GBuffer, eye, vertex, cone_factor: float = 1.5, sph
             "levels": len(sizes), "base_size": int(sizes[0]), "origin": [r0, c0]}
 
 
-def virtual_vertices(gbuffer: GBuffer, result: SearchResult, vertices, relative: bool = False) -> np.ndarray:
+def virtual_vertices(gbuffer: GBuffer, result: SearchResult, vertices, relative: bool = False,
+                     surface=None) -> np.ndarray:
     """Virtual vertices V' (DESIGN 4.6), world space.
 
     With ``d = V - P_R`` and ``N_R`` at the reflection pixel: a visible vertex (``d.N >= 0``)
@@ -307,6 +308,8 @@ def virtual_vertices(gbuffer: GBuffer, result: SearchResult, vertices, relative:
     drawn). CULLED vertices give ``V``. Arithmetic in the G-buffer's precision, relative to its
     origin; ``relative=True`` returns that result as it is (``origin + result`` in float64 is
     then the virtual vertex without the rounding of large world coordinates to float32).
+    ``surface = (P, N)``, two (N, 3) arrays relative to the origin (from
+    :func:`refsoft.search.refine.refine`), replaces the reflection pixel's P and N per vertex.
 
     Returns
     -------
@@ -320,8 +323,11 @@ def virtual_vertices(gbuffer: GBuffer, result: SearchResult, vertices, relative:
     ok = (result.flags & CULLED) == 0
     r = np.where(ok, result.pixel[:, 0], 0)
     c = np.where(ok, result.pixel[:, 1], 0)
-    p = gbuffer.position[r, c]
-    nrm = gbuffer.normal[r, c]
+    if surface is None:
+        p = gbuffer.position[r, c]
+        nrm = gbuffer.normal[r, c]
+    else:
+        p, nrm = (np.asarray(a, dtype=dt).reshape(len(v), 3) for a in surface)
     d = v - p
     dn = (d[:, 0] * nrm[:, 0] + d[:, 1] * nrm[:, 1]) + d[:, 2] * nrm[:, 2]
     two = dt(2.0)
