@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from . import _tessellate as _kernels
 from .errors import RefsoftError
 from .mesh import normalize_rows
 from .search import CULLED, HIDDEN, search
@@ -29,50 +30,34 @@ KEY_BASE = np.int64(1) << 31
 def edge_errors(gbuffer, eye, a_world, b_world, pa, pb, oa=None, ob=None) -> np.ndarray:
     """The thesis's reflection error of edges A-B (world endpoints (E, 3) float64, reflection
     pixels (E, 2)); 1 where a pixel is missing (-1) or the midpoint pixel is uncovered.
+    Shape (E,), float64.
 
     With sub-texel offsets ``oa``, ``ob`` (E, 2) of the endpoints' reflection points
     (:func:`refsoft.search.refine.refine`), the error is taken at the exact midpoint of the
-    refined points, P and N there by the refinement's first-order model at the nearest texel,
-    instead of at the texel halfway (rounded down): the thesis's error then no longer includes
-    up to a texel of rounding, and small thresholds stop splitting edges that are already
-    straight in the image."""
-    e = len(a_world)
-    out = np.ones(e)
-    ok = np.all(pa >= 0, axis=1) & np.all(pb >= 0, axis=1)
-    h, w = gbuffer.mask.shape
-    if oa is None:
-        mid = (pa + pb) // 2
-        r, c = np.where(ok, mid[:, 0], 0), np.where(ok, mid[:, 1], 0)
-        ok &= gbuffer.mask[r, c]
-        p = gbuffer.position[r, c].astype(np.float64) + gbuffer.origin
-        n = gbuffer.normal[r, c].astype(np.float64)
-    else:
-        from .search.refine import surface_at
+    refined points, P and N there by the refinement's first-order model at the texel nearest to
+    it (beside the mirror's outline, where that texel is uncovered, at the thesis's texel),
+    instead of at the texel halfway (rounded down): the error then no longer includes up to a
+    texel of rounding, and small thresholds stop splitting edges already straight in the image.
+    """
+    a = np.asarray(a_world, dtype=np.float64).reshape(-1, 3)
+    e = len(a)
+    verts = np.concatenate([a, np.asarray(b_world, dtype=np.float64).reshape(-1, 3)])
+    pix = np.concatenate([np.asarray(pa), np.asarray(pb)]).reshape(-1, 2)
+    off = None if oa is None else np.concatenate([np.asarray(oa), np.asarray(ob)]).reshape(-1, 2)
+    idx = np.arange(e, dtype=np.int64)
+    return _edge_errors(gbuffer, eye, verts, pix, off, idx, idx + e)
 
-        mid = 0.5 * ((pa + np.asarray(oa, dtype=np.float64)) + (pb + np.asarray(ob, dtype=np.float64)))
-        # the model is taken at the texel nearest the midpoint, else (beside the mirror's
-        # outline) at the thesis's texel halfway
-        near = np.floor(mid + 0.5).astype(np.int64)
-        r, c = np.clip(near[:, 0], 0, h - 1), np.clip(near[:, 1], 0, w - 1)
-        use = ok & (near[:, 0] == r) & (near[:, 1] == c) & gbuffer.mask[r, c]
-        half = (pa + pb) // 2
-        hr, hc = np.where(ok, half[:, 0], 0), np.where(ok, half[:, 1], 0)
-        alt = ok & ~use & gbuffer.mask[hr, hc]
-        near = np.where(alt[:, None], np.c_[hr, hc], near)
-        r, c = np.where(alt, hr, r), np.where(alt, hc, c)
-        ok = use | alt
-        p = np.zeros((e, 3))
-        n = np.zeros((e, 3))
-        sel = np.flatnonzero(ok)
-        ps, ns = surface_at(gbuffer, np.c_[r[sel], c[sel]], mid[sel] - near[sel])
-        p[sel] = ps.astype(np.float64) + gbuffer.origin
-        n[sel] = ns
-    m = 0.5 * (np.asarray(a_world) + np.asarray(b_world))
-    v = normalize_rows(np.asarray(eye, dtype=np.float64) - p)
-    w = normalize_rows(m - p)
-    b = normalize_rows(v + w)
-    err = 1.0 - (np.einsum("ij,ij->i", n, b) + 1.0) / 2.0
-    out[ok] = err[ok]
+
+def _edge_errors(gbuffer, eye, verts, pixel, offset, e0, e1):
+    """:func:`edge_errors` of edges (verts[e0], verts[e1]) without gathering them first."""
+    dt = gbuffer.position.dtype
+    sub = offset is not None
+    off = np.ascontiguousarray(offset, dtype=dt) if sub else np.zeros((1, 2), dtype=dt)
+    out = np.empty(len(e0))
+    _kernels.edge_errors(gbuffer.position, gbuffer.normal, gbuffer.mask, np.asarray(gbuffer.origin, np.float64),
+                         np.asarray(eye, dtype=np.float64), np.ascontiguousarray(verts, dtype=np.float64),
+                         np.ascontiguousarray(pixel, dtype=np.int64), off, np.ascontiguousarray(e0, dtype=np.int64),
+                         np.ascontiguousarray(e1, dtype=np.int64), sub, dt.type(0), out)
     return out
 
 
@@ -195,11 +180,7 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
             break
         f = faces[cand]
         e0, e1 = f.reshape(-1), f[:, [1, 2, 0]].reshape(-1)
-        if surf is None:
-            err = edge_errors(gbuffer, eye, allv[e0], allv[e1], allp[e0], allp[e1])
-        else:
-            allo = np.concatenate(surf[2])
-            err = edge_errors(gbuffer, eye, allv[e0], allv[e1], allp[e0], allp[e1], allo[e0], allo[e1])
+        err = _edge_errors(gbuffer, eye, allv, allp, None if surf is None else np.concatenate(surf[2]), e0, e1)
         err = err.reshape(-1, 3)
         bad = ((allf[f] & CULLED) != 0).any(axis=1)  # no reflection to refine
         if threshold > 0:

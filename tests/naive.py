@@ -276,3 +276,41 @@ def naive_refine(P, N, mask, vertices, eye, pixel, flags, hidden_bit, culled_bit
             + t[1] * derivative(lambda a, b: N[a, b], r, c, 0, 1)
         out_n[i] = nn / np.linalg.norm(nn)
     return out_p, out_n, out_o
+
+
+def naive_edge_errors(gbuffer, eye, a_world, b_world, pa, pb, oa=None, ob=None):
+    """The thesis's edge error, NumPy, float64 (refsoft.tessellate.edge_errors): at the texel
+    halfway between the reflection pixels (rounded down), or with offsets at the midpoint of the
+    refined points by the first-order model (refsoft.search.refine.surface_at) at the nearest
+    covered texel, else the halfway texel; 1 where a pixel is missing or nothing is covered."""
+    from refsoft.search.refine import surface_at
+
+    e = len(a_world)
+    out = np.ones(e)
+    pa, pb = np.asarray(pa, np.int64), np.asarray(pb, np.int64)
+    h, w = gbuffer.mask.shape
+    for i in range(e):
+        if (pa[i] < 0).any() or (pb[i] < 0).any():
+            continue
+        half = (pa[i] + pb[i]) // 2
+        if oa is None:
+            if not gbuffer.mask[half[0], half[1]]:
+                continue
+            p = gbuffer.position[half[0], half[1]].astype(np.float64) + gbuffer.origin
+            n = gbuffer.normal[half[0], half[1]].astype(np.float64)
+        else:
+            mid = 0.5 * ((pa[i] + np.asarray(oa[i], np.float64)) + (pb[i] + np.asarray(ob[i], np.float64)))
+            base = np.floor(mid + 0.5).astype(np.int64)
+            if not (0 <= base[0] < h and 0 <= base[1] < w and gbuffer.mask[base[0], base[1]]):
+                base = half
+                if not gbuffer.mask[base[0], base[1]]:
+                    continue
+            ps, ns = surface_at(gbuffer, base[None], (mid - base)[None])
+            p = ps[0].astype(np.float64) + gbuffer.origin
+            n = ns[0].astype(np.float64)
+        m = 0.5 * (np.asarray(a_world[i], np.float64) + np.asarray(b_world[i], np.float64))
+        v = (eye - p) / np.linalg.norm(eye - p)
+        u = (m - p) / np.linalg.norm(m - p)
+        b = (v + u) / np.linalg.norm(v + u)
+        out[i] = 1.0 - (n @ b + 1.0) / 2.0
+    return out

@@ -175,3 +175,22 @@ def test_cli_refine_switch(tmp_path):
     assert RenderOptions(refine=True).refine
     with pytest.raises(refsoft.RefsoftError, match="refine"):
         RenderOptions(refine="yes")
+
+
+@pytest.mark.parametrize("precision", ["float32", "float64"])
+def test_edge_error_kernel_matches_the_numpy_reference(precision):
+    from naive import naive_edge_errors
+
+    cam, gb, verts, res = _ball(precision, n=600)
+    _, _, off = refine(gb, cam.eye, verts, res)
+    rng = np.random.default_rng(7)
+    i, j = rng.integers(0, len(verts), (2, 800))
+    j[:100] = i[:100]  # zero-length edges
+    pi = res.pixel[i].copy()
+    pi[100:110] = -1  # an end without a reflection pixel
+    args = (gb, cam.eye, verts[i], verts[j], pi, res.pixel[j])
+    for extra in ((), (off[i], off[j])):
+        got = edge_errors(*args, *extra)
+        want = naive_edge_errors(*args, *extra)
+        assert got.dtype == np.float64 and np.any(got == 1.0) and np.any(got < 1e-6)
+        np.testing.assert_allclose(got, want, rtol=1e-9, atol=1e-13)

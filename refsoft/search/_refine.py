@@ -38,18 +38,30 @@ def _stencil(mask, r, c, dr, dc, conv):
 
 
 @kernel(inline=True)
-def _surface(P, N, mask, r, c, t0, t1, conv, out_p, out_n, i):
-    """P and unit N at (r + t0, c + t1) by the first-order model at texel (r, c), into row i."""
+def surface_values(P, N, mask, r, c, t0, t1, conv):
+    """P and unit N at (r + t0, c + t1) by the first-order model at texel (r, c):
+    ``(px, py, pz, nx, ny, nz)``."""
     ar, ac, br, bc, sa = _stencil(mask, r, c, 1, 0, conv)
     cr, cc, dr, dc, sb = _stencil(mask, r, c, 0, 1, conv)
     ka = t0 * sa
     kb = t1 * sb
-    for k in range(3):
-        out_p[i, k] = (P[r, c, k] + ka * (P[ar, ac, k] - P[br, bc, k])) + kb * (P[cr, cc, k] - P[dr, dc, k])
+    px = (P[r, c, 0] + ka * (P[ar, ac, 0] - P[br, bc, 0])) + kb * (P[cr, cc, 0] - P[dr, dc, 0])
+    py = (P[r, c, 1] + ka * (P[ar, ac, 1] - P[br, bc, 1])) + kb * (P[cr, cc, 1] - P[dr, dc, 1])
+    pz = (P[r, c, 2] + ka * (P[ar, ac, 2] - P[br, bc, 2])) + kb * (P[cr, cc, 2] - P[dr, dc, 2])
     nx, ny, nz = _normalize((N[r, c, 0] + ka * (N[ar, ac, 0] - N[br, bc, 0])) + kb * (N[cr, cc, 0] - N[dr, dc, 0]),
                             (N[r, c, 1] + ka * (N[ar, ac, 1] - N[br, bc, 1])) + kb * (N[cr, cc, 1] - N[dr, dc, 1]),
                             (N[r, c, 2] + ka * (N[ar, ac, 2] - N[br, bc, 2])) + kb * (N[cr, cc, 2] - N[dr, dc, 2]),
                             conv)
+    return px, py, pz, nx, ny, nz
+
+
+@kernel(inline=True)
+def _surface(P, N, mask, r, c, t0, t1, conv, out_p, out_n, i):
+    """:func:`surface_values` written to row ``i`` of ``out_p`` and ``out_n``."""
+    px, py, pz, nx, ny, nz = surface_values(P, N, mask, r, c, t0, t1, conv)
+    out_p[i, 0] = px
+    out_p[i, 1] = py
+    out_p[i, 2] = pz
     out_n[i, 0] = nx
     out_n[i, 1] = ny
     out_n[i, 2] = nz

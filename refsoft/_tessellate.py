@@ -1,0 +1,61 @@
+"""Edge-error kernel of :mod:`refsoft.tessellate` (float64 arithmetic, as the thesis's error is
+a small difference of cosines)."""
+
+import numpy as np
+from numba import prange
+
+from ._numba import kernel, like
+from .search._refine import surface_values
+
+
+@kernel(inline=True)
+def _unit(x, y, z):
+    n = np.sqrt((x * x + y * y) + z * z)
+    if n > 0.0:
+        return x / n, y / n, z / n
+    return 0.0, 0.0, 0.0
+
+
+@kernel(parallel=True)
+def edge_errors(P, N, mask, origin, eye, verts, pixel, offset, e0, e1, subtexel, conv, out):
+    """``out[i]``: the thesis's error of edge (e0[i], e1[i]) (see
+    :func:`refsoft.tessellate.edge_errors`), 1 where an end has no pixel or the point the error
+    is taken at is not covered."""
+    h, w = mask.shape
+    for i in prange(e0.shape[0]):
+        a = e0[i]
+        b = e1[i]
+        out[i] = 1.0
+        if pixel[a, 0] < 0 or pixel[a, 1] < 0 or pixel[b, 0] < 0 or pixel[b, 1] < 0:
+            continue
+        hr = (pixel[a, 0] + pixel[b, 0]) // 2
+        hc = (pixel[a, 1] + pixel[b, 1]) // 2
+        if subtexel:
+            mr = 0.5 * ((pixel[a, 0] + np.float64(offset[a, 0])) + (pixel[b, 0] + np.float64(offset[b, 0])))
+            mc = 0.5 * ((pixel[a, 1] + np.float64(offset[a, 1])) + (pixel[b, 1] + np.float64(offset[b, 1])))
+            r = int(np.floor(mr + 0.5))
+            c = int(np.floor(mc + 0.5))
+            if not (0 <= r < h and 0 <= c < w and mask[r, c]):
+                r = hr  # beside the mirror's outline: the thesis's texel halfway
+                c = hc
+                if not mask[r, c]:
+                    continue
+            px, py, pz, nx, ny, nz = surface_values(P, N, mask, r, c, like(mr - r, conv), like(mc - c, conv), conv)
+            px = np.float64(px) + origin[0]
+            py = np.float64(py) + origin[1]
+            pz = np.float64(pz) + origin[2]
+            nx, ny, nz = np.float64(nx), np.float64(ny), np.float64(nz)
+        else:
+            if not mask[hr, hc]:
+                continue
+            px = np.float64(P[hr, hc, 0]) + origin[0]
+            py = np.float64(P[hr, hc, 1]) + origin[1]
+            pz = np.float64(P[hr, hc, 2]) + origin[2]
+            nx, ny, nz = np.float64(N[hr, hc, 0]), np.float64(N[hr, hc, 1]), np.float64(N[hr, hc, 2])
+        mx = 0.5 * (verts[a, 0] + verts[b, 0])
+        my = 0.5 * (verts[a, 1] + verts[b, 1])
+        mz = 0.5 * (verts[a, 2] + verts[b, 2])
+        vx, vy, vz = _unit(eye[0] - px, eye[1] - py, eye[2] - pz)
+        wx, wy, wz = _unit(mx - px, my - py, mz - pz)
+        bx, by, bz = _unit(vx + wx, vy + wy, vz + wz)
+        out[i] = 1.0 - ((nx * bx + ny * by + nz * bz) + 1.0) / 2.0
