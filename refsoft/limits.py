@@ -14,8 +14,11 @@ meant to stop a typo like ``--width 100000`` before the machine swaps, not to bu
 
 from __future__ import annotations
 
+import mmap
 import os
 import re
+
+import numpy as np
 
 from . import constants
 from .errors import LimitError, RefsoftError
@@ -133,3 +136,24 @@ def check_frame_memory(scene, options, frames_kept: int = 1, limit=None) -> dict
             f"above the memory limit of {human(lim)}: lower --width/--height or --widen, or raise --memory-limit "
             f"(or REFSOFT_MEMORY_LIMIT)")
     return est
+
+
+#: Arrays at least this large come from :func:`zeros` as fresh anonymous memory.
+LAZY_ZEROS_BYTES = 1 << 20
+
+
+def zeros(shape, dtype) -> np.ndarray:
+    """A zero-filled array whose pages the operating system supplies, already zero, on first
+    touch: for the full-size maps of which a frame writes only a reflector's box.
+
+    ``np.zeros`` gets large blocks from the C allocator, which, once freed blocks are reused
+    (glibc raises its mmap threshold after the first free), clears every byte: about 2 ms per
+    1024x768x3 float32 map, several per reflector and frame. An anonymous ``mmap`` is zero and
+    costs only the pages written. Small arrays use ``np.zeros``.
+    """
+    dt = np.dtype(dtype)
+    count = int(np.prod(shape, dtype=np.int64))
+    if count * dt.itemsize < LAZY_ZEROS_BYTES:
+        return np.zeros(shape, dtype=dt)
+    buf = mmap.mmap(-1, count * dt.itemsize)
+    return np.frombuffer(buf, dtype=dt, count=count).reshape(shape)

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from . import constants, skips
+from . import constants, limits, skips
 from .errors import RefsoftError
 from .raster import _setup, color_pass, interpolate, rasterize, shade, to_uint8
 from .raster import gbuffer
@@ -263,7 +263,7 @@ def composite(colour, reflected, view_color, vcol, vid, covered, box, reflectivi
 def _gbuffer_outputs(gb, k):
     """The DESIGN section 7 G-buffer arrays of reflector ``k``: world-space float32 positions,
     zero where not covered (as the rasterizer's maps), and float32 normals."""
-    position = np.zeros(gb.position.shape, dtype=np.float32)
+    position = limits.zeros(gb.position.shape, np.float32)
     if gb.mask.any():
         r0, r1, c0, c1 = _stencil_box(gb.mask)  # only the covered box is converted
         m = gb.mask[r0:r1, c0:c1, None]
@@ -288,8 +288,8 @@ def _empty_gbuffer(camera, precision):
 
     dt = PRECISIONS[precision]
     h, w = camera.height, camera.width
-    return GBuffer(np.zeros((h, w, 3), dt), np.zeros((h, w, 3), dt), np.zeros((h, w), bool),
-                   np.full((h, w), constants.DEPTH_CLEAR, np.float32), np.full((h, w), -1, np.int32),
+    return GBuffer(limits.zeros((h, w, 3), dt), limits.zeros((h, w, 3), dt), limits.zeros((h, w), bool),
+                   (0, 0, np.zeros((0, 0), np.float32)), (0, 0, np.zeros((0, 0), np.int32)),
                    camera.view_proj(), np.asarray(camera.eye, dtype=np.float64))
 
 

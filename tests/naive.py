@@ -314,3 +314,16 @@ def naive_edge_errors(gbuffer, eye, a_world, b_world, pa, pb, oa=None, ob=None):
         b = (v + u) / np.linalg.norm(v + u)
         out[i] = 1.0 - (n @ b + 1.0) / 2.0
     return out
+
+
+def naive_start_pixel(mask):
+    """DESIGN 4.3's start, over every pixel: the bounding box's centre, else the covered pixel
+    nearest to it (Euclidean, ties to the smaller row, then col); None when nothing is covered."""
+    pts = [(r, c) for r in range(mask.shape[0]) for c in range(mask.shape[1]) if mask[r, c]]
+    if not pts:
+        return None
+    r = (min(p[0] for p in pts) + max(p[0] for p in pts)) // 2
+    c = (min(p[1] for p in pts) + max(p[1] for p in pts)) // 2
+    if mask[r, c]:
+        return r, c
+    return min(pts, key=lambda p: ((p[0] - r) ** 2 + (p[1] - c) ** 2, p[0], p[1]))

@@ -3,6 +3,7 @@ against what a frame really allocates."""
 
 import tracemalloc
 
+import numpy as np
 import pytest
 
 import refsoft
@@ -93,3 +94,32 @@ def test_cli_huge_image_is_refused_by_the_guard(tmp_path, capsys):
     assert cli.main(["gbuffer", "sphere", "--width", "64", "--height", "48", "--memory-limit", "64k",
                      "--out", str(out)]) == 2
     assert sorted(p.name for p in out.iterdir()) == ["frame_0000.png"]
+
+
+@pytest.mark.parametrize("shape, dtype", [((8, 8), np.float32), ((768, 1024, 3), np.float32), ((768, 1024), bool),
+                                          ((600, 900), np.int32)])
+def test_lazy_zeros_are_zero_writable_arrays(shape, dtype):
+    from refsoft.limits import LAZY_ZEROS_BYTES, zeros
+
+    a = zeros(shape, dtype)
+    assert a.shape == shape and a.dtype == np.dtype(dtype) and a.flags.c_contiguous and a.flags.writeable
+    assert not a.any()
+    a.reshape(-1)[5] = 1
+    assert np.count_nonzero(a) == 1 and a.reshape(-1)[5] == 1
+    b = zeros(shape, dtype)  # fresh memory, not the block just written
+    assert not b.any()
+    big = a.nbytes >= LAZY_ZEROS_BYTES
+    assert big == (shape != (8, 8))
+
+
+def test_full_size_gbuffer_from_lazy_maps_equals_the_uncropped_one():
+    import refsoft
+    from refsoft import raster
+
+    scene = refsoft.load_scene("sphere", width=1024, height=768)
+    cam = scene.camera
+    mesh = scene.world_mesh(1, 0, proxy=True)
+    a = raster.gbuffer(mesh, cam, origin=cam.eye)
+    b = raster.gbuffer(mesh, cam, origin=cam.eye, crop=False)
+    for field in ("position", "normal", "mask", "depth", "triangle"):
+        np.testing.assert_array_equal(getattr(a, field), getattr(b, field), err_msg=field)

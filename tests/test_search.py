@@ -7,6 +7,8 @@ import sys
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import refsoft
 from naive import naive_scores, naive_search
@@ -333,6 +335,15 @@ def test_start_pixel_rule():
     m[2, 3] = True
     assert search.start_pixel(m) == (2, 3)
     assert search.start_pixel(np.zeros((3, 3), bool)) is None
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.integers(1, 12), st.integers(1, 12), st.integers(0, 2**32 - 1), st.floats(0.02, 0.6))
+def test_start_pixel_equals_the_plain_rule(h, w, seed, density):
+    from naive import naive_start_pixel
+
+    m = np.random.default_rng(seed).random((h, w)) < density
+    assert search.start_pixel(m) == naive_start_pixel(m)
 
 
 # --------------------------------------------------------------------------- traces

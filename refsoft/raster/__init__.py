@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import constants
+from .. import constants, limits
 from ..camera import Camera, check_image_size
 from ..errors import RefsoftError
 from ..mesh import Mesh
@@ -200,7 +200,6 @@ def interpolate(fragments: Fragments, attributes, faces, precision="float32", no
     return out
 
 
-@dataclass(frozen=True, eq=False)
 class GBuffer:
     """One reflector's G-buffer (Estalella section 3.1).
 
@@ -220,15 +219,41 @@ class GBuffer:
         The camera's world-to-clip matrix.
     origin : ndarray, shape (3,), float64
         Positions are ``world - origin`` (zero for world space).
+
+    ``depth`` and ``triangle`` may be given as ``(r0, c0, crop)``: the crop's values at
+    ``[r0:, c0:]``, the clear value elsewhere, made full size on first use (only ``refsoft
+    gbuffer`` and the tests read them; filling two full-size maps per reflector and frame cost
+    about 3 ms at 1024x768).
     """
 
-    position: np.ndarray
-    normal: np.ndarray
-    mask: np.ndarray
-    depth: np.ndarray
-    triangle: np.ndarray
-    view_proj: np.ndarray
-    origin: np.ndarray
+    __slots__ = ("position", "normal", "mask", "_depth", "_triangle", "view_proj", "origin")
+
+    def __init__(self, position, normal, mask, depth, triangle, view_proj, origin):
+        self.position = position
+        self.normal = normal
+        self.mask = mask
+        self._depth = depth
+        self._triangle = triangle
+        self.view_proj = view_proj
+        self.origin = origin
+
+    def _full(self, name, clear, dtype):
+        value = getattr(self, name)
+        if isinstance(value, tuple):
+            r0, c0, crop = value
+            full = np.full(self.mask.shape, clear, dtype=dtype)
+            full[r0:r0 + crop.shape[0], c0:c0 + crop.shape[1]] = crop
+            setattr(self, name, full)
+            value = full
+        return value
+
+    @property
+    def depth(self) -> np.ndarray:
+        return self._full("_depth", constants.DEPTH_CLEAR, np.float32)
+
+    @property
+    def triangle(self) -> np.ndarray:
+        return self._full("_triangle", -1, np.int32)
 
 
 def _check_camera(camera):
@@ -296,11 +321,11 @@ def gbuffer(mesh: Mesh, camera: Camera, precision="float32", origin=None, crop=T
     clip = _setup.transform_points(mesh.vertices, vp)
     H, W = camera.height, camera.width
     region = coverage_region(clip, W, H) if crop else None
-    pos = np.zeros((H, W, 3), dtype=dt)  # untouched pages of np.zeros cost nothing
-    nrm = np.zeros((H, W, 3), dtype=dt)
+    pos = limits.zeros((H, W, 3), dt)  # only the pages of the covered box are ever touched
+    nrm = limits.zeros((H, W, 3), dt)
     if region == ():
-        return GBuffer(pos, nrm, np.zeros((H, W), dtype=bool), np.full((H, W), constants.DEPTH_CLEAR, np.float32),
-                       np.full((H, W), -1, np.int32), vp, o)
+        return GBuffer(pos, nrm, np.zeros((H, W), dtype=bool), (0, 0, np.zeros((0, 0), np.float32)),
+                       (0, 0, np.zeros((0, 0), np.int32)), vp, o)
     frags = rasterize(clip, mesh.faces, W, H, region=region)
     r0, c0 = frags.origin
     h, w = frags.shape
@@ -316,13 +341,9 @@ def gbuffer(mesh: Mesh, camera: Camera, precision="float32", origin=None, crop=T
         return GBuffer(pos, nrm, frags.mask, frags.depth, frags.triangle, vp, o)
     pos[r0:r0 + h, c0:c0 + w] = pos_r
     nrm[r0:r0 + h, c0:c0 + w] = nrm_r
-    mask = np.zeros((H, W), dtype=bool)
+    mask = limits.zeros((H, W), bool)
     mask[r0:r0 + h, c0:c0 + w] = frags.mask
-    depth = np.full((H, W), constants.DEPTH_CLEAR, dtype=np.float32)
-    depth[r0:r0 + h, c0:c0 + w] = frags.depth
-    triangle = np.full((H, W), -1, dtype=np.int32)
-    triangle[r0:r0 + h, c0:c0 + w] = frags.triangle
-    return GBuffer(pos, nrm, mask, depth, triangle, vp, o)
+    return GBuffer(pos, nrm, mask, (r0, c0, frags.depth), (r0, c0, frags.triangle), vp, o)
 
 
 def to_uint8(color) -> np.ndarray:

@@ -84,17 +84,20 @@ def start_pixel(mask) -> tuple[int, int] | None:
     ties to the smaller row, then the smaller col). ``None`` for an empty mask.
     """
     mask = np.asarray(mask, dtype=bool)
-    rows, cols = np.nonzero(mask)
-    if len(rows) == 0:
+    any_r = np.flatnonzero(mask.any(axis=1))
+    if len(any_r) == 0:
         return None
-    r = (int(rows.min()) + int(rows.max())) // 2
-    c = (int(cols.min()) + int(cols.max())) // 2
+    any_c = np.flatnonzero(mask.any(axis=0))
+    r0, r1, c0, c1 = int(any_r[0]), int(any_r[-1]), int(any_c[0]), int(any_c[-1])
+    r = (r0 + r1) // 2
+    c = (c0 + c1) // 2
     if mask[r, c]:
         return r, c
-    d2 = (rows.astype(np.int64) - r) ** 2 + (cols.astype(np.int64) - c) ** 2
+    rows, cols = np.nonzero(mask[r0:r1 + 1, c0:c1 + 1])  # the bounding box holds every covered pixel
+    d2 = (rows.astype(np.int64) + (r0 - r)) ** 2 + (cols.astype(np.int64) + (c0 - c)) ** 2
     # np.nonzero lists pixels in row-major order, so argmin's first minimum is the tie rule
     k = int(np.argmin(d2))
-    return int(rows[k]), int(cols[k])
+    return int(rows[k]) + r0, int(cols[k]) + c0
 
 
 def _check_gbuffer(gbuffer):
