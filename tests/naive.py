@@ -327,3 +327,31 @@ def naive_start_pixel(mask):
     if mask[r, c]:
         return r, c
     return min(pts, key=lambda p: ((p[0] - r) ** 2 + (p[1] - c) ** 2, p[0], p[1]))
+
+
+def naive_virtual_vertices(gbuffer, result, vertices, surface=None):
+    """DESIGN 4.6's virtual vertices in NumPy, relative to the G-buffer's origin, in its
+    precision (refsoft.search.virtual_vertices with relative=True): V - 2 (d.N) N for visible
+    vertices, by mode for hidden ones (plane: P + N (2 d.N) - d; search: V; discard: the mirror
+    formula), V for CULLED ones; ``surface`` (P, N) per vertex in place of the texel's."""
+    HIDDEN, CULLED = 1, 16
+    dt = gbuffer.position.dtype.type
+    v = (np.asarray(vertices, np.float64) - gbuffer.origin).astype(dt)
+    ok = (result.flags & CULLED) == 0
+    r = np.where(ok, result.pixel[:, 0], 0)
+    c = np.where(ok, result.pixel[:, 1], 0)
+    if surface is None:
+        p, nrm = gbuffer.position[r, c], gbuffer.normal[r, c]
+    else:
+        p, nrm = (np.asarray(a, dtype=dt).reshape(len(v), 3) for a in surface)
+    d = v - p
+    dn = (d[:, 0] * nrm[:, 0] + d[:, 1] * nrm[:, 1]) + d[:, 2] * nrm[:, 2]
+    two = dt(2.0)
+    mirror = v - (two * dn)[:, None] * nrm
+    hidden = ok & ((result.flags & HIDDEN) != 0)
+    out = np.where(ok[:, None], mirror, v)
+    if result.inverse == "plane":
+        out = np.where(hidden[:, None], p + nrm * (two * dn)[:, None] - d, out)
+    elif result.inverse == "search":
+        out = np.where(hidden[:, None], v, out)
+    return out

@@ -515,3 +515,30 @@ def test_kernel_equals_the_recording_walk(name):
             assert np.any(res.flags & search.CAPPED)
         if inverse == "search" and name != "concave":  # inside a bowl nothing is hidden
             assert np.any(res.flags & search.HIDDEN)
+
+
+@pytest.mark.parametrize("precision", ["float32", "float64"])
+@pytest.mark.parametrize("inverse", ["plane", "search", "discard"])
+def test_virtual_vertex_kernel_equals_numpy_bit_for_bit(precision, inverse):
+    from naive import naive_virtual_vertices
+
+    from refsoft.search.refine import refine
+
+    for name in ("sphere", "ellipsoid", "concave"):
+        scene = refsoft.load_scene(name, width=96, height=72)
+        verts, _ = scene_vertices(scene)
+        cam = scene.camera
+        gb = raster.gbuffer(scene.world_mesh(1, proxy=True), cam, precision, origin=cam.eye)
+        res = search.search(gb, cam.eye, verts, "cross", inverse)
+        if name == "sphere":
+            assert np.any(res.flags & search.HIDDEN)
+        got = search.virtual_vertices(gb, res, verts, relative=True)
+        assert got.dtype == np.dtype(precision)
+        np.testing.assert_array_equal(got, naive_virtual_vertices(gb, res, verts))
+        p, n, _ = refine(gb, cam.eye, verts, res)
+        np.testing.assert_array_equal(search.virtual_vertices(gb, res, verts, relative=True, surface=(p, n)),
+                                      naive_virtual_vertices(gb, res, verts, surface=(p, n)))
+    # culled vertices (an empty G-buffer) give V itself
+    empty = raster.gbuffer(primitives.icosphere(1, 0.1), Camera(eye=(0, 0, -5), target=(0, 0, -10)), precision)
+    res = search.search(empty, (0, 0, -5), verts[:4], "cross", inverse)
+    np.testing.assert_array_equal(search.virtual_vertices(empty, res, verts[:4]), verts[:4].astype(precision))

@@ -321,27 +321,16 @@ def virtual_vertices(gbuffer: GBuffer, result: SearchResult, vertices, relative:
     """
     dt = _check_gbuffer(gbuffer)
     verts = _points(vertices, "vertices", len(result))
-    o = gbuffer.origin
-    v = (verts - o).astype(dt)
-    ok = (result.flags & CULLED) == 0
-    r = np.where(ok, result.pixel[:, 0], 0)
-    c = np.where(ok, result.pixel[:, 1], 0)
+    o = np.asarray(gbuffer.origin, dtype=np.float64)
+    out = np.empty((len(verts), 3), dtype=dt)
+    flags = np.ascontiguousarray(result.flags, dtype=np.uint8)
+    mode = INVERSE_MODES.index(result.inverse)
     if surface is None:
-        p = gbuffer.position[r, c]
-        nrm = gbuffer.normal[r, c]
+        _kernels.virtual_from_texels(gbuffer.position, gbuffer.normal, np.ascontiguousarray(result.pixel), verts, o,
+                                     flags, mode, dt(0), out)
     else:
-        p, nrm = (np.asarray(a, dtype=dt).reshape(len(v), 3) for a in surface)
-    d = v - p
-    dn = (d[:, 0] * nrm[:, 0] + d[:, 1] * nrm[:, 1]) + d[:, 2] * nrm[:, 2]
-    two = dt(2.0)
-    mirror = v - (two * dn)[:, None] * nrm
-    hidden = ok & ((result.flags & HIDDEN) != 0)
-    out = np.where(ok[:, None], mirror, v)
-    if result.inverse == "plane":
-        eq1 = p + nrm * (two * dn)[:, None] - d
-        out = np.where(hidden[:, None], eq1, out)
-    elif result.inverse == "search":
-        out = np.where(hidden[:, None], v, out)
+        p, nrm = (np.ascontiguousarray(np.asarray(a, dtype=dt).reshape(len(verts), 3)) for a in surface)
+        _kernels.virtual_from_points(p, nrm, verts, o, flags, mode, dt(0), out)
     if relative:
         return out
     return (out.astype(np.float64) + o).astype(dt)

@@ -320,3 +320,51 @@ def scores_at(G, mask, vertices, origin, pixels, inverse, conv, out):
         for k in range(3):
             v[k] = like(vertices[i, k] - origin[k], conv)
         out[i] = _evaluate(G, r, c, v, inverse[i], conv)
+
+
+@kernel(inline=True)
+def _virtual_one(vx, vy, vz, px, py, pz, nx, ny, nz, fl, mode, conv):
+    """DESIGN 4.6 for one vertex, relative to the G-buffer's origin (``mode``: 0 plane,
+    1 search, 2 discard), the operations in the order ``virtual_vertices`` documents."""
+    if fl & CULLED:
+        return vx, vy, vz
+    dx, dy, dz = vx - px, vy - py, vz - pz
+    dn = (dx * nx + dy * ny) + dz * nz
+    k = like(2.0, conv) * dn
+    if fl & HIDDEN:
+        if mode == 0:  # equation (1): P + N (2 d.N) - d
+            return (px + nx * k) - dx, (py + ny * k) - dy, (pz + nz * k) - dz
+        if mode == 1:
+            return vx, vy, vz
+    return vx - k * nx, vy - k * ny, vz - k * nz
+
+
+@kernel(parallel=True)
+def virtual_from_texels(P, N, pixel, vertices, origin, flags, mode, conv, out):
+    """Virtual vertices from each vertex's reflection texel (``vertices`` world float64, made
+    relative to ``origin`` and rounded to the working precision here)."""
+    for i in prange(vertices.shape[0]):
+        vx = like(vertices[i, 0] - origin[0], conv)
+        vy = like(vertices[i, 1] - origin[1], conv)
+        vz = like(vertices[i, 2] - origin[2], conv)
+        r = pixel[i, 0] if pixel[i, 0] >= 0 else 0
+        c = pixel[i, 1] if pixel[i, 1] >= 0 else 0
+        x, y, z = _virtual_one(vx, vy, vz, P[r, c, 0], P[r, c, 1], P[r, c, 2], N[r, c, 0], N[r, c, 1], N[r, c, 2],
+                               flags[i], mode, conv)
+        out[i, 0] = x
+        out[i, 1] = y
+        out[i, 2] = z
+
+
+@kernel(parallel=True)
+def virtual_from_points(p, n, vertices, origin, flags, mode, conv, out):
+    """Virtual vertices from per-vertex surface points ``p`` and normals ``n`` (relative)."""
+    for i in prange(vertices.shape[0]):
+        vx = like(vertices[i, 0] - origin[0], conv)
+        vy = like(vertices[i, 1] - origin[1], conv)
+        vz = like(vertices[i, 2] - origin[2], conv)
+        x, y, z = _virtual_one(vx, vy, vz, p[i, 0], p[i, 1], p[i, 2], n[i, 0], n[i, 1], n[i, 2], flags[i], mode,
+                               conv)
+        out[i, 0] = x
+        out[i, 1] = y
+        out[i, 2] = z
