@@ -14,7 +14,7 @@ import numpy as np
 
 from ..errors import RefsoftError
 from ..raster import GBuffer
-from . import _kernels
+from . import _kernels, _lanes
 from ._kernels import BORDER, CAPPED, CULLED, HIDDEN, RESTARTED
 
 __all__ = ["search", "virtual_vertices", "start_pixel", "packed", "SearchResult", "trace_search", "Trace", "scores_at",
@@ -237,9 +237,13 @@ def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", invers
         keys, crop_starts, restart = _kernels.prepare(verts, starts, np.ascontiguousarray(gbuffer.mask),
                                                       gbuffer.view_proj, r0, c0, LOCALITY_CELL)
         order = np.argsort(keys.astype(np.uint16) if keys.max(initial=0) < 65536 else keys, kind="stable")
-        _kernels.search_all(G, mask, np.ascontiguousarray(verts), gbuffer.origin, order, crop_starts, start[0] - r0, start[1] - c0,
-                            NEIGHBOURHOODS[neighbourhood], int(cap), inverse == "search", conv, pixel, score,
-                            margin, iterations, flags)
+        args = (G, mask, np.ascontiguousarray(verts), gbuffer.origin, order, crop_starts, start[0] - r0,
+                start[1] - c0)
+        if neighbourhood == "cross":  # several walks per thread, scored together (same results)
+            _lanes.search_lanes(*args, int(cap), inverse == "search", conv, pixel, score, margin, iterations, flags)
+        else:
+            _kernels.search_all(*args, NEIGHBOURHOODS[neighbourhood], int(cap), inverse == "search", conv, pixel,
+                                score, margin, iterations, flags)
         pixel += np.array([r0, c0], dtype=np.int32)
         flags[restart] |= RESTARTED
     return SearchResult(pixel, score, margin, iterations, flags, neighbourhood, inverse, int(cap))
