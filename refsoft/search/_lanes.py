@@ -70,6 +70,28 @@ def score_batch(n, P0, P1, P2, N0, N1, N2, U0, U1, U2, VX, VY, VZ, INV, OUT, con
         OUT[j] = (nx * hx + ny * hy) + nz * hz
 
 
+@kernel(inline=True)
+def _begin(G, vertices, origin, starts, default_r, default_c, conv, i, s, V, VI, R, C, S0, IT, IT0, PH, FL, CAME):
+    """Walk slot ``s`` takes vertex ``i``: its start (previous pixel, else the default start)
+    and the start's score; counters and flags cleared."""
+    VI[s] = i
+    for k in range(3):
+        V[s, k] = like(vertices[i, k] - origin[k], conv)
+    r0 = starts[i, 0]
+    c0 = starts[i, 1]
+    if r0 < 0:
+        r0 = default_r
+        c0 = default_c
+    R[s] = r0
+    C[s] = c0
+    S0[s] = _evaluate(G, r0, c0, V[s], False, conv)
+    IT[s] = 0
+    IT0[s] = 0
+    PH[s] = 0
+    FL[s] = 0
+    CAME[s] = 0
+
+
 @kernel(parallel=True)
 def search_lanes(G, mask, vertices, origin, order, starts, default_r, default_c, cap, inverse_search,
                  conv, pixel, best_out, margin_out, iterations, flags_out):
@@ -80,45 +102,46 @@ def search_lanes(G, mask, vertices, origin, order, starts, default_r, default_c,
     n_groups = (n + SEARCH_GROUP - 1) // SEARCH_GROUP
     for g in prange(n_groups):
         dt = best_out.dtype
-        P0 = np.zeros(BATCH, dt); P1 = np.zeros(BATCH, dt); P2 = np.zeros(BATCH, dt)
-        N0 = np.zeros(BATCH, dt); N1 = np.zeros(BATCH, dt); N2 = np.zeros(BATCH, dt)
-        U0 = np.zeros(BATCH, dt); U1 = np.zeros(BATCH, dt); U2 = np.zeros(BATCH, dt)
-        VX = np.zeros(BATCH, dt); VY = np.zeros(BATCH, dt); VZ = np.zeros(BATCH, dt)
+        # per candidate of the round: P, N, U of its pixel and its vertex, one row per channel
+        cand = np.zeros((12, BATCH), dt)
+        P0 = cand[0]
+        P1 = cand[1]
+        P2 = cand[2]
+        N0 = cand[3]
+        N1 = cand[4]
+        N2 = cand[5]
+        U0 = cand[6]
+        U1 = cand[7]
+        U2 = cand[8]
+        VX = cand[9]
+        VY = cand[10]
+        VZ = cand[11]
         INV = np.zeros(BATCH, np.bool_)
         OUT = np.zeros(BATCH, dt)
+        IDX = np.zeros(BATCH, np.int64)
+        # per walk slot: vertex (relative), vertex index (-1 free), pixel, score there, the
+        # previous centre's score and direction, iterations (this phase, first phase), phase
+        # (1: inverse search), flags
         V = np.zeros((LANES, 3), dt)
         VI = np.full(LANES, -1, np.int64)
-        R = np.zeros(LANES, np.int64); C = np.zeros(LANES, np.int64)
+        R = np.zeros(LANES, np.int64)
+        C = np.zeros(LANES, np.int64)
         S0 = np.zeros(LANES, dt)
         PREV = np.zeros(LANES, dt)
         CAME = np.zeros(LANES, np.int64)
-        IDX = np.zeros(BATCH, np.int64)
-        IT = np.zeros(LANES, np.int64); IT0 = np.zeros(LANES, np.int64)
-        PH = np.zeros(LANES, np.int64); FL = np.zeros(LANES, np.int64)
+        IT = np.zeros(LANES, np.int64)
+        IT0 = np.zeros(LANES, np.int64)
+        PH = np.zeros(LANES, np.int64)
+        FL = np.zeros(LANES, np.int64)
         lo = g * SEARCH_GROUP
         hi = min(n, (g + 1) * SEARCH_GROUP)
         nxt = lo
         active = 0
         for s in range(LANES):
             if nxt < hi:
-                i = order[nxt]
+                _begin(G, vertices, origin, starts, default_r, default_c, conv, order[nxt], s, V, VI, R, C, S0, IT,
+                       IT0, PH, FL, CAME)
                 nxt += 1
-                VI[s] = i
-                for k in range(3):
-                    V[s, k] = like(vertices[i, k] - origin[k], conv)
-                r0 = starts[i, 0]
-                c0 = starts[i, 1]
-                if r0 < 0:
-                    r0 = default_r
-                    c0 = default_c
-                R[s] = r0
-                C[s] = c0
-                S0[s] = _evaluate(G, r0, c0, V[s], False, conv)
-                IT[s] = 0
-                IT0[s] = 0
-                PH[s] = 0
-                FL[s] = 0
-                CAME[s] = 0
                 active += 1
         while active > 0:
             # gather the candidates to score: covered, and not the previous centre (known);
@@ -226,24 +249,9 @@ def search_lanes(G, mask, vertices, origin, order, starts, default_r, default_c,
                 iterations[i] = total
                 flags_out[i] = fl
                 if nxt < hi:
-                    i2 = order[nxt]
+                    _begin(G, vertices, origin, starts, default_r, default_c, conv, order[nxt], s, V, VI, R, C, S0,
+                           IT, IT0, PH, FL, CAME)
                     nxt += 1
-                    VI[s] = i2
-                    for k in range(3):
-                        V[s, k] = like(vertices[i2, k] - origin[k], conv)
-                    r0 = starts[i2, 0]
-                    c0 = starts[i2, 1]
-                    if r0 < 0:
-                        r0 = default_r
-                        c0 = default_c
-                    R[s] = r0
-                    C[s] = c0
-                    S0[s] = _evaluate(G, r0, c0, V[s], False, conv)
-                    IT[s] = 0
-                    IT0[s] = 0
-                    PH[s] = 0
-                    FL[s] = 0
-                    CAME[s] = 0
                 else:
                     VI[s] = -1
                     active -= 1
