@@ -505,9 +505,10 @@ def test_kernel_equals_the_recording_walk(name):
     verts, _ = scene_vertices(scene)
     gb = reflector_gbuffer(scene, scene.reflector_ids[0])
     eye = scene.camera.eye
-    for inverse, cap in (("plane", None), ("search", None), ("search", 3)):
-        res = search.search(gb, eye, verts, "cross", inverse, cap=cap)
-        ref = _recording_search(gb, eye, verts, "cross", inverse, res.cap)
+    for nb, inverse, cap in (("cross", "plane", None), ("cross", "search", None), ("cross", "search", 3),
+                             ("box", "plane", None), ("box", "search", None), ("box", "search", 3)):
+        res = search.search(gb, eye, verts, nb, inverse, cap=cap)
+        ref = _recording_search(gb, eye, verts, nb, inverse, res.cap)
         got = list(zip(res.pixel[:, 0], res.pixel[:, 1], res.score, res.margin, res.iterations, res.flags))
         bad = [i for i, (a, b) in enumerate(zip(got, ref)) if tuple(a) != tuple(b)]
         assert not bad, f"{len(bad)} vertices differ, first {bad[0]}: {got[bad[0]]} vs {ref[bad[0]]}"
