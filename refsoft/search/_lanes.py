@@ -26,14 +26,23 @@ BATCH = 4 * LANES
 VECTOR = 8
 
 
+@kernel(inline=True)
+def _normalize_select(x, y, z, conv):
+    """``_kernels._normalize`` with selects in place of its branch (same values, vectorizable):
+    ``x * (1 / sqrt(...))``, zero where the length is not positive."""
+    zero = like(0.0, conv)
+    length = np.sqrt((x * x + y * y) + z * z)
+    q = like(1.0, conv) / length
+    pos = length > zero
+    return (x * q if pos else zero), (y * q if pos else zero), (z * q if pos else zero)
+
+
 @kernel
 def score_batch(n, P0, P1, P2, N0, N1, N2, U0, U1, U2, VX, VY, VZ, INV, OUT, conv):
     """``OUT[j]``: the score (the inverse score where ``INV[j]``) of vertex ``(VX, VY, VZ)[j]`` at
     the pixel whose P, N and U are ``(P0, P1, P2)[j]``, ...: the arithmetic of
     :func:`refsoft.search._kernels._evaluate`, written without branches (selects) so that the
     loop vectorizes."""
-    zero = like(0.0, conv)
-    one = like(1.0, conv)
     two = like(2.0, conv)
     for j in range(n):
         px = P0[j]
@@ -50,24 +59,8 @@ def score_batch(n, P0, P1, P2, N0, N1, N2, U0, U1, U2, VX, VY, VZ, INV, OUT, con
         wx = vx - t * nx if inv else vx
         wy = vy - t * ny if inv else vy
         wz = vz - t * nz if inv else vz
-        x = wx - px
-        y = wy - py
-        z = wz - pz
-        l = np.sqrt((x * x + y * y) + z * z)
-        q = one / l
-        pos = l > zero
-        bx = x * q if pos else zero
-        by = y * q if pos else zero
-        bz = z * q if pos else zero
-        x = U0[j] + bx
-        y = U1[j] + by
-        z = U2[j] + bz
-        l = np.sqrt((x * x + y * y) + z * z)
-        q = one / l
-        pos = l > zero
-        hx = x * q if pos else zero
-        hy = y * q if pos else zero
-        hz = z * q if pos else zero
+        bx, by, bz = _normalize_select(wx - px, wy - py, wz - pz, conv)
+        hx, hy, hz = _normalize_select(U0[j] + bx, U1[j] + by, U2[j] + bz, conv)
         OUT[j] = (nx * hx + ny * hy) + nz * hz
 
 
