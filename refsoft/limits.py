@@ -37,9 +37,10 @@ GBUFFER_WORK_BYTES = {4: 15 * 4 + 12, 8: 15 * 8 + 12}
 #: Bytes per searched vertex and reflector kept in the outputs: pixel (2 int32), virtual vertex
 #: (3 float32), iterations, flags, object id, score and margin (float64 at most).
 VERTEX_OUTPUT_BYTES = 8 + 12 + 4 + 1 + 4 + 16
-#: Working bytes per vertex: world position (float64 x 3), clip coordinates (4 float64), search
-#: keys and starts, virtual vertices in float64.
-VERTEX_WORK_BYTES = 24 + 32 + 24 + 24
+#: Working bytes per vertex: world position (float64 x 3), clip coordinates (4 float64), the
+#: search's key, status and order (17), its inputs and results in search order (float64 at most:
+#: 24 + 8 + 8 + 16 + 4 + 1) and the scattered results (37), virtual vertices in float64.
+VERTEX_WORK_BYTES = 24 + 32 + 17 + 61 + 37 + 24
 #: Working bytes per triangle in the rasterizer's setup (snapped coordinates, depths, 1/w,
 #: bounding box, edge biases, bins).
 TRIANGLE_WORK_BYTES = 24 + 48 + 32 + 16 + 24 + 16

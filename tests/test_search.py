@@ -270,6 +270,36 @@ def test_restart_when_previous_pixel_is_uncovered(sphere_case):
         search.search(gb, scene.camera.eye, verts, previous=np.full((len(verts), 2), 10**6))
 
 
+@pytest.mark.parametrize("dtype", [np.int32, np.int64, np.int16, np.uint16])
+def test_previous_pixels_of_every_kind_and_dtype(sphere_case, dtype):
+    """Each vertex's own previous pixel: none (-1, -1), still covered, or no longer covered
+    (restart), in any integer dtype: the same results as searching each group alone."""
+    scene, verts, gb = sphere_case
+    cold = search.search(gb, scene.camera.eye, verts)
+    kind = np.arange(len(verts)) % 3
+    prev = np.where((kind == 0)[:, None], -1, np.where((kind == 1)[:, None], cold.pixel, 0))
+    if dtype == np.uint16:
+        prev = np.where(prev < 0, 0, prev)  # no (-1, -1) in an unsigned dtype: the background
+        kind = np.where(kind == 0, 2, kind)
+    res = search.search(gb, scene.camera.eye, verts, previous=prev.astype(dtype))
+    for k, ref in ((0, cold), (1, search.search(gb, scene.camera.eye, verts, previous=cold.pixel)), (2, cold)):
+        sel = kind == k
+        for name in ("pixel", "score", "margin", "iterations"):
+            np.testing.assert_array_equal(getattr(res, name)[sel], getattr(ref, name)[sel], err_msg=f"{k} {name}")
+        np.testing.assert_array_equal(res.flags[sel], ref.flags[sel] | (search.RESTARTED if k == 2 else 0))
+    bad = prev.astype(np.int64)
+    bad[7] = (0, -3)
+    with pytest.raises(refsoft.RefsoftError, match="vertex 7 is outside"):
+        search.search(gb, scene.camera.eye, verts, previous=bad)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(1, 3000), st.integers(0, 2000), st.integers(0, 2**32 - 1))
+def test_search_order_is_the_stable_argsort(n_keys, n, seed):
+    keys = np.random.default_rng(seed).integers(0, n_keys, n)
+    np.testing.assert_array_equal(_kernels.order_by_key(keys, n_keys), np.argsort(keys, kind="stable"))
+
+
 # --------------------------------------------------------------------------- termination
 def _gbuffer(P, N, mask):
     h, w = mask.shape

@@ -177,6 +177,15 @@ def _culled_results(n, dt):
 LOCALITY_CELL = 16
 
 
+def _check_starts(starts, shape):
+    """Raise for the first previous pixel outside a G-buffer of ``shape`` ((-1, -1) is none)."""
+    h, w = shape
+    none = (starts[:, 0] == -1) & (starts[:, 1] == -1)
+    bad = ~none & ((starts[:, 0] < 0) | (starts[:, 0] >= h) | (starts[:, 1] < 0) | (starts[:, 1] >= w))
+    if bad.any():
+        raise RefsoftError(f"previous pixel of vertex {int(np.argmax(bad))} is outside the {h}x{w} G-buffer")
+
+
 def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", inverse: str = "plane",
            previous=None, cap: int | None = None, cone_factor: float = 1.5, sphere_factor: float = 2.0,
            break_level: int = 0) -> SearchResult:
@@ -214,7 +223,6 @@ def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", invers
         return _hierarchy_search(gbuffer, eye, vertices, inverse, cap, cone_factor, sphere_factor, break_level)
     eye = _point(eye, "eye")
     verts = _points(vertices, "vertices")
-    h, w = gbuffer.mask.shape
     n = len(verts)
     if previous is None:
         starts = np.full((n, 2), -1, dtype=np.int64)
@@ -222,30 +230,33 @@ def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", invers
         starts = np.asarray(previous)
         if starts.shape != (n, 2) or not np.issubdtype(starts.dtype, np.integer):
             raise RefsoftError(f"previous must be an integer array of shape ({n}, 2), got {starts.dtype} {starts.shape}")
-        starts = starts.astype(np.int64)
-        none = np.all(starts == -1, axis=1)
-        bad = ~none & ((starts[:, 0] < 0) | (starts[:, 0] >= h) | (starts[:, 1] < 0) | (starts[:, 1] >= w))
-        if bad.any():
-            raise RefsoftError(f"previous pixel of vertex {int(np.argmax(bad))} is outside the {h}x{w} G-buffer")
-        starts = np.where(none[:, None], -1, starts)
-    pixel, score, margin, iterations, flags = _culled_results(n, dt)
+        starts = np.ascontiguousarray(starts, dtype=starts.dtype if starts.dtype in (np.int32, np.int64) else np.int64)
     start = start_pixel(gbuffer.mask)
-    if start is not None and n:
-        G, mask, conv, (r0, c0) = packed(gbuffer, eye)
-        # Search in an order where consecutive vertices start near each other (the G-buffer
-        # then stays in cache); each vertex's result is unchanged.
-        keys, crop_starts, restart = _kernels.prepare(verts, starts, np.ascontiguousarray(gbuffer.mask),
-                                                      gbuffer.view_proj, r0, c0, LOCALITY_CELL)
-        order = np.argsort(keys.astype(np.uint16) if keys.max(initial=0) < 65536 else keys, kind="stable")
-        args = (G, mask, np.ascontiguousarray(verts), gbuffer.origin, order, crop_starts, start[0] - r0,
-                start[1] - c0)
-        if neighbourhood == "cross":  # several walks per thread, scored together (same results)
-            _lanes.search_lanes(*args, int(cap), inverse == "search", conv, pixel, score, margin, iterations, flags)
-        else:
-            _kernels.search_all(*args, NEIGHBOURHOODS[neighbourhood], int(cap), inverse == "search", conv, pixel,
-                                score, margin, iterations, flags)
-        pixel += np.array([r0, c0], dtype=np.int32)
-        flags[restart] |= RESTARTED
+    if start is None or not n:
+        _check_starts(starts, gbuffer.mask.shape)
+        return SearchResult(*_culled_results(n, dt), neighbourhood, inverse, int(cap))
+    G, mask, conv, (r0, c0) = packed(gbuffer, eye)
+    # Search in an order where consecutive vertices start near each other (the G-buffer then
+    # stays in cache), with the inputs and results in that order (read and written one after
+    # another); each vertex's result is unchanged.
+    h, w = gbuffer.mask.shape
+    keys = np.empty(n, dtype=np.int64)
+    status = np.empty(n, dtype=np.uint8)
+    _kernels.prepare(verts, starts, np.ascontiguousarray(gbuffer.mask), gbuffer.view_proj,
+                     LOCALITY_CELL, keys, status)
+    if status.max() == _kernels.START_BAD:
+        _check_starts(starts, (h, w))
+    order = _kernels.order_by_key(keys, -(-h // LOCALITY_CELL) * -(-w // LOCALITY_CELL))
+    rows = np.empty((n, 3), dtype=dt)
+    row_starts = np.empty((n, 2), dtype=np.int32)
+    _kernels.gather(verts, gbuffer.origin, starts, status, order, r0, c0, conv, rows, row_starts)
+    sorted_out = (np.empty((n, 2), np.int32), np.empty(n, dt), np.empty(n, dt), np.empty(n, np.int32),
+                  np.empty(n, np.uint8))
+    # several walks per thread, their candidates scored together (the one-walk search's results)
+    _lanes.SEARCH[NEIGHBOURHOODS[neighbourhood]](G, mask, rows, row_starts, start[0] - r0, start[1] - c0, int(cap),
+                                                 inverse == "search", conv, *sorted_out)
+    pixel, score, margin, iterations, flags = (np.empty_like(a) for a in sorted_out)
+    _kernels.scatter(order, r0, c0, *sorted_out, pixel, score, margin, iterations, flags)
     return SearchResult(pixel, score, margin, iterations, flags, neighbourhood, inverse, int(cap))
 
 

@@ -1,29 +1,42 @@
-"""The crosshair search of many vertices, several walks at a time (DESIGN 4; the same results,
-bit for bit, as :func:`refsoft.search._kernels.search_one`, which the traces use).
+"""The linear search of many vertices, several walks at a time (DESIGN 4; the same results, bit
+for bit, as :func:`refsoft.search._kernels.search_one`, the one-walk search the traces record).
 
-Each thread advances ``LANES`` walks together: every round gathers the candidates that need a
-score (covered, and not the previous centre, whose score is known) of all its walks into
-structure-of-arrays buffers, scores them in one branch-free loop that LLVM vectorizes (8 float32
-lanes with AVX2), then compares each walk's candidates in the visiting order, as the one-walk
-kernel does. Vectorized square roots, divisions, products and sums are IEEE operations rounded
-exactly like the scalar ones, and there is no contraction (``fastmath=False``), so every score
-is the scalar score bit for bit. A walk that ends makes room for the next vertex of the group.
-Measured on the cold benchmarks: 92-122 M candidate evaluations per second on 2 cores, where the
-one-walk kernel gives 55-91 M (docs/benchmarks.md).
+Each thread takes the vertices in groups of ``SEARCH_GROUP`` and advances ``LANES`` walks
+together: every round gathers the candidates that need a score (covered, and not in the previous
+neighbourhood, whose scores are known) of all its walks into one block of per-channel rows,
+scores them in one branch-free loop that LLVM vectorizes (8 float32 lanes with AVX2), then
+compares each walk's candidates in the visiting order, as the one-walk search does. Vectorized
+square roots, divisions, products and sums are IEEE operations rounded exactly like the scalar
+ones, and there is no contraction (``fastmath=False``), so every score is the scalar score bit
+for bit. A walk that ends makes room for the next vertex of the group.
+
+One source gives two kernels, :data:`SEARCH` ``[5]`` (the crosshair) and ``[9]`` (the box): the
+neighbourhood's size is a constant of each compiled kernel. Their arguments:
+
+G, mask : (h, w, 9) packed G-buffer and (h, w) coverage, cropped (``search.packed``)
+vertices : (N, 3), ``G``'s dtype: the vertices relative to the G-buffer's origin, in search order
+(vertices starting near each other one after another: ``_kernels.gather``)
+starts : (N, 2) int32, start in the crop, or (DEFAULT_START or RESTART, -1) for the default start
+default_r, default_c : the default start in the crop
+cap : int; inverse_search : bool; conv : a scalar of the working precision
+pixel (N, 2) int32 (in the crop), best_out, margin_out, iterations (N,) int32, flags_out (N,)
+uint8 : the outputs, row ``i`` for row ``i`` of the inputs
+
+Measured: docs/benchmarks.md ("Reflection-point search").
 """
 
 import numpy as np
 from numba import prange
 
 from .._numba import kernel, like
-from ._kernels import BORDER, CAPPED, HIDDEN, OFFSETS, SEARCH_GROUP, _evaluate
+from ._kernels import BORDER, CAPPED, HIDDEN, OFFSETS, RESTART, RESTARTED, REUSE, _evaluate
 
 #: Walks advanced together by one thread.
 LANES = 16
-#: Candidates gathered per round at most (four per walk).
-BATCH = 4 * LANES
 #: The scoring loop runs over a multiple of this many candidates (no scalar remainder).
 VECTOR = 8
+#: Vertices searched by one thread one after another (its work arrays are allocated once per group).
+SEARCH_GROUP = 256
 
 
 @kernel(inline=True)
@@ -65,14 +78,15 @@ def score_batch(n, P0, P1, P2, N0, N1, N2, U0, U1, U2, VX, VY, VZ, INV, OUT, con
 
 
 @kernel(inline=True)
-def _begin(G, vertices, origin, starts, default_r, default_c, conv, i, s, V, VI, R, C, S0, IT, IT0, PH, FL, CAME):
-    """Walk slot ``s`` takes vertex ``i``: its start (previous pixel, else the default start)
-    and the start's score; counters and flags cleared."""
+def _begin(G, vertices, starts, default_r, default_c, conv, i, s, V, VI, R, C, S0, IT, IT0, PH, FL, MOVED):
+    """Walk slot ``s`` takes the vertex of row ``i``: its start (previous pixel, else the
+    default start) and the start's score; counters cleared, flags RESTARTED or none."""
     VI[s] = i
     for k in range(3):
-        V[s, k] = like(vertices[i, k] - origin[k], conv)
+        V[s, k] = vertices[i, k]
     r0 = starts[i, 0]
     c0 = starts[i, 1]
+    FL[s] = RESTARTED if r0 == RESTART else 0
     if r0 < 0:
         r0 = default_r
         c0 = default_c
@@ -82,170 +96,187 @@ def _begin(G, vertices, origin, starts, default_r, default_c, conv, i, s, V, VI,
     IT[s] = 0
     IT0[s] = 0
     PH[s] = 0
-    FL[s] = 0
-    CAME[s] = 0
+    MOVED[s] = 0
 
 
-@kernel(parallel=True)
-def search_lanes(G, mask, vertices, origin, order, starts, default_r, default_c, cap, inverse_search,
-                 conv, pixel, best_out, margin_out, iterations, flags_out):
-    """:func:`refsoft.search._kernels.search_all` for the crosshair (same arguments but the
-    neighbourhood, same outputs), ``LANES`` walks per thread at a time."""
-    n = vertices.shape[0]
-    h, w = mask.shape
-    n_groups = (n + SEARCH_GROUP - 1) // SEARCH_GROUP
-    for g in prange(n_groups):
-        dt = best_out.dtype
-        # per candidate of the round: P, N, U of its pixel and its vertex, one row per channel
-        cand = np.zeros((12, BATCH), dt)
-        P0 = cand[0]
-        P1 = cand[1]
-        P2 = cand[2]
-        N0 = cand[3]
-        N1 = cand[4]
-        N2 = cand[5]
-        U0 = cand[6]
-        U1 = cand[7]
-        U2 = cand[8]
-        VX = cand[9]
-        VY = cand[10]
-        VZ = cand[11]
-        INV = np.zeros(BATCH, np.bool_)
-        OUT = np.zeros(BATCH, dt)
-        IDX = np.zeros(BATCH, np.int64)
-        # per walk slot: vertex (relative), vertex index (-1 free), pixel, score there, the
-        # previous centre's score and direction, iterations (this phase, first phase), phase
-        # (1: inverse search), flags
-        V = np.zeros((LANES, 3), dt)
-        VI = np.full(LANES, -1, np.int64)
-        R = np.zeros(LANES, np.int64)
-        C = np.zeros(LANES, np.int64)
-        S0 = np.zeros(LANES, dt)
-        PREV = np.zeros(LANES, dt)
-        CAME = np.zeros(LANES, np.int64)
-        IT = np.zeros(LANES, np.int64)
-        IT0 = np.zeros(LANES, np.int64)
-        PH = np.zeros(LANES, np.int64)
-        FL = np.zeros(LANES, np.int64)
-        lo = g * SEARCH_GROUP
-        hi = min(n, (g + 1) * SEARCH_GROUP)
-        nxt = lo
-        active = 0
-        for s in range(LANES):
-            if nxt < hi:
-                _begin(G, vertices, origin, starts, default_r, default_c, conv, order[nxt], s, V, VI, R, C, S0, IT,
-                       IT0, PH, FL, CAME)
-                nxt += 1
-                active += 1
-        while active > 0:
-            # gather the candidates to score: covered, and not the previous centre (known);
-            # IDX: the candidate's slot in the batch, -1 uncovered or outside, -2 known
-            m = 0
+def _make_search(n_neighbours):
+    """The lanes kernel for a neighbourhood of ``n_neighbours`` (4: the crosshair, 8: the box)
+    around the current pixel; the count is a constant of the compiled code (one source, two
+    kernels, each as fast as one written for its neighbourhood alone)."""
+    NB = n_neighbours
+    NC = NB + 1
+    BATCH = NB * LANES
+
+    @kernel(parallel=True)
+    def search_lanes(G, mask, vertices, starts, default_r, default_c, cap, inverse_search, conv, pixel, best_out,
+                     margin_out, iterations, flags_out):
+        n = vertices.shape[0]
+        h, w = mask.shape
+        n_groups = (n + SEARCH_GROUP - 1) // SEARCH_GROUP
+        for g in prange(n_groups):
+            dt = best_out.dtype
+            # per candidate of the round: P, N, U of its pixel and its vertex, one row per channel
+            cand = np.zeros((12, BATCH), dt)
+            P0 = cand[0]
+            P1 = cand[1]
+            P2 = cand[2]
+            N0 = cand[3]
+            N1 = cand[4]
+            N2 = cand[5]
+            U0 = cand[6]
+            U1 = cand[7]
+            U2 = cand[8]
+            VX = cand[9]
+            VY = cand[10]
+            VZ = cand[11]
+            INV = np.zeros(BATCH, np.bool_)
+            OUT = np.zeros(BATCH, dt)
+            # the candidate's slot in the batch; -1 uncovered or outside; -2 - j: known, the
+            # previous neighbourhood's candidate j
+            IDX = np.zeros(BATCH, np.int64)
+            CUR = np.zeros(NC, dt)
+            # per walk slot: vertex (relative), vertex index (-1 free), pixel, score there, the
+            # previous neighbourhood's scores and the candidate moved to (0: none), iterations
+            # (this phase, first phase), phase (1: inverse search), flags
+            V = np.zeros((LANES, 3), dt)
+            VI = np.full(LANES, -1, np.int64)
+            R = np.zeros(LANES, np.int64)
+            C = np.zeros(LANES, np.int64)
+            S0 = np.zeros(LANES, dt)
+            PREV = np.zeros((LANES, NC), dt)
+            MOVED = np.zeros(LANES, np.int64)
+            IT = np.zeros(LANES, np.int64)
+            IT0 = np.zeros(LANES, np.int64)
+            PH = np.zeros(LANES, np.int64)
+            FL = np.zeros(LANES, np.int64)
+            lo = g * SEARCH_GROUP
+            hi = min(n, (g + 1) * SEARCH_GROUP)
+            nxt = lo
+            active = 0
             for s in range(LANES):
-                if VI[s] < 0:
-                    continue
-                r = R[s]
-                c = C[s]
-                for k in range(4):
-                    rr = r + OFFSETS[k + 1, 0]
-                    cc = c + OFFSETS[k + 1, 1]
-                    if not (rr >= 0 and rr < h and cc >= 0 and cc < w and mask[rr, cc]):
-                        IDX[s * 4 + k] = -1
-                        continue
-                    if k + 1 == CAME[s]:
-                        IDX[s * 4 + k] = -2
-                        continue
-                    IDX[s * 4 + k] = m
-                    P0[m] = G[rr, cc, 0]
-                    P1[m] = G[rr, cc, 1]
-                    P2[m] = G[rr, cc, 2]
-                    N0[m] = G[rr, cc, 3]
-                    N1[m] = G[rr, cc, 4]
-                    N2[m] = G[rr, cc, 5]
-                    U0[m] = G[rr, cc, 6]
-                    U1[m] = G[rr, cc, 7]
-                    U2[m] = G[rr, cc, 8]
-                    VX[m] = V[s, 0]
-                    VY[m] = V[s, 1]
-                    VZ[m] = V[s, 2]
-                    INV[m] = PH[s] == 1
-                    m += 1
-            score_batch((m + VECTOR - 1) // VECTOR * VECTOR, P0, P1, P2, N0, N1, N2, U0, U1, U2, VX, VY, VZ, INV, OUT, conv)
-            for s in range(LANES):
-                i = VI[s]
-                if i < 0:
-                    continue
-                r = R[s]
-                c = C[s]
-                s0 = S0[s]
-                it = IT[s] + 1
-                best = s0
-                best_k = 0
-                second = like(-3.0, conv)
-                best_r = r
-                best_c = c
-                border = False
-                for k in range(4):
-                    j = IDX[s * 4 + k]
-                    if j == -1:
-                        border = True
-                        continue
-                    sc = PREV[s] if j == -2 else OUT[j]
-                    if sc > best:
-                        second = best
-                        best = sc
-                        best_k = k + 1
-                        best_r = r + OFFSETS[k + 1, 0]
-                        best_c = c + OFFSETS[k + 1, 1]
-                    elif sc > second:
-                        second = sc
-                capped = False
-                if best_k == 0:
-                    res_s = best
-                    res_m = best - second if second > like(-3.0, conv) else like(2.0, conv)
-                elif it >= cap:
-                    capped = True
-                    res_s = s0
-                    res_m = best - s0
-                else:
-                    PREV[s] = s0
-                    CAME[s] = (best_k + 1) % 4 + 1
-                    S0[s] = best
-                    R[s] = best_r
-                    C[s] = best_c
-                    IT[s] = it
-                    continue
-                fl = FL[s]
-                if capped:
-                    fl |= CAPPED
-                if PH[s] == 0:
-                    d = ((V[s, 0] - G[r, c, 0]) * G[r, c, 3] + (V[s, 1] - G[r, c, 1]) * G[r, c, 4]) \
-                        + (V[s, 2] - G[r, c, 2]) * G[r, c, 5]
-                    if d < like(0.0, conv):
-                        fl |= HIDDEN
-                        if inverse_search:
-                            PH[s] = 1
-                            FL[s] = fl
-                            IT0[s] = it
-                            IT[s] = 0
-                            CAME[s] = 0
-                            S0[s] = _evaluate(G, r, c, V[s], True, conv)
-                            continue
-                    total = it
-                else:
-                    total = IT0[s] + it
-                if border:
-                    fl |= BORDER
-                pixel[i, 0] = r
-                pixel[i, 1] = c
-                best_out[i] = res_s
-                margin_out[i] = res_m
-                iterations[i] = total
-                flags_out[i] = fl
                 if nxt < hi:
-                    _begin(G, vertices, origin, starts, default_r, default_c, conv, order[nxt], s, V, VI, R, C, S0,
-                           IT, IT0, PH, FL, CAME)
+                    _begin(G, vertices, starts, default_r, default_c, conv, nxt, s, V, VI, R, C, S0, IT, IT0, PH, FL,
+                           MOVED)
                     nxt += 1
-                else:
-                    VI[s] = -1
-                    active -= 1
+                    active += 1
+            while active > 0:
+                # gather the candidates to score: covered, and not in the previous neighbourhood
+                m = 0
+                for s in range(LANES):
+                    if VI[s] < 0:
+                        continue
+                    r = R[s]
+                    c = C[s]
+                    moved = MOVED[s]
+                    for k in range(1, NC):
+                        q = s * NB + k - 1
+                        rr = r + OFFSETS[k, 0]
+                        cc = c + OFFSETS[k, 1]
+                        if not (rr >= 0 and rr < h and cc >= 0 and cc < w and mask[rr, cc]):
+                            IDX[q] = -1
+                            continue
+                        if moved > 0:
+                            j = REUSE[moved, k]
+                            if j >= 0 and j < NC:
+                                IDX[q] = -2 - j
+                                continue
+                        IDX[q] = m
+                        P0[m] = G[rr, cc, 0]
+                        P1[m] = G[rr, cc, 1]
+                        P2[m] = G[rr, cc, 2]
+                        N0[m] = G[rr, cc, 3]
+                        N1[m] = G[rr, cc, 4]
+                        N2[m] = G[rr, cc, 5]
+                        U0[m] = G[rr, cc, 6]
+                        U1[m] = G[rr, cc, 7]
+                        U2[m] = G[rr, cc, 8]
+                        VX[m] = V[s, 0]
+                        VY[m] = V[s, 1]
+                        VZ[m] = V[s, 2]
+                        INV[m] = PH[s] == 1
+                        m += 1
+                score_batch((m + VECTOR - 1) // VECTOR * VECTOR, P0, P1, P2, N0, N1, N2, U0, U1, U2, VX, VY, VZ,
+                            INV, OUT, conv)
+                for s in range(LANES):
+                    i = VI[s]
+                    if i < 0:
+                        continue
+                    r = R[s]
+                    c = C[s]
+                    s0 = S0[s]
+                    it = IT[s] + 1
+                    best = s0
+                    best_k = 0
+                    second = like(-3.0, conv)
+                    border = False
+                    CUR[0] = s0
+                    for k in range(1, NC):
+                        j = IDX[s * NB + k - 1]
+                        if j == -1:
+                            border = True
+                            continue
+                        sc = PREV[s, -2 - j] if j < -1 else OUT[j]
+                        CUR[k] = sc
+                        if sc > best:  # strictly larger: ties never move, earlier candidates win
+                            second = best
+                            best = sc
+                            best_k = k
+                        elif sc > second:
+                            second = sc
+                    capped = False
+                    if best_k == 0:
+                        res_s = best
+                        res_m = best - second if second > like(-3.0, conv) else like(2.0, conv)
+                    elif it >= cap:
+                        capped = True
+                        res_s = s0
+                        res_m = best - s0
+                    else:
+                        for k in range(NC):
+                            PREV[s, k] = CUR[k]
+                        MOVED[s] = best_k
+                        S0[s] = best
+                        R[s] = r + OFFSETS[best_k, 0]
+                        C[s] = c + OFFSETS[best_k, 1]
+                        IT[s] = it
+                        continue
+                    fl = FL[s]
+                    if capped:
+                        fl |= CAPPED
+                    if PH[s] == 0:
+                        d = ((V[s, 0] - G[r, c, 0]) * G[r, c, 3] + (V[s, 1] - G[r, c, 1]) * G[r, c, 4]) \
+                            + (V[s, 2] - G[r, c, 2]) * G[r, c, 5]
+                        if d < like(0.0, conv):
+                            fl |= HIDDEN
+                            if inverse_search:
+                                PH[s] = 1
+                                FL[s] = fl
+                                IT0[s] = it
+                                IT[s] = 0
+                                MOVED[s] = 0
+                                S0[s] = _evaluate(G, r, c, V[s], True, conv)
+                                continue
+                        total = it
+                    else:
+                        total = IT0[s] + it
+                    if border:
+                        fl |= BORDER
+                    pixel[i, 0] = r
+                    pixel[i, 1] = c
+                    best_out[i] = res_s
+                    margin_out[i] = res_m
+                    iterations[i] = total
+                    flags_out[i] = fl
+                    if nxt < hi:
+                        _begin(G, vertices, starts, default_r, default_c, conv, nxt, s, V, VI, R, C, S0, IT, IT0, PH,
+                               FL, MOVED)
+                        nxt += 1
+                    else:
+                        VI[s] = -1
+                        active -= 1
+
+    return search_lanes
+
+
+#: The lanes kernel by candidates per step (current pixel included), as ``search.NEIGHBOURHOODS``.
+SEARCH = {5: _make_search(4), 9: _make_search(8)}
