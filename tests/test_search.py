@@ -297,7 +297,9 @@ def test_previous_pixels_of_every_kind_and_dtype(sphere_case, dtype):
 @given(st.integers(1, 3000), st.integers(0, 2000), st.integers(0, 2**32 - 1))
 def test_search_order_is_the_stable_argsort(n_keys, n, seed):
     keys = np.random.default_rng(seed).integers(0, n_keys, n)
-    np.testing.assert_array_equal(_kernels.order_by_key(keys, n_keys), np.argsort(keys, kind="stable"))
+    order, rank = _kernels.order_by_key(keys, n_keys)
+    np.testing.assert_array_equal(order, np.argsort(keys, kind="stable"))
+    np.testing.assert_array_equal(rank[order], np.arange(n))
 
 
 # --------------------------------------------------------------------------- termination

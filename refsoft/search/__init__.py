@@ -241,22 +241,22 @@ def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", invers
     # another); each vertex's result is unchanged.
     h, w = gbuffer.mask.shape
     keys = np.empty(n, dtype=np.int64)
-    status = np.empty(n, dtype=np.uint8)
-    _kernels.prepare(verts, starts, np.ascontiguousarray(gbuffer.mask), gbuffer.view_proj,
-                     LOCALITY_CELL, keys, status)
-    if status.max() == _kernels.START_BAD:
+    rel = np.empty((n, 3), dtype=dt)
+    crop = np.empty((n, 2), dtype=np.int32)
+    if _kernels.prepare(verts, gbuffer.origin, starts, np.ascontiguousarray(gbuffer.mask), gbuffer.view_proj, r0, c0,
+                        LOCALITY_CELL, conv, keys, rel, crop):
         _check_starts(starts, (h, w))
-    order = _kernels.order_by_key(keys, -(-h // LOCALITY_CELL) * -(-w // LOCALITY_CELL))
-    rows = np.empty((n, 3), dtype=dt)
-    row_starts = np.empty((n, 2), dtype=np.int32)
-    _kernels.gather(verts, gbuffer.origin, starts, status, order, r0, c0, conv, rows, row_starts)
+    order, rank = _kernels.order_by_key(keys, -(-h // LOCALITY_CELL) * -(-w // LOCALITY_CELL))
+    rows = np.empty_like(rel)
+    row_starts = np.empty_like(crop)
+    _kernels.gather(rel, crop, order, rows, row_starts)
     sorted_out = (np.empty((n, 2), np.int32), np.empty(n, dt), np.empty(n, dt), np.empty(n, np.int32),
                   np.empty(n, np.uint8))
     # several walks per thread, their candidates scored together (the one-walk search's results)
     _lanes.SEARCH[NEIGHBOURHOODS[neighbourhood]](G, mask, rows, row_starts, start[0] - r0, start[1] - c0, int(cap),
                                                  inverse == "search", conv, *sorted_out)
     pixel, score, margin, iterations, flags = (np.empty_like(a) for a in sorted_out)
-    _kernels.scatter(order, r0, c0, *sorted_out, pixel, score, margin, iterations, flags)
+    _kernels.scatter(rank, r0, c0, *sorted_out, pixel, score, margin, iterations, flags)
     return SearchResult(pixel, score, margin, iterations, flags, neighbourhood, inverse, int(cap))
 
 

@@ -217,36 +217,43 @@ def search_one(G, mask, v, start_r, start_c, n_candidates, cap, inverse_search, 
     return r, c, best, margin, it, flags, n_rec
 
 
-#: ``prepare``'s status per vertex: no previous pixel, or one still covered; a previous pixel no
-#: longer covered (the search restarts); a previous pixel outside the G-buffer (bad input).
-START_OK = 0
-START_RESTART = 1
-START_BAD = 2
-#: A sorted start's row: the default start; the default start after a restart.
+#: A start's row in the search's inputs: the default start; the default start after a restart
+#: (the previous pixel is no longer covered); a previous pixel outside the G-buffer (bad input).
 DEFAULT_START = -1
 RESTART = -2
+BAD_START = -3
 
 
 @kernel(parallel=True)
-def prepare(vertices, starts, mask, view_proj, cell, keys, status):
-    """Per vertex: the locality key ``keys[i]`` (the ``cell`` x ``cell`` G-buffer cell where its
-    search starts: its previous pixel, else its projection, clamped) and ``status[i]``
-    (START_OK, START_RESTART or START_BAD). ``starts[i]`` is the previous pixel or (-1, -1)."""
+def prepare(vertices, origin, starts, mask, view_proj, r0, c0, cell, conv, keys, rel, crop):
+    """Per vertex ``i``: the locality key ``keys[i]`` (the ``cell`` x ``cell`` G-buffer cell where
+    its search starts: its previous pixel, else its projection, clamped); ``rel[i]`` the vertex
+    relative to ``origin``, rounded to the working precision (``like(v - o, conv)``); ``crop[i]``
+    its start in the crop at (r0, c0), or (DEFAULT_START, RESTART or BAD_START, -1).
+    ``starts[i]`` is the previous pixel or (-1, -1). Returns the number of bad starts."""
     n = vertices.shape[0]
     h, w = mask.shape
     cells_x = (w + cell - 1) // cell
+    n_bad = 0
     for i in prange(n):
+        for k in range(3):
+            rel[i, k] = like(vertices[i, k] - origin[k], conv)
         r = np.int64(starts[i, 0])
         c = np.int64(starts[i, 1])
-        status[i] = START_OK
+        crop[i, 1] = -1
         if r != -1 or c != -1:
             if r < 0 or r >= h or c < 0 or c >= w:
-                status[i] = START_BAD
+                crop[i, 0] = BAD_START
                 keys[i] = 0
+                n_bad += 1
                 continue
-            if not mask[r, c]:
-                status[i] = START_RESTART
+            if mask[r, c]:
+                crop[i, 0] = r - r0
+                crop[i, 1] = c - c0
+            else:
+                crop[i, 0] = RESTART
         else:
+            crop[i, 0] = DEFAULT_START
             x, y, z = vertices[i, 0], vertices[i, 1], vertices[i, 2]
             cw = ((view_proj[3, 0] * x + view_proj[3, 1] * y) + view_proj[3, 2] * z) + view_proj[3, 3]
             r = 0
@@ -259,13 +266,15 @@ def prepare(vertices, starts, mask, view_proj, cell, keys, status):
                 c = int(min(max(fx, 0.0), w - 1.0))
                 r = int(min(max(h - 1.0 - fy, 0.0), h - 1.0))
         keys[i] = (r // cell) * cells_x + c // cell
+    return n_bad
 
 
 @kernel
 def order_by_key(keys, n_keys):
     """The stable order of ``keys`` (ints in [0, n_keys)), as ``np.argsort(keys,
-    kind="stable")``: one pass to count, one to place (NumPy's radix argsort of 16-bit keys is
-    slower on 1M vertices: docs/benchmarks.md)."""
+    kind="stable")``, and each element's place in it (``rank[order[j]] = j``): one pass to count,
+    one to place (NumPy's radix argsort of 16-bit keys is slower on 1M vertices:
+    docs/benchmarks.md)."""
     n = keys.shape[0]
     first = np.zeros(n_keys + 1, np.int64)
     for i in range(n):
@@ -273,43 +282,36 @@ def order_by_key(keys, n_keys):
     for k in range(n_keys):
         first[k + 1] += first[k]
     order = np.empty(n, np.int64)
+    rank = np.empty(n, np.int64)
     for i in range(n):
         k = keys[i]
         order[first[k]] = i
+        rank[i] = first[k]
         first[k] += 1
-    return order
+    return order, rank
 
 
 @kernel(parallel=True)
-def gather(vertices, origin, starts, status, order, r0, c0, conv, V, S):
-    """Row ``j`` of the search's inputs for vertex ``order[j]``: ``V[j]`` the vertex relative to
-    ``origin``, rounded to the working precision (``like(v - o, conv)``, as the search rounds
-    it); ``S[j]`` its start in the crop at (r0, c0), or (DEFAULT_START or RESTART, -1). In
-    search order, the walks read their inputs one after another (1.5x faster than reading
-    scattered rows on 1M vertices)."""
+def gather(rel, crop, order, V, S):
+    """Row ``j`` of the search's inputs, ``V[j]`` and ``S[j]``, is row ``order[j]`` of
+    ``prepare``'s ``rel`` and ``crop``: in search order, the walks read their inputs one after
+    another (1.5x faster than reading scattered rows on 1M vertices)."""
     for j in prange(order.shape[0]):
         i = order[j]
         for k in range(3):
-            V[j, k] = like(vertices[i, k] - origin[k], conv)
-        st = status[i]
-        if st == START_RESTART:
-            S[j, 0] = RESTART
-            S[j, 1] = -1
-        elif starts[i, 0] == -1 and starts[i, 1] == -1:
-            S[j, 0] = DEFAULT_START
-            S[j, 1] = -1
-        else:
-            S[j, 0] = starts[i, 0] - r0
-            S[j, 1] = starts[i, 1] - c0
+            V[j, k] = rel[i, k]
+        S[j, 0] = crop[i, 0]
+        S[j, 1] = crop[i, 1]
 
 
 @kernel(parallel=True)
-def scatter(order, r0, c0, pixel_s, score_s, margin_s, iterations_s, flags_s, pixel, score, margin, iterations,
+def scatter(rank, r0, c0, pixel_s, score_s, margin_s, iterations_s, flags_s, pixel, score, margin, iterations,
             flags):
-    """Row ``j`` of the results in search order to vertex ``order[j]``'s row; pixels from the
-    crop at (r0, c0) to the G-buffer."""
-    for j in prange(order.shape[0]):
-        i = order[j]
+    """Vertex ``i``'s results from row ``rank[i]`` of the results in search order; pixels from
+    the crop at (r0, c0) to the G-buffer. (Reading scattered rows and writing in order is 3x
+    faster than the converse on 1M vertices.)"""
+    for i in prange(rank.shape[0]):
+        j = rank[i]
         pixel[i, 0] = pixel_s[j, 0] + r0
         pixel[i, 1] = pixel_s[j, 1] + c0
         score[i] = score_s[j]
