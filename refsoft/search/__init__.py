@@ -110,7 +110,9 @@ def _check_gbuffer(gbuffer):
 
 
 def packed(gbuffer: GBuffer, eye):
-    """The G-buffer packed for the kernels, cropped to the covered pixels.
+    """The G-buffer packed for the one-search-at-a-time kernels (traces, the hierarchy,
+    :func:`scores_at`), cropped to the covered pixels. (:func:`search` reads the positions and
+    normals where they are and computes U with each score: the same values.)
 
     Returns ``(G, mask, conv, offset)``: ``G`` (h, w, 9) holds P, N and
     ``U = normalize(O - P)`` per covered pixel (the eye direction does not depend on the vertex,
@@ -235,28 +237,33 @@ def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", invers
     if start is None or not n:
         _check_starts(starts, gbuffer.mask.shape)
         return SearchResult(*_culled_results(n, dt), neighbourhood, inverse, int(cap))
-    G, mask, conv, (r0, c0) = packed(gbuffer, eye)
+    conv = dt(0)  # prototype scalar: the kernels compute in its precision
+    P = np.ascontiguousarray(gbuffer.position)
+    N = np.ascontiguousarray(gbuffer.normal)
+    mask = np.ascontiguousarray(gbuffer.mask)
     # Search in an order where consecutive vertices start near each other (the G-buffer then
     # stays in cache), with the inputs and results in that order (read and written one after
     # another); each vertex's result is unchanged.
-    h, w = gbuffer.mask.shape
+    h, w = mask.shape
     keys = np.empty(n, dtype=np.int64)
     rel = np.empty((n, 3), dtype=dt)
-    crop = np.empty((n, 2), dtype=np.int32)
-    if _kernels.prepare(verts, gbuffer.origin, starts, np.ascontiguousarray(gbuffer.mask), gbuffer.view_proj, r0, c0,
-                        LOCALITY_CELL, conv, keys, rel, crop):
+    first = np.empty((n, 2), dtype=np.int32)
+    if _kernels.prepare(verts, gbuffer.origin, starts, mask, gbuffer.view_proj, LOCALITY_CELL, conv, keys, rel, first):
         _check_starts(starts, (h, w))
     order, rank = _kernels.order_by_key(keys, -(-h // LOCALITY_CELL) * -(-w // LOCALITY_CELL))
     rows = np.empty_like(rel)
-    row_starts = np.empty_like(crop)
-    _kernels.gather(rel, crop, order, rows, row_starts)
+    row_starts = np.empty_like(first)
+    _kernels.gather(rel, first, order, rows, row_starts)
     sorted_out = (np.empty((n, 2), np.int32), np.empty(n, dt), np.empty(n, dt), np.empty(n, np.int32),
                   np.empty(n, np.uint8))
-    # several walks per thread, their candidates scored together (the one-walk search's results)
-    _lanes.SEARCH[NEIGHBOURHOODS[neighbourhood]](G, mask, rows, row_starts, start[0] - r0, start[1] - c0, int(cap),
+    # several walks per thread, their candidates scored together (the one-walk search's results);
+    # the eye direction of a pixel is computed with its score (as ``packed`` computes it: the
+    # same values), which costs less than packing the whole G-buffer for a few steps per vertex
+    eye_rel = (eye - gbuffer.origin).astype(dt)
+    _lanes.SEARCH[NEIGHBOURHOODS[neighbourhood]](P, N, mask, eye_rel, rows, row_starts, start[0], start[1], int(cap),
                                                  inverse == "search", conv, *sorted_out)
     pixel, score, margin, iterations, flags = (np.empty_like(a) for a in sorted_out)
-    _kernels.scatter(rank, r0, c0, *sorted_out, pixel, score, margin, iterations, flags)
+    _kernels.scatter(rank, *sorted_out, pixel, score, margin, iterations, flags)
     return SearchResult(pixel, score, margin, iterations, flags, neighbourhood, inverse, int(cap))
 
 

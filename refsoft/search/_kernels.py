@@ -68,22 +68,24 @@ def pack(P, N, mask, eye, conv):
 
 
 @kernel(inline=True)
-def score_from(g, vx, vy, vz, conv):
-    """``dot(N, normalize(U + normalize(V - P)))`` at packed pixel ``g`` (DESIGN 4.1, with
-    ``U = normalize(O - P)`` precomputed: the same arithmetic as computing it here)."""
-    bx, by, bz = _normalize(vx - g[0], vy - g[1], vz - g[2], conv)
-    hx, hy, hz = _normalize(g[6] + bx, g[7] + by, g[8] + bz, conv)
-    return (g[3] * hx + g[4] * hy) + g[5] * hz
+def score_pnu(px, py, pz, nx, ny, nz, ux, uy, uz, vx, vy, vz, inverse, conv):
+    """``dot(N, normalize(U + normalize(V - P)))`` (DESIGN 4.1) at a pixel with position P, normal
+    N and eye direction ``U = normalize(O - P)``; with ``inverse`` the inverse score, ``V``
+    replaced by its mirror image ``W = V - 2 dot(V - P, N) N`` (DESIGN 4.6, ``search``)."""
+    if inverse:
+        k = like(2.0, conv) * (((vx - px) * nx + (vy - py) * ny) + (vz - pz) * nz)
+        vx, vy, vz = vx - k * nx, vy - k * ny, vz - k * nz
+    bx, by, bz = _normalize(vx - px, vy - py, vz - pz, conv)
+    hx, hy, hz = _normalize(ux + bx, uy + by, uz + bz, conv)
+    return (nx * hx + ny * hy) + nz * hz
 
 
 @kernel(inline=True)
 def _evaluate(G, r, c, v, inverse, conv):
+    """The (inverse) score of vertex ``v`` at packed pixel (r, c) (U precomputed by ``pack``,
+    with the arithmetic of ``_normalize``: the same values as computing it here)."""
     g = G[r, c]
-    if inverse:
-        # the inverse score: W = V - 2 dot(V - P, N) N in place of V (DESIGN 4.6, ``search``)
-        k = like(2.0, conv) * (((v[0] - g[0]) * g[3] + (v[1] - g[1]) * g[4]) + (v[2] - g[2]) * g[5])
-        return score_from(g, v[0] - k * g[3], v[1] - k * g[4], v[2] - k * g[5], conv)
-    return score_from(g, v[0], v[1], v[2], conv)
+    return score_pnu(g[0], g[1], g[2], g[3], g[4], g[5], g[6], g[7], g[8], v[0], v[1], v[2], inverse, conv)
 
 
 def _reuse_table():
@@ -225,11 +227,11 @@ BAD_START = -3
 
 
 @kernel(parallel=True)
-def prepare(vertices, origin, starts, mask, view_proj, r0, c0, cell, conv, keys, rel, crop):
+def prepare(vertices, origin, starts, mask, view_proj, cell, conv, keys, rel, first):
     """Per vertex ``i``: the locality key ``keys[i]`` (the ``cell`` x ``cell`` G-buffer cell where
     its search starts: its previous pixel, else its projection, clamped); ``rel[i]`` the vertex
-    relative to ``origin``, rounded to the working precision (``like(v - o, conv)``); ``crop[i]``
-    its start in the crop at (r0, c0), or (DEFAULT_START, RESTART or BAD_START, -1).
+    relative to ``origin``, rounded to the working precision (``like(v - o, conv)``); ``first[i]``
+    the pixel its search starts from, or (DEFAULT_START, RESTART or BAD_START, -1).
     ``starts[i]`` is the previous pixel or (-1, -1). Returns the number of bad starts."""
     n = vertices.shape[0]
     h, w = mask.shape
@@ -240,20 +242,20 @@ def prepare(vertices, origin, starts, mask, view_proj, r0, c0, cell, conv, keys,
             rel[i, k] = like(vertices[i, k] - origin[k], conv)
         r = np.int64(starts[i, 0])
         c = np.int64(starts[i, 1])
-        crop[i, 1] = -1
+        first[i, 1] = -1
         if r != -1 or c != -1:
             if r < 0 or r >= h or c < 0 or c >= w:
-                crop[i, 0] = BAD_START
+                first[i, 0] = BAD_START
                 keys[i] = 0
                 n_bad += 1
                 continue
             if mask[r, c]:
-                crop[i, 0] = r - r0
-                crop[i, 1] = c - c0
+                first[i, 0] = r
+                first[i, 1] = c
             else:
-                crop[i, 0] = RESTART
+                first[i, 0] = RESTART
         else:
-            crop[i, 0] = DEFAULT_START
+            first[i, 0] = DEFAULT_START
             x, y, z = vertices[i, 0], vertices[i, 1], vertices[i, 2]
             cw = ((view_proj[3, 0] * x + view_proj[3, 1] * y) + view_proj[3, 2] * z) + view_proj[3, 3]
             r = 0
@@ -292,28 +294,26 @@ def order_by_key(keys, n_keys):
 
 
 @kernel(parallel=True)
-def gather(rel, crop, order, V, S):
+def gather(rel, first, order, V, S):
     """Row ``j`` of the search's inputs, ``V[j]`` and ``S[j]``, is row ``order[j]`` of
-    ``prepare``'s ``rel`` and ``crop``: in search order, the walks read their inputs one after
+    ``prepare``'s ``rel`` and ``first``: in search order, the walks read their inputs one after
     another (1.5x faster than reading scattered rows on 1M vertices)."""
     for j in prange(order.shape[0]):
         i = order[j]
         for k in range(3):
             V[j, k] = rel[i, k]
-        S[j, 0] = crop[i, 0]
-        S[j, 1] = crop[i, 1]
+        S[j, 0] = first[i, 0]
+        S[j, 1] = first[i, 1]
 
 
 @kernel(parallel=True)
-def scatter(rank, r0, c0, pixel_s, score_s, margin_s, iterations_s, flags_s, pixel, score, margin, iterations,
-            flags):
-    """Vertex ``i``'s results from row ``rank[i]`` of the results in search order; pixels from
-    the crop at (r0, c0) to the G-buffer. (Reading scattered rows and writing in order is 3x
-    faster than the converse on 1M vertices.)"""
+def scatter(rank, pixel_s, score_s, margin_s, iterations_s, flags_s, pixel, score, margin, iterations, flags):
+    """Vertex ``i``'s results from row ``rank[i]`` of the results in search order. (Reading
+    scattered rows and writing in order is 3x faster than the converse on 1M vertices.)"""
     for i in prange(rank.shape[0]):
         j = rank[i]
-        pixel[i, 0] = pixel_s[j, 0] + r0
-        pixel[i, 1] = pixel_s[j, 1] + c0
+        pixel[i, 0] = pixel_s[j, 0]
+        pixel[i, 1] = pixel_s[j, 1]
         score[i] = score_s[j]
         margin[i] = margin_s[j]
         iterations[i] = iterations_s[j]

@@ -13,13 +13,15 @@ for bit. A walk that ends makes room for the next vertex of the group.
 One source gives two kernels, :data:`SEARCH` ``[5]`` (the crosshair) and ``[9]`` (the box): the
 neighbourhood's size is a constant of each compiled kernel. Their arguments:
 
-G, mask : (h, w, 9) packed G-buffer and (h, w) coverage, cropped (``search.packed``)
-vertices : (N, 3), ``G``'s dtype: the vertices relative to the G-buffer's origin, in search order
-(vertices starting near each other one after another: ``_kernels.gather``)
-starts : (N, 2) int32, start in the crop, or (DEFAULT_START or RESTART, -1) for the default start
-default_r, default_c : the default start in the crop
+P, N, mask : the G-buffer's (h, w, 3) positions and normals (relative to its origin; float32 or
+float64, the working precision) and its (h, w) coverage
+eye : (3,), the eye relative to the G-buffer's origin, in the working precision
+vertices : (N, 3), the vertices relative to the G-buffer's origin, in the working precision, in
+search order (vertices starting near each other one after another: ``_kernels.gather``)
+starts : (N, 2) int32, start pixel, or (DEFAULT_START or RESTART, -1) for the default start
+default_r, default_c : the default start
 cap : int; inverse_search : bool; conv : a scalar of the working precision
-pixel (N, 2) int32 (in the crop), best_out, margin_out, iterations (N,) int32, flags_out (N,)
+pixel (N, 2) int32, best_out, margin_out, iterations (N,) int32, flags_out (N,)
 uint8 : the outputs, row ``i`` for row ``i`` of the inputs
 
 Measured: docs/benchmarks.md ("Reflection-point search").
@@ -29,7 +31,7 @@ import numpy as np
 from numba import prange
 
 from .._numba import kernel, like
-from ._kernels import BORDER, CAPPED, HIDDEN, OFFSETS, RESTART, RESTARTED, REUSE, _evaluate
+from ._kernels import BORDER, CAPPED, HIDDEN, OFFSETS, RESTART, RESTARTED, REUSE, _normalize, score_pnu
 
 #: Walks advanced together by one thread.
 LANES = 16
@@ -51,11 +53,11 @@ def _normalize_select(x, y, z, conv):
 
 
 @kernel
-def score_batch(n, P0, P1, P2, N0, N1, N2, U0, U1, U2, VX, VY, VZ, INV, OUT, conv):
+def score_batch(n, P0, P1, P2, N0, N1, N2, ex, ey, ez, VX, VY, VZ, INV, OUT, conv):
     """``OUT[j]``: the score (the inverse score where ``INV[j]``) of vertex ``(VX, VY, VZ)[j]`` at
-    the pixel whose P, N and U are ``(P0, P1, P2)[j]``, ...: the arithmetic of
-    :func:`refsoft.search._kernels._evaluate`, written without branches (selects) so that the
-    loop vectorizes."""
+    the pixel whose P and N are ``(P0, P1, P2)[j]`` and ``(N0, N1, N2)[j]``, seen from the eye
+    ``(ex, ey, ez)``: the arithmetic of :func:`refsoft.search._kernels.score_pnu` with
+    ``U = normalize(O - P)``, written without branches (selects) so that the loop vectorizes."""
     two = like(2.0, conv)
     for j in range(n):
         px = P0[j]
@@ -72,13 +74,22 @@ def score_batch(n, P0, P1, P2, N0, N1, N2, U0, U1, U2, VX, VY, VZ, INV, OUT, con
         wx = vx - t * nx if inv else vx
         wy = vy - t * ny if inv else vy
         wz = vz - t * nz if inv else vz
+        ux, uy, uz = _normalize_select(ex - px, ey - py, ez - pz, conv)
         bx, by, bz = _normalize_select(wx - px, wy - py, wz - pz, conv)
-        hx, hy, hz = _normalize_select(U0[j] + bx, U1[j] + by, U2[j] + bz, conv)
+        hx, hy, hz = _normalize_select(ux + bx, uy + by, uz + bz, conv)
         OUT[j] = (nx * hx + ny * hy) + nz * hz
 
 
 @kernel(inline=True)
-def _begin(G, vertices, starts, default_r, default_c, conv, i, s, V, VI, R, C, S0, IT, IT0, PH, FL, MOVED):
+def _score_at(P, N, eye, r, c, v, inverse, conv):
+    """The (inverse) score of vertex ``v`` at pixel (r, c), one at a time."""
+    ux, uy, uz = _normalize(eye[0] - P[r, c, 0], eye[1] - P[r, c, 1], eye[2] - P[r, c, 2], conv)
+    return score_pnu(P[r, c, 0], P[r, c, 1], P[r, c, 2], N[r, c, 0], N[r, c, 1], N[r, c, 2], ux, uy, uz, v[0], v[1],
+                     v[2], inverse, conv)
+
+
+@kernel(inline=True)
+def _begin(P, N, eye, vertices, starts, default_r, default_c, conv, i, s, V, VI, R, C, S0, IT, IT0, PH, FL, MOVED):
     """Walk slot ``s`` takes the vertex of row ``i``: its start (previous pixel, else the
     default start) and the start's score; counters cleared, flags RESTARTED or none."""
     VI[s] = i
@@ -92,7 +103,7 @@ def _begin(G, vertices, starts, default_r, default_c, conv, i, s, V, VI, R, C, S
         c0 = default_c
     R[s] = r0
     C[s] = c0
-    S0[s] = _evaluate(G, r0, c0, V[s], False, conv)
+    S0[s] = _score_at(P, N, eye, r0, c0, V[s], False, conv)
     IT[s] = 0
     IT0[s] = 0
     PH[s] = 0
@@ -108,27 +119,24 @@ def _make_search(n_neighbours):
     BATCH = NB * LANES
 
     @kernel(parallel=True)
-    def search_lanes(G, mask, vertices, starts, default_r, default_c, cap, inverse_search, conv, pixel, best_out,
+    def search_lanes(P, N, mask, eye, vertices, starts, default_r, default_c, cap, inverse_search, conv, pixel, best_out,
                      margin_out, iterations, flags_out):
         n = vertices.shape[0]
         h, w = mask.shape
         n_groups = (n + SEARCH_GROUP - 1) // SEARCH_GROUP
         for g in prange(n_groups):
             dt = best_out.dtype
-            # per candidate of the round: P, N, U of its pixel and its vertex, one row per channel
-            cand = np.zeros((12, BATCH), dt)
+            # per candidate of the round: P, N of its pixel and its vertex, one row per channel
+            cand = np.zeros((9, BATCH), dt)
             P0 = cand[0]
             P1 = cand[1]
             P2 = cand[2]
             N0 = cand[3]
             N1 = cand[4]
             N2 = cand[5]
-            U0 = cand[6]
-            U1 = cand[7]
-            U2 = cand[8]
-            VX = cand[9]
-            VY = cand[10]
-            VZ = cand[11]
+            VX = cand[6]
+            VY = cand[7]
+            VZ = cand[8]
             INV = np.zeros(BATCH, np.bool_)
             OUT = np.zeros(BATCH, dt)
             # the candidate's slot in the batch; -1 uncovered or outside; -2 - j: known, the
@@ -155,8 +163,8 @@ def _make_search(n_neighbours):
             active = 0
             for s in range(LANES):
                 if nxt < hi:
-                    _begin(G, vertices, starts, default_r, default_c, conv, nxt, s, V, VI, R, C, S0, IT, IT0, PH, FL,
-                           MOVED)
+                    _begin(P, N, eye, vertices, starts, default_r, default_c, conv, nxt, s, V, VI, R, C, S0, IT, IT0,
+                           PH, FL, MOVED)
                     nxt += 1
                     active += 1
             while active > 0:
@@ -181,21 +189,18 @@ def _make_search(n_neighbours):
                                 IDX[q] = -2 - j
                                 continue
                         IDX[q] = m
-                        P0[m] = G[rr, cc, 0]
-                        P1[m] = G[rr, cc, 1]
-                        P2[m] = G[rr, cc, 2]
-                        N0[m] = G[rr, cc, 3]
-                        N1[m] = G[rr, cc, 4]
-                        N2[m] = G[rr, cc, 5]
-                        U0[m] = G[rr, cc, 6]
-                        U1[m] = G[rr, cc, 7]
-                        U2[m] = G[rr, cc, 8]
+                        P0[m] = P[rr, cc, 0]
+                        P1[m] = P[rr, cc, 1]
+                        P2[m] = P[rr, cc, 2]
+                        N0[m] = N[rr, cc, 0]
+                        N1[m] = N[rr, cc, 1]
+                        N2[m] = N[rr, cc, 2]
                         VX[m] = V[s, 0]
                         VY[m] = V[s, 1]
                         VZ[m] = V[s, 2]
                         INV[m] = PH[s] == 1
                         m += 1
-                score_batch((m + VECTOR - 1) // VECTOR * VECTOR, P0, P1, P2, N0, N1, N2, U0, U1, U2, VX, VY, VZ,
+                score_batch((m + VECTOR - 1) // VECTOR * VECTOR, P0, P1, P2, N0, N1, N2, eye[0], eye[1], eye[2], VX, VY, VZ,
                             INV, OUT, conv)
                 for s in range(LANES):
                     i = VI[s]
@@ -244,8 +249,8 @@ def _make_search(n_neighbours):
                     if capped:
                         fl |= CAPPED
                     if PH[s] == 0:
-                        d = ((V[s, 0] - G[r, c, 0]) * G[r, c, 3] + (V[s, 1] - G[r, c, 1]) * G[r, c, 4]) \
-                            + (V[s, 2] - G[r, c, 2]) * G[r, c, 5]
+                        d = ((V[s, 0] - P[r, c, 0]) * N[r, c, 0] + (V[s, 1] - P[r, c, 1]) * N[r, c, 1]) \
+                            + (V[s, 2] - P[r, c, 2]) * N[r, c, 2]
                         if d < like(0.0, conv):
                             fl |= HIDDEN
                             if inverse_search:
@@ -254,7 +259,7 @@ def _make_search(n_neighbours):
                                 IT0[s] = it
                                 IT[s] = 0
                                 MOVED[s] = 0
-                                S0[s] = _evaluate(G, r, c, V[s], True, conv)
+                                S0[s] = _score_at(P, N, eye, r, c, V[s], True, conv)
                                 continue
                         total = it
                     else:
@@ -268,8 +273,8 @@ def _make_search(n_neighbours):
                     iterations[i] = total
                     flags_out[i] = fl
                     if nxt < hi:
-                        _begin(G, vertices, starts, default_r, default_c, conv, nxt, s, V, VI, R, C, S0, IT, IT0, PH,
-                               FL, MOVED)
+                        _begin(P, N, eye, vertices, starts, default_r, default_c, conv, nxt, s, V, VI, R, C, S0, IT,
+                               IT0, PH, FL, MOVED)
                         nxt += 1
                     else:
                         VI[s] = -1
