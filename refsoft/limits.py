@@ -32,8 +32,13 @@ GBUFFER_OUTPUT_BYTES_PER_PIXEL = 12 + 12 + 1
 #: the last G-buffer's positions and normals (3p each), mask, depth and triangle ids.
 GBUFFER_REUSE_BYTES = {4: 6 * 4 + 9, 8: 6 * 8 + 9}
 #: Working bytes per G-buffer pixel at a precision of ``p`` bytes: positions and normals (3p
-#: each), packed P, N, U (9p), depth, triangle and clip-triangle ids.
-GBUFFER_WORK_BYTES = {4: 15 * 4 + 12, 8: 15 * 8 + 12}
+#: each), depth, triangle and clip-triangle ids.
+GBUFFER_WORK_BYTES = {4: 6 * 4 + 12, 8: 6 * 8 + 12}
+#: The hierarchy search packs P, N and U per G-buffer pixel (9p bytes) and builds a pyramid over
+#: the square of the next power of two: a sphere and a cone (8p) per texel, a third more for the
+#: levels above, twice over while the levels are concatenated.
+HIERARCHY_PACKED_FLOATS = 9
+HIERARCHY_TEXEL_FLOATS = 8 * 2 * 4 / 3
 #: Bytes per searched vertex and reflector kept in the outputs: pixel (2 int32), virtual vertex
 #: (3 float32), iterations, flags, object id, score and margin (float64 at most).
 VERTEX_OUTPUT_BYTES = 8 + 12 + 4 + 1 + 4 + 16
@@ -119,6 +124,13 @@ def frame_bytes(scene, options, frames_kept: int = 1) -> dict:
     kept_v = n_refl * n_verts * VERTEX_OUTPUT_BYTES
     cache = n_refl * (g_px * GBUFFER_REUSE_BYTES[p] + n_verts * VERTEX_OUTPUT_BYTES) if options.reuse else 0
     work = g_px * GBUFFER_WORK_BYTES[p] + n_verts * VERTEX_WORK_BYTES + n_tris * TRIANGLE_WORK_BYTES + view_px * 16
+    if options.neighbourhood == "hierarchy":
+        if options.gbuffer_size is not None:
+            side = max(int(options.gbuffer_size[0]), int(options.gbuffer_size[1]))
+        else:
+            side = math.ceil(max(cam.width, cam.height) * options.widen)
+        pyramid = (1 << max(side - 1, 0).bit_length()) ** 2
+        work += g_px * HIERARCHY_PACKED_FLOATS * p + int(pyramid * HIERARCHY_TEXEL_FLOATS * p)
     kept = (kept_view + kept_gb + kept_v) * max(int(frames_kept), 1)
     return {"view": kept_view, "gbuffers": kept_gb, "vertices": kept_v, "cache": cache, "work": work,
             "total": kept + cache + work}
