@@ -1,6 +1,5 @@
 """The reflection-point search against plain references, analytic truth and its own contract."""
 
-import hashlib
 import os
 import subprocess
 import sys

@@ -105,7 +105,7 @@ def _check_gbuffer(gbuffer):
         raise RefsoftError(f"gbuffer must be a refsoft.raster.GBuffer, got {type(gbuffer).__name__}")
     dt = gbuffer.position.dtype
     if dt not in (np.float32, np.float64) or gbuffer.normal.dtype != dt:
-        raise RefsoftError(f"G-buffer position and normal must share a float32 or float64 dtype")
+        raise RefsoftError("G-buffer position and normal must share a float32 or float64 dtype")
     return dt.type
 
 

@@ -16,7 +16,7 @@ import numpy as np
 from numba import prange
 
 from .._numba import kernel, like
-from ._kernels import BORDER, CAPPED, CULLED, HIDDEN, _evaluate, walk
+from ._kernels import BORDER, CAPPED, HIDDEN, _evaluate, walk
 
 #: Restarts with enlarged cones and spheres before a search gives up (flag CAPPED).
 MAX_ENLARGEMENTS = 8

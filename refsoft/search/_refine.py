@@ -1,6 +1,5 @@
 """Sub-texel refinement kernel (see :mod:`refsoft.search.refine`)."""
 
-import numpy as np
 from numba import prange
 
 from .._numba import kernel, like
