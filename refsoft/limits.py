@@ -43,9 +43,10 @@ HIERARCHY_TEXEL_FLOATS = 8 * 2 * 4 / 3
 #: (3 float32), iterations, flags, object id, score and margin (float64 at most).
 VERTEX_OUTPUT_BYTES = 8 + 12 + 4 + 1 + 4 + 16
 #: Working bytes per vertex: world position (float64 x 3), clip coordinates (4 float64), the
-#: search's key, status and order (17), its inputs and results in search order (float64 at most:
-#: 24 + 8 + 8 + 16 + 4 + 1) and the scattered results (37), virtual vertices in float64.
-VERTEX_WORK_BYTES = 24 + 32 + 17 + 61 + 37 + 24
+#: search's key, order and rank (3 int64), its relative vertex and start twice (as prepared, then
+#: in search order: 2 x (24 + 8), float64 at most), its results in search order (8 + 8 + 8 + 4 +
+#: 1; the results put back are the kept outputs), virtual vertices in float64.
+VERTEX_WORK_BYTES = 24 + 32 + 24 + 2 * (24 + 8) + 29 + 24
 #: Working bytes per triangle in the rasterizer's setup (snapped coordinates, depths, 1/w,
 #: bounding box, edge biases, bins).
 TRIANGLE_WORK_BYTES = 24 + 48 + 32 + 16 + 24 + 16
