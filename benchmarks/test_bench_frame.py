@@ -7,7 +7,7 @@ Run: ``pytest benchmarks/test_bench_frame.py --benchmark-columns=min,median,roun
 import pytest
 
 import refsoft
-from refsoft.render import FrameDriver
+from refsoft.frame.driver import FrameDriver
 
 SCENES = ["kitchen", "ufo", "ants"]
 
@@ -47,7 +47,7 @@ def test_frame_coherent(benchmark, name):
 def test_frame_truth(benchmark, name):
     """The ray-traced truth of the same frames as ``test_frame_coherent`` (frames 1, 2, ...):
     the ratio of the two medians is the figure issue 4 asks for."""
-    from refsoft.truth import TruthRenderer
+    from refsoft.truth.raytrace import TruthRenderer
 
     scene = refsoft.load_scene(name, width=1024, height=768)
     renderer = TruthRenderer(scene, exact=False)

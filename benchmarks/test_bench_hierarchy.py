@@ -2,7 +2,7 @@
 quad subdivided into more and more vertices, and a ball filling the whole view. For each: the
 search time (cold; the hierarchy has no coherence), the mean steps (linear: neighbourhoods
 evaluated; hierarchy: texels tested) and the pixel distance of the found reflection pixels from
-the projections of the exact reflection points (refsoft.analytic), over the visible vertices.
+the projections of the exact reflection points (refsoft.truth.analytic), over the visible vertices.
 
 Run: ``pytest benchmarks/test_bench_hierarchy.py --benchmark-columns=min,median,rounds``.
 """
@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from refsoft import Camera, primitives, raster, search
-from refsoft.analytic import sphere_reflection_points
-from refsoft.metrics import pixel_distance
+from refsoft.truth.analytic import sphere_reflection_points
+from refsoft.truth.metrics import pixel_distance
 
 SETUPS = {
     # ball at the origin, a quad of n x n cells 4 units in front of it, the camera beside the quad

@@ -11,8 +11,8 @@ import pytest
 
 import refsoft
 from refsoft.raster import color_pass
-from refsoft.reflect import reflect, reflector_gbuffer, scene_vertices
-from refsoft.render import _stencil_box, _virtual_parts, _virtual_pass, composite
+from refsoft.search.reflect import reflect, reflector_gbuffer, scene_vertices
+from refsoft.frame.driver import _stencil_box, _virtual_parts, _virtual_pass, composite
 from refsoft.search import search
 
 SCENES = ["kitchen", "ufo", "ants"]
@@ -56,7 +56,7 @@ def test_stage(benchmark, case, stage):
     elif stage == "main":
         fn = lambda: color_pass(case["meshes"], [o.color for o in scene.objects], scene.camera_at(1))  # noqa: E731
     else:
-        from refsoft.truth import TruthRenderer
+        from refsoft.truth.raytrace import TruthRenderer
 
         tr = TruthRenderer(scene, exact=False)
         tr.render_frame(0)

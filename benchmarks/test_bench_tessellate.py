@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 import refsoft
-from refsoft.metrics import disagreement, interior_disagreement
-from refsoft.render import FrameDriver, RenderOptions
+from refsoft.truth.metrics import disagreement, interior_disagreement
+from refsoft.frame.driver import FrameDriver, RenderOptions
 
 SETTINGS = {
     "none": {},

@@ -63,7 +63,7 @@ def fill_rule_figure():
 
 def trace_figure():
     from refsoft import search
-    from refsoft.reflect import reflector_gbuffer, scene_vertices
+    from refsoft.search.reflect import reflector_gbuffer, scene_vertices
     from refsoft.search.pictures import trace_picture
 
     scene = refsoft.load_scene("sphere", width=320, height=240)
@@ -80,7 +80,7 @@ def trace_figure():
 
 def frame_figure():
     """The sphere scene rendered with each hidden-vertex mode, and a kitchen frame."""
-    from refsoft.render import FrameDriver, RenderOptions
+    from refsoft.frame.driver import FrameDriver, RenderOptions
 
     scene = refsoft.load_scene("sphere", width=320, height=240)
     pics = [FrameDriver(scene, RenderOptions(inverse=mode)).render_frame(0).image
@@ -97,8 +97,8 @@ def frame_figure():
 
 def truth_figure():
     """Render | truth | agreement map, for the sphere (discard) and the quad (search)."""
-    from refsoft.render import FrameDriver, RenderOptions
-    from refsoft.truth import TruthRenderer
+    from refsoft.frame.driver import FrameDriver, RenderOptions
+    from refsoft.truth.raytrace import TruthRenderer
     from refsoft.visualize import agreement_map
 
     rows = []
@@ -113,8 +113,8 @@ def truth_figure():
 def refine_figure():
     """Agreement maps of the quad scene (search mode) against the truth, cropped to the ball:
     the paper's method, sub-texel points, adaptive tessellation, both."""
-    from refsoft.render import FrameDriver, RenderOptions
-    from refsoft.truth import TruthRenderer
+    from refsoft.frame.driver import FrameDriver, RenderOptions
+    from refsoft.truth.raytrace import TruthRenderer
     from refsoft.visualize import agreement_map
 
     scene = refsoft.load_scene("quad", width=320, height=240)
@@ -138,8 +138,8 @@ def check_figure():
 
     import imageio.v3 as iio
 
-    from refsoft.check import check
-    from refsoft.golden import write_golden
+    from refsoft.conformance.check import check
+    from refsoft.conformance.golden import write_golden
     from refsoft.io import write_npz
 
     with tempfile.TemporaryDirectory() as tmp:

@@ -1,18 +1,23 @@
 """refsoft: the CPU reference implementation of curved-mirror reflections by per-vertex
-reflection-point search in screen space (Estalella et al., EGSR 2006)."""
+reflection-point search in screen space (Estalella et al., EGSR 2006).
 
-from .camera import Camera
+The packages follow the pipeline: :mod:`refsoft.scene` (input), :mod:`refsoft.raster` (the exact
+rasterizer), :mod:`refsoft.search` (the vertex-search reflection method), :mod:`refsoft.frame`
+(the frame driver and its outputs), :mod:`refsoft.truth` (ray-traced truth and metrics),
+:mod:`refsoft.conformance` (golden set and checks for ports), :mod:`refsoft.bench` and
+:mod:`refsoft.cli`.
+"""
+
 from .errors import CameraError, LimitError, MeshError, RefsoftError, SceneError
-from .mesh import Mesh, load_mesh
-from .scene import Animation, Scene, SceneObject, Transform
-from .scenes import builtin_names, load_scene
-from . import primitives, raster, search
-from .render import FrameDriver, RenderOptions, render  # noqa: E402  (the function shadows the module name,
-from .truth import TruthRenderer, truth  # noqa: E402     as refsoft.render(...) is the API; import submodules by name)
+from .scene import (Animation, Camera, Mesh, Scene, SceneObject, Transform, builtin_names, load_mesh, load_scene,
+                    primitives)
+from . import raster, search
+from .frame import FrameDriver, RenderOptions, render
+from .truth import TruthRenderer, render_truth
 
 __version__ = "0.1.0"
 
 __all__ = ["Camera", "Mesh", "Scene", "SceneObject", "Transform", "Animation", "load_scene", "load_mesh",
            "builtin_names", "primitives", "raster", "RefsoftError", "SceneError", "MeshError",
-           "CameraError", "LimitError", "search", "render", "RenderOptions", "FrameDriver", "truth",
+           "CameraError", "LimitError", "search", "render", "RenderOptions", "FrameDriver", "render_truth",
            "TruthRenderer", "__version__"]

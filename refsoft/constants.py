@@ -48,5 +48,5 @@ CAMERA_PARALLEL_TOL = 1e-9
 
 # --- Conformance (DESIGN section 8) --------------------------------------------------------
 #: Two reflection pixels are a tie when the oracle's scores differ by at most this many float32
-#: ULP of the better one (``refsoft check``, ``refsoft.precision``).
+#: ULP of the better one (``refsoft check``, ``refsoft.conformance.precision``).
 TIE_ULPS = 8

@@ -279,7 +279,7 @@ def naive_refine(P, N, mask, vertices, eye, pixel, flags, hidden_bit, culled_bit
 
 
 def naive_edge_errors(gbuffer, eye, a_world, b_world, pa, pb, oa=None, ob=None):
-    """The thesis's edge error, NumPy, float64 (refsoft.tessellate.edge_errors): at the texel
+    """The thesis's edge error, NumPy, float64 (refsoft.search.tessellate.edge_errors): at the texel
     halfway between the reflection pixels (rounded down), or with offsets at the midpoint of the
     refined points by the first-order model (refsoft.search.refine.surface_at) at the nearest
     covered texel, else the halfway texel; 1 where a pixel is missing or nothing is covered."""

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from refsoft import RefsoftError
-from refsoft.analytic import reflection_residual, sphere_reflection_points, sphere_reflection_points_quartic
+from refsoft.truth.analytic import reflection_residual, sphere_reflection_points, sphere_reflection_points_quartic
 
 
 def random_pairs(rng, n, grazing=False):

@@ -64,7 +64,7 @@ def test_cli_prints_one_line_and_exits_2(tmp_path, capsys, case):
 def test_process_exit_has_no_traceback(tmp_path, case):
     _, files, argv, _, message = case
     out = _materialise(tmp_path, files)
-    r = subprocess.run([sys.executable, "-m", "refsoft.cli", *[a.format(d=tmp_path) for a in argv]],
+    r = subprocess.run([sys.executable, "-m", "refsoft", *[a.format(d=tmp_path) for a in argv]],
                        capture_output=True, text=True, timeout=300)
     assert r.returncode == 2 and "Traceback" not in r.stderr
     lines = r.stderr.strip().splitlines()

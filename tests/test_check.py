@@ -10,10 +10,10 @@ import pytest
 
 import naive
 from refsoft import cli
-from refsoft.check import check
-from refsoft.golden import case_by_name, write_golden
+from refsoft.conformance.check import check
+from refsoft.conformance.golden import case_by_name, write_golden
 from refsoft.io import write_npz
-from refsoft.reflect import reflector_gbuffer, scene_vertices
+from refsoft.search.reflect import reflector_gbuffer, scene_vertices
 from refsoft.search import start_pixel
 
 @pytest.fixture(scope="module")
@@ -49,7 +49,7 @@ def _flagged(summary):
 
 
 def test_oracle_against_itself_passes_with_nothing_flagged(golden, tmp_path):
-    from refsoft.golden import CASES
+    from refsoft.conformance.golden import CASES
 
     s = check(golden, golden, out=tmp_path / "report")
     assert s["passed"] and _flagged(s) == [] and s["counts"]["pass"] >= 400

@@ -15,7 +15,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
 def run_cli(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "refsoft.cli", *args], capture_output=True, text=True, cwd=cwd)
+    return subprocess.run([sys.executable, "-m", "refsoft", *args], capture_output=True, text=True, cwd=cwd)
 
 
 def test_gbuffer_command_writes_maps_and_pictures(tmp_path):
@@ -111,7 +111,7 @@ def test_trace_command_coherent_frame_starts_at_previous_pixel(tmp_path, capsys)
     import json
 
     import refsoft
-    from refsoft.reflect import reflect
+    from refsoft.search.reflect import reflect
 
     (tmp_path / "anim.toml").write_text(ANIMATED)
     scene = refsoft.load_scene(tmp_path / "anim.toml")

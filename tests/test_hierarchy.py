@@ -9,8 +9,8 @@ import pytest
 import naive
 import refsoft
 from refsoft import cli, search
-from refsoft.reflect import reflector_gbuffer, scene_vertices
-from refsoft.render import FrameDriver, RenderOptions
+from refsoft.search.reflect import reflector_gbuffer, scene_vertices
+from refsoft.frame.driver import FrameDriver, RenderOptions
 from refsoft.search import hierarchy, packed
 
 W, H = 160, 120

@@ -10,8 +10,8 @@ import refsoft
 from refsoft import cli
 from refsoft.errors import LimitError, RefsoftError
 from refsoft.limits import check_frame_memory, frame_bytes, memory_limit, parse_bytes
-from refsoft.render import FrameDriver, RenderOptions, render
-from refsoft.truth import truth
+from refsoft.frame.driver import FrameDriver, RenderOptions, render
+from refsoft.truth.raytrace import render_truth as truth
 
 
 @pytest.mark.parametrize("text, value", [("4G", 4 << 30), ("512M", 512 << 20), ("1.5GiB", 3 << 29), ("100", 100),

@@ -1,12 +1,12 @@
-"""float32 against float64 (refsoft.precision): nearly every vertex finds the same pixel, and on
+"""float32 against float64 (refsoft.conformance.precision): nearly every vertex finds the same pixel, and on
 mirrors whose score has one optimum every difference is a tie."""
 
 import numpy as np
 import pytest
 
 import refsoft
-from refsoft.precision import compare_precisions, scores64
-from refsoft.reflect import reflect
+from refsoft.conformance.precision import compare_precisions, scores64
+from refsoft.search.reflect import reflect
 
 
 def test_scores64_is_the_kernels_float64_score():

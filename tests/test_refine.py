@@ -8,11 +8,11 @@ import pytest
 import refsoft
 from naive import naive_refine
 from refsoft import Camera, primitives, raster, search
-from refsoft.analytic import sphere_reflection_points
-from refsoft.metrics import virtual_distance, window_to_pixel
-from refsoft.render import FrameDriver, RenderOptions
+from refsoft.truth.analytic import sphere_reflection_points
+from refsoft.truth.metrics import virtual_distance, window_to_pixel
+from refsoft.frame.driver import FrameDriver, RenderOptions
 from refsoft.search.refine import refine, surface_at
-from refsoft.tessellate import edge_errors, tessellate
+from refsoft.search.tessellate import edge_errors, tessellate
 
 
 def _ball(precision, n=1500, seed=1, size=(240, 180)):

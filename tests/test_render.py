@@ -14,7 +14,7 @@ import pytest
 import refsoft
 from refsoft import Camera, Scene, SceneObject, Transform, primitives, raster
 from refsoft.raster import _setup
-from refsoft.render import FrameDriver, RenderOptions, render
+from refsoft.frame.driver import FrameDriver, RenderOptions, render
 from scene_data import ANIMATED
 
 W, H = 160, 120

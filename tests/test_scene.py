@@ -8,7 +8,7 @@ import trimesh
 
 import refsoft
 from refsoft import Mesh, MeshError, SceneError, load_mesh, load_scene, primitives
-from refsoft.scene import euler_xyz_matrix
+from refsoft.scene.model import euler_xyz_matrix
 
 GOOD = """
 name = "demo"

@@ -12,8 +12,8 @@ from hypothesis import strategies as st
 import refsoft
 from naive import naive_scores, naive_search
 from refsoft import Camera, Mesh, Scene, SceneObject, Transform, primitives, raster, search
-from refsoft.analytic import sphere_reflection_points
-from refsoft.reflect import reflect, reflector_gbuffer, scene_vertices
+from refsoft.truth.analytic import sphere_reflection_points
+from refsoft.search.reflect import reflect, reflector_gbuffer, scene_vertices
 from refsoft.search import _kernels
 
 W, H = 320, 240
@@ -446,7 +446,7 @@ def test_multiple_reflectors_are_independent_and_use_closed_proxies():
 # --------------------------------------------------------------------------- determinism
 SCRIPT = r"""
 import hashlib, numpy as np, refsoft
-from refsoft.reflect import reflect
+from refsoft.search.reflect import reflect
 from refsoft.search.refine import refine
 s = refsoft.load_scene("sphere", width=200, height=150)
 h = hashlib.sha256()

@@ -5,12 +5,13 @@ import json
 import numpy as np
 import pytest
 
-from refsoft import Camera, Scene, SceneObject, Transform, cli, load_scene, metrics
-from refsoft.analytic import fit_sphere, sphere_reflection_points
-from refsoft.primitives import icosphere, plane_grid
+from refsoft import Camera, Scene, SceneObject, Transform, cli, load_scene
+from refsoft.truth import metrics
+from refsoft.truth.analytic import fit_sphere, sphere_reflection_points
+from refsoft.scene.primitives import icosphere, plane_grid
 from refsoft.raster import color_pass
-from refsoft.render import render
-from refsoft.truth import TruthRenderer, exact_sphere_vertices, ray_triangle, truth
+from refsoft.frame.driver import render
+from refsoft.truth.raytrace import TruthRenderer, exact_sphere_vertices, ray_triangle, render_truth as truth
 
 FLOOR_Y = -1.5
 FLOOR_HALF = 6.0
@@ -27,7 +28,7 @@ def ball_over_floor(width=160, height=120):
 
 
 def _naive_reflected_floor_hits(scene):
-    """Per reflector pixel, independently of refsoft.truth: the pixel ray meets the visible ball
+    """Per reflector pixel, independently of refsoft.truth.raytrace: the pixel ray meets the visible ball
     triangle (a 3x3 solve), reflects about the interpolated normal and meets the plane y = FLOOR_Y."""
     cam = scene.camera
     ball = scene.world_mesh(1)

@@ -22,7 +22,7 @@ COLUMNS = ["series", "size", "time_ms", "per_item_ns"]
 
 
 def _ball_camera(width, height):
-    from ..camera import Camera
+    from ..scene.camera import Camera
 
     return Camera(eye=(0.0, 0.0, 3.75), target=(0.0, 0.0, 0.0), width=width, height=height)
 
@@ -43,7 +43,7 @@ def scaling(out=None, width=1024, height=768, max_vertices=1 << 20, max_subdivis
             progress_bar=False) -> dict:
     """Run the three series; returns ``{"rows": [...], "slopes": {series: slope}}`` (written to
     ``out`` as ``scaling.csv``, ``scaling.md`` and, with matplotlib, ``scaling.png``)."""
-    from ..primitives import icosphere
+    from ..scene.primitives import icosphere
     from ..raster import gbuffer
     from ..search import search
 

@@ -46,7 +46,7 @@ def settings(knobs=None) -> list:
 
 
 def _options(setting, width, height):
-    from ..render import RenderOptions
+    from ..frame.driver import RenderOptions
 
     opts = dict(setting)
     scale = opts.pop("gbuffer_scale", 1.0)
@@ -57,7 +57,7 @@ def _options(setting, width, height):
 
 
 def _errors(frames, truths) -> dict:
-    from ..metrics import frame_metrics
+    from ..truth.metrics import frame_metrics
 
     ms = [frame_metrics(f.arrays, t.arrays) for f, t in zip(frames, truths)]
     row = {"disagreement": float(np.mean([m["reflected_id_disagreement"] for m in ms])),
@@ -86,9 +86,9 @@ def sweep(scenes=("sphere", "quad", "kitchen"), out=None, width=320, height=240,
           progress_bar=False) -> list:
     """Run the sweep; returns the rows (also written to ``out``: ``sweep.csv``, ``sweep.md`` and,
     with matplotlib, ``pareto.png``)."""
-    from ..render import FrameDriver
-    from ..scenes import load_scene
-    from ..truth import TruthRenderer
+    from ..frame.driver import FrameDriver
+    from ..scene.builtin import load_scene
+    from ..truth.raytrace import TruthRenderer
 
     if knobs is not None:
         unknown = [k for k in knobs if k not in KNOBS]

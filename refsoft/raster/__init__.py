@@ -15,9 +15,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import constants, limits
-from ..camera import Camera, check_image_size
+from ..scene.camera import Camera, check_image_size
 from ..errors import RefsoftError
-from ..mesh import Mesh
+from ..scene.mesh import Mesh
 from . import _kernels, _setup, _shading
 
 __all__ = ["Fragments", "GBuffer", "ColorPass", "rasterize", "interpolate", "gbuffer", "color_pass", "coverage_region",

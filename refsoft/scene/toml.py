@@ -14,10 +14,10 @@ import sys
 import numpy as np
 
 from .camera import Camera
-from .errors import RefsoftError, SceneError
+from ..errors import RefsoftError, SceneError
 from .mesh import load_mesh
 from .primitives import make_primitive
-from .scene import Animation, Scene, SceneObject, Transform
+from .model import Animation, Scene, SceneObject, Transform
 
 if sys.version_info >= (3, 11):
     import tomllib

@@ -12,8 +12,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from . import constants
-from .errors import CameraError, LimitError
+from .. import constants
+from ..errors import CameraError, LimitError
 
 
 def _vec3(value, name: str) -> np.ndarray:

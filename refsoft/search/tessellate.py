@@ -19,9 +19,9 @@ from __future__ import annotations
 import numpy as np
 
 from . import _tessellate as _kernels
-from .errors import RefsoftError
-from .mesh import normalize_rows
-from .search import CULLED, HIDDEN, search
+from ..errors import RefsoftError
+from ..scene.mesh import normalize_rows
+from . import CULLED, HIDDEN, search
 
 #: Edge keys are ``min * KEY_BASE + max`` of vertex indices (room for 2^31 vertices).
 KEY_BASE = np.int64(1) << 31
@@ -211,7 +211,7 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
         pix.append(res.pixel)
         fl.append(res.flags)
         if surf is not None:
-            from .search.refine import refine
+            from .refine import refine
 
             for lst, a in zip(surf, refine(gbuffer, eye, new_v, res)):
                 lst.append(a)

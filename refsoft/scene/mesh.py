@@ -12,8 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import constants
-from .errors import MeshError, LimitError
+from .. import constants
+from ..errors import MeshError, LimitError
 
 
 def area_weighted_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:

@@ -21,8 +21,8 @@ import numpy as np
 
 from numba import prange
 
-from ._numba import kernel
-from .search import BORDER, CAPPED, CULLED, HIDDEN
+from .._numba import kernel
+from . import BORDER, CAPPED, CULLED, HIDDEN
 
 #: Extra pixels around a stencil box before an object's virtual triangles count as outside it:
 #: more than the 1/512 px a snapped window coordinate can move (DESIGN section 2).

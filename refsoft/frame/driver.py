@@ -12,14 +12,15 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from . import constants, limits, skips
-from .errors import RefsoftError
-from .raster import _setup, color_pass, interpolate, rasterize, shade, to_uint8
-from .raster import gbuffer
-from .reflect import Reflection, coherent_starts, gbuffer_camera, scene_vertices
-from .scene import Scene
-from .search.refine import refine as refine_points
-from .search import CULLED, HIDDEN, INVERSE_MODES, SEARCH_METHODS, SearchResult, search, virtual_vertices
+from .. import constants, limits
+from ..search import skips
+from ..errors import RefsoftError
+from ..raster import _setup, color_pass, interpolate, rasterize, shade, to_uint8
+from ..raster import gbuffer
+from ..search.reflect import Reflection, coherent_starts, gbuffer_camera, scene_vertices
+from ..scene.model import Scene
+from ..search.refine import refine as refine_points
+from ..search import CULLED, HIDDEN, INVERSE_MODES, SEARCH_METHODS, SearchResult, search, virtual_vertices
 
 STAGES = ("gbuffer", "search", "virtual", "main", "composite")
 #: The exact skips of :class:`RenderOptions` (issue 10).
@@ -54,7 +55,7 @@ class RenderOptions:
         An approximation (off by default, changes results): use ``widen`` only on frames where
         the reflector's projection is clipped by the view.
     tessellate : float, optional
-        Szabo's adaptive tessellation of the reflected geometry (:mod:`refsoft.tessellate`):
+        Szabo's adaptive tessellation of the reflected geometry (:mod:`refsoft.search.tessellate`):
         split triangles whose largest edge error exceeds this threshold (0: every triangle, full
         tessellation), crack-free, up to ``max_level`` levels. Default: off.
     max_level : int
@@ -148,9 +149,9 @@ def _virtual_parts(scene, meshes, refl):
 
 
 def _tessellated_parts(scene, meshes, refl, verts, opt, eye):
-    """One part holding the reflected geometry after :func:`refsoft.tessellate.tessellate`, and
+    """One part holding the reflected geometry after :func:`refsoft.search.tessellate.tessellate`, and
     that function's counts."""
-    from .tessellate import tessellate
+    from ..search.tessellate import tessellate
 
     faces, face_obj, normals, start = [], [], [], 0
     for k, obj in enumerate(scene.objects, start=1):
@@ -193,7 +194,7 @@ def _virtual_pass(scene, parts, camera, stencil, box, inverse, cull=True):
     vertices, normals, faces, face object ids and flags. Only the stencil's bounding box
     ``box = (r0, r1, c0, c1)`` is rasterized (the same pixels as the whole view, cropped). With
     ``cull``, parts whose virtual vertices all lie beyond one side of the box are left out
-    (:func:`refsoft.skips.outside_box`: they cover none of its pixels), and so are such
+    (:func:`refsoft.search.skips.outside_box`: they cover none of its pixels), and so are such
     triangles. Returns, over the box: colour (h, w, 3) float32, reflected object id (h, w)
     int32, covered (h, w) bool, and the number of parts culled.
     """
@@ -284,7 +285,7 @@ class _Last:
 
 def _empty_gbuffer(camera, precision):
     """The G-buffer the rasterizer makes of a mesh it draws no pixel of (the eye as origin)."""
-    from .raster import PRECISIONS, GBuffer
+    from ..raster import PRECISIONS, GBuffer
 
     dt = PRECISIONS[precision]
     h, w = camera.height, camera.width
@@ -298,7 +299,7 @@ class FrameDriver:
     for the reuse skip, its last G-buffer and search results)."""
 
     def __init__(self, scene: Scene, options: RenderOptions | None = None, memory_limit=None):
-        from .limits import check_frame_memory
+        from ..limits import check_frame_memory
 
         if not isinstance(scene, Scene):
             raise RefsoftError(f"scene must be a refsoft.Scene, got {type(scene).__name__}")
@@ -474,7 +475,7 @@ def write_frame(out_dir, frame: Frame):
     """Write ``frame_NNNN.npz`` (every array) and ``frame_NNNN.png`` atomically."""
     import os
 
-    from .io import write_npz, write_png
+    from ..io import write_npz, write_png
 
     base = os.path.join(os.fspath(out_dir), f"frame_{frame.index:04d}")
     write_npz(base + ".npz", **frame.arrays)
@@ -565,8 +566,8 @@ def render(scene, frames=None, out=None, progress=False, memory_limit=None, keep
     """
     import os
 
-    from .io import write_json
-    from .scenes import load_scene
+    from ..io import write_json
+    from ..scene.builtin import load_scene
 
     if not isinstance(scene, Scene):
         scene = load_scene(scene, width=width, height=height)
@@ -575,7 +576,7 @@ def render(scene, frames=None, out=None, progress=False, memory_limit=None, keep
 
         scene = _replace(scene, camera=_replace(scene.camera, **{k: v for k, v in (("width", width),
                                                                                   ("height", height)) if v is not None}))
-    from .limits import check_frame_memory
+    from ..limits import check_frame_memory
 
     opts = RenderOptions(**options)
     indices = frame_indices(scene, frames)

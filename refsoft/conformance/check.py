@@ -20,7 +20,7 @@ ties recomputed from the candidate's pixel; flags and vertex objects identical w
 agree, iterations likewise up to 1% of vertices; 8-bit images within 1 per channel (``loose``:
 4, with a 1-pixel window and at most 0.1% of pixels failing). ``object_id`` and
 ``reflected_id`` are reported, not judged. Candidate traces (``traces_NNNN.json``, see
-:mod:`refsoft.golden`) are compared step by step with the oracle's walk of the same vertex.
+:mod:`refsoft.conformance.golden`) are compared step by step with the oracle's walk of the same vertex.
 """
 
 from __future__ import annotations
@@ -31,8 +31,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import constants
-from .errors import RefsoftError
+from .. import constants
+from ..errors import RefsoftError
 
 STATUSES = ("pass", "accepted", "fail", "missing")
 F32_ULP_TOL = 4
@@ -90,7 +90,7 @@ class _Oracle:
 
     def __init__(self, entry, frame):
         from .golden import Case
-        from .reflect import scene_vertices
+        from ..search.reflect import scene_vertices
 
         self.entry, self.frame = entry, frame
         self.case = Case(entry["name"], entry["scene"], tuple(entry["frames"]), _options(entry["options"]))
@@ -101,7 +101,7 @@ class _Oracle:
         self._gb = {}
 
     def gbuffer(self, k):
-        from .reflect import reflector_gbuffer
+        from ..search.reflect import reflector_gbuffer
 
         if k not in self._gb:
             o = self.case.options
@@ -112,7 +112,7 @@ class _Oracle:
     def edge_distance(self, k, pixels):
         """Distance (px) from each pixel centre (row, col) to the nearest edge of the reflector's
         projected triangles, unsnapped float64 window coordinates."""
-        from .reflect import gbuffer_camera
+        from ..search.reflect import gbuffer_camera
 
         o = self.case.options
         cam = gbuffer_camera(self.scene, self.frame, o.get("widen", 1.0), o.get("gbuffer_size"))
@@ -200,7 +200,7 @@ class _Context:
         """An error mask over a (H, W) grid: green pass, yellow accepted, red fail."""
         if self.out is None:
             return
-        from .io import write_png
+        from ..io import write_png
 
         img = np.zeros(tuple(shape[:2]) + (3,), np.uint8)
         if green is not None:
@@ -227,7 +227,7 @@ def _compare_image(ctx, g, c, loose):
                 best = np.minimum(best, np.abs(sh.astype(np.int16) - c.astype(np.int16)).max(axis=2))
         bad = best > tol
     if ctx.out is not None:
-        from .io import write_png
+        from ..io import write_png
 
         green = (d == 0)
         ctx.paint("image", d.shape, np.argwhere((d > 0) & ~bad), np.argwhere(bad), green)
@@ -259,13 +259,13 @@ def _load_traces(path):
 
 
 def _oracle_trace(ctx, k, i, prev_pixel):
-    from .search import trace_search
+    from ..search import trace_search
 
     o = ctx.oracle()
     opts = o.case.options
     if opts.get("neighbourhood") == "hierarchy":
         from .golden import hierarchy_path
-        from .search import trace_hierarchy
+        from ..search import trace_hierarchy
 
         return hierarchy_path(trace_hierarchy(o.gbuffer(k), o.scene.camera_at(ctx.frame).eye, o.verts[i],
                                               cap=opts.get("cap")))
@@ -286,7 +286,7 @@ def _first_divergence(expected, observed):
 
 def _compare_vertices(ctx, k, G, C, cand_traces, prev_pixels):
     """reflection_pixel_k, virtual_vertex_k, flags_k, iterations_k, score_k, vertex_object_k."""
-    from .search import CULLED, HIDDEN, SearchResult, scores_at, virtual_vertices
+    from ..search import CULLED, HIDDEN, SearchResult, scores_at, virtual_vertices
 
     findings = []
     gp, cp = G[f"reflection_pixel_{k}"], C[f"reflection_pixel_{k}"]
@@ -337,7 +337,7 @@ def _compare_vertices(ctx, k, G, C, cand_traces, prev_pixels):
     if ctx.out is not None:
         gbm = G.get(f"gbuffer_mask_{k}")
         if gbm is not None:
-            from .io import write_png
+            from ..io import write_png
 
             img = np.where(gbm[..., None], 60, 0).astype(np.uint8) * np.ones(3, np.uint8)
             for sel, col in ((agree, (0, 160, 0)), (tie, (230, 200, 0)), (live & ~agree & ~tie, (220, 0, 0))):
@@ -468,7 +468,7 @@ def check(golden, candidate, loose=False, out=None, cases=None, progress=False) 
         Only these cases.
     """
     from .golden import read_manifest, sha256
-    from .io import write_json
+    from ..io import write_json
 
     golden, candidate = os.fspath(golden), os.fspath(candidate)
     manifest = read_manifest(golden)

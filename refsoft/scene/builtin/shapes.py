@@ -6,7 +6,7 @@ import numpy as np
 
 from ..mesh import Mesh, normalize_rows
 from ..primitives import _drop_degenerate, _grid_faces
-from ..scene import Transform
+from ..model import Transform
 
 
 def merge(parts, name="merged") -> Mesh:

@@ -1,11 +1,11 @@
-"""Edge-error kernel of :mod:`refsoft.tessellate` (float64 arithmetic, as the thesis's error is
+"""Edge-error kernel of :mod:`refsoft.search.tessellate` (float64 arithmetic, as the thesis's error is
 a small difference of cosines)."""
 
 import numpy as np
 from numba import prange
 
-from ._numba import kernel, like
-from .search._refine import surface_values
+from .._numba import kernel, like
+from ._refine import surface_values
 
 
 @kernel(inline=True)
@@ -19,7 +19,7 @@ def _unit(x, y, z):
 @kernel(parallel=True)
 def edge_errors(P, N, mask, origin, eye, verts, pixel, offset, e0, e1, subtexel, conv, out):
     """``out[i]``: the thesis's error of edge (e0[i], e1[i]) (see
-    :func:`refsoft.tessellate.edge_errors`), 1 where an end has no pixel or the point the error
+    :func:`refsoft.search.tessellate.edge_errors`), 1 where an end has no pixel or the point the error
     is taken at is not covered."""
     h, w = mask.shape
     for i in prange(e0.shape[0]):

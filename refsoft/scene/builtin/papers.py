@@ -6,7 +6,7 @@ import numpy as np
 
 from ..camera import Camera
 from ..primitives import box, capsule, cylinder, icosphere, plane_grid
-from ..scene import Animation, Scene, SceneObject, Transform
+from ..model import Animation, Scene, SceneObject, Transform
 from .shapes import bowl, merge, subdivide_long_edges, tf
 
 

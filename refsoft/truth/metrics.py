@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import RefsoftError
+from ..errors import RefsoftError
 
 #: Pixels within this many pixels (8-neighbour steps) of a reflector's silhouette form its rim;
 #: ``interior_disagreement`` leaves them out (region-C effects concentrate there).

@@ -15,13 +15,13 @@ import numpy as np
 
 
 def _scene_from_args(args):
-    from .scenes import load_scene
+    from ..scene.builtin import load_scene
 
     return load_scene(args.scene, width=args.width, height=args.height)
 
 
 def cmd_scenes(args) -> int:
-    from .scenes import BUILTIN_SCENES, load_scene
+    from ..scene.builtin import BUILTIN_SCENES, load_scene
 
     print(f"{'name':<10} {'vertices':>9} {'triangles':>10} {'reflectors':>10} {'frames':>6}  description")
     for name, (_, desc) in BUILTIN_SCENES.items():
@@ -31,10 +31,10 @@ def cmd_scenes(args) -> int:
 
 
 def cmd_gbuffer(args) -> int:
-    from . import raster
-    from .errors import RefsoftError
-    from .io import write_npz, write_png
-    from .visualize import normal_colors, position_colors, side_by_side
+    from .. import raster
+    from ..errors import RefsoftError
+    from ..io import write_npz, write_png
+    from ..visualize import normal_colors, position_colors, side_by_side
 
     scene = _scene_from_args(args)
     if args.frame < 0 or args.frame >= scene.n_frames:
@@ -48,8 +48,8 @@ def cmd_gbuffer(args) -> int:
     camera = scene.camera_at(args.frame)
     if args.widen != 1.0:
         camera = camera.widened(args.widen)
-    from .limits import check_frame_memory
-    from .render import RenderOptions
+    from ..limits import check_frame_memory
+    from ..frame.driver import RenderOptions
 
     check_frame_memory(scene, RenderOptions(widen=args.widen, precision=args.precision), 1, args.memory_limit)
     os.makedirs(args.out, exist_ok=True)
@@ -73,11 +73,11 @@ def cmd_gbuffer(args) -> int:
 
 
 def cmd_trace(args) -> int:
-    from . import search as search_mod
-    from .errors import RefsoftError
-    from .io import atomic_path, write_json, write_png
-    from .reflect import reflector_gbuffer, scene_vertices
-    from .search.pictures import trace_frames, trace_picture, write_trace_gif
+    from .. import search as search_mod
+    from ..errors import RefsoftError
+    from ..io import atomic_path, write_json, write_png
+    from ..search.reflect import reflector_gbuffer, scene_vertices
+    from ..search.pictures import trace_frames, trace_picture, write_trace_gif
 
     scene = _scene_from_args(args)
     if args.frame < 0 or args.frame >= scene.n_frames:
@@ -126,9 +126,9 @@ def _trace_hierarchy(args, scene, k, verts, owner):
     """``refsoft trace --search hierarchy``: the texels the traversal popped and tested, a table,
     trace.json and trace.png (the footprints of the popped texels, finer levels brighter; the
     chosen pixel red)."""
-    from .io import write_json, write_png
-    from .reflect import reflector_gbuffer
-    from .search import trace_hierarchy
+    from ..io import write_json, write_png
+    from ..search.reflect import reflector_gbuffer
+    from ..search import trace_hierarchy
 
     gb = reflector_gbuffer(scene, k, args.frame, args.widen, None, args.precision)
     tr = trace_hierarchy(gb, scene.camera_at(args.frame).eye, verts[args.vertex])
@@ -162,8 +162,8 @@ def _trace_hierarchy(args, scene, k, verts, owner):
 
 
 def cmd_render(args) -> int:
-    from .errors import RefsoftError
-    from .render import render
+    from ..errors import RefsoftError
+    from ..frame.driver import render
 
     scene = _scene_from_args(args)
     if args.frame is not None and args.frames is not None:
@@ -175,7 +175,7 @@ def cmd_render(args) -> int:
     else:
         frames = args.frames
     t0 = time.perf_counter()
-    from .render import SKIPS
+    from ..frame.driver import SKIPS
 
     off = set(SKIPS) if args.no_skips else {n.replace("-", "_") for n in args.no_skip or ()}
     # every frame is written as soon as it is rendered, then dropped (one frame in memory)
@@ -195,9 +195,9 @@ def cmd_render(args) -> int:
 
 
 def cmd_truth(args) -> int:
-    from .errors import RefsoftError
-    from .render import frame_indices
-    from .truth import truth
+    from ..errors import RefsoftError
+    from ..frame.driver import frame_indices
+    from ..truth.raytrace import render_truth as truth
 
     scene = _scene_from_args(args)
     if args.frame is not None and args.frames is not None:
@@ -215,7 +215,7 @@ def cmd_truth(args) -> int:
 
 
 def cmd_golden(args) -> int:
-    from .golden import CASES, GOLDEN_SIZE, write_golden
+    from ..conformance.golden import CASES, GOLDEN_SIZE, write_golden
 
     if args.list:
         for c in CASES:
@@ -230,7 +230,7 @@ def cmd_golden(args) -> int:
 
 
 def cmd_check(args) -> int:
-    from .check import check
+    from ..conformance.check import check
 
     out = args.out or os.path.join(args.candidate, "check")
     summary = check(args.golden, args.candidate, loose=args.loose, out=out, cases=args.case, progress=True)
@@ -248,8 +248,8 @@ def cmd_check(args) -> int:
 
 
 def cmd_bench(args) -> int:
-    from . import bench
-    from .errors import RefsoftError
+    from .. import bench
+    from ..errors import RefsoftError
 
     out = args.out or os.path.join("out", "bench", args.what)
     t0 = time.perf_counter()
@@ -286,7 +286,7 @@ def cmd_bench(args) -> int:
 def _frame_files(folder):
     import glob
 
-    from .errors import RefsoftError
+    from ..errors import RefsoftError
 
     if not os.path.isdir(folder):
         raise RefsoftError(f"{folder} is not a folder")
@@ -295,10 +295,10 @@ def _frame_files(folder):
 
 
 def cmd_compare(args) -> int:
-    from .errors import RefsoftError
-    from .io import write_json, write_png
-    from .metrics import frame_metrics
-    from .visualize import agreement_map, difference_image, side_by_side
+    from ..errors import RefsoftError
+    from ..io import write_json, write_png
+    from ..truth.metrics import frame_metrics
+    from ..visualize import agreement_map, difference_image, side_by_side
 
     render_files, truth_files = _frame_files(args.render_dir), _frame_files(args.truth_dir)
     common = sorted(set(render_files) & set(truth_files))
@@ -348,7 +348,7 @@ def cmd_compare(args) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from . import __version__
+    from .. import __version__
 
     p = argparse.ArgumentParser(prog="refsoft", description=__doc__.splitlines()[0])
     p.add_argument("--version", action="version", version=f"refsoft {__version__}")
@@ -468,7 +468,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
-    from .errors import RefsoftError
+    from ..errors import RefsoftError
 
     parser = build_parser()
     args = parser.parse_args(argv)
@@ -486,6 +486,3 @@ def main(argv=None) -> int:
         print("refsoft: interrupted", file=sys.stderr)
         return 130
 
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())

@@ -19,9 +19,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import constants
-from .reflect import reflect
-from .search import CULLED
+from .. import constants
+from ..search.reflect import reflect
+from ..search import CULLED
 
 
 def scores64(gbuffer, eye, vertices, pixels) -> np.ndarray:
@@ -44,7 +44,7 @@ def scores64(gbuffer, eye, vertices, pixels) -> np.ndarray:
 
 def compare_precisions(scene, frame: int = 0, **options) -> dict:
     """Search every reflector of ``scene`` at ``frame`` in float32 and in float64 (cold, the
-    other options as :func:`refsoft.reflect.reflect`) and classify the differences.
+    other options as :func:`refsoft.search.reflect.reflect`) and classify the differences.
 
     Returns
     -------

@@ -12,10 +12,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import RefsoftError
-from .raster import GBuffer, gbuffer
-from .scene import Scene
-from .search import SearchResult, search, virtual_vertices
+from ..errors import RefsoftError
+from ..raster import GBuffer, gbuffer
+from ..scene.model import Scene
+from . import SearchResult, search, virtual_vertices
 
 
 def scene_vertices(scene: Scene, frame: int = 0, meshes=None):

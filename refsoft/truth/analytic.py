@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .errors import RefsoftError
+from ..errors import RefsoftError
 
 #: Samples along the arc used to bracket the roots.
 ARC_SAMPLES = 64

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from .camera import Camera
-from .errors import SceneError
+from ..errors import SceneError
 from .mesh import Mesh
 
 

@@ -2,14 +2,14 @@
 
 Curved primitives carry analytic normals (a mirror's shape is its normals); flat pieces
 (box faces, cylinder caps, grids) have their own vertices so their normals stay flat. Each
-function returns a :class:`refsoft.mesh.Mesh` centred at the origin.
+function returns a :class:`refsoft.scene.mesh.Mesh` centred at the origin.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from .errors import SceneError
+from ..errors import SceneError
 from .mesh import Mesh, normalize_rows
 
 

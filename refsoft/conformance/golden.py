@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .errors import RefsoftError
+from ..errors import RefsoftError
 
 GOLDEN_FORMAT = "refsoft-golden-1"
 TRACE_FORMAT = "refsoft-traces-1"
@@ -46,7 +46,7 @@ class Case:
     def load(self):
         if self.scene == "pixel_grid":
             return pixel_grid_scene()
-        from .scenes import load_scene
+        from ..scene.builtin import load_scene
 
         return load_scene(self.scene, width=GOLDEN_SIZE[0], height=GOLDEN_SIZE[1])
 
@@ -57,10 +57,10 @@ def pixel_grid_scene():
     pixel centres (so the fill rule decides them), a box and a ball in front of it, and a strip of
     triangles on the plane x = y, which the whole setup is symmetric about: walks toward those
     vertices meet exact ties between two moves, which only the fixed visiting order decides."""
-    from .camera import Camera
-    from .mesh import Mesh
-    from .primitives import box, icosphere
-    from .scene import Scene, SceneObject, Transform
+    from ..scene.camera import Camera
+    from ..scene.mesh import Mesh
+    from ..scene.primitives import box, icosphere
+    from ..scene.model import Scene, SceneObject, Transform
 
     w, h = GOLDEN_SIZE
     # pixel centres at x = -w/2 + c + 0.5, y = h/2 - r - 0.5: corners on half-integers
@@ -152,7 +152,7 @@ def hierarchy_path(trace) -> list:
 
 def hierarchy_record(gbuffer, eye, vertex, index, cap=None) -> dict:
     """One vertex's hierarchy search in the trace format (``path`` as :func:`hierarchy_path`)."""
-    from .search import trace_hierarchy
+    from ..search import trace_hierarchy
 
     tr = trace_hierarchy(gbuffer, eye, vertex, cap=cap)
     return {"vertex": int(index), "path": hierarchy_path(tr), "pixel": tr["pixel"], "iterations": tr["tests"],
@@ -166,9 +166,9 @@ def traced_vertices(n: int) -> np.ndarray:
 
 def render_case(case: Case):
     """Yield ``(frame index, arrays, traces)`` for each frame of a case."""
-    from .reflect import reflector_gbuffer, scene_vertices
-    from .render import FrameDriver, RenderOptions
-    from .search import CULLED, trace_search
+    from ..search.reflect import reflector_gbuffer, scene_vertices
+    from ..frame.driver import FrameDriver, RenderOptions
+    from ..search import CULLED, trace_search
 
     scene = case.load()
     opts = RenderOptions(**case.options)
@@ -213,8 +213,8 @@ def write_golden(out, cases=None, progress=False) -> dict:
     """
     import numba
 
-    from . import __version__
-    from .io import write_json, write_npz
+    from .. import __version__
+    from ..io import write_json, write_npz
 
     chosen = list(CASES) if cases is None else [case_by_name(c) for c in cases]
     out = os.fspath(out)
@@ -227,7 +227,7 @@ def write_golden(out, cases=None, progress=False) -> dict:
     files = {}
     entries = []
     for case in chosen:
-        from .render import RenderOptions
+        from ..frame.driver import RenderOptions
 
         opts = RenderOptions(**case.options)
         entries.append({"name": case.name, "scene": case.scene, "frames": list(case.frames),

@@ -6,7 +6,7 @@ import numpy as np
 
 from ..camera import Camera
 from ..primitives import box, cylinder, icosphere, plane_grid, torus
-from ..scene import Animation, Scene, SceneObject, Transform
+from ..model import Animation, Scene, SceneObject, Transform
 
 
 def sphere_scene() -> Scene:

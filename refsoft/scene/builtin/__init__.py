@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import os
 
-from ..errors import SceneError
-from ..scene import Scene
+from ...errors import SceneError
+from ..model import Scene
 from .basic import concave_scene, ellipsoid_scene, planar_scene, quad_scene, sphere_scene, torus_scene
 from .papers import ants_scene, kitchen_scene, ufo_scene
 
@@ -44,7 +44,7 @@ def load_scene(name_or_path, **overrides) -> Scene:
     """
     from dataclasses import replace
 
-    from ..scene_toml import load_scene_file
+    from ..toml import load_scene_file
 
     key = os.fspath(name_or_path)
     if key in BUILTIN_SCENES:

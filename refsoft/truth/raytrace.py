@@ -10,8 +10,8 @@ triangle: the hit point and its barycentrics are recomputed in float64 on that t
 
 For reflectors that are spheres (every vertex on one sphere: icosphere, uv-sphere) the truth
 also holds each searched vertex's exact reflection point (Alhazen's problem, solved by
-:func:`refsoft.analytic.sphere_reflection_points`) and its exact virtual vertex, so per-vertex
-errors can be measured (:mod:`refsoft.metrics`).
+:func:`refsoft.truth.analytic.sphere_reflection_points`) and its exact virtual vertex, so per-vertex
+errors can be measured (:mod:`refsoft.truth.metrics`).
 
 Outputs follow DESIGN section 7: ``image``, ``object_id``, ``reflected_id``, plus
 ``reflected_hit`` (H, W, 3) float64, the world position hit by each reflected ray (valid where
@@ -27,10 +27,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from .analytic import fit_sphere, sphere_reflection_points
-from .errors import RefsoftError
-from .raster import color_pass, shade, to_uint8
-from .reflect import scene_vertices
-from .scene import Scene
+from ..errors import RefsoftError
+from ..raster import color_pass, shade, to_uint8
+from ..search.reflect import scene_vertices
+from ..scene.model import Scene
 
 TRUTH_STAGES = ("main", "primary", "trace", "shade", "exact", "total")
 
@@ -167,8 +167,8 @@ class TruthRenderer:
     """Ray-traces frames of a scene (caches the Embree scene while no reflected object moves)."""
 
     def __init__(self, scene: Scene, exact: bool = True, memory_limit=None):
-        from .limits import check_frame_memory
-        from .render import RenderOptions
+        from ..limits import check_frame_memory
+        from ..frame.driver import RenderOptions
 
         if not isinstance(scene, Scene):
             raise RefsoftError(f"scene must be a refsoft.Scene, got {type(scene).__name__}")
@@ -264,7 +264,7 @@ def truth_stats(frames) -> dict:
                         "median_total_ms": float(np.median([f.time_ms["total"] for f in frames])) if frames else 0.0}}
 
 
-def truth(scene, frames=None, out=None, progress=False, exact=True, memory_limit=None, width=None,
+def render_truth(scene, frames=None, out=None, progress=False, exact=True, memory_limit=None, width=None,
           height=None):
     """Ray-trace frames of a scene (the Python face of ``refsoft truth``).
 
@@ -281,7 +281,7 @@ def truth(scene, frames=None, out=None, progress=False, exact=True, memory_limit
     exact : bool
         Also solve the exact reflection points of spherical reflectors.
     memory_limit : int or str, optional
-        As :func:`refsoft.render.render`.
+        As :func:`refsoft.render`.
     width, height : int, optional
         Image size (replaces the scene camera's).
 
@@ -290,9 +290,9 @@ def truth(scene, frames=None, out=None, progress=False, exact=True, memory_limit
     frames : list of TruthFrame
     stats : dict
     """
-    from .io import write_json
-    from .render import frame_indices, run_frames
-    from .scenes import load_scene
+    from ..io import write_json
+    from ..frame.driver import frame_indices, run_frames
+    from ..scene.builtin import load_scene
 
     if not isinstance(scene, Scene):
         scene = load_scene(scene, width=width, height=height)

@@ -1,0 +1,8 @@
+"""The frame driver and the output contract (DESIGN sections 1, 5 and 7): the main view, one
+reflection method per reflector, the composite, and the ``frame_NNNN.npz`` / ``stats.json``
+outputs, frame after frame."""
+
+from .driver import Frame, FrameDriver, RenderOptions, frame_indices, frame_stats, render, run_frames, write_frame
+
+__all__ = ["Frame", "FrameDriver", "RenderOptions", "render", "frame_indices", "frame_stats", "run_frames",
+           "write_frame"]
