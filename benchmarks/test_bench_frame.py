@@ -7,7 +7,7 @@ Run: ``pytest benchmarks/test_bench_frame.py --benchmark-columns=min,median,roun
 import pytest
 
 import refsoft
-from refsoft.frame.driver import FrameDriver
+from refsoft.frame import FrameDriver
 
 SCENES = ["kitchen", "ufo", "ants"]
 
@@ -61,4 +61,4 @@ def test_frame_truth(benchmark, name):
 
     fr = benchmark.pedantic(traced, rounds=5)
     _stages(benchmark, fr)
-    benchmark.extra_info["reflector_pixels"] = fr.counts["reflector_pixels"]
+    benchmark.extra_info["reflector_pixels"] = fr.report["reflector_pixels"]

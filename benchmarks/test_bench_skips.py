@@ -8,7 +8,7 @@ Run: ``pytest benchmarks/test_bench_skips.py --benchmark-columns=min,median,roun
 import pytest
 
 import refsoft
-from refsoft.frame.driver import FrameDriver, RenderOptions
+from refsoft.frame import FrameDriver, RenderOptions
 
 SCENES = ["sphere", "ellipsoid", "planar", "concave", "torus", "quad", "kitchen", "ufo", "ants"]
 FRAMES = 6

@@ -11,8 +11,11 @@ import pytest
 
 import refsoft
 from refsoft.raster import color_pass
-from refsoft.search.reflect import reflect, reflector_gbuffer, scene_vertices
-from refsoft.frame.driver import _stencil_box, _virtual_parts, _virtual_pass, composite
+from refsoft.search.reflect import reflect, reflector_gbuffer
+from refsoft.scene import scene_vertices
+from refsoft.frame.composite import composite
+from refsoft.search.virtual import virtual_parts as _virtual_parts, virtual_pass as _virtual_pass
+from refsoft.seam import stencil_box as _stencil_box
 from refsoft.search import search
 
 SCENES = ["kitchen", "ufo", "ants"]

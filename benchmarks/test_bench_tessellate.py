@@ -12,7 +12,7 @@ import pytest
 
 import refsoft
 from refsoft.truth.metrics import disagreement, interior_disagreement
-from refsoft.frame.driver import FrameDriver, RenderOptions
+from refsoft.frame import FrameDriver, RenderOptions
 
 SETTINGS = {
     "none": {},

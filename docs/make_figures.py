@@ -63,7 +63,8 @@ def fill_rule_figure():
 
 def trace_figure():
     from refsoft import search
-    from refsoft.search.reflect import reflector_gbuffer, scene_vertices
+    from refsoft.search.reflect import reflector_gbuffer
+    from refsoft.scene import scene_vertices
     from refsoft.search.pictures import trace_picture
 
     scene = refsoft.load_scene("sphere", width=320, height=240)
@@ -80,7 +81,7 @@ def trace_figure():
 
 def frame_figure():
     """The sphere scene rendered with each hidden-vertex mode, and a kitchen frame."""
-    from refsoft.frame.driver import FrameDriver, RenderOptions
+    from refsoft.frame import FrameDriver, RenderOptions
 
     scene = refsoft.load_scene("sphere", width=320, height=240)
     pics = [FrameDriver(scene, RenderOptions(inverse=mode)).render_frame(0).image
@@ -97,7 +98,7 @@ def frame_figure():
 
 def truth_figure():
     """Render | truth | agreement map, for the sphere (discard) and the quad (search)."""
-    from refsoft.frame.driver import FrameDriver, RenderOptions
+    from refsoft.frame import FrameDriver, RenderOptions
     from refsoft.truth.raytrace import TruthRenderer
     from refsoft.visualize import agreement_map
 
@@ -113,7 +114,7 @@ def truth_figure():
 def refine_figure():
     """Agreement maps of the quad scene (search mode) against the truth, cropped to the ball:
     the paper's method, sub-texel points, adaptive tessellation, both."""
-    from refsoft.frame.driver import FrameDriver, RenderOptions
+    from refsoft.frame import FrameDriver, RenderOptions
     from refsoft.truth.raytrace import TruthRenderer
     from refsoft.visualize import agreement_map
 

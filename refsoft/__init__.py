@@ -12,7 +12,8 @@ from .errors import CameraError, LimitError, MeshError, RefsoftError, SceneError
 from .scene import (Animation, Camera, Mesh, Scene, SceneObject, Transform, builtin_names, load_mesh, load_scene,
                     primitives)
 from . import raster, search
-from .frame import FrameDriver, RenderOptions, render
+from .frame import FrameDriver, render
+from .options import RenderOptions
 from .truth import TruthRenderer, render_truth
 
 __version__ = "0.1.0"

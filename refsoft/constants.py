@@ -42,6 +42,21 @@ DIFFUSE = 0.7
 #: Colour of pixels no object covers (linear RGB in [0, 1]).
 BACKGROUND_COLOR = np.array([0.08, 0.09, 0.12])
 
+# --- Option vocabularies (the choices the API and the CLI accept) ---------------------------
+#: Reflection methods: the vertex search's linear walk from a start pixel (Estalella, the
+#: papers' method) and Szabo's ray-cone hierarchy.
+METHODS = ("walk", "hierarchy")
+#: The walk's neighbourhoods -> candidates per iteration (current pixel included).
+NEIGHBOURHOODS = {"cross": 5, "box": 9}
+#: Hidden-vertex modes (DESIGN 4.6).
+INVERSE_MODES = ("plane", "search", "discard")
+#: Working precisions of the G-buffer and the search.
+PRECISIONS = ("float32", "float64")
+#: The exact skips of a render: outputs are bit-identical with them on or off.
+SKIPS = ("cull_reflectors", "reuse", "cull_virtual", "crop_virtual")
+#: Adaptive tessellation levels accepted.
+MAX_TESSELLATION_LEVEL = 8
+
 # --- Camera validation ---------------------------------------------------------------------
 #: |cross(forward, up)| below this means up is parallel to the view direction.
 CAMERA_PARALLEL_TOL = 1e-9

@@ -125,7 +125,7 @@ def frame_bytes(scene, options, frames_kept: int = 1) -> dict:
     kept_v = n_refl * n_verts * VERTEX_OUTPUT_BYTES
     cache = n_refl * (g_px * GBUFFER_REUSE_BYTES[p] + n_verts * VERTEX_OUTPUT_BYTES) if options.reuse else 0
     work = g_px * GBUFFER_WORK_BYTES[p] + n_verts * VERTEX_WORK_BYTES + n_tris * TRIANGLE_WORK_BYTES + view_px * 16
-    if options.neighbourhood == "hierarchy":
+    if options.method == "hierarchy":
         if options.gbuffer_size is not None:
             side = max(int(options.gbuffer_size[0]), int(options.gbuffer_size[1]))
         else:

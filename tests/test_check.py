@@ -13,7 +13,8 @@ from refsoft import cli
 from refsoft.conformance.check import check
 from refsoft.conformance.golden import case_by_name, write_golden
 from refsoft.io import write_npz
-from refsoft.search.reflect import reflector_gbuffer, scene_vertices
+from refsoft.search.reflect import reflector_gbuffer
+from refsoft.scene import scene_vertices
 from refsoft.search import start_pixel
 
 @pytest.fixture(scope="module")

@@ -51,8 +51,8 @@ def test_scenes_lists_builtins(capsys):
     (["gbuffer", "sphere", "--width", "0"], "width must be positive"),
     (["gbuffer", "sphere", "--width", "100000"], "exceeds the limit"),
     (["gbuffer", "sphere", "--reflector", "2"], "not a reflector"),
-    (["gbuffer", "sphere", "--frame", "3"], "--frame must be in"),
-    (["gbuffer", "sphere", "--widen", "0.5"], "widen factor"),
+    (["gbuffer", "ellipsoid", "--frame", "99"], "frame must be an integer in [0, "),
+    (["gbuffer", "sphere", "--widen", "0.5"], "widen must be a number >= 1"),
     (["gbuffer", "missing.toml"], "scene file not found"),
 ])
 def test_bad_input_gives_one_line_and_exit_2(tmp_path, args, message):
@@ -130,9 +130,9 @@ def test_trace_command_coherent_frame_starts_at_previous_pixel(tmp_path, capsys)
 
 
 @pytest.mark.parametrize("args, message", [
-    (["trace", "sphere", "--vertex", "999999"], "--vertex must be in"),
+    (["trace", "sphere", "--vertex", "999999"], "vertex must be an integer in [0, "),
     (["trace", "sphere", "--vertex", "1", "--reflector", "3"], "not a reflector"),
-    (["trace", "sphere", "--vertex", "1", "--frame", "2"], "--frame must be in"),
+    (["trace", "ellipsoid", "--vertex", "1", "--frame", "99"], "frame must be an integer in [0, "),
 ])
 def test_trace_bad_input(tmp_path, args, message):
     r = run_cli(*args, "--out", str(tmp_path / "o"), cwd=tmp_path)

@@ -9,9 +9,10 @@ import pytest
 import naive
 import refsoft
 from refsoft import cli, search
-from refsoft.search.reflect import reflector_gbuffer, scene_vertices
-from refsoft.frame.driver import FrameDriver, RenderOptions
-from refsoft.search import hierarchy, packed
+from refsoft.search.reflect import reflector_gbuffer
+from refsoft.scene import scene_vertices
+from refsoft.frame import FrameDriver, RenderOptions
+from refsoft.search import _packed as packed, hierarchy
 
 W, H = 160, 120
 
@@ -63,7 +64,7 @@ def _contains64(s, c, v):
 
 def test_equals_the_exhaustive_argmax_where_the_optimum_is_reachable(case):
     scene, gb, verts, (G, mask, conv, (r0, c0)), pyr = case
-    res = search.search(gb, scene.camera.eye, verts, "hierarchy")
+    res = search.search(gb, scene.camera.eye, verts, method="hierarchy")
     eye = scene.camera.eye - gb.origin
     P, N = gb.position[r0:r0 + mask.shape[0], c0:c0 + mask.shape[1]], gb.normal[r0:r0 + mask.shape[0], c0:c0 + mask.shape[1]]
     levels = [_level(pyr, lvl) for lvl in range(len(pyr[3]))]
@@ -89,33 +90,33 @@ def test_equals_the_exhaustive_argmax_where_the_optimum_is_reachable(case):
 
 def test_trace_ends_where_the_kernel_ends(case):
     scene, gb, verts, _, _ = case
-    res = search.search(gb, scene.camera.eye, verts, "hierarchy")
+    res = search.search(gb, scene.camera.eye, verts, method="hierarchy")
     for i in range(0, len(verts), 11):
         tr = search.trace_hierarchy(gb, scene.camera.eye, verts[i])
         if res.flags[i] & search.CAPPED:
-            assert tr["pixel"] is None
+            assert tr.pixel is None
             continue
-        assert tr["pixel"] == [int(x) for x in res.pixel[i]] and tr["tests"] <= res.iterations[i]
+        assert tr.pixel == [int(x) for x in res.pixel[i]] and tr.tests <= res.iterations[i]
         if not res.flags[i] & search.HIDDEN:  # no inverse walk adds to the count
-            assert tr["tests"] == res.iterations[i]
-        assert tr["steps"][-1]["event"] == "chosen" and tr["steps"][0]["level"] == len(case[4][3]) - 1
+            assert tr.tests == res.iterations[i]
+        assert tr.steps[-1]["event"] == "chosen" and tr.steps[0]["level"] == len(case[4][3]) - 1
 
 
 def test_options_and_break_level(case):
     scene, gb, verts, _, _ = case
-    coarse = search.search(gb, scene.camera.eye, verts, "hierarchy", break_level=2)
-    fine = search.search(gb, scene.camera.eye, verts, "hierarchy")
+    coarse = search.search(gb, scene.camera.eye, verts, method="hierarchy", break_level=2)
+    fine = search.search(gb, scene.camera.eye, verts, method="hierarchy")
     assert np.all(gb.mask[coarse.pixel[:, 0], coarse.pixel[:, 1]])
     assert coarse.iterations.mean() != fine.iterations.mean()
     with pytest.raises(refsoft.RefsoftError, match="cone_factor"):
-        search.search(gb, scene.camera.eye, verts, "hierarchy", cone_factor=0.5)
+        search.search(gb, scene.camera.eye, verts, method="hierarchy", cone_factor=0.5)
     with pytest.raises(refsoft.RefsoftError, match="trace_hierarchy"):
         search.trace_search(gb, scene.camera.eye, verts[0], "hierarchy")
 
 
 def test_frames_render_deterministically_with_the_hierarchy():
     scene = refsoft.load_scene("quad", width=96, height=72)
-    opts = RenderOptions(neighbourhood="hierarchy")
+    opts = RenderOptions(method="hierarchy")
     a = [FrameDriver(scene, opts).render_frame(f).arrays for f in (0,)][0]
     numba.set_num_threads(1)
     try:
@@ -129,9 +130,9 @@ def test_frames_render_deterministically_with_the_hierarchy():
 
 
 def test_cli_trace_and_render_with_the_hierarchy(tmp_path, capsys):
-    assert cli.main(["trace", "sphere", "--vertex", "100", "--search", "hierarchy", "--width", "80", "--height", "60",
+    assert cli.main(["trace", "sphere", "--vertex", "100", "--method", "hierarchy", "--width", "80", "--height", "60",
                      "--out", str(tmp_path / "t")]) == 0
     out = capsys.readouterr().out
     assert "ray-cone hierarchy" in out and "chosen" in out and (tmp_path / "t" / "trace.png").exists()
-    assert cli.main(["render", "sphere", "--search", "hierarchy", "--width", "48", "--height", "36",
+    assert cli.main(["render", "sphere", "--method", "hierarchy", "--width", "48", "--height", "36",
                      "--out", str(tmp_path / "r")]) == 0

@@ -10,7 +10,7 @@ import refsoft
 from refsoft import cli
 from refsoft.errors import LimitError, RefsoftError
 from refsoft.limits import check_frame_memory, frame_bytes, memory_limit, parse_bytes
-from refsoft.frame.driver import FrameDriver, RenderOptions, render
+from refsoft.frame import FrameDriver, RenderOptions, render
 from refsoft.truth.raytrace import render_truth as truth
 
 
@@ -66,7 +66,7 @@ def test_hierarchy_estimate_bounds_its_traced_peak(name):
     the traced peak where the mirror fills much of the view (planar: 1.3x), above it for a
     small mirror (sphere: 4.1x)."""
     scene = refsoft.load_scene(name, width=320, height=240)
-    opts = RenderOptions(neighbourhood="hierarchy")
+    opts = RenderOptions(method="hierarchy")
     FrameDriver(scene, opts).render_frame(0)
     tracemalloc.start()
     try:

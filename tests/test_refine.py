@@ -10,7 +10,7 @@ from naive import naive_refine
 from refsoft import Camera, primitives, raster, search
 from refsoft.truth.analytic import sphere_reflection_points
 from refsoft.truth.metrics import virtual_distance, window_to_pixel
-from refsoft.frame.driver import FrameDriver, RenderOptions
+from refsoft.frame import FrameDriver, RenderOptions
 from refsoft.search.refine import refine, surface_at
 from refsoft.search.tessellate import edge_errors, tessellate
 
@@ -135,8 +135,8 @@ def test_adaptive_tessellation_leaves_wholly_hidden_triangles_whole():
     faces = hidden[:30].reshape(10, 3)
     normals = np.tile([0.0, 0.0, 1.0], (len(verts), 1))
     args = (gb, cam.eye, verts, normals, faces, np.ones(10, np.int32), res.pixel, res.flags)
-    assert tessellate(*args, 1e-12, 2)["searched"] == 0
-    assert tessellate(*args, 0.0, 1)["searched"] > 0  # full tessellation splits every triangle
+    assert tessellate(*args, 1e-12, 2).searched == 0
+    assert tessellate(*args, 0.0, 1).searched > 0  # full tessellation splits every triangle
 
 
 def test_refine_with_tessellation_converges_to_the_truth():

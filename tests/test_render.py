@@ -14,7 +14,7 @@ import pytest
 import refsoft
 from refsoft import Camera, Scene, SceneObject, Transform, primitives, raster
 from refsoft.raster import _setup
-from refsoft.frame.driver import FrameDriver, RenderOptions, render
+from refsoft.frame import FrameDriver, RenderOptions, render
 from scene_data import ANIMATED
 
 W, H = 160, 120
@@ -153,7 +153,9 @@ def test_interrupted_render_leaves_no_torn_file(tmp_path):
 
 
 @pytest.mark.parametrize("kwargs, message", [
-    (dict(neighbourhood="hex"), "search must be one of"),
+    (dict(neighbourhood="hex"), "neighbourhood must be one of"),
+    (dict(neighbourhood="hierarchy"), "method='hierarchy'"),
+    (dict(method="ldt2"), "method must be one of"),
     (dict(inverse="x"), "inverse must be one of"),
     (dict(widen=0.5), "widen"),
     (dict(precision="float16"), "precision"),

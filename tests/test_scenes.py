@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import refsoft
-from refsoft.frame.driver import render
+from refsoft.frame import render
 from refsoft.scene.builtin import BUILTIN_SCENES
 
 SIZES = {"kitchen": (15_000, 1), "ufo": (82_000, 1), "ants": (30_000, 8)}

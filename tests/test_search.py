@@ -13,7 +13,8 @@ import refsoft
 from naive import naive_scores, naive_search
 from refsoft import Camera, Mesh, Scene, SceneObject, Transform, primitives, raster, search
 from refsoft.truth.analytic import sphere_reflection_points
-from refsoft.search.reflect import reflect, reflector_gbuffer, scene_vertices
+from refsoft.search.reflect import reflect, reflector_gbuffer
+from refsoft.scene import scene_vertices
 from refsoft.search import _kernels
 
 W, H = 320, 240
@@ -37,7 +38,7 @@ def ellipsoid_scene(scale=(1.4, 1.0, 0.8), rotate=(0, 30, 0)):
 def exhaustive(gb, eye, verts, inverse=False):
     """Best score over the whole G-buffer per vertex (the kernel's own score, checked elsewhere)."""
     dt = gb.position.dtype.type
-    G, mask, conv, (r0, c0) = search.packed(gb, eye)
+    G, mask, conv, (r0, c0) = search._packed(gb, eye)
     best = np.empty(len(verts), dtype=dt)
     where = np.empty((len(verts), 2), dtype=np.int64)
     field = np.full(mask.shape, -np.inf, dtype=dt)
@@ -78,7 +79,7 @@ def test_score_is_float32_arithmetic_bit_for_bit(sphere_case):
     scene, verts, gb = sphere_case
     eye = (scene.camera.eye - gb.origin).astype(np.float32)
     P, N = gb.position[gb.mask], gb.normal[gb.mask]
-    G, mask, conv, (r0, c0) = search.packed(gb, scene.camera.eye)
+    G, mask, conv, (r0, c0) = search._packed(gb, scene.camera.eye)
     differs = 0
     for inverse in (False, True):
         for v in verts[::400]:
@@ -511,7 +512,7 @@ def test_results_do_not_depend_on_vertex_order(sphere_case):
 def _recording_search(gb, eye, verts, neighbourhood, inverse, cap, starts=None):
     """Every vertex searched by the recording walk (search_one with a record buffer, as
     trace_search calls it), one call per vertex: pixel, score, margin, iterations, flags."""
-    G, mask, conv, (r0, c0) = search.packed(gb, eye)
+    G, mask, conv, (r0, c0) = search._packed(gb, eye)
     dt = gb.position.dtype
     n_cand = search.NEIGHBOURHOODS[neighbourhood]
     sr, sc = search.start_pixel(gb.mask)

@@ -11,7 +11,7 @@ import refsoft
 from refsoft import Camera, Scene, SceneObject, Transform, primitives
 from refsoft.search import skips
 from refsoft.raster import _setup, rasterize
-from refsoft.frame.driver import SKIPS, FrameDriver, RenderOptions
+from refsoft.frame import SKIPS, FrameDriver, RenderOptions
 from refsoft.scene.model import Animation
 
 W, H = 96, 72
@@ -95,7 +95,8 @@ def test_builtin_animations_unchanged_by_skips(name):
 def test_reused_search_equals_search_from_the_last_pixel():
     """The reuse rule (1 iteration; HIDDEN and BORDER kept; CAPPED and inverse searches redone)
     checked on its own against the search kernel."""
-    from refsoft.search.reflect import reflect, scene_vertices
+    from refsoft.search.reflect import reflect
+    from refsoft.scene import scene_vertices
 
     scene = _stage_scene()
     for inverse in ("plane", "search", "discard"):

@@ -7,8 +7,8 @@ import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
 from refsoft import Camera, Mesh, Scene, SceneObject, Transform, primitives
-from refsoft.search.reflect import scene_vertices
-from refsoft.frame.driver import FrameDriver, RenderOptions
+from refsoft.scene import scene_vertices
+from refsoft.frame import FrameDriver, RenderOptions
 from refsoft.search import BORDER, CAPPED, CULLED, HIDDEN, NEIGHBOURHOODS, default_cap
 
 W, H = 64, 48

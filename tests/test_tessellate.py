@@ -6,7 +6,7 @@ import pytest
 
 import refsoft
 from refsoft import primitives
-from refsoft.frame.driver import FrameDriver, RenderOptions
+from refsoft.frame import FrameDriver, RenderOptions
 from refsoft.search.tessellate import KEY_BASE, _edge_keys, _split
 
 
@@ -73,7 +73,7 @@ def test_no_crack_where_the_thesis_rule_leaves_some(monkeypatch):
     the thesis's rule (split triangles only, T-junctions left) empties some (measured: 66)."""
     import importlib
 
-    tess = importlib.import_module("refsoft.search.tessellate")
+    tess = importlib.import_module("refsoft.search.virtual")
     scene = refsoft.load_scene("sphere", width=320, height=240)
     floor = [i + 1 for i, o in enumerate(scene.objects) if o.name == "floor"][0]
     opts = dict(inverse="discard", tessellate=1e-3, max_level=3)

@@ -10,7 +10,7 @@ from refsoft.truth import metrics
 from refsoft.truth.analytic import fit_sphere, sphere_reflection_points
 from refsoft.scene.primitives import icosphere, plane_grid
 from refsoft.raster import color_pass
-from refsoft.frame.driver import render
+from refsoft.frame import render
 from refsoft.truth.raytrace import TruthRenderer, exact_sphere_vertices, ray_triangle, render_truth as truth
 
 FLOOR_Y = -1.5

@@ -2,7 +2,7 @@
 
 One factor at a time around the defaults (the paper's method): each knob takes each of its
 values while the others keep theirs. The knobs: G-buffer resolution scale, widen factor, search
-method (crosshair, box, Szabo's hierarchy), precision, hidden-vertex mode and Szabo's adaptive
+method (walk or Szabo's hierarchy), neighbourhood (crosshair or box), precision, hidden-vertex mode and Szabo's adaptive
 tessellation (threshold 1e-3, 3 levels), and sub-texel
 reflection points (``refine``). For every scene and setting: the median run time of
 ``repeats`` coherent renders of frames 0..F-1 (a fresh driver each time, JIT warmed up before),
@@ -25,7 +25,8 @@ from ._common import machine, markdown_table, median_time, plt_or_none, progress
 KNOBS = {
     "gbuffer_scale": (1.0, 0.5, 2.0),
     "widen": (1.0, 1.25, 1.5),
-    "neighbourhood": ("cross", "box", "hierarchy"),
+    "neighbourhood": ("cross", "box"),
+    "method": ("walk", "hierarchy"),
     "precision": ("float32", "float64"),
     "inverse": ("plane", "search", "discard"),
     "tessellate": (None, 1e-3),
@@ -46,7 +47,7 @@ def settings(knobs=None) -> list:
 
 
 def _options(setting, width, height):
-    from ..frame.driver import RenderOptions
+    from ..options import RenderOptions
 
     opts = dict(setting)
     scale = opts.pop("gbuffer_scale", 1.0)
@@ -86,7 +87,7 @@ def sweep(scenes=("sphere", "quad", "kitchen"), out=None, width=320, height=240,
           progress_bar=False) -> list:
     """Run the sweep; returns the rows (also written to ``out``: ``sweep.csv``, ``sweep.md`` and,
     with matplotlib, ``pareto.png``)."""
-    from ..frame.driver import FrameDriver
+    from ..frame import FrameDriver
     from ..scene.builtin import load_scene
     from ..truth.raytrace import TruthRenderer
 

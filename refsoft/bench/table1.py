@@ -20,7 +20,7 @@ COLUMNS = ["scene", "frames", "max_frame_mean", "paper_max_frame_mean", "total_m
 
 def table1(scenes=("kitchen", "ufo", "ants"), out=None, width=1024, height=768, frames=None, progress_bar=False) -> list:
     """Render each animation coherently (``frames``: the first N, default all) and tabulate."""
-    from ..frame.driver import FrameDriver, frame_stats
+    from ..frame import FrameDriver, frame_stats
     from ..scene.builtin import load_scene
 
     rows = []

@@ -90,7 +90,7 @@ class _Oracle:
 
     def __init__(self, entry, frame):
         from .golden import Case
-        from ..search.reflect import scene_vertices
+        from ..scene import scene_vertices
 
         self.entry, self.frame = entry, frame
         self.case = Case(entry["name"], entry["scene"], tuple(entry["frames"]), _options(entry["options"]))
@@ -263,12 +263,10 @@ def _oracle_trace(ctx, k, i, prev_pixel):
 
     o = ctx.oracle()
     opts = o.case.options
-    if opts.get("neighbourhood") == "hierarchy":
-        from .golden import hierarchy_path
+    if opts.get("method") == "hierarchy":
         from ..search import trace_hierarchy
 
-        return hierarchy_path(trace_hierarchy(o.gbuffer(k), o.scene.camera_at(ctx.frame).eye, o.verts[i],
-                                              cap=opts.get("cap")))
+        return trace_hierarchy(o.gbuffer(k), o.scene.camera_at(ctx.frame).eye, o.verts[i], cap=opts.get("cap")).path()
     tr = trace_search(o.gbuffer(k), o.scene.camera_at(ctx.frame).eye, o.verts[i], opts.get("neighbourhood", "cross"),
                       opts.get("inverse", "plane"), prev_pixel, opts.get("cap"))
     return [[int(x) for x in s["pixel"]] for s in tr.steps]
@@ -354,7 +352,7 @@ def _compare_vertices(ctx, k, G, C, cand_traces, prev_pixels):
             sub = np.flatnonzero(tie)
             res = SearchResult(cp[sub].astype(np.int32), np.zeros(len(sub)), np.zeros(len(sub)), np.ones(len(sub), np.int32),
                                gflags[sub], o.case.options.get("neighbourhood", "cross"),
-                               o.case.options.get("inverse", "plane"), 1)
+                               o.case.options.get("inverse", "plane"), 1, o.case.options.get("method", "walk"))
             gv[sub] = virtual_vertices(gb, res, o.verts[sub]).astype(np.float64)
         if extent is None:
             extent = ctx.oracle().extent if not np.array_equal(gv[agree | tie], cv[agree | tie]) else 1.0

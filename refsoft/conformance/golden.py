@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .. import keys
 from ..errors import RefsoftError
 
 GOLDEN_FORMAT = "refsoft-golden-1"
@@ -104,7 +105,7 @@ CASES = (
     Case("torus_search_box", "torus", (0, 1), {"inverse": "search", "neighbourhood": "box"}),
     Case("kitchen_widen", "kitchen", (20, 21), {"widen": 1.3}),
     Case("planar_cold", "planar", (0, 1), {"coherence": False}),
-    Case("sphere_hierarchy", "sphere", (0,), {"neighbourhood": "hierarchy"}),
+    Case("sphere_hierarchy", "sphere", (0,), {"method": "hierarchy"}),
 )
 
 
@@ -143,20 +144,15 @@ def trace_record(trace, vertex_index: int) -> dict:
             "stop": trace.stop}
 
 
-def hierarchy_path(trace) -> list:
-    """The walk of a hierarchy search as ``[level, row, col]`` of every texel popped, then the
-    chosen base pixel ``[0, row, col]`` (level-0 entries in G-buffer pixels; higher levels in the
-    pyramid over the mirror's cropped box, whose origin the trace gives)."""
-    return [[s["level"], *s["texel"]] for s in trace["steps"] if s["event"] in ("popped", "chosen")]
-
-
 def hierarchy_record(gbuffer, eye, vertex, index, cap=None) -> dict:
-    """One vertex's hierarchy search in the trace format (``path`` as :func:`hierarchy_path`)."""
+    """One vertex's hierarchy search in the trace format: ``path`` lists ``[level, row, col]``
+    of every texel popped, then the chosen base pixel ``[0, row, col]`` (level-0 entries in
+    G-buffer pixels; higher levels in the pyramid over the mirror's cropped box, whose ``origin``
+    the record gives)."""
     from ..search import trace_hierarchy
 
     tr = trace_hierarchy(gbuffer, eye, vertex, cap=cap)
-    return {"vertex": int(index), "path": hierarchy_path(tr), "pixel": tr["pixel"], "iterations": tr["tests"],
-            "origin": tr["origin"]}
+    return {"vertex": int(index), "path": tr.path(), "pixel": tr.pixel, "iterations": tr.tests, "origin": tr.origin}
 
 
 def traced_vertices(n: int) -> np.ndarray:
@@ -166,8 +162,9 @@ def traced_vertices(n: int) -> np.ndarray:
 
 def render_case(case: Case):
     """Yield ``(frame index, arrays, traces)`` for each frame of a case."""
-    from ..search.reflect import reflector_gbuffer, scene_vertices
-    from ..frame.driver import FrameDriver, RenderOptions
+    from ..frame import FrameDriver
+    from ..options import RenderOptions
+    from ..scene import scene_vertices
     from ..search import CULLED, trace_search
 
     scene = case.load()
@@ -180,23 +177,25 @@ def render_case(case: Case):
         eye = scene.camera_at(f).eye
         traces = {}
         for k in scene.reflector_ids:
-            gb = reflector_gbuffer(scene, k, f, opts.widen, opts.gbuffer_size, opts.precision)
+            gb = frame.reflectors[k].state.gbuffer  # the G-buffer the search ran on
+            pixels = frame.arrays[keys.REFLECTION_PIXEL(k)]
             records = []
-            flags = frame.arrays[f"flags_{k}"]
+            flags = frame.arrays[keys.FLAGS(k)]
             for i in traced_vertices(len(verts)):
                 if flags[i] & CULLED:
                     continue
                 prev = previous.get(k)
                 start = None if (prev is None or not opts.coherence) else prev[i]
-                if opts.neighbourhood == "hierarchy":
+                if opts.method == "hierarchy":
                     records.append(hierarchy_record(gb, eye, verts[i], i, opts.cap))
                     continue
                 tr = trace_search(gb, eye, verts[i], opts.neighbourhood, opts.inverse, start, opts.cap)
-                if list(tr.pixel) != [int(x) for x in frame.arrays[f"reflection_pixel_{k}"][i]]:
-                    raise AssertionError(f"case {case.name}: trace of vertex {i} disagrees with the kernel")  # pragma: no cover
+                if list(tr.pixel) != [int(x) for x in pixels[i]]:
+                    raise RefsoftError(f"case {case.name}: the trace of vertex {i} disagrees with the kernel "
+                                       "(an internal error: please report it)")
                 records.append(trace_record(tr, i))
             traces[str(k)] = records
-            previous[k] = frame.arrays[f"reflection_pixel_{k}"]
+            previous[k] = pixels
         yield f, frame.arrays, {"format": TRACE_FORMAT, "reflectors": traces}
 
 
@@ -227,12 +226,11 @@ def write_golden(out, cases=None, progress=False) -> dict:
     files = {}
     entries = []
     for case in chosen:
-        from ..frame.driver import RenderOptions
+        from ..options import RenderOptions
 
-        opts = RenderOptions(**case.options)
         entries.append({"name": case.name, "scene": case.scene, "frames": list(case.frames),
                         "width": GOLDEN_SIZE[0], "height": GOLDEN_SIZE[1],
-                        "options": {k: (list(v) if isinstance(v, tuple) else v) for k, v in vars(opts).items()}})
+                        "options": RenderOptions(**case.options).as_dict()})
         for f, arrays, traces in render_case(case):
             base = os.path.join(out, case.name)
             npz = os.path.join(base, f"frame_{f:04d}.npz")

@@ -17,7 +17,7 @@ import numpy as np
 from .. import constants, limits
 from ..scene.camera import Camera, check_image_size
 from ..errors import RefsoftError
-from ..scene.mesh import Mesh
+from ..scene.mesh import Mesh, concatenate
 from . import _kernels, _setup, _shading
 
 __all__ = ["Fragments", "GBuffer", "ColorPass", "rasterize", "interpolate", "gbuffer", "color_pass", "coverage_region",
@@ -430,18 +430,13 @@ def color_pass(meshes, colors, camera: Camera) -> ColorPass:
     colors = np.asarray(colors, dtype=np.float64)
     if colors.shape != (len(meshes), 3):
         raise RefsoftError(f"colors must have shape ({len(meshes)}, 3), got {colors.shape}")
-    verts = np.concatenate([m.vertices for m in meshes])
-    norms = np.concatenate([m.normals for m in meshes])
-    v_off = np.cumsum([0] + [m.n_vertices for m in meshes])
-    f_off = np.cumsum([0] + [m.n_faces for m in meshes])
-    faces = np.concatenate([m.faces.astype(np.int64) + v_off[i] for i, m in enumerate(meshes)])
-    face_object = np.repeat(np.arange(1, len(meshes) + 1, dtype=np.int32), [m.n_faces for m in meshes])
-    clip = _setup.transform_points(verts, camera.view_proj())
-    frags = rasterize(clip, faces, camera.width, camera.height)
-    nrm = interpolate(frags, norms, faces, np.float32, normalize=True)
+    scene = concatenate(meshes)
+    clip = _setup.transform_points(scene.vertices, camera.view_proj())
+    frags = rasterize(clip, scene.faces, camera.width, camera.height)
+    nrm = interpolate(frags, scene.normals, scene.faces, np.float32, normalize=True)
     object_id = np.empty(frags.triangle.shape, dtype=np.int32)
     local_tri = np.empty(frags.triangle.shape, dtype=np.int32)
-    _shading.object_ids(frags.triangle, face_object, f_off.astype(np.int64), object_id, local_tri)
+    _shading.object_ids(frags.triangle, scene.face_object, scene.face_offsets, object_id, local_tri)
     table = np.vstack([constants.BACKGROUND_COLOR, colors]).astype(np.float32)
     color = np.empty(nrm.shape, dtype=np.float32)
     # shade() of every pixel, and the background colour off the objects, in one pass

@@ -9,7 +9,7 @@ from . import primitives
 from .builtin import BUILTIN_SCENES, builtin_names, load_scene
 from .camera import Camera
 from .mesh import Mesh, load_mesh
-from .model import Animation, Scene, SceneObject, Transform
+from .model import Animation, Scene, SceneObject, Transform, scene_vertices
 
 __all__ = ["Camera", "Mesh", "load_mesh", "Scene", "SceneObject", "Transform", "Animation", "primitives",
-           "load_scene", "builtin_names", "BUILTIN_SCENES"]
+           "load_scene", "builtin_names", "BUILTIN_SCENES", "scene_vertices"]

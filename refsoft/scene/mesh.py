@@ -183,3 +183,48 @@ def load_mesh(path: str | os.PathLike) -> Mesh:
     if file_normals is not None and np.shape(file_normals) != v.shape:
         file_normals = None
     return Mesh(v, f, file_normals, name=os.path.basename(path))
+
+
+@dataclass(frozen=True, eq=False)
+class Combined:
+    """Several meshes as one (:func:`concatenate`).
+
+    Attributes
+    ----------
+    vertices, normals : ndarray, shape (V, 3), float64
+        Every mesh's vertices and normals, mesh after mesh.
+    faces : ndarray, shape (F, 3), int64
+        Every mesh's faces, indices into the combined vertices.
+    face_object : ndarray, shape (F,), int32
+        The id given for each face's mesh.
+    vertex_offsets, face_offsets : ndarray, shape (M + 1,), int64
+        Mesh ``i``'s vertices are ``vertex_offsets[i]:vertex_offsets[i + 1]``; faces likewise.
+    """
+
+    vertices: np.ndarray
+    normals: np.ndarray
+    faces: np.ndarray
+    face_object: np.ndarray
+    vertex_offsets: np.ndarray
+    face_offsets: np.ndarray
+
+
+def concatenate(meshes, ids=None) -> Combined:
+    """Concatenate meshes, re-indexing their faces (the one place this is done).
+
+    Parameters
+    ----------
+    meshes : sequence of Mesh
+    ids : sequence of int, optional
+        An id per mesh for ``face_object`` (default ``1 .. M``).
+    """
+    meshes = list(meshes)
+    ids = np.arange(1, len(meshes) + 1) if ids is None else np.asarray(ids)
+    v_off = np.cumsum([0] + [m.n_vertices for m in meshes]).astype(np.int64)
+    f_off = np.cumsum([0] + [m.n_faces for m in meshes]).astype(np.int64)
+    if not meshes:
+        empty = np.zeros((0, 3))
+        return Combined(empty, empty, np.zeros((0, 3), np.int64), np.zeros(0, np.int32), v_off, f_off)
+    return Combined(np.concatenate([m.vertices for m in meshes]), np.concatenate([m.normals for m in meshes]),
+                    np.concatenate([m.faces.astype(np.int64) + v_off[i] for i, m in enumerate(meshes)]),
+                    np.repeat(ids.astype(np.int32), [m.n_faces for m in meshes]), v_off, f_off)

@@ -250,3 +250,33 @@ class Scene:
             "reflectors": len(self.reflector_ids),
             "frames": self.n_frames,
         }
+
+
+def scene_vertices(scene: Scene, frame: int = 0, meshes=None):
+    """World-space vertices of every non-reflector object: the vertices a reflection method
+    reflects (DESIGN section 7's ``vertex_object_k`` rows).
+
+    Parameters
+    ----------
+    scene : Scene
+    frame : int
+    meshes : list of Mesh, optional
+        The world meshes of all objects at ``frame``, already computed.
+
+    Returns
+    -------
+    vertices : ndarray, shape (N, 3), float64
+        Concatenated in scene order, each object's vertices in file order.
+    vertex_object : ndarray, shape (N,), int32
+        1-based object id of each vertex.
+    """
+    verts, ids = [], []
+    for k, obj in enumerate(scene.objects, start=1):
+        if obj.reflector:
+            continue
+        m = scene.world_mesh(k, frame) if meshes is None else meshes[k - 1]
+        verts.append(m.vertices)
+        ids.append(np.full(m.n_vertices, k, dtype=np.int32))
+    if not verts:
+        return np.zeros((0, 3)), np.zeros(0, dtype=np.int32)
+    return np.concatenate(verts), np.concatenate(ids)

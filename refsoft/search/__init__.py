@@ -12,21 +12,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import validate
+from ..constants import INVERSE_MODES, METHODS, NEIGHBOURHOODS
 from ..errors import RefsoftError
 from ..raster import GBuffer
 from . import _kernels, _lanes
 from ._kernels import BORDER, CAPPED, CULLED, HIDDEN, RESTARTED
 
-__all__ = ["search", "virtual_vertices", "start_pixel", "packed", "SearchResult", "trace_search", "Trace", "scores_at",
+__all__ = ["search", "virtual_vertices", "start_pixel", "SearchResult", "trace_search", "Trace", "scores_at",
            "HIDDEN", "BORDER", "CAPPED", "RESTARTED", "CULLED", "NEIGHBOURHOODS", "INVERSE_MODES",
-           "flag_names", "default_cap", "SEARCH_METHODS", "trace_hierarchy"]
+           "flag_names", "default_cap", "SEARCH_METHODS", "trace_hierarchy", "HierarchyTrace"]
 
-#: Neighbourhood name -> candidates per iteration (current pixel included).
-NEIGHBOURHOODS = {"cross": 5, "box": 9}
-#: Search methods: the two neighbourhoods of the linear search and Szabo's ray-cone hierarchy.
-SEARCH_METHODS = ("cross", "box", "hierarchy")
-#: Hidden-vertex modes (DESIGN 4.6).
-INVERSE_MODES = ("plane", "search", "discard")
+#: Search methods (``constants.METHODS``): the linear walk and Szabo's ray-cone hierarchy.
+SEARCH_METHODS = METHODS
 _FLAG_NAMES = ((HIDDEN, "HIDDEN"), (BORDER, "BORDER"), (CAPPED, "CAPPED"), (RESTARTED, "RESTARTED"),
                (CULLED, "CULLED"))
 
@@ -61,6 +59,8 @@ class SearchResult:
     neighbourhood, inverse : str
         The options used.
     cap : int
+    method : str
+        ``walk`` or ``hierarchy``.
     """
 
     pixel: np.ndarray
@@ -71,6 +71,7 @@ class SearchResult:
     neighbourhood: str
     inverse: str
     cap: int
+    method: str = "walk"
 
     def __len__(self):
         return len(self.pixel)
@@ -109,7 +110,7 @@ def _check_gbuffer(gbuffer):
     return dt.type
 
 
-def packed(gbuffer: GBuffer, eye):
+def _packed(gbuffer: GBuffer, eye):
     """The G-buffer packed for the one-search-at-a-time kernels (traces, the hierarchy,
     :func:`scores_at`), cropped to the covered pixels. (:func:`search` reads the positions and
     normals where they are and computes U with each score: the same values.)
@@ -138,34 +139,17 @@ def packed(gbuffer: GBuffer, eye):
     return G, mask, conv, (r0, c0)
 
 
-def _check_options(gbuffer, neighbourhood, inverse, cap):
+def _check_options(gbuffer, neighbourhood, inverse, cap, method="walk"):
     """Validate the options shared by :func:`search` and :func:`trace_search`; returns
     (dtype, cap)."""
     dt = _check_gbuffer(gbuffer)
-    if neighbourhood not in SEARCH_METHODS:
-        raise RefsoftError(f"neighbourhood must be one of {list(SEARCH_METHODS)}, got {neighbourhood!r}")
-    if inverse not in INVERSE_MODES:
-        raise RefsoftError(f"inverse must be one of {list(INVERSE_MODES)}, got {inverse!r}")
-    cap = default_cap(gbuffer.mask.shape) if cap is None else cap
-    if isinstance(cap, bool) or not isinstance(cap, (int, np.integer)) or cap < 1:
-        raise RefsoftError(f"cap must be a positive integer, got {cap!r}")
+    if neighbourhood == "hierarchy":
+        raise RefsoftError("neighbourhood must be one of ['cross', 'box']; the hierarchy search is method='hierarchy'")
+    validate.choice(neighbourhood, tuple(NEIGHBOURHOODS), "neighbourhood")
+    validate.choice(inverse, INVERSE_MODES, "inverse")
+    validate.choice(method, SEARCH_METHODS, "method")
+    cap = default_cap(gbuffer.mask.shape) if cap is None else validate.integer(cap, "cap", 1)
     return dt, int(cap)
-
-
-def _point(x, name):
-    """One finite 3-vector as float64, shape (3,)."""
-    if np.size(x) != 3:
-        raise RefsoftError(f"{name} must be 3 numbers, got shape {np.shape(x)}")
-    return _points(np.reshape(x, (1, 3)), name, 1)[0]
-
-
-def _points(x, name, n=None):
-    a = np.asarray(x, dtype=np.float64)
-    if a.ndim != 2 or a.shape[1] != 3 or (n is not None and len(a) != n):
-        raise RefsoftError(f"{name} must have shape ({'N' if n is None else n}, 3), got {a.shape}")
-    if not np.all(np.isfinite(a)):
-        raise RefsoftError(f"{name} has non-finite values")
-    return a
 
 
 def _culled_results(n, dt):
@@ -189,8 +173,8 @@ def _check_starts(starts, shape):
 
 
 def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", inverse: str = "plane",
-           previous=None, cap: int | None = None, cone_factor: float = 1.5, sphere_factor: float = 2.0,
-           break_level: int = 0) -> SearchResult:
+           previous=None, cap: int | None = None, method: str = "walk", cone_factor: float = 1.5,
+           sphere_factor: float = 2.0, break_level: int = 0) -> SearchResult:
     """Find each vertex's reflection pixel in a reflector's G-buffer.
 
     Parameters
@@ -201,10 +185,8 @@ def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", invers
         The eye, world space.
     vertices : array_like, shape (N, 3)
         Vertices to reflect, world space.
-    neighbourhood : {"cross", "box", "hierarchy"}
-        Candidates per step: the crosshair (left, up, right, down) or the 3x3 box; or Szabo's
-        ray-cone hierarchy (:mod:`refsoft.search.hierarchy`: no coherence, ``iterations``
-        counts the texels tested).
+    neighbourhood : {"cross", "box"}
+        The walk's candidates per step: the crosshair (left, up, right, down) or the 3x3 box.
     inverse : {"plane", "search", "discard"}
         Hidden-vertex mode; only ``"search"`` changes the search (an inverse search follows).
     previous : array_like, shape (N, 2), int, optional
@@ -212,6 +194,9 @@ def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", invers
         coherence. A previous pixel that is no longer covered restarts (flag RESTARTED).
     cap : int, optional
         Iteration cap per search (default ``2 * (width + height)``).
+    method : {"walk", "hierarchy"}
+        The linear walk, or Szabo's ray-cone hierarchy (:mod:`refsoft.search.hierarchy`: no
+        coherence, ``iterations`` counts the texels tested).
     cone_factor, sphere_factor, break_level
         The hierarchy's error corrections (enlargement after a failed traversal; levels above
         the base where the descent stops).
@@ -220,11 +205,12 @@ def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", invers
     -------
     SearchResult
     """
-    dt, cap = _check_options(gbuffer, neighbourhood, inverse, cap)
-    if neighbourhood == "hierarchy":
-        return _hierarchy_search(gbuffer, eye, vertices, inverse, cap, cone_factor, sphere_factor, break_level)
-    eye = _point(eye, "eye")
-    verts = _points(vertices, "vertices")
+    dt, cap = _check_options(gbuffer, neighbourhood, inverse, cap, method)
+    if method == "hierarchy":
+        return _hierarchy_search(gbuffer, eye, vertices, neighbourhood, inverse, cap, cone_factor, sphere_factor,
+                                 break_level)
+    eye = validate.point(eye, "eye")
+    verts = validate.points(vertices, "vertices")
     n = len(verts)
     if previous is None:
         starts = np.full((n, 2), -1, dtype=np.int64)
@@ -257,7 +243,7 @@ def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", invers
     sorted_out = (np.empty((n, 2), np.int32), np.empty(n, dt), np.empty(n, dt), np.empty(n, np.int32),
                   np.empty(n, np.uint8))
     # several walks per thread, their candidates scored together (the one-walk search's results);
-    # the eye direction of a pixel is computed with its score (as ``packed`` computes it: the
+    # the eye direction of a pixel is computed with its score (as ``_packed`` computes it: the
     # same values), which costs less than packing the whole G-buffer for a few steps per vertex
     eye_rel = (eye - gbuffer.origin).astype(dt)
     _lanes.SEARCH[NEIGHBOURHOODS[neighbourhood]](P, N, mask, eye_rel, rows, row_starts, start[0], start[1], int(cap),
@@ -267,42 +253,40 @@ def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", invers
     return SearchResult(pixel, score, margin, iterations, flags, neighbourhood, inverse, int(cap))
 
 
-def _hierarchy_search(gbuffer, eye, vertices, inverse, cap, cone_factor, sphere_factor, break_level):
+def _hierarchy_search(gbuffer, eye, vertices, neighbourhood, inverse, cap, cone_factor, sphere_factor, break_level):
     from . import _hierarchy, hierarchy
 
     hierarchy.check_factors(cone_factor, sphere_factor, break_level)
-    eye = _point(eye, "eye")
-    verts = _points(vertices, "vertices")
+    eye = validate.point(eye, "eye")
+    verts = validate.points(vertices, "vertices")
     dt = gbuffer.position.dtype.type
     n = len(verts)
     pixel, score, margin, iterations, flags = _culled_results(n, dt)
     start = start_pixel(gbuffer.mask)
     if start is not None and n:
-        G, mask, conv, (r0, c0) = packed(gbuffer, eye)
+        G, mask, conv, (r0, c0) = _packed(gbuffer, eye)
         sph, cone, offsets, sizes = hierarchy.build(G, mask, conv)
         _hierarchy.search_all(G, mask, sph, cone, offsets, sizes, len(sizes), np.ascontiguousarray(verts),
                               gbuffer.origin, dt(cone_factor), dt(sphere_factor), int(break_level), int(cap),
                               inverse == "search", start[0] - r0, start[1] - c0, conv, pixel, score, margin,
                               iterations, flags)
         pixel += np.array([r0, c0], dtype=np.int32)
-    return SearchResult(pixel, score, margin, iterations, flags, "hierarchy", inverse, int(cap))
+    return SearchResult(pixel, score, margin, iterations, flags, neighbourhood, inverse, int(cap), "hierarchy")
 
 
 def trace_hierarchy(gbuffer: GBuffer, eye, vertex, cone_factor: float = 1.5, sphere_factor: float = 2.0,
-                    break_level: int = 0, cap: int | None = None) -> dict:
+                    break_level: int = 0, cap: int | None = None) -> "HierarchyTrace":
     """Replay one hierarchy traversal (the kernel's own, with a record): every texel popped and
-    every child tested, in order. Returns ``{"steps": [{"attempt", "level", "texel", "event"}],
-    "pixel": [row, col] or None, "tests": n}``; events are ``popped``, ``pushed`` (its cone
-    contains the vertex), ``rejected`` and ``chosen`` (the base pixel)."""
+    every child tested, in order (:class:`refsoft.search.trace.HierarchyTrace`)."""
     from . import _hierarchy, hierarchy
 
     hierarchy.check_factors(cone_factor, sphere_factor, break_level)
-    dt, cap = _check_options(gbuffer, "hierarchy", "plane", cap)
-    v = _point(vertex, "vertex")
-    e = _point(eye, "eye")
+    dt, cap = _check_options(gbuffer, "cross", "plane", cap, "hierarchy")
+    v = validate.point(vertex, "vertex")
+    e = validate.point(eye, "eye")
     if start_pixel(gbuffer.mask) is None:
         raise RefsoftError("the reflector covers no pixel of its G-buffer: there is nothing to search")
-    G, mask, conv, (r0, c0) = packed(gbuffer, e)
+    G, mask, conv, (r0, c0) = _packed(gbuffer, e)
     sph, cone, offsets, sizes = hierarchy.build(G, mask, conv)
     record = np.zeros((8 * cap + 64, _hierarchy.RECORD_WIDTH), dtype=np.float64)
     stack = np.empty((3 * len(sizes) + 4, 3), dtype=np.int64)
@@ -318,8 +302,8 @@ def trace_hierarchy(gbuffer: GBuffer, eye, vertex, cone_factor: float = 1.5, sph
         if lvl == 0:
             texel = [int(i) + r0, int(j) + c0]  # base texels as G-buffer pixels
         steps.append({"attempt": int(a), "level": lvl, "texel": texel, "event": names[int(ev)]})
-    return {"steps": steps, "pixel": [int(r) + r0, int(c) + c0] if found else None, "tests": int(tests),
-            "levels": len(sizes), "base_size": int(sizes[0]), "origin": [r0, c0]}
+    return HierarchyTrace(steps, [int(r) + r0, int(c) + c0] if found else None, int(tests), len(sizes),
+                          int(sizes[0]), [r0, c0])
 
 
 def virtual_vertices(gbuffer: GBuffer, result: SearchResult, vertices, relative: bool = False,
@@ -342,7 +326,7 @@ def virtual_vertices(gbuffer: GBuffer, result: SearchResult, vertices, relative:
         World space, or relative to ``gbuffer.origin`` when ``relative``.
     """
     dt = _check_gbuffer(gbuffer)
-    verts = _points(vertices, "vertices", len(result))
+    verts = validate.points(vertices, "vertices", len(result))
     o = np.asarray(gbuffer.origin, dtype=np.float64)
     out = np.empty((len(verts), 3), dtype=dt)
     flags = np.ascontiguousarray(result.flags, dtype=np.uint8)
@@ -363,7 +347,7 @@ def scores_at(gbuffer: GBuffer, eye, vertices, pixels, inverse=None) -> np.ndarr
     pixel; ``inverse`` (N,) bool picks the inverse score of DESIGN 4.6 per vertex. -3 where the
     pixel is not covered. Shape (N,)."""
     dt = _check_gbuffer(gbuffer)
-    verts = _points(vertices, "vertices")
+    verts = validate.points(vertices, "vertices")
     pix = np.asarray(pixels, dtype=np.int64).reshape(-1, 2)
     if len(pix) != len(verts):
         raise RefsoftError(f"pixels ({len(pix)}) and vertices ({len(verts)}) differ in number")
@@ -372,9 +356,9 @@ def scores_at(gbuffer: GBuffer, eye, vertices, pixels, inverse=None) -> np.ndarr
     if not gbuffer.mask.any() or not len(verts):
         out[:] = -3
         return out
-    G, mask, conv, (r0, c0) = packed(gbuffer, _point(eye, "eye"))
+    G, mask, conv, (r0, c0) = _packed(gbuffer, validate.point(eye, "eye"))
     _kernels.scores_at(G, mask, np.ascontiguousarray(verts), gbuffer.origin, pix - [r0, c0], inv, conv, out)
     return out
 
 
-from .trace import Trace, trace_search  # noqa: E402  (uses the names above)
+from .trace import HierarchyTrace, Trace, trace_search  # noqa: E402  (uses the names above)

@@ -128,3 +128,42 @@ def write_trace_gif(path, frames, ms_per_frame: int = 150):
     with atomic_path(path, ".gif") as tmp:
         durations = [ms_per_frame] * (len(frames) - 1) + [1500]
         iio.imwrite(tmp, np.stack(frames), extension=".gif", duration=durations, loop=0)
+
+
+def hierarchy_picture(trace, mask, zoom: int = 2) -> np.ndarray:
+    """A hierarchy traversal (:class:`refsoft.search.trace.HierarchyTrace`) over the reflector's
+    (H, W) coverage: the footprints of the popped texels (finer levels brighter), the chosen
+    pixel red; magnified ``zoom`` times. (H * zoom, W * zoom, 3) uint8."""
+    img = np.where(mask[..., None], 70, 0).astype(np.uint8) * np.ones(3, np.uint8)
+    r0, c0 = trace.origin
+    for st in trace.steps:
+        if st["event"] != "popped":
+            continue
+        lv, (i, j) = st["level"], st["texel"]
+        side = 1 << lv
+        shade = int(90 + 150 * (1 - lv / max(trace.levels - 1, 1)))
+        rs, cs = r0 + i * side, c0 + j * side
+        region = img[rs:rs + side, cs:cs + side]
+        region[mask[rs:rs + side, cs:cs + side]] = (0, shade, shade)
+    if trace.pixel is not None:
+        img[trace.pixel[0], trace.pixel[1]] = (255, 0, 0)
+    return np.repeat(np.repeat(img, zoom, axis=0), zoom, axis=1)
+
+
+def write_trace(out, replay) -> list:
+    """Write a replayed search (:func:`refsoft.search.trace.trace_vertex`) into folder ``out``:
+    ``trace.json`` and ``trace.png`` (and ``trace.gif``, one frame per step, for the walk).
+    Returns the names written."""
+    import os
+
+    from ..io import write_json, write_png
+
+    os.makedirs(out, exist_ok=True)
+    write_json(os.path.join(out, "trace.json"), replay.to_dict())
+    mask = replay.gbuffer.mask
+    if replay.method == "hierarchy":
+        write_png(os.path.join(out, "trace.png"), hierarchy_picture(replay.trace, mask))
+        return ["trace.json", "trace.png"]
+    write_png(os.path.join(out, "trace.png"), trace_picture(replay.trace, mask))
+    write_trace_gif(os.path.join(out, "trace.gif"), trace_frames(replay.trace, mask))
+    return ["trace.json", "trace.png", "trace.gif"]

@@ -46,11 +46,12 @@ def refine(gbuffer: GBuffer, eye, vertices, result):
     offset : ndarray, shape (N, 2), the G-buffer's dtype
         The step taken, in texels (rows, cols); in [-1, 1]; 0 where not refined.
     """
-    from . import _check_gbuffer, _point, _points
+    from .. import validate
+    from . import _check_gbuffer
 
     dt = _check_gbuffer(gbuffer)
-    verts = _points(vertices, "vertices", len(result))
-    eye = _point(eye, "eye")
+    verts = validate.points(vertices, "vertices", len(result))
+    eye = validate.point(eye, "eye")
     n = len(verts)
     p = np.zeros((n, 3), dtype=dt)
     nrm = np.zeros((n, 3), dtype=dt)

@@ -1,9 +1,10 @@
-"""Per-frame reflection stage for a whole scene: each visible reflector's G-buffer (closed
-proxy, optionally widened frustum), the search for every vertex of every non-reflector object,
-and the virtual vertices (DESIGN section 1, first three stages).
+"""The vertex search's first stages for one reflector (DESIGN section 1): the G-buffer camera and
+G-buffer of its closed proxy, the coherent start pixels, and :class:`Reflection`, the record of
+one reflector's G-buffer, search and virtual vertices; :func:`reflect` runs them for a whole
+scene at one frame.
 
 Vertices to reflect are those of every non-reflector object, concatenated in scene order, each
-in file order; ``vertex_object`` gives each one's object id.
+in file order (:func:`refsoft.scene.scene_vertices`).
 """
 
 from __future__ import annotations
@@ -15,30 +16,6 @@ import numpy as np
 from ..errors import RefsoftError
 from ..raster import GBuffer, gbuffer
 from ..scene.model import Scene
-from . import SearchResult, search, virtual_vertices
-
-
-def scene_vertices(scene: Scene, frame: int = 0, meshes=None):
-    """World-space vertices of every non-reflector object.
-
-    ``meshes`` (optional) are the world meshes of all objects at ``frame``, already computed.
-
-    Returns
-    -------
-    vertices : ndarray, shape (N, 3), float64
-    vertex_object : ndarray, shape (N,), int32
-        1-based object id of each vertex.
-    """
-    verts, ids = [], []
-    for k, obj in enumerate(scene.objects, start=1):
-        if obj.reflector:
-            continue
-        m = scene.world_mesh(k, frame) if meshes is None else meshes[k - 1]
-        verts.append(m.vertices)
-        ids.append(np.full(m.n_vertices, k, dtype=np.int32))
-    if not verts:
-        return np.zeros((0, 3)), np.zeros(0, dtype=np.int32)
-    return np.concatenate(verts), np.concatenate(ids)
 
 
 def gbuffer_camera(scene: Scene, frame: int = 0, widen: float = 1.0, size=None):
@@ -55,11 +32,21 @@ def reflector_gbuffer(scene: Scene, reflector: int, frame: int = 0, widen: float
                       precision="float32") -> GBuffer:
     """G-buffer of one reflector (its closed proxy when it has one), positions relative to the
     eye (float32 keeps its precision far from the world origin)."""
-    if reflector not in scene.reflector_ids:
-        raise RefsoftError(f"object {reflector} of scene {scene.name!r} is not a reflector "
-                           f"(reflectors: {scene.reflector_ids})")
+    check_reflector(scene, reflector)
     cam = gbuffer_camera(scene, frame, widen, size)
     return gbuffer(scene.world_mesh(reflector, frame, proxy=True), cam, precision, origin=cam.eye)
+
+
+def check_reflector(scene: Scene, reflector) -> int:
+    """``reflector`` must be the object id of one of ``scene``'s reflectors."""
+    n = len(scene.objects)
+    if isinstance(reflector, bool) or not isinstance(reflector, (int, np.integer)) or not 1 <= reflector <= n:
+        raise RefsoftError(f"scene {scene.name!r} has no object {reflector!r} (object ids are 1..{n}; "
+                           f"reflectors: {scene.reflector_ids})")
+    if reflector not in scene.reflector_ids:
+        raise RefsoftError(f"object {reflector} ({scene.objects[reflector - 1].name!r}) of scene {scene.name!r} is "
+                           f"not a reflector (reflectors: {scene.reflector_ids})")
+    return int(reflector)
 
 
 @dataclass(frozen=True, eq=False)
@@ -83,15 +70,15 @@ class Reflection:
 
     reflector: int
     gbuffer: GBuffer
-    result: SearchResult
+    result: object
     virtual: np.ndarray
     virtual64: np.ndarray | None = None
     surface: tuple | None = None
 
 
-def reflect(scene: Scene, frame: int = 0, reflectors=None, neighbourhood="cross", inverse="plane", widen=1.0,
-            gbuffer_size=None, precision="float32", previous=None, cap=None):
-    """Run the reflection stage for each reflector (each independently).
+def reflect(scene: Scene, frame: int = 0, reflectors=None, previous=None, **options):
+    """Run the vertex search's G-buffer, search and virtual-vertex stages for each reflector of
+    one frame (no virtual raster, no composite).
 
     Parameters
     ----------
@@ -99,15 +86,11 @@ def reflect(scene: Scene, frame: int = 0, reflectors=None, neighbourhood="cross"
     frame : int
     reflectors : list of int, optional
         Object ids (default: every reflector).
-    neighbourhood, inverse, cap
-        As :func:`refsoft.search.search`.
-    widen : float
-        Wider-frustum factor for the G-buffer.
-    gbuffer_size : (int, int), optional
-        G-buffer (width, height); default the view's pixel density.
-    precision : {"float32", "float64"}
     previous : dict of int -> ndarray (N, 2), optional
         Last frame's reflection pixels per reflector (coherence).
+    **options
+        :class:`refsoft.RenderOptions` fields (``method``, ``neighbourhood``, ``inverse``,
+        ``widen``, ``gbuffer_size``, ``precision``, ``cap``, ``refine``, ...).
 
     Returns
     -------
@@ -115,31 +98,20 @@ def reflect(scene: Scene, frame: int = 0, reflectors=None, neighbourhood="cross"
     vertex_object : ndarray (N,) int32
     reflections : dict of int -> Reflection
     """
-    if not 0 <= frame < scene.n_frames and scene.animation is not None:
+    from ..options import RenderOptions
+    from ..seam import FrameView
+    from .method import VertexSearch
+
+    if scene.animation is not None and not 0 <= frame < scene.n_frames:
         raise RefsoftError(f"frame must be in [0, {scene.n_frames - 1}], got {frame}")
-    ids = scene.reflector_ids if reflectors is None else list(reflectors)
-    verts, owner = scene_vertices(scene, frame)
-    out = {}
-    for k in ids:
-        prev = None if previous is None else previous.get(k)
-        out[k], _, _ = reflect_one(scene, k, frame, verts, neighbourhood, inverse, widen, gbuffer_size, precision,
-                                   prev, cap)
-    return verts, owner, out
-
-
-def reflect_one(scene, k, frame, verts, neighbourhood, inverse, widen, gbuffer_size, precision, previous, cap):
-    """One reflector's G-buffer, search and virtual vertices. Returns (Reflection, G-buffer ms,
-    search ms). A previous pixel array of the wrong length (the vertex count changed) is
-    ignored; previous pixels outside the G-buffer restart."""
-    import time
-
-    t0 = time.perf_counter()
-    gb = reflector_gbuffer(scene, k, frame, widen, gbuffer_size, precision)
-    t1 = time.perf_counter()
-    prev = coherent_starts(previous, len(verts), gb.mask.shape)
-    res = search(gb, scene.camera_at(frame).eye, verts, neighbourhood, inverse, prev, cap)
-    refl = Reflection(k, gb, res, virtual_vertices(gb, res, verts))
-    return refl, 1000 * (t1 - t0), 1000 * (time.perf_counter() - t1)
+    ids = scene.reflector_ids if reflectors is None else [check_reflector(scene, k) for k in reflectors]
+    method = VertexSearch(scene, RenderOptions(**{"reuse": False, **options}))
+    method.previous = dict(previous or {})
+    meshes = [scene.world_mesh(k, frame) for k in range(1, len(scene.objects) + 1)]
+    view = FrameView(scene, frame, scene.camera_at(frame), meshes, None,
+                     {j: scene.transform_at(j, frame) for j in range(1, len(scene.objects) + 1)})
+    out = {k: method.reflection(view, k)[0] for k in ids}
+    return view.vertices, view.vertex_object, out
 
 
 def coherent_starts(previous, n, shape):

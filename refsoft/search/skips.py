@@ -71,7 +71,7 @@ def reusable(result, coherence: bool, inverse: str) -> np.ndarray:
     CULLED results repeat only without coherence (the G-buffer is the same empty one).
     """
     flags = result.flags
-    if not coherence or getattr(result, "neighbourhood", None) == "hierarchy":  # no start pixel: it repeats
+    if not coherence or getattr(result, "method", "walk") == "hierarchy":  # no start pixel: it repeats
         return np.ones(len(flags), dtype=bool)
     ok = (flags & (CAPPED | CULLED)) == 0
     if inverse == "search":
@@ -83,7 +83,7 @@ def reused_result(result, coherence: bool):
     """Iterations and flags of a reused search: unchanged without coherence; with coherence the
     walk evaluates one neighbourhood and keeps HIDDEN and BORDER (both depend on the end pixel
     only), RESTARTED is not set (the start was covered). Returns (iterations, flags)."""
-    if not coherence or getattr(result, "neighbourhood", None) == "hierarchy":
+    if not coherence or getattr(result, "method", "walk") == "hierarchy":
         return result.iterations, result.flags
     return np.ones(len(result.flags), dtype=np.int32), (result.flags & (HIDDEN | BORDER)).astype(np.uint8)
 

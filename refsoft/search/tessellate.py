@@ -16,6 +16,8 @@ only triangles created by the previous one, up to ``max_level`` levels.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from . import _tessellate as _kernels
@@ -126,8 +128,41 @@ def _split(faces, edge_keys, edge_mid, n_vertices, only=None):
     return out, parent
 
 
+@dataclass(frozen=True, eq=False)
+class Tessellation:
+    """The reflected geometry of one reflector after :func:`tessellate`: the ``N`` input
+    vertices first, then the ``N' - N`` new ones.
+
+    Attributes
+    ----------
+    vertices, normals : ndarray (N', 3) float64
+    pixel : ndarray (N', 2) int32
+        Reflection pixels (the new vertices' from their own searches).
+    flags : ndarray (N',) uint8
+    faces : ndarray (T', 3) int64
+    face_obj : ndarray (T',) int32
+    searched : int
+        New vertices searched.
+    levels : int
+        Levels done.
+    surface : (P, N, offset), optional
+        Sub-texel reflection points of all ``N'`` vertices, when refined.
+    """
+
+    vertices: np.ndarray
+    normals: np.ndarray
+    pixel: np.ndarray
+    flags: np.ndarray
+    faces: np.ndarray
+    face_obj: np.ndarray
+    searched: int
+    levels: int
+    surface: tuple | None = None
+
+
 def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, threshold, max_level,
-               neighbourhood="cross", inverse="plane", cap=None, crack_free=True, surface=None):
+               neighbourhood="cross", inverse="plane", cap=None, crack_free=True, surface=None,
+               method="walk") -> Tessellation:
     """Refine the reflected triangles of one reflector until every triangle's largest edge error
     is at most ``threshold`` (0: every triangle, i.e. full tessellation) or ``max_level`` levels.
 
@@ -151,12 +186,12 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
         edge errors are then taken between refined points (:func:`edge_errors`) and the new
         vertices are refined too.
 
+    method : {"walk", "hierarchy"}
+        The search the new vertices get (as the original vertices').
+
     Returns
     -------
-    dict
-        ``vertices``, ``normals`` (N', 3), ``pixel`` (N', 2), ``flags`` (N',), ``faces`` (T', 3),
-        ``face_obj`` (T',), ``searched`` (new vertices searched), ``levels`` (levels done),
-        and with ``surface``, ``surface`` (P, N, offset) of all N' vertices.
+    Tessellation
     """
     if not (isinstance(threshold, (int, float)) and np.isfinite(threshold) and threshold >= 0):
         raise RefsoftError(f"tessellation threshold must be a number >= 0, got {threshold!r}")
@@ -204,7 +239,7 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
         okm &= gbuffer.mask[np.clip(start[:, 0], 0, h - 1), np.clip(start[:, 1], 0, w - 1)]
         start = np.where(okm[:, None], start, pa)
         start = np.where(np.all(start >= 0, axis=1)[:, None], start, -1)
-        res = search(gbuffer, eye, new_v, neighbourhood, inverse, start, cap)
+        res = search(gbuffer, eye, new_v, neighbourhood, inverse, start, cap, method=method)
         searched += len(new_v)
         verts.append(new_v)
         norms.append(new_n)
@@ -228,8 +263,6 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
         face_obj = face_obj[parent]
         faces = new_faces
         levels += 1
-    out = {"vertices": np.concatenate(verts), "normals": np.concatenate(norms), "pixel": np.concatenate(pix),
-           "flags": np.concatenate(fl), "faces": faces, "face_obj": face_obj, "searched": searched, "levels": levels}
-    if surf is not None:
-        out["surface"] = tuple(np.concatenate(lst) for lst in surf)
-    return out
+    return Tessellation(np.concatenate(verts), np.concatenate(norms), np.concatenate(pix), np.concatenate(fl), faces,
+                        face_obj, searched, levels,
+                        None if surf is None else tuple(np.concatenate(lst) for lst in surf))

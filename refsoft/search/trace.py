@@ -100,14 +100,15 @@ class Trace:
 def trace_search(gbuffer, eye, vertex, neighbourhood="cross", inverse="plane", previous=None, cap=None) -> Trace:
     """Replay the search of one vertex (same arguments as :func:`refsoft.search.search`, for a
     single vertex, ``vertex`` shape (3,), ``previous`` a pixel or None)."""
-    from . import NEIGHBOURHOODS, _check_options, _point, packed, start_pixel
+    from .. import validate
+    from . import NEIGHBOURHOODS, _check_options, _packed, start_pixel
 
     if neighbourhood == "hierarchy":
         raise RefsoftError("trace_search replays the linear search; for the hierarchy use "
                            "refsoft.search.trace_hierarchy")
     dt, cap = _check_options(gbuffer, neighbourhood, inverse, cap)
-    v = _point(vertex, "vertex")
-    e = _point(eye, "eye")
+    v = validate.point(vertex, "vertex")
+    e = validate.point(eye, "eye")
     h, w = gbuffer.mask.shape
     start = start_pixel(gbuffer.mask)
     if start is None:
@@ -121,7 +122,7 @@ def trace_search(gbuffer, eye, vertex, neighbourhood="cross", inverse="plane", p
             start = (pr, pc)
         else:
             restarted = True
-    G, M, conv, (r0, c0) = packed(gbuffer, e)
+    G, M, conv, (r0, c0) = _packed(gbuffer, e)
     v_rel = (v - gbuffer.origin).astype(dt)
     record = np.zeros((2 * cap + 2, _kernels.RECORD_WIDTH), dtype=np.float64)
     n_cand = NEIGHBOURHOODS[neighbourhood]
@@ -156,3 +157,137 @@ def trace_search(gbuffer, eye, vertex, neighbourhood="cross", inverse="plane", p
     return Trace(v, e, neighbourhood, inverse, cap, [int(start[0]), int(start[1])], restarted, steps,
                  [int(r), int(c)], float(s), float(m), int(it), int(fl), "capped" if capped_last else "converged",
                  field_std, field_inv)
+
+
+@dataclass
+class HierarchyTrace:
+    """One ray-cone hierarchy traversal, replayed (:func:`refsoft.search.trace_hierarchy`).
+
+    Attributes
+    ----------
+    steps : list of dict
+        ``{"attempt", "level", "texel", "event"}`` in order; events are ``popped``, ``pushed``
+        (its cone contains the vertex), ``rejected`` and ``chosen`` (the base pixel). Level-0
+        texels are G-buffer pixels; higher levels index the pyramid over the cropped box whose
+        first pixel is ``origin``.
+    pixel : [row, col] or None
+        The pixel chosen.
+    tests : int
+        Texels tested (the search's ``iterations``).
+    levels : int
+        Pyramid levels.
+    base_size : int
+        Edge of the pyramid's base (a power of two).
+    origin : [row, col]
+        The G-buffer pixel of the pyramid's first texel.
+    """
+
+    steps: list
+    pixel: list | None
+    tests: int
+    levels: int
+    base_size: int
+    origin: list
+
+    def path(self) -> list:
+        """``[level, row, col]`` of every texel popped, then of the chosen base pixel."""
+        return [[s["level"], *s["texel"]] for s in self.steps if s["event"] in ("popped", "chosen")]
+
+    def to_dict(self) -> dict:
+        """JSON-ready fields."""
+        return {"steps": self.steps, "pixel": self.pixel, "tests": self.tests, "levels": self.levels,
+                "base_size": self.base_size, "origin": self.origin}
+
+
+@dataclass
+class VertexReplay:
+    """One vertex's search in one reflector of a scene, replayed (:func:`trace_vertex`).
+
+    Attributes
+    ----------
+    scene : str
+    reflector, frame, vertex : int
+        ``vertex`` indexes the non-reflector vertices in scene order.
+    vertex_object : int
+        The vertex's object id; ``local_index`` its index within that object.
+    method : str
+    trace : Trace or HierarchyTrace
+    gbuffer : GBuffer
+        The G-buffer searched.
+    """
+
+    scene: str
+    reflector: int
+    frame: int
+    vertex: int
+    vertex_object: int
+    local_index: int
+    method: str
+    trace: object
+    gbuffer: object
+
+    def to_dict(self) -> dict:
+        """``trace.json``: the trace's fields and where it comes from."""
+        data = self.trace.to_dict()
+        data.update(scene=self.scene, reflector=self.reflector, frame=self.frame, vertex_index=self.vertex,
+                    vertex_object=self.vertex_object)
+        if self.method == "hierarchy":
+            data["method"] = "hierarchy"
+        return data
+
+
+def trace_vertex(scene, vertex: int, reflector=None, frame: int = 0, coherence: bool = True,
+                 **options) -> VertexReplay:
+    """Replay one vertex's search in one reflector, as a render of ``frame`` runs it.
+
+    With coherence (the walk), the vertex's searches of frames ``0 .. frame - 1`` run first, so
+    the replayed search starts where the render's does.
+
+    Parameters
+    ----------
+    scene : Scene
+    vertex : int
+        Index into the vertices of the non-reflector objects, in scene order.
+    reflector : int, optional
+        Object id (default: the first reflector).
+    frame : int
+    coherence : bool
+    **options
+        ``method``, ``neighbourhood``, ``inverse``, ``widen``, ``precision``
+        (:class:`refsoft.RenderOptions`).
+
+    Returns
+    -------
+    VertexReplay
+    """
+    from .. import validate
+    from ..options import RenderOptions
+    from ..scene.model import scene_vertices
+    from . import search, trace_hierarchy
+    from .reflect import check_reflector, reflector_gbuffer
+
+    opts = RenderOptions(coherence=coherence, **options)
+    validate.integer(frame, "frame", 0, None if scene.animation is None else scene.n_frames - 1)
+    if not scene.reflector_ids:
+        raise RefsoftError(f"scene {scene.name!r} has no reflector")
+    k = scene.reflector_ids[0] if reflector is None else check_reflector(scene, reflector)
+    verts, owner = scene_vertices(scene, frame)
+    validate.integer(vertex, "vertex", 0, len(verts) - 1)
+    gb = reflector_gbuffer(scene, k, frame, opts.widen, None, opts.precision)
+    eye = scene.camera_at(frame).eye
+    obj = int(owner[vertex])
+    local = vertex - int(np.argmax(owner == obj))
+    if opts.method == "hierarchy":
+        tr = trace_hierarchy(gb, eye, verts[vertex])
+        return VertexReplay(scene.name, k, frame, vertex, obj, local, "hierarchy", tr, gb)
+    walk = dict(neighbourhood=opts.neighbourhood, inverse=opts.inverse)
+    previous = None
+    if coherence:  # this vertex's searches of the earlier frames
+        for f in range(frame):
+            gb_f = reflector_gbuffer(scene, k, f, opts.widen, None, opts.precision)
+            v_f, _ = scene_vertices(scene, f)
+            res = search(gb_f, scene.camera_at(f).eye, v_f[vertex:vertex + 1],
+                         previous=None if previous is None else previous[None], **walk)
+            previous = res.pixel[0]
+    tr = trace_search(gb, eye, verts[vertex], previous=previous, **walk)
+    return VertexReplay(scene.name, k, frame, vertex, obj, local, "walk", tr, gb)

@@ -2,6 +2,6 @@
 points on spheres (:mod:`.analytic`) and the metrics of a render against its truth
 (:mod:`.metrics`)."""
 
-from .raytrace import TruthFrame, TruthRenderer, exact_sphere_vertices, render_truth
+from .raytrace import RayTracedTruth, TruthRenderer, exact_sphere_vertices, render_truth
 
-__all__ = ["TruthFrame", "TruthRenderer", "exact_sphere_vertices", "render_truth"]
+__all__ = ["RayTracedTruth", "TruthRenderer", "exact_sphere_vertices", "render_truth"]

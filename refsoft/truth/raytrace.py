@@ -22,31 +22,19 @@ from __future__ import annotations
 
 import os
 import time
-from dataclasses import dataclass
 
 import numpy as np
 
-from .analytic import fit_sphere, sphere_reflection_points
+from .. import keys
 from ..errors import RefsoftError
-from ..raster import color_pass, shade, to_uint8
-from ..search.reflect import scene_vertices
+from ..frame.driver import FrameDriver, frame_indices, resolve_scene, run_frames
+from ..frame.outputs import frame_stats
+from ..options import RenderOptions
+from ..raster import shade
+from ..scene.mesh import concatenate
 from ..scene.model import Scene
-
-TRUTH_STAGES = ("main", "primary", "trace", "shade", "exact", "total")
-
-
-@dataclass
-class TruthFrame:
-    """One ray-traced frame: DESIGN section 7 arrays (``arrays``) and timings (ms)."""
-
-    index: int
-    arrays: dict
-    time_ms: dict
-    counts: dict
-
-    @property
-    def image(self) -> np.ndarray:
-        return self.arrays["image"]
+from ..seam import ReflectorResult, stencil_box
+from .analytic import fit_sphere, sphere_reflection_points
 
 
 def ray_triangle(origins, directions, a, b, c):
@@ -96,12 +84,8 @@ class _Targets:
         self.empty = not ids
         if self.empty:
             return
-        parts = [meshes[k - 1] for k in ids]
-        offs = np.cumsum([0] + [m.n_vertices for m in parts])
-        self.vertices = np.concatenate([m.vertices for m in parts])
-        self.normals = np.concatenate([m.normals for m in parts])
-        self.faces = np.concatenate([m.faces.astype(np.int64) + offs[i] for i, m in enumerate(parts)])
-        self.face_object = np.repeat(np.array(ids, dtype=np.int32), [m.n_faces for m in parts])
+        c = concatenate([meshes[k - 1] for k in ids], ids)
+        self.vertices, self.normals, self.faces, self.face_object = c.vertices, c.normals, c.faces, c.face_object
         mesh = trimesh.Trimesh(self.vertices, self.faces, process=False, validate=False)
         self.intersector = RayMeshIntersector(mesh)
 
@@ -163,25 +147,31 @@ def exact_sphere_vertices(scene: Scene, reflector: int, frame: int, vertices):
     return points, vertices - 2.0 * d * n
 
 
-class TruthRenderer:
-    """Ray-traces frames of a scene (caches the Embree scene while no reflected object moves)."""
+class RayTracedTruth:
+    """The ray-traced truth as a reflection method (:mod:`refsoft.seam`): at each stencil pixel
+    the eye ray meets the reflector's visible triangle, is reflected about the interpolated
+    normal there and traced against every non-reflector object.
 
-    def __init__(self, scene: Scene, exact: bool = True, memory_limit=None):
-        from ..limits import check_frame_memory
-        from ..frame.driver import RenderOptions
+    Keeps the Embree scene while no reflected object moves.
 
-        if not isinstance(scene, Scene):
-            raise RefsoftError(f"scene must be a refsoft.Scene, got {type(scene).__name__}")
-        if not scene.reflector_ids:
-            raise RefsoftError(f"scene {scene.name!r} has no reflector: nothing to reflect "
-                               "(mark an object with reflector = true)")
-        # the render's estimate bounds the truth's: the same view, per-pixel rays instead of G-buffers
-        check_frame_memory(scene, RenderOptions(), 1, memory_limit)
+    Parameters
+    ----------
+    scene : Scene
+    exact : bool
+        Also solve the exact reflection points of spherical reflectors (per-vertex truth).
+    """
+
+    name = "truth"
+    stages = ("primary", "trace", "shade", "exact")
+    pixel_arrays = {keys.REFLECTED_HIT: ((3,), np.float64)}
+
+    def __init__(self, scene: Scene, exact: bool = True):
         self.scene = scene
         self.exact = exact
         self._targets = None
+        self._colors = np.vstack([np.zeros(3), [o.color for o in scene.objects]]).astype(np.float32)
 
-    def _targets_at(self, frame, meshes):
+    def _targets_at(self, meshes):
         scene = self.scene
         moving = set() if scene.animation is None else set(scene.animation.object_keys)
         static = not any(o.name in moving for o in scene.objects if not o.reflector)
@@ -189,79 +179,74 @@ class TruthRenderer:
             self._targets = _Targets(scene, meshes)
         return self._targets
 
-    def render_frame(self, frame: int) -> TruthFrame:
-        scene = self.scene
-        if scene.animation is not None and not 0 <= frame < scene.n_frames:
-            raise RefsoftError(f"frame must be in [0, {scene.n_frames - 1}], got {frame}")
-        times = dict.fromkeys(TRUTH_STAGES, 0.0)
-        t0 = time.perf_counter()
-        camera = scene.camera_at(frame)
-        meshes = [scene.world_mesh(k, frame) for k in range(1, len(scene.objects) + 1)]
-        view = color_pass(meshes, [o.color for o in scene.objects], camera)
-        times["main"] = 1000 * (time.perf_counter() - t0)
-        h, w = view.object_id.shape
-        colour = view.color.copy()
-        reflected = np.full((h, w), -1, dtype=np.int32)
-        reflected_hit = np.zeros((h, w, 3))
-        colors = np.vstack([np.zeros(3), [o.color for o in scene.objects]]).astype(np.float32)
-        targets = None
-        arrays = {}
-        counts = {"reflector_pixels": 0, "hits": 0}
-        for k in scene.reflector_ids:
-            rows, cols = np.nonzero(view.object_id == k)
-            if len(rows) == 0:
-                continue
+    def reflect(self, view, k: int, stencil) -> ReflectorResult:
+        """The reflected colour, object id and hit point at reflector ``k``'s stencil pixels; the
+        exact reflection points of the searched vertices when ``k`` is a sphere."""
+        out = ReflectorResult(k, time_ms=dict.fromkeys(self.stages, 0.0), report={"reflector_pixels": 0, "hits": 0})
+        if stencil.any():
+            self._trace(view, k, stencil, out)
+        if self.exact:
             t = time.perf_counter()
-            reflected[rows, cols] = 0
-            m = meshes[k - 1]
-            f = m.faces.astype(np.int64)[view.triangle[rows, cols]]
-            origin, direction = camera.rays(rows, cols)
-            tt, bary = ray_triangle(origin, direction, m.vertices[f[:, 0]], m.vertices[f[:, 1]], m.vertices[f[:, 2]])
-            ok = np.isfinite(tt)
-            hit = origin + np.where(ok, tt, 0.0)[:, None] * direction
-            normal = _interpolated_normals(m.normals, m.faces.astype(np.int64), view.triangle[rows, cols],
-                                           np.where(ok[:, None], bary, 0.0))
-            ray = direction - 2.0 * np.sum(direction * normal, axis=1, keepdims=True) * normal
-            times["primary"] += 1000 * (time.perf_counter() - t)
-            t = time.perf_counter()
-            if targets is None:
-                targets = self._targets_at(frame, meshes)
-            tri, hit2, obj, nrm2 = targets.first_hits(hit[ok], ray[ok])
-            times["trace"] += 1000 * (time.perf_counter() - t)
-            t = time.perf_counter()
-            sel = np.flatnonzero(ok)[tri >= 0]
-            got = tri >= 0
-            rho = np.float32(scene.object_by_id(k).reflectivity)
-            col = shade(nrm2[got], colors[obj[got]])
-            r_, c_ = rows[sel], cols[sel]
-            colour[r_, c_] = rho * col + (np.float32(1) - rho) * view.color[r_, c_]
-            reflected[r_, c_] = obj[got]
-            reflected_hit[r_, c_] = hit2[got]
-            counts["reflector_pixels"] += len(rows)
-            counts["hits"] += int(got.sum())
-            times["shade"] += 1000 * (time.perf_counter() - t)
-        if self.exact and scene.reflector_ids:
-            t = time.perf_counter()
-            verts, owner = scene_vertices(scene, frame, meshes)
-            for k in scene.reflector_ids:
-                exact = exact_sphere_vertices(scene, k, frame, verts)
-                if exact is not None:
-                    arrays[f"exact_reflection_point_{k}"] = exact[0]
-                    arrays[f"exact_virtual_vertex_{k}"] = exact[1]
-                    arrays[f"vertex_object_{k}"] = owner.astype(np.int32)
-            times["exact"] = 1000 * (time.perf_counter() - t)
-        arrays.update(image=to_uint8(colour), object_id=view.object_id.astype(np.int32), reflected_id=reflected,
-                      reflected_hit=reflected_hit)
-        times["total"] = 1000 * (time.perf_counter() - t0)
-        return TruthFrame(frame, arrays, times, counts)
+            exact = exact_sphere_vertices(self.scene, k, view.frame, view.vertices)
+            if exact is not None:
+                out.arrays = {keys.EXACT_REFLECTION_POINT(k): exact[0], keys.EXACT_VIRTUAL_VERTEX(k): exact[1],
+                              keys.VERTEX_OBJECT(k): view.vertex_object.astype(np.int32)}
+            out.time_ms["exact"] = 1000 * (time.perf_counter() - t)
+        return out
+
+    def _trace(self, view, k, stencil, out):
+        times = out.time_ms
+        t = time.perf_counter()
+        box = stencil_box(stencil)
+        r0, r1, c0, c1 = box
+        rows, cols = np.nonzero(stencil)
+        m = view.meshes[k - 1]
+        tri = view.view.triangle[rows, cols]
+        f = m.faces.astype(np.int64)[tri]
+        origin, direction = view.camera.rays(rows, cols)
+        tt, bary = ray_triangle(origin, direction, m.vertices[f[:, 0]], m.vertices[f[:, 1]], m.vertices[f[:, 2]])
+        ok = np.isfinite(tt)
+        hit = origin + np.where(ok, tt, 0.0)[:, None] * direction
+        normal = _interpolated_normals(m.normals, m.faces.astype(np.int64), tri, np.where(ok[:, None], bary, 0.0))
+        ray = direction - 2.0 * np.sum(direction * normal, axis=1, keepdims=True) * normal
+        times["primary"] += 1000 * (time.perf_counter() - t)
+        t = time.perf_counter()
+        hit_tri, hit2, obj, nrm2 = self._targets_at(view.meshes).first_hits(hit[ok], ray[ok])
+        times["trace"] += 1000 * (time.perf_counter() - t)
+        t = time.perf_counter()
+        sel = np.flatnonzero(ok)[hit_tri >= 0]
+        got = hit_tri >= 0
+        rr, cc = rows[sel] - r0, cols[sel] - c0
+        h, w = r1 - r0, c1 - c0
+        out.box = box
+        out.colour = np.zeros((h, w, 3), np.float32)
+        out.reflected_id = np.zeros((h, w), np.int32)
+        out.covered = np.zeros((h, w), bool)
+        hits = np.zeros((h, w, 3))
+        out.colour[rr, cc] = shade(nrm2[got], self._colors[obj[got]])
+        out.reflected_id[rr, cc] = obj[got]
+        out.covered[rr, cc] = True
+        hits[rr, cc] = hit2[got]
+        out.pixels = {keys.REFLECTED_HIT: hits}
+        out.report = {"reflector_pixels": int(len(rows)), "hits": int(got.sum())}
+        times["shade"] += 1000 * (time.perf_counter() - t)
+
+    def frame_report(self, results) -> dict:
+        """``stats.json``'s per-frame counts: reflector pixels and reflected rays that hit."""
+        return {"reflector_pixels": sum(r.report["reflector_pixels"] for r in results.values()),
+                "hits": sum(r.report["hits"] for r in results.values())}
 
 
-def truth_stats(frames) -> dict:
-    """``stats.json`` of a truth run: per-frame stage milliseconds and ray counts."""
-    return {"frames": [{"frame": f.index, "time_ms": {k: round(v, 3) for k, v in f.time_ms.items()},
-                        **f.counts} for f in frames],
-            "summary": {"frames": len(frames),
-                        "median_total_ms": float(np.median([f.time_ms["total"] for f in frames])) if frames else 0.0}}
+class TruthRenderer(FrameDriver):
+    """Ray-traces frames of a scene: the frame driver with :class:`RayTracedTruth` as the
+    reflection method (the same main view, composite and outputs as a render)."""
+
+    def __init__(self, scene: Scene, exact: bool = True, memory_limit=None):
+        if not isinstance(scene, Scene):
+            raise RefsoftError(f"scene must be a refsoft.Scene, got {type(scene).__name__}")
+        # the render's estimate bounds the truth's: the same view, per-pixel rays instead of G-buffers
+        super().__init__(scene, RenderOptions(), memory_limit, method=RayTracedTruth(scene, exact))
+        self.exact = exact
 
 
 def render_truth(scene, frames=None, out=None, progress=False, exact=True, memory_limit=None, width=None,
@@ -287,24 +272,16 @@ def render_truth(scene, frames=None, out=None, progress=False, exact=True, memor
 
     Returns
     -------
-    frames : list of TruthFrame
+    frames : list of refsoft.frame.Frame
     stats : dict
     """
     from ..io import write_json
-    from ..frame.driver import frame_indices, run_frames
-    from ..scene.builtin import load_scene
 
-    if not isinstance(scene, Scene):
-        scene = load_scene(scene, width=width, height=height)
-    elif width is not None or height is not None:
-        from dataclasses import replace as _replace
-
-        scene = _replace(scene, camera=_replace(scene.camera, **{k: v for k, v in (("width", width),
-                                                                                  ("height", height)) if v is not None}))
+    scene = resolve_scene(scene, width, height)
     indices = frame_indices(scene, frames)
     done = run_frames(TruthRenderer(scene, exact=exact, memory_limit=memory_limit), indices, out, progress,
                       f"truth {scene.name}")
-    stats = truth_stats(done)
+    stats = frame_stats(done)
     if out is not None:
         write_json(os.path.join(out, "stats.json"), stats)
     return done, stats

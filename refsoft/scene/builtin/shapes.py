@@ -4,21 +4,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..mesh import Mesh, normalize_rows
+from ..mesh import Mesh, concatenate, normalize_rows
 from ..primitives import _drop_degenerate, _grid_faces
 from ..model import Transform
 
 
 def merge(parts, name="merged") -> Mesh:
     """One mesh from (mesh, Transform) pairs (vertex order: part by part)."""
-    verts, faces, norms, off = [], [], [], 0
-    for mesh, tf in parts:
-        m = mesh.transformed(tf.matrix())
-        verts.append(m.vertices)
-        norms.append(m.normals)
-        faces.append(m.faces.astype(np.int64) + off)
-        off += m.n_vertices
-    return Mesh(np.concatenate(verts), np.concatenate(faces), np.concatenate(norms), name=name)
+    c = concatenate([mesh.transformed(tf.matrix()) for mesh, tf in parts])
+    return Mesh(c.vertices, c.faces, c.normals, name=name)
 
 
 def bowl(radius=1.0, rings=24, segments=64, inside=False) -> tuple[Mesh, Mesh]:

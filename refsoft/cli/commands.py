@@ -1,0 +1,215 @@
+"""The subcommands: each reads its arguments, calls the library and prints a short summary."""
+
+from __future__ import annotations
+
+import os
+import time
+
+import numpy as np
+
+from ..errors import RefsoftError
+from .options import render_kwargs, search_kwargs
+
+
+def _scene(args):
+    from ..scene import load_scene
+
+    return load_scene(args.scene, width=args.width, height=args.height)
+
+
+def _one_of(args):
+    """--frames N or --frame K (not both), as the library's ``frames`` argument."""
+    if args.frame is not None and args.frames is not None:
+        raise RefsoftError("give --frames N or --frame K, not both")
+    return args.frames
+
+
+def cmd_scenes(args) -> int:
+    from ..scene import BUILTIN_SCENES, load_scene
+
+    print(f"{'name':<10} {'vertices':>9} {'triangles':>10} {'reflectors':>10} {'frames':>6}  description")
+    for name, (_, desc) in BUILTIN_SCENES.items():
+        c = load_scene(name).counts()
+        print(f"{name:<10} {c['vertices']:>9} {c['triangles']:>10} {c['reflectors']:>10} {c['frames']:>6}  {desc}")
+    return 0
+
+
+def cmd_gbuffer(args) -> int:
+    from ..frame.outputs import write_gbuffers
+
+    scene = _scene(args)
+    t0 = time.perf_counter()
+    done = write_gbuffers(scene, args.out, args.frame, None if args.reflector is None else [args.reflector],
+                          args.widen, args.precision, args.memory_limit)
+    for k, covered, w, h in done:
+        print(f"reflector {k} ({scene.object_by_id(k).name}): {covered} covered pixels of {w * h} at {w}x{h}")
+    print(f"wrote {args.out}/gbuffer.png (positions | normals), view.png and gbuffer_K.npz "
+          f"in {1000 * (time.perf_counter() - t0):.0f} ms")
+    return 0
+
+
+def cmd_trace(args) -> int:
+    from ..search.pictures import write_trace
+    from ..search.trace import trace_vertex
+
+    scene = _scene(args)
+    opts = search_kwargs(args)
+    coherence = opts.pop("coherence")
+    rp = trace_vertex(scene, args.vertex, args.reflector, args.frame, coherence, **opts)
+    name = lambda k: scene.object_by_id(k).name  # noqa: E731
+    tr = rp.trace
+    if rp.method == "hierarchy":
+        print(f"vertex {rp.vertex} in reflector {rp.reflector} ({name(rp.reflector)!r}), frame {rp.frame}, ray-cone "
+              f"hierarchy of {tr.levels} levels over {tr.base_size}x{tr.base_size} pixels at {tuple(tr.origin)}")
+        print(f"{'#':>4} {'attempt':>7} {'level':>5} {'texel':>12}  event")
+        for n, st in enumerate(tr.steps):
+            if st["event"] in ("popped", "chosen"):
+                print(f"{n:>4} {st['attempt']:>7} {st['level']:>5} {str(tuple(st['texel'])):>12}  {st['event']}")
+        print(f"result: pixel {tr.pixel} after {tr.tests} texel tests")
+        written = write_trace(args.out, rp)
+        print(f"wrote {args.out}/{' and '.join(written)}")
+        return 0
+    print(f"vertex {rp.vertex} (object {rp.vertex_object} {name(rp.vertex_object)!r}, its vertex {rp.local_index}) "
+          f"in reflector {rp.reflector} ({name(rp.reflector)!r}), frame {rp.frame}, {opts['neighbourhood']}, start "
+          f"({tr.start[0]}, {tr.start[1]}){' after a restart' if tr.restarted else ''}")
+    print(tr.table())
+    write_trace(args.out, rp)
+    print(f"wrote {args.out}/trace.json, trace.png (score field -log10(1 - s), path, start green, end red) "
+          f"and trace.gif ({len(tr.steps)} steps)")
+    return 0
+
+
+def cmd_render(args) -> int:
+    from ..frame import render
+
+    scene = _scene(args)
+    frames = _one_of(args)
+    write = None
+    if args.frame is not None:
+        if args.frame < 0 or (scene.animation is not None and args.frame >= scene.n_frames):
+            raise RefsoftError(f"--frame must be in [0, {scene.n_frames - 1}], got {args.frame}")
+        frames = list(range(args.frame + 1)) if not args.no_coherence else [args.frame]
+        write = {args.frame}
+    t0 = time.perf_counter()
+    # every frame is written as soon as it is rendered, then dropped (one frame in memory)
+    done, stats = render(scene, frames=frames, out=args.out, progress=True, memory_limit=args.memory_limit,
+                         keep=False, write=write, **render_kwargs(args))
+    keep = done if write is None else [f for f in done if f.index in write]
+    summ = stats["summary"]
+    median_ms = np.median([f.time_ms["total"] for f in keep])
+    print(f"{scene.name}: {len(keep)} frame(s) written to {args.out} in {time.perf_counter() - t0:.1f} s "
+          f"(median {median_ms:.0f} ms per frame; the first includes compiling on a first run); search iterations: "
+          f"max frame mean {summ['max_frame_mean_iterations']:.1f}, total mean {summ['total_mean_iterations']:.1f}")
+    return 0
+
+
+def cmd_truth(args) -> int:
+    from ..frame import frame_indices
+    from ..truth import render_truth
+
+    scene = _scene(args)
+    frames = _one_of(args)
+    if args.frame is not None:
+        frames = [args.frame]
+    frame_indices(scene, frames)  # checks the range before any work
+    t0 = time.perf_counter()
+    done, stats = render_truth(scene, frames=frames, out=args.out, progress=True, exact=not args.no_exact,
+                               memory_limit=args.memory_limit)
+    rays = sum(f.report["reflector_pixels"] for f in done)
+    print(f"{scene.name}: {len(done)} truth frame(s) written to {args.out} in {time.perf_counter() - t0:.1f} s "
+          f"(median {stats['summary']['median_total_ms']:.0f} ms per frame; {rays} reflected rays)")
+    return 0
+
+
+def cmd_golden(args) -> int:
+    from ..conformance.golden import CASES, GOLDEN_SIZE, write_golden
+
+    if args.list:
+        for c in CASES:
+            opts = ", ".join(f"{k}={v}" for k, v in c.options.items()) or "defaults"
+            print(f"{c.name:<24} {c.scene:<10} frames {list(c.frames)}  {opts}")
+        return 0
+    t0 = time.perf_counter()
+    m = write_golden(args.out, args.case, progress=True)
+    print(f"golden set: {len(m['cases'])} cases, {len(m['files'])} files at {GOLDEN_SIZE[0]}x{GOLDEN_SIZE[1]} "
+          f"written to {args.out} in {time.perf_counter() - t0:.1f} s (manifest.json lists their SHA-256)")
+    return 0
+
+
+def cmd_check(args) -> int:
+    from ..conformance.check import check
+
+    out = args.out or os.path.join(args.candidate, "check")
+    summary = check(args.golden, args.candidate, loose=args.loose, out=out, cases=args.case, progress=True)
+    findings = summary.pop("_findings")
+    for f in findings:
+        if f.status != "pass" or args.verbose:
+            print(f.line())
+            for d in f.details[:5]:
+                print(f"           {d}")
+    c = summary["counts"]
+    verdict = "PASSED" if summary["passed"] else "FAILED"
+    print(f"{verdict}: {c['pass']} pass, {c['accepted']} accepted (yellow), {c['fail']} fail, {c['missing']} missing; "
+          f"error masks, difference images and summary.json in {out}")
+    return 0 if summary["passed"] else 1
+
+
+def cmd_bench(args) -> int:
+    from .. import bench
+
+    out = args.out or os.path.join("out", "bench", args.what)
+    t0 = time.perf_counter()
+    if args.what == "sweep":
+        scenes = args.scenes or ["sphere", "quad", "kitchen"]
+        rows = bench.sweep(scenes, out, args.width or 320, args.height or 240, args.frames or 3, args.repeats,
+                           args.knob, progress_bar=True)
+        plot = "pareto.png" if os.path.exists(os.path.join(out, "pareto.png")) else \
+            "no plot (pip install '.[plot]' for matplotlib)"
+        print(f"sweep: {len(rows)} settings over {len(scenes)} scenes in {time.perf_counter() - t0:.0f} s; "
+              f"{out}/sweep.csv, sweep.md, {plot}")
+    elif args.what == "scaling":
+        if args.scenes or args.knob:
+            raise RefsoftError("bench scaling takes no --scenes or --knob")
+        r = bench.scaling(out, args.width or 1024, args.height or 768, args.max_vertices, args.max_subdivisions,
+                          args.max_width, args.repeats, progress_bar=True)
+        slopes = ", ".join(f"{k} {v:.2f}" for k, v in r["slopes"].items())
+        plot = ".png" if os.path.exists(os.path.join(out, "scaling.png")) else \
+            " (no plot: pip install '.[plot]' for matplotlib)"
+        print(f"scaling in {time.perf_counter() - t0:.0f} s; fitted slopes: {slopes}; {out}/scaling.csv, .md{plot}")
+    else:
+        if args.knob:
+            raise RefsoftError("bench table1 takes no --knob")
+        rows = bench.table1(args.scenes or ["kitchen", "ufo", "ants"], out, args.width or 1024, args.height or 768,
+                            args.frames, progress_bar=True)
+        for r in rows:
+            print(f"{r['scene']:<8} max frame mean {r['max_frame_mean']:6.2f} (paper {r['paper_max_frame_mean']}), "
+                  f"total mean {r['total_mean']:5.2f} (paper {r['paper_total_mean']}), {r['ms_per_frame']} ms/frame "
+                  f"(paper {r['paper_ms_per_frame']})")
+        print(f"{out}/table1.csv, table1.md")
+    return 0
+
+
+def cmd_compare(args) -> int:
+    from ..truth.compare import compare_runs
+
+    print(f"{'frame':>5} {'refl px':>8} {'id disagree':>11} {'interior':>9} {'colour mean':>11} {'colour p99':>10}"
+          f"  per-vertex (reflector: px mean/max, |V'-V'*| mean)")
+
+    def row(m):
+        verts = "; ".join(f"{k}: {v['pixel_distance_mean']:.3f}/{v['pixel_distance_max']:.3f} px, "
+                          f"{v['virtual_distance_mean']:.2e}" for k, v in m.get("vertices", {}).items()
+                          if "pixel_distance_mean" in v)
+        print(f"{m['frame']:>5} {m['reflector_pixels']:>8} {100 * m['reflected_id_disagreement']:>10.2f}% "
+              f"{100 * m['interior_disagreement']:>8.2f}% {m['color_error']['mean']:>11.4f} "
+              f"{m['color_error']['p99']:>10.4f}  {verts}")
+
+    out = args.out or os.path.join(args.render_dir, "compare")
+    report = compare_runs(args.render_dir, args.truth_dir, out, on_frame=row)
+    s = report["summary"]
+    extra = ""
+    if s["only_in_render"] or s["only_in_truth"]:
+        extra = f" (not compared: {len(s['only_in_render'])} render-only, {len(s['only_in_truth'])} truth-only frames)"
+    print(f"{s['frames']} frame(s): reflected_id differs on {100 * s['reflected_id_disagreement']:.2f}% of reflector "
+          f"pixels{extra}; wrote {out}/metrics.json, agreement_NNNN.png (green agree, red differ) and side_NNNN.png "
+          f"(render | truth | 4x difference)")
+    return 0

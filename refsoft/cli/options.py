@@ -1,0 +1,114 @@
+"""Option groups shared by the subcommands (argparse ``parents=``), their choices taken from the
+library's own tuples, and their translation into library arguments."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from .. import constants
+
+
+def _parser():
+    return argparse.ArgumentParser(add_help=False)
+
+
+def scene_options() -> argparse.ArgumentParser:
+    """The scene and the image size."""
+    p = _parser()
+    p.add_argument("scene", help="built-in scene name (refsoft scenes lists them) or a TOML scene file")
+    p.add_argument("--width", type=int, default=None, help="image width in pixels (default: the scene's)")
+    p.add_argument("--height", type=int, default=None, help="image height in pixels (default: the scene's)")
+    return p
+
+
+def frame_range_options() -> argparse.ArgumentParser:
+    """Which frames a render or a truth covers."""
+    p = _parser()
+    p.add_argument("--frames", type=int, default=None, metavar="N",
+                   help="frames 0..N-1 (default: the whole animation; 1 for a static scene)")
+    p.add_argument("--frame", type=int, default=None, metavar="K",
+                   help="only frame K (a render runs frames 0..K for coherence and writes K)")
+    return p
+
+
+def one_frame_options() -> argparse.ArgumentParser:
+    """One frame of the scene."""
+    p = _parser()
+    p.add_argument("--frame", type=int, default=0, metavar="K", help="the frame (default 0)")
+    return p
+
+
+def method_options() -> argparse.ArgumentParser:
+    """The reflection method and the search's options."""
+    p = _parser()
+    p.add_argument("--method", choices=constants.METHODS, default="walk",
+                   help="the vertex search: the linear walk from a start pixel (the papers) or Szabo's ray-cone "
+                        "hierarchy (default walk)")
+    p.add_argument("--neighbourhood", choices=tuple(constants.NEIGHBOURHOODS), default="cross",
+                   help="the walk's candidates per step: the crosshair or the 3x3 box (default cross)")
+    p.add_argument("--search", choices=("cross", "box", "hierarchy"), default=None, help=argparse.SUPPRESS)
+    p.add_argument("--inverse", choices=constants.INVERSE_MODES, default="plane",
+                   help="hidden vertices: Estalella's plane rule, an inverse search, or their triangles "
+                        "discarded (default plane)")
+    p.add_argument("--widen", type=float, default=1.0, metavar="FACTOR",
+                   help="wider field of view of the G-buffers, for reflectors cut by the image border "
+                        "(Estalella 5.2; default 1 = off)")
+    p.add_argument("--precision", choices=constants.PRECISIONS, default="float32",
+                   help="G-buffer and search arithmetic (default float32, as a GPU)")
+    p.add_argument("--no-coherence", action="store_true",
+                   help="start every search at the default start, not at the last frame's pixel")
+    return p
+
+
+def render_options() -> argparse.ArgumentParser:
+    """What only a render takes: tessellation, refinement, the skips."""
+    p = _parser()
+    p.add_argument("--tessellate", type=float, default=None, metavar="THRESHOLD",
+                   help="Szabo's adaptive tessellation of reflected triangles whose edge error exceeds THRESHOLD "
+                        "(e.g. 1e-3; 0 = full tessellation), crack-free")
+    p.add_argument("--max-level", type=int, default=3, metavar="L",
+                   help="tessellation levels at most (default 3)")
+    p.add_argument("--refine", action="store_true",
+                   help="beyond the papers: sub-texel reflection points (one Gauss-Newton step from the texel "
+                        "found); with --tessellate, edge errors between refined points")
+    p.add_argument("--adaptive-widen", action="store_true",
+                   help="approximation: use --widen only on frames where a reflector is cut by the image border")
+    p.add_argument("--no-skip", action="append", metavar="NAME",
+                   choices=[s.replace("_", "-") for s in constants.SKIPS],
+                   help="turn one exact skip off (repeatable): " + ", ".join(s.replace("_", "-") for s in constants.SKIPS)
+                        + "; outputs are identical either way, only the time changes")
+    p.add_argument("--no-skips", action="store_true", help="turn every exact skip off")
+    return p
+
+
+def memory_options() -> argparse.ArgumentParser:
+    p = _parser()
+    p.add_argument("--memory-limit", default=None, metavar="SIZE",
+                   help="refuse a run estimated to need more memory (e.g. 4G; default $REFSOFT_MEMORY_LIMIT or 4G)")
+    return p
+
+
+def out_option(default: str) -> argparse.ArgumentParser:
+    p = _parser()
+    p.add_argument("--out", default=default, metavar="DIR", help=f"output folder (default: {default})")
+    return p
+
+
+def search_kwargs(args) -> dict:
+    """``method``, ``neighbourhood`` and the other search options of :func:`method_options`, as
+    :class:`refsoft.RenderOptions` fields (the hidden ``--search`` spelling mapped onto them)."""
+    method, neighbourhood = args.method, args.neighbourhood
+    if args.search is not None:
+        print("refsoft: note: --search is now --method walk|hierarchy with --neighbourhood cross|box",
+              file=sys.stderr)
+        method, neighbourhood = ("hierarchy", "cross") if args.search == "hierarchy" else ("walk", args.search)
+    return dict(method=method, neighbourhood=neighbourhood, inverse=args.inverse, widen=args.widen,
+                precision=args.precision, coherence=not args.no_coherence)
+
+
+def render_kwargs(args) -> dict:
+    """Every :class:`refsoft.RenderOptions` field a ``refsoft render`` command line sets."""
+    off = set(constants.SKIPS) if args.no_skips else {n.replace("-", "_") for n in args.no_skip or ()}
+    return dict(search_kwargs(args), adaptive_widen=args.adaptive_widen, tessellate=args.tessellate,
+                max_level=args.max_level, refine=args.refine, **{name: name not in off for name in constants.SKIPS})

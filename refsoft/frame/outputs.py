@@ -1,0 +1,84 @@
+"""A frame's outputs on disk (DESIGN section 7): ``frame_NNNN.npz`` (every array), ``frame_NNNN.png``
+and ``stats.json``, each written atomically."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from .. import keys
+from ..io import write_npz, write_png
+
+
+def frame_basename(index: int) -> str:
+    """``frame_NNNN`` (four digits, more when needed)."""
+    return f"frame_{index:04d}"
+
+
+def write_frame(out_dir, frame):
+    """Write ``frame_NNNN.npz`` (every array, in the order the frame holds them) and
+    ``frame_NNNN.png`` atomically."""
+    base = os.path.join(os.fspath(out_dir), frame_basename(frame.index))
+    write_npz(base + ".npz", **frame.arrays)
+    write_png(base + ".png", frame.arrays[keys.IMAGE])
+
+
+def frame_stats(frames) -> dict:
+    """The ``stats.json`` content of rendered frames: per frame its stage milliseconds and what
+    its reflection method reports (the vertex search: mean and max iterations per reflector,
+    the skips taken; the truth: reflector pixels and hits); a summary over the frames."""
+    out = {"frames": [{"frame": f.index, "time_ms": {k: round(v, 3) for k, v in f.time_ms.items()}, **f.report}
+                      for f in frames]}
+    summary = {}
+    means = [np.mean([v["mean"] for v in f.report["iterations"].values()]) for f in frames
+             if f.report.get("iterations")]
+    if any("iterations" in f.report for f in frames):
+        summary["max_frame_mean_iterations"] = float(max(means)) if means else 0.0
+        summary["total_mean_iterations"] = float(np.mean(means)) if means else 0.0
+    summary["frames"] = len(frames)
+    summary["median_total_ms"] = float(np.median([f.time_ms["total"] for f in frames])) if frames else 0.0
+    out["summary"] = summary
+    return out
+
+
+def write_gbuffers(scene, out, frame: int = 0, reflectors=None, widen: float = 1.0, precision="float32",
+                   memory_limit=None) -> list:
+    """Write each reflector's G-buffer as ``refsoft gbuffer`` does: ``gbuffer_K.npz``
+    (``gbuffer_position`` world space, ``gbuffer_normal``, ``gbuffer_mask``, ``gbuffer_depth``,
+    ``gbuffer_triangle``, ``gbuffer_view_proj``), ``gbuffer.png`` (positions | normals, one row
+    per reflector) and ``view.png`` (the main view without reflections).
+
+    Returns ``[(k, covered pixels, G-buffer width, height)]``.
+    """
+    from .. import raster, validate
+    from ..search.reflect import check_reflector
+    from ..visualize import normal_colors, position_colors, side_by_side
+
+    validate.integer(frame, "frame", 0, None if scene.animation is None else scene.n_frames - 1)
+    if not scene.reflector_ids:
+        from ..errors import RefsoftError
+
+        raise RefsoftError(f"scene {scene.name!r} has no reflector")
+    ids = scene.reflector_ids if reflectors is None else [check_reflector(scene, k) for k in reflectors]
+    from ..limits import check_frame_memory
+    from ..options import RenderOptions
+
+    check_frame_memory(scene, RenderOptions(widen=widen, precision=precision), 1, memory_limit)
+    camera = scene.camera_at(frame)
+    if widen != 1.0:
+        camera = camera.widened(widen)
+    os.makedirs(out, exist_ok=True)
+    pictures, done = [], []
+    for k in ids:
+        gb = raster.gbuffer(scene.world_mesh(k, frame, proxy=True), camera, precision)
+        write_npz(os.path.join(out, f"gbuffer_{k}.npz"), gbuffer_position=gb.position, gbuffer_normal=gb.normal,
+                  gbuffer_mask=gb.mask, gbuffer_depth=gb.depth, gbuffer_triangle=gb.triangle,
+                  gbuffer_view_proj=gb.view_proj)
+        pictures.append(side_by_side(position_colors(gb.position, gb.mask), normal_colors(gb.normal, gb.mask)))
+        done.append((k, int(gb.mask.sum()), camera.width, camera.height))
+    view = raster.color_pass([scene.world_mesh(i + 1, frame) for i in range(len(scene.objects))],
+                             [o.color for o in scene.objects], scene.camera_at(frame))
+    write_png(os.path.join(out, "view.png"), view.image)
+    write_png(os.path.join(out, "gbuffer.png"), np.concatenate(pictures, axis=0))
+    return done

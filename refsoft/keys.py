@@ -1,0 +1,74 @@
+"""The names of the output arrays of a frame (``frame_NNNN.npz``, DESIGN section 7), in one place.
+
+Frame-wide arrays have fixed names (:data:`IMAGE`, ...). Per-reflector arrays are named
+``NAME_K`` with ``K`` the reflector's object id: each per-reflector name below is a string that,
+called with ``K``, gives the key (``GBUFFER_MASK(3) == "gbuffer_mask_3"``); :func:`parse` splits
+a key back.
+"""
+
+from __future__ import annotations
+
+
+class PerReflector(str):
+    """A per-reflector array name; ``name(k)`` is its key for reflector ``k``."""
+
+    def __call__(self, k) -> str:
+        return f"{self}_{int(k)}"
+
+
+# --- frame-wide ------------------------------------------------------------------------------
+#: (H, W, 3) uint8: the composited picture.
+IMAGE = "image"
+#: (H, W) int32: the directly visible object, 0 background.
+OBJECT_ID = "object_id"
+#: (H, W) int32: at reflector pixels the object seen in the reflection (0 none), -1 elsewhere.
+REFLECTED_ID = "reflected_id"
+#: (H, W, 3) float64, truth only: the world point each reflected ray hits (0 where none).
+REFLECTED_HIT = "reflected_hit"
+
+# --- per reflector: the G-buffer ---------------------------------------------------------------
+GBUFFER_POSITION = PerReflector("gbuffer_position")
+GBUFFER_NORMAL = PerReflector("gbuffer_normal")
+GBUFFER_MASK = PerReflector("gbuffer_mask")
+GBUFFER_VIEW_PROJ = PerReflector("gbuffer_view_proj")
+
+# --- per reflector: one row per searched vertex ------------------------------------------------
+REFLECTION_PIXEL = PerReflector("reflection_pixel")
+VIRTUAL_VERTEX = PerReflector("virtual_vertex")
+ITERATIONS = PerReflector("iterations")
+FLAGS = PerReflector("flags")
+VERTEX_OBJECT = PerReflector("vertex_object")
+SCORE = PerReflector("score")
+MARGIN = PerReflector("margin")
+
+# --- per reflector, truth only: exact solutions on spherical reflectors -------------------------
+EXACT_REFLECTION_POINT = PerReflector("exact_reflection_point")
+EXACT_VIRTUAL_VERTEX = PerReflector("exact_virtual_vertex")
+
+#: Every per-reflector name, longest first (so that :func:`parse` matches ``gbuffer_view_proj``
+#: before a shorter name could).
+PER_REFLECTOR = tuple(sorted((GBUFFER_POSITION, GBUFFER_NORMAL, GBUFFER_MASK, GBUFFER_VIEW_PROJ, REFLECTION_PIXEL,
+                              VIRTUAL_VERTEX, ITERATIONS, FLAGS, VERTEX_OBJECT, SCORE, MARGIN,
+                              EXACT_REFLECTION_POINT, EXACT_VIRTUAL_VERTEX), key=len, reverse=True))
+#: The per-vertex arrays of the vertex search, judged together by ``refsoft check``.
+VERTEX_ARRAYS = (REFLECTION_PIXEL, VIRTUAL_VERTEX, FLAGS, ITERATIONS, SCORE, VERTEX_OBJECT, MARGIN)
+
+
+def parse(key: str):
+    """``(name, k)`` of a per-reflector key (``"flags_2"`` -> ``(FLAGS, 2)``); ``None`` for any
+    other key."""
+    for name in PER_REFLECTOR:
+        prefix = name + "_"
+        if key.startswith(prefix) and key[len(prefix):].isdigit():
+            return name, int(key[len(prefix):])
+    return None
+
+
+def reflectors(arrays, name: str = REFLECTION_PIXEL) -> list[int]:
+    """The reflector ids ``k`` for which ``arrays`` holds ``name(k)``, sorted."""
+    out = []
+    for key in arrays:
+        p = parse(key)
+        if p is not None and p[0] == name:
+            out.append(p[1])
+    return sorted(out)

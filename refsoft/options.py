@@ -1,0 +1,96 @@
+"""The options of a render (:class:`RenderOptions`), checked once at the boundary."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields, replace
+
+from . import validate
+from .constants import INVERSE_MODES, MAX_TESSELLATION_LEVEL, METHODS, NEIGHBOURHOODS, PRECISIONS, SKIPS
+from .errors import RefsoftError
+
+
+@dataclass(frozen=True)
+class RenderOptions:
+    """Options of :func:`refsoft.render` (the defaults are the papers' method).
+
+    Parameters
+    ----------
+    method : {"walk", "hierarchy"}
+        The reflection method: the vertex search's linear walk from a start pixel (Estalella),
+        or Szabo's ray-cone pyramid (no coherence).
+    neighbourhood : {"cross", "box"}
+        The walk's candidates per step: the crosshair or the 3x3 box.
+    inverse : {"plane", "search", "discard"}
+        Hidden vertices: Estalella's plane rule, the inverse search, or their triangles left out.
+    widen : float
+        Wider-frustum factor of the G-buffers (1.0: off).
+    gbuffer_size : (int, int), optional
+        G-buffer (width, height); default keeps the view's pixel density.
+    precision : {"float32", "float64"}
+    coherence : bool
+        Start each search at the vertex's previous reflection pixel.
+    cap : int, optional
+        Iteration cap per search (default ``2 * (width + height)`` of the G-buffer).
+    cull_reflectors, reuse, cull_virtual, crop_virtual : bool
+        Exact skips (on by default; outputs are bit-identical with them off): no G-buffer and
+        no search for a reflector outside the G-buffer's frustum; G-buffer and search results
+        reused when the reflector, the camera and the vertex's object did not move; objects
+        whose virtual vertices all lie beyond one side of the stencil's box not rasterized; the
+        virtual raster restricted to that box.
+    adaptive_widen : bool
+        An approximation (off by default, changes results): use ``widen`` only on frames where
+        the reflector's projection is clipped by the view.
+    tessellate : float, optional
+        Szabo's adaptive tessellation of the reflected geometry
+        (:mod:`refsoft.search.tessellate`): split triangles whose largest edge error exceeds
+        this threshold (0: every triangle), crack-free, up to ``max_level`` levels. Default off.
+    max_level : int
+    refine : bool
+        Sub-texel reflection points (:mod:`refsoft.search.refine`, beyond the papers; off by
+        default): one Gauss-Newton step from the texel found before mirroring the vertex.
+    """
+
+    method: str = "walk"
+    neighbourhood: str = "cross"
+    inverse: str = "plane"
+    widen: float = 1.0
+    gbuffer_size: tuple | None = None
+    precision: str = "float32"
+    coherence: bool = True
+    cap: int | None = None
+    cull_reflectors: bool = True
+    reuse: bool = True
+    cull_virtual: bool = True
+    crop_virtual: bool = True
+    adaptive_widen: bool = False
+    tessellate: float | None = None
+    max_level: int = 3
+    refine: bool = False
+
+    def __post_init__(self):
+        if self.neighbourhood == "hierarchy":
+            raise RefsoftError("neighbourhood must be one of ['cross', 'box']; the hierarchy search is "
+                               "method='hierarchy'")
+        validate.choice(self.method, METHODS, "method")
+        validate.choice(self.neighbourhood, tuple(NEIGHBOURHOODS), "neighbourhood")
+        validate.choice(self.inverse, INVERSE_MODES, "inverse")
+        validate.choice(self.precision, PRECISIONS, "precision")
+        validate.number(self.widen, "widen", minimum=1.0)
+        if self.tessellate is not None:
+            validate.number(self.tessellate, "tessellate", minimum=0.0, what="a threshold >= 0 (or None)")
+        validate.integer(self.max_level, "max_level", 0, MAX_TESSELLATION_LEVEL)
+        if self.cap is not None:
+            validate.integer(self.cap, "cap", 1)
+        for name in SKIPS + ("adaptive_widen", "coherence", "refine"):
+            validate.flag(getattr(self, name), name)
+
+    def without_skips(self) -> "RenderOptions":
+        """The same options with every exact skip off (the reference the skips are tested
+        against)."""
+        return replace(self, **dict.fromkeys(SKIPS, False))
+
+    def as_dict(self) -> dict:
+        """Every option by name (tuples as lists), as ``stats.json`` and golden manifests record
+        them."""
+        return {f.name: (list(v) if isinstance(v, tuple) else v) for f in fields(self)
+                for v in [getattr(self, f.name)]}

@@ -1,0 +1,223 @@
+"""The vertex search as a reflection method (DESIGN sections 1, 4 and 5; the seam is
+:mod:`refsoft.seam`).
+
+Per reflector and frame: the G-buffer of its closed proxy (optionally widened), the search of
+every non-reflector vertex (coherent with the last frame), the virtual vertices (optionally from
+sub-texel points), then the virtual scene (optionally tessellated) rasterized inside the
+reflector's stencil. The exact skips of :mod:`refsoft.search.skips` leave every output
+bit-identical.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import keys, limits
+from ..raster import PRECISIONS, GBuffer, _setup, gbuffer
+from ..seam import ReflectorResult, stencil_box
+from . import CULLED, SearchResult, search, skips, virtual_vertices
+from .reflect import Reflection, coherent_starts, gbuffer_camera
+from .refine import refine as refine_points
+from .virtual import tessellated_parts, virtual_parts, virtual_pass
+
+
+@dataclass
+class _Last:
+    """What the method remembers of a reflector's last frame, for the reuse skip."""
+
+    key: tuple  # (G-buffer camera key, reflector transform, widen used)
+    gbuffer: object
+    result: object
+    transforms: dict  # object id -> Transform of the vertices searched
+
+
+def empty_gbuffer(camera, precision) -> GBuffer:
+    """The G-buffer the rasterizer makes of a mesh it draws no pixel of (the eye as origin)."""
+    dt = PRECISIONS[precision]
+    h, w = camera.height, camera.width
+    return GBuffer(limits.zeros((h, w, 3), dt), limits.zeros((h, w, 3), dt), limits.zeros((h, w), bool),
+                   (0, 0, np.zeros((0, 0), np.float32)), (0, 0, np.zeros((0, 0), np.int32)),
+                   camera.view_proj(), np.asarray(camera.eye, dtype=np.float64))
+
+
+def gbuffer_outputs(gb: GBuffer, k: int) -> dict:
+    """The DESIGN section 7 G-buffer arrays of reflector ``k``: world-space float32 positions,
+    zero where not covered (as the rasterizer's maps), float32 normals, the mask and the
+    view-projection matrix."""
+    position = limits.zeros(gb.position.shape, np.float32)
+    if gb.mask.any():
+        r0, r1, c0, c1 = stencil_box(gb.mask)  # only the covered box is converted
+        m = gb.mask[r0:r1, c0:c1, None]
+        world = gb.position[r0:r1, c0:c1].astype(np.float64) + gb.origin
+        position[r0:r1, c0:c1] = np.where(m, world, 0.0)
+    return {keys.GBUFFER_POSITION(k): position, keys.GBUFFER_NORMAL(k): np.asarray(gb.normal, dtype=np.float32),
+            keys.GBUFFER_MASK(k): gb.mask, keys.GBUFFER_VIEW_PROJ(k): gb.view_proj}
+
+
+def vertex_outputs(refl: Reflection, owner, k: int) -> dict:
+    """The DESIGN section 7 per-vertex arrays of reflector ``k`` (plus its scores and margins)."""
+    res = refl.result
+    return {keys.REFLECTION_PIXEL(k): res.pixel.astype(np.int32),
+            keys.VIRTUAL_VERTEX(k): refl.virtual.astype(np.float32),
+            keys.ITERATIONS(k): res.iterations.astype(np.int32),
+            keys.FLAGS(k): res.flags.astype(np.uint8),
+            keys.VERTEX_OBJECT(k): owner.astype(np.int32),
+            keys.SCORE(k): res.score,
+            keys.MARGIN(k): res.margin}
+
+
+def virtual_relative(gb, res, verts, eye, refine):
+    """Virtual vertices relative to the G-buffer's origin, from sub-texel points if ``refine``;
+    and those points (P, N, offset) or None."""
+    if not (refine and len(verts) and gb.mask.any()):
+        return virtual_vertices(gb, res, verts, relative=True), None
+    surface = refine_points(gb, eye, verts, res)
+    return virtual_vertices(gb, res, verts, relative=True, surface=surface[:2]), surface
+
+
+class VertexSearch:
+    """The vertex search for every reflector of a scene, frame after frame.
+
+    Keeps each reflector's previous reflection pixels (coherence) and, for the reuse skip, its
+    last G-buffer and search results.
+
+    Parameters
+    ----------
+    scene : Scene
+    options : RenderOptions
+        Read: ``method``, ``neighbourhood``, ``inverse``, ``widen``, ``gbuffer_size``,
+        ``precision``, ``coherence``, ``cap``, the skips, ``adaptive_widen``, ``tessellate``,
+        ``max_level``, ``refine``.
+    """
+
+    name = "vertex"
+    stages = ("gbuffer", "search", "virtual")
+    pixel_arrays = {}
+
+    def __init__(self, scene, options):
+        self.scene = scene
+        self.options = options
+        self.previous = {}
+        self._last = {}
+
+    # --- the seam --------------------------------------------------------------------------
+    def reflect(self, view, k: int, stencil) -> ReflectorResult:
+        """Reflector ``k``'s G-buffer, search, virtual vertices and virtual pass (the
+        :mod:`refsoft.seam` interface)."""
+        opt = self.options
+        report = {}
+        refl, t_gb, t_search = self.reflection(view, k, report)
+        times = {"gbuffer": t_gb, "search": t_search, "virtual": 0.0}
+        self.previous[k] = refl.result.pixel
+        out = ReflectorResult(k, time_ms=times, report=report, state=refl)
+        if stencil.any():
+            t = time.perf_counter()
+            box = stencil_box(stencil) if opt.crop_virtual else (0, view.camera.height, 0, view.camera.width)
+            if opt.tessellate is None:
+                parts = virtual_parts(self.scene, view.meshes, refl)
+            else:
+                parts, report["tessellation"] = tessellated_parts(self.scene, view.meshes, refl, view.vertices, opt,
+                                                                  view.camera.eye)
+                times["tessellate"] = 1000 * (time.perf_counter() - t)
+                t = time.perf_counter()
+            out.colour, out.reflected_id, out.covered, report["virtual_objects_culled"] = virtual_pass(
+                self.scene, parts, view.camera, stencil, box, opt.inverse, opt.cull_virtual)
+            out.box = box
+            times["virtual"] = 1000 * (time.perf_counter() - t)
+        out.arrays = {**gbuffer_outputs(refl.gbuffer, k), **vertex_outputs(refl, view.vertex_object, k)}
+        return out
+
+    def frame_report(self, results) -> dict:
+        """``stats.json``'s per-frame ``iterations`` (mean and max per reflector, CULLED vertices
+        left out) and ``skipped`` (what the exact skips left out, and tessellation counts)."""
+        iterations = {}
+        skipped = {"reflectors_outside_view": [], "gbuffers_reused": [], "searches_reused": {},
+                   "virtual_objects_culled": {}, "widen_off": []}
+        tessellation = {}
+        for k, r in results.items():
+            rep = r.report
+            for flag, name in (("outside_view", "reflectors_outside_view"), ("gbuffer_reused", "gbuffers_reused")):
+                if rep.get(flag):
+                    skipped[name].append(k)
+            if rep.get("widen_off"):
+                skipped["widen_off"].append(k)
+            for name in ("searches_reused", "virtual_objects_culled"):
+                if name in rep:
+                    skipped[name][str(k)] = rep[name]
+            if "tessellation" in rep:
+                tessellation[str(k)] = rep["tessellation"]
+            res = r.state.result
+            it = res.iterations[(res.flags & CULLED) == 0]
+            iterations[str(k)] = {"mean": float(it.mean()) if len(it) else 0.0, "max": int(it.max()) if len(it) else 0}
+        if self.options.tessellate is not None:
+            skipped["tessellation"] = tessellation  # reported beside the skips (what was added, not skipped)
+        return {"iterations": iterations, "skipped": skipped}
+
+    # --- the stages --------------------------------------------------------------------------
+    def reflection(self, view, k: int, report=None):
+        """Reflector ``k``'s G-buffer, search and virtual vertices, with the exact skips.
+
+        Returns (Reflection, G-buffer ms, search ms); ``report`` (a dict) receives which skips
+        were taken."""
+        scene, opt = self.scene, self.options
+        report = {} if report is None else report
+        frame, camera, verts = view.frame, view.camera, view.vertices
+        t0 = time.perf_counter()
+        proxy = scene.world_mesh(k, frame, proxy=True)
+        widen = opt.widen
+        if opt.adaptive_widen and widen != 1.0:
+            if not skips.projection_clipped(_setup.transform_points(proxy.vertices, camera.view_proj())):
+                widen = 1.0
+                report["widen_off"] = True
+        gcam = gbuffer_camera(scene, frame, widen, opt.gbuffer_size)
+        key = (skips.camera_key(gcam), view.transforms[k], widen)
+        last = self._last.get(k)
+        same = opt.reuse and last is not None and last.key == key and len(last.result) == len(verts)
+        if same:
+            gb = last.gbuffer
+            report["gbuffer_reused"] = True
+        elif opt.cull_reflectors and skips.outside_frustum(_setup.transform_points(proxy.vertices, gcam.view_proj())):
+            gb = empty_gbuffer(gcam, opt.precision)
+            report["outside_view"] = True
+        else:
+            gb = gbuffer(proxy, gcam, opt.precision, origin=gcam.eye)
+        t1 = time.perf_counter()
+        prev = self.previous.get(k) if opt.coherence else None
+        if last is not None and last.key[2] != widen:
+            prev = None  # the G-buffer's pixel grid changed: restart
+        prev = coherent_starts(prev, len(verts), gb.mask.shape)
+        eye = camera.eye
+        if same:
+            moved = [j for j, tr in view.transforms.items() if last.transforms.get(j) != tr]
+            reuse = ~np.isin(view.vertex_object, moved) & skips.reusable(last.result, opt.coherence, opt.inverse)
+            res = self._merged_search(gb, eye, verts, prev, last.result, reuse)
+            report["searches_reused"] = int(reuse.sum())
+        else:
+            res = search(gb, eye, verts, opt.neighbourhood, opt.inverse, prev, opt.cap, method=opt.method)
+        rel, surface = virtual_relative(gb, res, verts, eye, opt.refine)
+        world64 = rel.astype(np.float64) + gb.origin
+        refl = Reflection(k, gb, res, world64.astype(rel.dtype), world64, surface)
+        if opt.reuse:
+            self._last[k] = _Last(key, gb, res, dict(view.transforms))
+        return refl, 1000 * (t1 - t0), 1000 * (time.perf_counter() - t1)
+
+    def _merged_search(self, gb, eye, verts, prev, last, reuse):
+        """Search the vertices not in ``reuse``; the others keep ``last``'s pixel, score and
+        margin with the iterations and flags the search would give them."""
+        opt = self.options
+        todo = np.flatnonzero(~reuse)
+        it, fl = skips.reused_result(last, opt.coherence)
+        pixel, score, margin = last.pixel.copy(), last.score.copy(), last.margin.copy()
+        iterations, flags = it.copy(), fl.copy()
+        if len(todo):
+            new = search(gb, eye, verts[todo], opt.neighbourhood, opt.inverse,
+                         None if prev is None else prev[todo], opt.cap, method=opt.method)
+            pixel[todo], score[todo], margin[todo] = new.pixel, new.score, new.margin
+            iterations[todo], flags[todo] = new.iterations, new.flags
+            cap = new.cap
+        else:
+            cap = last.cap
+        return SearchResult(pixel, score, margin, iterations, flags, opt.neighbourhood, opt.inverse, cap, opt.method)

@@ -1,0 +1,133 @@
+"""The virtual scene of one reflector (DESIGN section 5): its virtual triangles rasterized with the
+view camera into a z-buffer of their own, on the reflector's stencil only.
+
+Input: a :class:`refsoft.search.reflect.Reflection` (virtual vertices and search flags) and the
+world meshes; output, over the stencil's box: colour (h, w, 3) float32, reflected object id
+(h, w) int32 and coverage (h, w) bool, which the frame driver composites.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..raster import _setup, interpolate, rasterize, shade
+from ..scene.mesh import concatenate
+from . import CULLED, HIDDEN, SearchResult, skips, virtual_vertices
+from .tessellate import tessellate
+
+
+def virtual_parts(scene, meshes, refl):
+    """The reflected geometry of one reflector, one part per non-reflector object.
+
+    Returns
+    -------
+    list of (virtual (n, 3) float64, normals (n, 3), faces (m, 3) int64 local, face_obj (m,)
+    int32, flags (n,) uint8)
+    """
+    # eye-relative virtual vertices moved to world space in float64: far from the origin the
+    # float32 world output would round them (1/16 unit at 1e6)
+    virtual = refl.virtual64 if refl.virtual64 is not None else refl.virtual.astype(np.float64)
+    flags = refl.result.flags
+    parts, start = [], 0
+    for k, obj in enumerate(scene.objects, start=1):
+        if obj.reflector:
+            continue
+        mesh = meshes[k - 1]
+        n = mesh.n_vertices
+        parts.append((virtual[start:start + n], mesh.normals, mesh.faces.astype(np.int64),
+                      np.full(mesh.n_faces, k, dtype=np.int32), flags[start:start + n]))
+        start += n
+    return parts
+
+
+def tessellated_parts(scene, meshes, refl, verts, opt, eye):
+    """One part holding the reflected geometry after :func:`refsoft.search.tessellate.tessellate`
+    (same layout as :func:`virtual_parts`), and that function's counts (dict)."""
+    ids = [k for k, obj in enumerate(scene.objects, start=1) if not obj.reflector]
+    reflected = concatenate([meshes[k - 1] for k in ids], ids)
+    res = refl.result
+    t = tessellate(refl.gbuffer, eye, verts, reflected.normals, reflected.faces, reflected.face_object, res.pixel,
+                   res.flags, opt.tessellate, opt.max_level, opt.neighbourhood, opt.inverse, opt.cap,
+                   surface=refl.surface, method=opt.method)
+    n0 = len(verts)
+    new = t.vertices[n0:]
+    m = len(new)
+    res_new = SearchResult(t.pixel[n0:], np.zeros(m), np.zeros(m), np.ones(m, np.int32), t.flags[n0:],
+                           res.neighbourhood, res.inverse, res.cap, res.method)
+    surface = None if refl.surface is None else tuple(a[n0:] for a in t.surface[:2])
+    rel = virtual_vertices(refl.gbuffer, res_new, new, relative=True, surface=surface)
+    virtual = np.concatenate([refl.virtual64, rel.astype(np.float64) + refl.gbuffer.origin])
+    counts = {"vertices_searched": int(t.searched), "levels": int(t.levels), "triangles": int(len(t.faces))}
+    return [(virtual, t.normals, t.faces, t.face_obj, t.flags)], counts
+
+
+def virtual_pass(scene, parts, camera, stencil, box, inverse, cull=True):
+    """Rasterize the virtual scene of one reflector with the view camera, inside its stencil.
+
+    Parameters
+    ----------
+    scene : Scene
+        For the objects' colours.
+    parts : list
+        :func:`virtual_parts` or :func:`tessellated_parts`: virtual vertices, normals, faces,
+        face object ids and flags per part.
+    camera : Camera
+        The view camera.
+    stencil : ndarray (H, W) bool
+        The pixels where this reflector is visible in the main view.
+    box : (r0, r1, c0, c1)
+        The pixels rasterized (the stencil's bounding box: the same pixels as the whole view,
+        cropped).
+    inverse : str
+        The hidden-vertex mode (``discard`` leaves out triangles with a HIDDEN vertex).
+    cull : bool
+        Leave out parts, then triangles, whose virtual vertices all lie beyond one side of the
+        box (:func:`refsoft.search.skips.outside_box`: they cover none of its pixels).
+
+    Returns
+    -------
+    colour : ndarray (h, w, 3) float32
+    reflected_id : ndarray (h, w) int32
+    covered : ndarray (h, w) bool
+    n_culled : int
+        Parts culled.
+    """
+    vp = camera.view_proj()
+    bounds = skips.box_planes(box, camera.width, camera.height)
+    bad = CULLED | (HIDDEN if inverse == "discard" else 0)
+    faces, face_obj, normals, clips = [], [], [], []
+    n_culled = 0
+    offset = 0
+    for virtual, nrm_v, f, fobj, flags in parts:
+        clip = _setup.transform_points(virtual, vp)
+        if cull and skips.outside_box(clip, bounds):
+            n_culled += 1
+            continue
+        keep = ~np.any(flags[f] & bad, axis=1)  # triangles whose vertices all have a V'
+        faces.append(f[keep] + offset)
+        face_obj.append(fobj[keep])
+        normals.append(nrm_v)
+        clips.append(clip)
+        offset += len(clip)
+    r0, r1, c0, c1 = box
+    h, w = r1 - r0, c1 - c0
+    colour = np.zeros((h, w, 3), dtype=np.float32)
+    rid = np.zeros((h, w), dtype=np.int32)
+    faces = np.concatenate(faces) if faces else np.zeros((0, 3), np.int64)
+    if len(faces) == 0:
+        return colour, rid, np.zeros((h, w), dtype=bool), n_culled
+    face_obj = np.concatenate(face_obj)
+    clip = np.concatenate(clips)
+    if cull:  # triangles beyond one side of the box: not set up (the order of the others is kept)
+        keep = ~skips.triangles_outside_box(clip, np.ascontiguousarray(faces, dtype=np.int64), *bounds)
+        faces, face_obj = faces[keep], face_obj[keep]
+        if len(faces) == 0:
+            return colour, rid, np.zeros((h, w), dtype=bool), n_culled
+    frags = rasterize(clip, faces, camera.width, camera.height, region=box)
+    inside = frags.mask & stencil[r0:r1, c0:c1]
+    nrm = interpolate(frags, np.concatenate(normals), faces, np.float32, normalize=True)
+    colors = np.vstack([np.zeros(3), [o.color for o in scene.objects]]).astype(np.float32)
+    obj = np.where(inside, face_obj[np.maximum(frags.triangle, 0)], 0)
+    colour[inside] = shade(nrm[inside], colors[obj[inside]])
+    rid[inside] = obj[inside]
+    return colour, rid, inside, n_culled
