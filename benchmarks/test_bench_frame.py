@@ -46,7 +46,7 @@ def test_frame_coherent(benchmark, name):
 @pytest.mark.parametrize("name", SCENES)
 def test_frame_truth(benchmark, name):
     """The ray-traced truth of the same frames as ``test_frame_coherent`` (frames 1, 2, ...):
-    the ratio of the two medians is the figure issue 4 asks for."""
+    the ratio of the two medians is the coherence speed-up."""
     from refsoft.truth.raytrace import TruthRenderer
 
     scene = refsoft.load_scene(name, width=1024, height=768)

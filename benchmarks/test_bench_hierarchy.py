@@ -1,4 +1,4 @@
-"""Linear against hierarchy search (issue 9) on the thesis's setups: a mirror ball reflecting a
+"""Linear against hierarchy search on the thesis's setups: a mirror ball reflecting a
 quad subdivided into more and more vertices, and a ball filling the whole view. For each: the
 search time (cold; the hierarchy has no coherence), the mean steps (linear: neighbourhoods
 evaluated; hierarchy: texels tested) and the pixel distance of the found reflection pixels from

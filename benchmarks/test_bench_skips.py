@@ -1,4 +1,4 @@
-"""Issue 10: each built-in animation rendered with the exact skips on and off (outputs are
+"""Each built-in animation rendered with the exact skips on and off (outputs are
 bit-identical either way: tests/test_skips.py), 640x480, the first 6 frames, coherent.
 ``extra_info`` lists what was skipped.
 

@@ -13,7 +13,7 @@ import refsoft
 from refsoft.raster import color_pass
 from refsoft.search.reflect import reflect, reflector_gbuffer
 from refsoft.scene import scene_vertices
-from refsoft.frame.composite import composite
+from refsoft.frame.driver import composite
 from refsoft.search.virtual import virtual_parts as _virtual_parts, virtual_pass as _virtual_pass
 from refsoft.seam import stencil_box as _stencil_box
 from refsoft.search import search

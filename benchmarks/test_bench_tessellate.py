@@ -1,4 +1,4 @@
-"""Adaptive against full against no tessellation (issue 9), with and without sub-texel
+"""Adaptive against full against no tessellation, with and without sub-texel
 reflection points (``refine``). The timed call is one coherent frame (frame 1, right after
 frame 0 rendered by the same fresh driver in the untimed setup); the agreement of its
 ``reflected_id`` with the ray-traced truth of the same frame goes in ``extra_info``, with the

@@ -1,4 +1,4 @@
-"""`refsoft bench sweep | scaling | table1` at tiny sizes (the CI smoke run of issue 6): the
+"""`refsoft bench sweep | scaling | table1` at tiny sizes (a CI smoke run): the
 files are written with the expected rows and columns; no time is asserted."""
 
 import csv

@@ -1,5 +1,5 @@
 """`refsoft golden` and `refsoft check`: the oracle checked against itself passes with nothing
-flagged, and every mutation a buggy port could make is flagged (issue 7's mutation suite)."""
+flagged, and every mutation a buggy port could make is flagged (the mutation suite)."""
 
 import json
 import os

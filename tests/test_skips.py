@@ -1,4 +1,4 @@
-"""Issue 10: every skip leaves the frame's outputs bit for bit unchanged; the approximation
+"""Every skip leaves the frame's outputs bit for bit unchanged; the approximation
 (adaptive widen) changes them only as documented."""
 
 from types import SimpleNamespace

@@ -1,4 +1,4 @@
-"""Stress suite (issue 8, DESIGN section 10): valid but hostile geometry never crashes, never
+"""Stress suite (DESIGN section 10): valid but hostile geometry never crashes, never
 puts a NaN or inf in an output, every search terminates (the cap only with its flag), and the
 flags say what happened."""
 

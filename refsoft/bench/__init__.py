@@ -1,4 +1,4 @@
-"""Measurements of run time against error (issue 6): ``refsoft bench sweep``, ``refsoft bench
+"""Measurements of run time against error: ``refsoft bench sweep``, ``refsoft bench
 scaling`` and ``refsoft bench table1``. Each writes CSV, a markdown table and (with matplotlib)
 plots; ``docs/benchmarks.md`` holds the figures of a run and how to rerun it.
 

@@ -1,4 +1,4 @@
-"""Tests that let the frame driver skip work a frame does not need (issue 10).
+"""Tests that let the frame driver skip work a frame does not need .
 
 Every skip here is *exact*: the frame's outputs are bit for bit those of the full computation
 (tests/test_skips.py renders every built-in animation with each skip on and off). A skip that
