@@ -355,3 +355,68 @@ def naive_virtual_vertices(gbuffer, result, vertices, surface=None):
     elif result.inverse == "search":
         out = np.where(hidden[:, None], v, out)
     return out
+
+
+def naive_subdivide(vertices, faces, normals, max_edge, scale=(1.0, 1.0, 1.0)):
+    """Loader subdivision (``refsoft.scene.subdivide``), one edge and one face at a time.
+
+    Returns vertices (V', 3), faces (F', 3) and normals (V', 3) as NumPy arrays.
+    """
+    import math
+
+    P = [tuple(float(c) for c in v) for v in vertices]
+    N = [tuple(float(c) for c in v) for v in normals]
+    F = [tuple(int(i) for i in f) for f in faces]
+    s = [float(c) for c in scale]
+    limit = float(max_edge) * float(max_edge)
+
+    def key(i, j):
+        return (min(i, j), max(i, j))
+
+    def len2(i, j):
+        lo, hi = key(i, j)
+        d = [(P[hi][k] - P[lo][k]) * s[k] for k in range(3)]
+        return d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
+
+    while True:
+        long = set()
+        for f in F:
+            for k in range(3):
+                if len2(f[k], f[(k + 1) % 3]) > limit:
+                    long.add(key(f[k], f[(k + 1) % 3]))
+        if not long:
+            break
+        mid = {}
+        for a, b in sorted(long):
+            mid[(a, b)] = len(P)
+            P.append(tuple((P[a][k] + P[b][k]) * 0.5 for k in range(3)))
+            m = [(N[a][k] + N[b][k]) * 0.5 for k in range(3)]
+            if m == [0.0, 0.0, 0.0]:
+                m = list(N[a])
+            length = math.sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2])
+            N.append(tuple(c / length for c in m) if length > 0 else (0.0, 0.0, 0.0))
+        new = []
+        for f in F:
+            ms = [mid.get(key(f[k], f[(k + 1) % 3])) for k in range(3)]
+            split = [k for k in range(3) if ms[k] is not None]
+            if not split:
+                new.append(f)
+            elif len(split) == 1:
+                k = split[0]
+                a, b, c, m = f[k], f[(k + 1) % 3], f[(k + 2) % 3], ms[k]
+                new += [(a, m, c), (m, b, c)]
+            elif len(split) == 2:
+                k = [k for k in range(3) if ms[k] is None][0]
+                q, r, p = f[k], f[(k + 1) % 3], f[(k + 2) % 3]
+                m_rp, m_pq = ms[(k + 1) % 3], ms[(k + 2) % 3]
+                da, db = len2(q, m_rp), len2(r, m_pq)
+                new.append((m_rp, p, m_pq))
+                if da < db or (da == db and q < r):
+                    new += [(q, r, m_rp), (q, m_rp, m_pq)]
+                else:
+                    new += [(q, r, m_pq), (r, m_rp, m_pq)]
+            else:
+                (v0, v1, v2), (m0, m1, m2) = f, ms
+                new += [(v0, m0, m2), (v1, m1, m0), (v2, m2, m1), (m0, m1, m2)]
+        F = new
+    return np.array(P, dtype=np.float64), np.array(F, dtype=np.int64), np.array(N, dtype=np.float64)

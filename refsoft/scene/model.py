@@ -75,6 +75,12 @@ class SceneObject:
         Search an open reflector's own mesh (a flat mirror, the inside of a bowl). An open
         reflector needs either this or a ``closed_proxy`` (Estalella section 5.3): without
         either, an open mesh is most likely a modelling mistake, and is refused.
+    subdivide : float, optional
+        Loader subdivision: split triangles until no edge is longer than this many world units
+        (:func:`refsoft.scene.subdivide.apply_subdivision`, applied when a scene is loaded).
+        None or 0: off.
+    source_counts : tuple of 2 ints, optional
+        (vertices, triangles) of the mesh as given, set when it has been subdivided.
     """
 
     name: str
@@ -85,6 +91,8 @@ class SceneObject:
     closed_proxy: Mesh | None = None
     reflectivity: float = 1.0
     open: bool = False
+    subdivide: float | None = None
+    source_counts: tuple | None = None
 
     def __post_init__(self):
         c = np.asarray(self.color, dtype=np.float64)
@@ -101,6 +109,18 @@ class SceneObject:
             raise SceneError(f"object {self.name!r}: open must be true or false")
         if self.open and not self.reflector:
             raise SceneError(f"object {self.name!r}: open is only for reflectors")
+        sub = self.subdivide
+        if sub is not None:
+            if isinstance(sub, (bool, np.bool_)) or not isinstance(sub, (int, float, np.integer, np.floating)) \
+                    or not np.isfinite(sub) or sub < 0:
+                raise SceneError(f"object {self.name!r}: subdivide must be a finite number >= 0 (0 = off), got {sub!r}")
+            object.__setattr__(self, "subdivide", float(sub))
+        if self.source_counts is not None:
+            c = self.source_counts
+            if (not isinstance(c, tuple) or len(c) != 2
+                    or not all(isinstance(x, (int, np.integer)) and not isinstance(x, bool) and x > 0 for x in c)):
+                raise SceneError(f"object {self.name!r}: source_counts must be (vertices, triangles), got {c!r}")
+            object.__setattr__(self, "source_counts", (int(c[0]), int(c[1])))
         if self.closed_proxy is not None:
             n = self.closed_proxy.boundary_edges()
             if n:

@@ -3,6 +3,10 @@
 Every key is checked: an unknown key, a wrong type or a bad value raises
 :class:`refsoft.errors.SceneError` with the file and the key path in the message, e.g.
 ``scene.toml: objects[2].colr: unknown key``.
+
+Loader subdivision (:mod:`refsoft.scene.subdivide`): ``[scene] subdivide = L`` is the default of
+the non-reflector objects, an object's own ``subdivide = L`` overrides it (0 = off); the meshes
+are subdivided when the file is loaded.
 """
 
 from __future__ import annotations
@@ -18,6 +22,7 @@ from ..errors import RefsoftError, SceneError
 from .mesh import load_mesh
 from .primitives import make_primitive
 from .model import Animation, Scene, SceneObject, Transform
+from .subdivide import apply_subdivision, check_override
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -26,8 +31,9 @@ else:  # pragma: no cover
 
 CAMERA_KEYS = {"eye", "target", "up", "fov_y", "width", "height", "near", "far", "projection", "ortho_height"}
 OBJECT_KEYS = {"name", "mesh", "primitive", "translate", "rotate_deg", "scale", "color", "reflector",
-               "closed_proxy", "reflectivity", "open"}
-TOP_KEYS = {"name", "camera", "objects", "animation"}
+               "closed_proxy", "reflectivity", "open", "subdivide"}
+TOP_KEYS = {"name", "scene", "camera", "objects", "animation"}
+SCENE_KEYS = {"subdivide"}
 ANIMATION_KEYS = {"frames", "camera", "objects"}
 ANIM_CAMERA_KEYS = {"frame", "eye", "target", "up", "fov_y"}
 ANIM_OBJECT_KEYS = {"name", "frame", "translate", "rotate_deg", "scale"}
@@ -57,6 +63,12 @@ class _Ctx:
         if isinstance(value, bool) or not isinstance(value, int):
             self.fail(key, f"must be an integer, got {value!r}")
         return value
+
+    def max_edge(self, value, key):
+        """A loader subdivision length: a finite number >= 0 (0 = off)."""
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value < 0:
+            self.fail(key, f"must be a finite number >= 0 (0 = off), got {value!r}")
+        return float(value)
 
     def vec3(self, value, key):
         if not isinstance(value, list) or len(value) != 3:
@@ -102,10 +114,20 @@ def _transform(ctx, d, key, base=Transform()):
         ctx.fail(key, str(exc))
 
 
-def scene_from_dict(data: dict, path: str = "<scene>", base_dir: str = ".") -> Scene:
-    """Build a :class:`Scene` from parsed TOML data (see module docstring for the checks)."""
+def scene_from_dict(data: dict, path: str = "<scene>", base_dir: str = ".", subdivide: float | None = None) -> Scene:
+    """Build a :class:`Scene` from parsed TOML data (see module docstring for the checks).
+
+    ``subdivide`` overrides the file's subdivision values
+    (:func:`refsoft.scene.subdivide.apply_subdivision`); the returned meshes are subdivided.
+    """
+    subdivide = check_override(subdivide)
     ctx = _Ctx(path)
     ctx.table(data, "", TOP_KEYS)
+    default_subdivide = None
+    if "scene" in data:
+        sc = ctx.table(data["scene"], "scene", SCENE_KEYS)
+        if "subdivide" in sc:
+            default_subdivide = ctx.max_edge(sc["subdivide"], "scene.subdivide")
     if "camera" not in data:
         ctx.fail("camera", "missing table [camera]")
     cam = ctx.table(data["camera"], "camera", CAMERA_KEYS)
@@ -153,9 +175,13 @@ def scene_from_dict(data: dict, path: str = "<scene>", base_dir: str = ".") -> S
         is_open = o.get("open", False)
         if not isinstance(is_open, bool):
             ctx.fail(f"{key}.open", f"must be true or false, got {is_open!r}")
+        if "subdivide" in o:
+            sub = ctx.max_edge(o["subdivide"], f"{key}.subdivide")
+        else:  # the scene-wide default is for the reflected objects, not the reflectors
+            sub = None if reflector else default_subdivide
         try:
             objects.append(SceneObject(name, mesh, tuple(color), _transform(ctx, o, key), reflector, proxy, reflectivity,
-                                       is_open))
+                                       is_open, sub))
         except SceneError as exc:
             if str(exc).startswith(str(path)):
                 raise
@@ -201,13 +227,17 @@ def scene_from_dict(data: dict, path: str = "<scene>", base_dir: str = ".") -> S
         if animation is not None:
             for f in range(animation.frames):  # every keyed camera must be valid
                 scene.camera_at(f)
-        return scene
     except RefsoftError as exc:
         raise SceneError(f"{path}: {exc}") from None
+    try:
+        return apply_subdivision(scene, subdivide)
+    except RefsoftError as exc:  # keep the type: a LimitError stays one
+        raise type(exc)(f"{path}: {exc}") from None
 
 
-def load_scene_file(path: str | os.PathLike) -> Scene:
-    """Load a TOML scene file; mesh paths are relative to the file."""
+def load_scene_file(path: str | os.PathLike, subdivide: float | None = None) -> Scene:
+    """Load a TOML scene file; mesh paths are relative to the file; meshes subdivided as the file
+    asks, or as ``subdivide`` overrides (:func:`refsoft.scene.subdivide.apply_subdivision`)."""
     path = os.fspath(path)
     if not os.path.isfile(path):
         raise SceneError(f"scene file not found: {path}")
@@ -218,4 +248,4 @@ def load_scene_file(path: str | os.PathLike) -> Scene:
         raise SceneError(f"{path}: malformed TOML: {exc}") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise SceneError(f"{path}: cannot read: {exc}") from None
-    return scene_from_dict(data, path, os.path.dirname(os.path.abspath(path)))
+    return scene_from_dict(data, path, os.path.dirname(os.path.abspath(path)), subdivide)

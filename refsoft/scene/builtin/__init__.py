@@ -28,13 +28,17 @@ def builtin_names() -> list[str]:
     return list(BUILTIN_SCENES)
 
 
-def load_scene(name_or_path, **overrides) -> Scene:
-    """Load a built-in scene by name or a TOML scene file by path.
+def load_scene(name_or_path, subdivide=None, **overrides) -> Scene:
+    """Load a built-in scene by name or a TOML scene file by path, its meshes subdivided as its
+    objects ask (:func:`refsoft.scene.subdivide.apply_subdivision`).
 
     Parameters
     ----------
     name_or_path : str or PathLike
         A name from :func:`builtin_names` or a path to a ``.toml`` file.
+    subdivide : float, optional
+        Loader subdivision override (a ``--subdivide`` flag): ``L > 0`` replaces every object's
+        value (reflectors only where they set their own), 0 turns subdivision off.
     **overrides
         Camera fields to replace (e.g. ``width=320, height=240``).
 
@@ -44,13 +48,15 @@ def load_scene(name_or_path, **overrides) -> Scene:
     """
     from dataclasses import replace
 
+    from ..subdivide import apply_subdivision, check_override
     from ..toml import load_scene_file
 
     key = os.fspath(name_or_path)
+    subdivide = check_override(subdivide)
     if key in BUILTIN_SCENES:
-        scene = BUILTIN_SCENES[key][0]()
+        scene = apply_subdivision(BUILTIN_SCENES[key][0](), subdivide)
     elif key.endswith(".toml") or os.path.sep in key or os.path.exists(key):
-        scene = load_scene_file(key)
+        scene = load_scene_file(key, subdivide)
     else:
         raise SceneError(f"unknown scene {key!r}: not a built-in ({', '.join(BUILTIN_SCENES)}) nor a .toml file")
     if overrides:
