@@ -23,7 +23,10 @@ def build_parser() -> argparse.ArgumentParser:
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
     scene, memory, methods = scene_options(), memory_options(), method_options()
 
-    s = sub.add_parser("scenes", help="list the built-in scenes")
+    s = sub.add_parser("scenes", help="list the built-in scenes, their vertex and triangle counts as loaded and "
+                                      "after the loader's subdivision")
+    s.add_argument("--subdivide", type=float, default=None, metavar="L",
+                   help="count with this loader subdivision instead of the scenes' own (0 = off)")
     s.set_defaults(func=commands.cmd_scenes)
 
     g = sub.add_parser("gbuffer", parents=[scene, one_frame_options(), memory, out_option("out")],

@@ -14,7 +14,7 @@ from .options import render_kwargs, search_kwargs
 def _scene(args):
     from ..scene import load_scene
 
-    return load_scene(args.scene, width=args.width, height=args.height)
+    return load_scene(args.scene, subdivide=args.subdivide, width=args.width, height=args.height)
 
 
 def _one_of(args):
@@ -25,12 +25,16 @@ def _one_of(args):
 
 
 def cmd_scenes(args) -> int:
-    from ..scene import BUILTIN_SCENES, load_scene
+    from ..scene import BUILTIN_SCENES, counts_before_after, load_scene
 
-    print(f"{'name':<10} {'vertices':>9} {'triangles':>10} {'reflectors':>10} {'frames':>6}  description")
+    print(f"{'name':<10} {'vertices (built -> subdivided)':>30} {'triangles (built -> subdivided)':>31} "
+          f"{'reflectors':>10} {'frames':>6}  description")
     for name, (_, desc) in BUILTIN_SCENES.items():
-        c = load_scene(name).counts()
-        print(f"{name:<10} {c['vertices']:>9} {c['triangles']:>10} {c['reflectors']:>10} {c['frames']:>6}  {desc}")
+        scene = load_scene(name, subdivide=args.subdivide)
+        c, ba = scene.counts(), counts_before_after(scene)
+        verts = f"{ba['vertices'][0]} -> {ba['vertices'][1]}"
+        tris = f"{ba['triangles'][0]} -> {ba['triangles'][1]}"
+        print(f"{name:<10} {verts:>30} {tris:>31} {c['reflectors']:>10} {c['frames']:>6}  {desc}")
     return 0
 
 

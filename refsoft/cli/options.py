@@ -19,6 +19,9 @@ def scene_options() -> argparse.ArgumentParser:
     p.add_argument("scene", help="built-in scene name (refsoft scenes lists them) or a TOML scene file")
     p.add_argument("--width", type=int, default=None, help="image width in pixels (default: the scene's)")
     p.add_argument("--height", type=int, default=None, help="image height in pixels (default: the scene's)")
+    p.add_argument("--subdivide", type=float, default=None, metavar="L",
+                   help="loader subdivision: split the non-reflector triangles with an edge longer than L world "
+                        "units (overrides the scene's own values; 0 = off; docs/scenes.md)")
     return p
 
 

@@ -239,13 +239,17 @@ def run_frames(renderer, indices, out=None, progress=False, desc="frames", keep=
     return done
 
 
-def resolve_scene(scene, width=None, height=None) -> Scene:
+def resolve_scene(scene, width=None, height=None, subdivide=None) -> Scene:
     """A Scene from a Scene or a built-in name / TOML path, at ``width`` x ``height`` when
-    given."""
+    given, with the loader subdivision override ``subdivide`` when given
+    (:func:`refsoft.scene.apply_subdivision`)."""
     from ..scene.builtin import load_scene
+    from ..scene.subdivide import apply_subdivision, check_override
 
     if not isinstance(scene, Scene):
-        return load_scene(scene, width=width, height=height)
+        return load_scene(scene, subdivide=subdivide, width=width, height=height)
+    if subdivide is not None:
+        scene = apply_subdivision(scene, check_override(subdivide))
     if width is None and height is None:
         return scene
     return replace(scene, camera=replace(scene.camera, **{k: v for k, v in (("width", width), ("height", height))
@@ -253,7 +257,7 @@ def resolve_scene(scene, width=None, height=None) -> Scene:
 
 
 def render(scene, frames=None, out=None, progress=False, memory_limit=None, keep=True, write=None,
-           width=None, height=None, **options):
+           width=None, height=None, subdivide=None, **options):
     """Render frames of a scene (the Python face of ``refsoft render``).
 
     Parameters
@@ -269,6 +273,8 @@ def render(scene, frames=None, out=None, progress=False, memory_limit=None, keep
         Show a tqdm progress bar.
     width, height : int, optional
         Image size (replaces the scene camera's).
+    subdivide : float, optional
+        Loader subdivision override (``L`` world units; 0 off; default the scene's own).
     memory_limit : int or str, optional
         Refuse (:class:`refsoft.errors.LimitError`) a render estimated to need more (e.g.
         ``"4G"``; default ``$REFSOFT_MEMORY_LIMIT`` or 4 GiB; see :mod:`refsoft.limits`).
@@ -291,7 +297,7 @@ def render(scene, frames=None, out=None, progress=False, memory_limit=None, keep
     from ..io import write_json
     from ..limits import check_frame_memory
 
-    scene = resolve_scene(scene, width, height)
+    scene = resolve_scene(scene, width, height, subdivide)
     opts = RenderOptions(**options)
     indices = frame_indices(scene, frames)
     driver = FrameDriver(scene, opts, memory_limit)

@@ -250,7 +250,7 @@ class TruthRenderer(FrameDriver):
 
 
 def render_truth(scene, frames=None, out=None, progress=False, exact=True, memory_limit=None, width=None,
-          height=None):
+                 height=None, subdivide=None):
     """Ray-trace frames of a scene (the Python face of ``refsoft truth``).
 
     Parameters
@@ -269,6 +269,8 @@ def render_truth(scene, frames=None, out=None, progress=False, exact=True, memor
         As :func:`refsoft.render`.
     width, height : int, optional
         Image size (replaces the scene camera's).
+    subdivide : float, optional
+        Loader subdivision override, as :func:`refsoft.render`.
 
     Returns
     -------
@@ -277,7 +279,7 @@ def render_truth(scene, frames=None, out=None, progress=False, exact=True, memor
     """
     from ..io import write_json
 
-    scene = resolve_scene(scene, width, height)
+    scene = resolve_scene(scene, width, height, subdivide)
     indices = frame_indices(scene, frames)
     done = run_frames(TruthRenderer(scene, exact=exact, memory_limit=memory_limit), indices, out, progress,
                       f"truth {scene.name}")
