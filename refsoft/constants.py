@@ -52,6 +52,12 @@ NEIGHBOURHOODS = {"cross": 5, "box": 9}
 INVERSE_MODES = ("plane", "search", "discard")
 #: Working precisions of the G-buffer and the search.
 PRECISIONS = ("float32", "float64")
+#: Virtual vertices of visible reflections: mirrored across the reflection point's tangent
+#: plane (the papers) or unfolded onto the eye's ray through it.
+VIRTUAL_RULES = ("mirror", "unfold")
+#: Triangles across the reflector's silhouette: left to the hidden-vertex rule (the papers) or
+#: cut at the silhouette.
+SILHOUETTE_RULES = ("texel", "clip")
 #: The exact skips of a render: outputs are bit-identical with them on or off.
 SKIPS = ("cull_reflectors", "reuse", "cull_virtual", "crop_virtual")
 #: Adaptive tessellation levels accepted.

@@ -5,7 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass, fields, replace
 
 from . import validate
-from .constants import INVERSE_MODES, MAX_TESSELLATION_LEVEL, METHODS, NEIGHBOURHOODS, PRECISIONS, SKIPS
+from .constants import (INVERSE_MODES, MAX_TESSELLATION_LEVEL, METHODS, NEIGHBOURHOODS, PRECISIONS, SKIPS,
+                        SILHOUETTE_RULES, VIRTUAL_RULES)
 from .errors import RefsoftError
 
 
@@ -48,6 +49,14 @@ class RenderOptions:
     refine : bool
         Sub-texel reflection points (:mod:`refsoft.search.refine`, beyond the papers; off by
         default): one Gauss-Newton step from the texel found before mirroring the vertex.
+    virtual : {"mirror", "unfold"}
+        Virtual vertices of visible reflections: mirrored across the reflection point's tangent
+        plane (the papers), or placed on the eye's ray through the reflection point at the
+        reflected path's length (beyond the papers: robust to the texel's normal error).
+    silhouette : {"texel", "clip"}
+        Triangles with visible and hidden vertices: handled by ``inverse`` (the papers), or cut
+        where their reflection reaches the reflector's silhouette and their visible part drawn
+        (:mod:`refsoft.search.silhouette`, beyond the papers).
     """
 
     method: str = "walk"
@@ -66,6 +75,8 @@ class RenderOptions:
     tessellate: float | None = None
     max_level: int = 3
     refine: bool = False
+    virtual: str = "mirror"
+    silhouette: str = "texel"
 
     def __post_init__(self):
         if self.neighbourhood == "hierarchy":
@@ -75,6 +86,8 @@ class RenderOptions:
         validate.choice(self.neighbourhood, tuple(NEIGHBOURHOODS), "neighbourhood")
         validate.choice(self.inverse, INVERSE_MODES, "inverse")
         validate.choice(self.precision, PRECISIONS, "precision")
+        validate.choice(self.virtual, VIRTUAL_RULES, "virtual")
+        validate.choice(self.silhouette, SILHOUETTE_RULES, "silhouette")
         validate.number(self.widen, "widen", minimum=1.0)
         if self.tessellate is not None:
             validate.number(self.tessellate, "tessellate", minimum=0.0, what="a threshold >= 0 (or None)")

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import validate
-from ..constants import INVERSE_MODES, METHODS, NEIGHBOURHOODS
+from ..constants import INVERSE_MODES, METHODS, NEIGHBOURHOODS, VIRTUAL_RULES
 from ..errors import RefsoftError
 from ..raster import GBuffer
 from . import _kernels, _lanes
@@ -307,36 +307,53 @@ def trace_hierarchy(gbuffer: GBuffer, eye, vertex, cone_factor: float = 1.5, sph
 
 
 def virtual_vertices(gbuffer: GBuffer, result: SearchResult, vertices, relative: bool = False,
-                     surface=None) -> np.ndarray:
+                     surface=None, rule: str = "mirror", eye=None) -> np.ndarray:
     """Virtual vertices V' (DESIGN 4.6), world space.
 
     With ``d = V - P_R`` and ``N_R`` at the reflection pixel: a visible vertex (``d.N >= 0``)
-    gives ``V - 2 (d.N) N``; a hidden one gives, by ``result.inverse``: ``plane``
-    ``P_R + 2 N (d.N) - d`` (Estalella's equation 1, verbatim), ``search`` ``V`` itself (the
-    inverse search found where V is seen), ``discard`` ``V - 2 (d.N) N`` (its triangles are not
-    drawn). CULLED vertices give ``V``. Arithmetic in the G-buffer's precision, relative to its
-    origin; ``relative=True`` returns that result as it is (``origin + result`` in float64 is
-    then the virtual vertex without the rounding of large world coordinates to float32).
-    ``surface = (P, N)``, two (N, 3) arrays relative to the origin (from
-    :func:`refsoft.search.refine.refine`), replaces the reflection pixel's P and N per vertex.
+    gives, by ``rule``, ``V - 2 (d.N) N`` (``mirror``: across the tangent plane, the papers) or
+    ``P_R + normalize(P_R - O) |d|`` (``unfold``: on the eye's ray through the reflection point,
+    at the reflected path's length; beyond the papers, see :mod:`refsoft.search._virtual`); a
+    hidden one gives, by ``result.inverse``: ``plane`` ``P_R + 2 N (d.N) - d`` (Estalella's
+    equation 1, verbatim), ``search`` ``V`` itself (the inverse search found where V is seen),
+    ``discard`` ``V - 2 (d.N) N`` (its triangles are not drawn). CULLED vertices give ``V``.
+    Arithmetic in the G-buffer's precision, relative to its origin; ``relative=True`` returns
+    that result as it is (``origin + result`` in float64 is then the virtual vertex without the
+    rounding of large world coordinates to float32). ``surface = (P, N)``, two (N, 3) arrays
+    relative to the origin (from :func:`refsoft.search.refine.refine`), replaces the reflection
+    pixel's P and N per vertex. ``eye`` (3,), world space, is needed by ``unfold``.
 
     Returns
     -------
     ndarray, shape (N, 3), float32 or float64 (the G-buffer's dtype)
         World space, or relative to ``gbuffer.origin`` when ``relative``.
     """
+    from . import _virtual
+
     dt = _check_gbuffer(gbuffer)
     verts = validate.points(vertices, "vertices", len(result))
+    validate.choice(rule, VIRTUAL_RULES, "rule")
     o = np.asarray(gbuffer.origin, dtype=np.float64)
     out = np.empty((len(verts), 3), dtype=dt)
     flags = np.ascontiguousarray(result.flags, dtype=np.uint8)
     mode = INVERSE_MODES.index(result.inverse)
+    if rule == "unfold":
+        if eye is None:
+            raise RefsoftError("virtual_vertices(rule='unfold') needs the eye")
+        e = (validate.point(eye, "eye") - o).astype(dt)
     if surface is None:
-        _kernels.virtual_from_texels(gbuffer.position, gbuffer.normal, np.ascontiguousarray(result.pixel), verts, o,
-                                     flags, mode, dt(0), out)
+        if rule == "unfold":
+            _virtual.unfold_from_texels(gbuffer.position, gbuffer.normal, np.ascontiguousarray(result.pixel), verts, o,
+                                        e, flags, mode, dt(0), out)
+        else:
+            _kernels.virtual_from_texels(gbuffer.position, gbuffer.normal, np.ascontiguousarray(result.pixel), verts,
+                                         o, flags, mode, dt(0), out)
     else:
         p, nrm = (np.ascontiguousarray(np.asarray(a, dtype=dt).reshape(len(verts), 3)) for a in surface)
-        _kernels.virtual_from_points(p, nrm, verts, o, flags, mode, dt(0), out)
+        if rule == "unfold":
+            _virtual.unfold_from_points(p, nrm, verts, o, e, flags, mode, dt(0), out)
+        else:
+            _kernels.virtual_from_points(p, nrm, verts, o, flags, mode, dt(0), out)
     if relative:
         return out
     return (out.astype(np.float64) + o).astype(dt)

@@ -21,7 +21,7 @@ from ..seam import ReflectorResult, stencil_box
 from . import CULLED, SearchResult, search, skips, virtual_vertices
 from .reflect import Reflection, coherent_starts, gbuffer_camera
 from .refine import refine as refine_points
-from .virtual import tessellated_parts, virtual_parts, virtual_pass
+from .virtual import refined_parts, virtual_parts, virtual_pass
 
 
 @dataclass
@@ -69,13 +69,13 @@ def vertex_outputs(refl: Reflection, owner, k: int) -> dict:
             keys.MARGIN(k): res.margin}
 
 
-def virtual_relative(gb, res, verts, eye, refine):
-    """Virtual vertices relative to the G-buffer's origin, from sub-texel points if ``refine``;
-    and those points (P, N, offset) or None."""
+def virtual_relative(gb, res, verts, eye, refine, rule="mirror"):
+    """Virtual vertices relative to the G-buffer's origin by ``rule``, from sub-texel points if
+    ``refine``; and those points (P, N, offset) or None."""
     if not (refine and len(verts) and gb.mask.any()):
-        return virtual_vertices(gb, res, verts, relative=True), None
+        return virtual_vertices(gb, res, verts, relative=True, rule=rule, eye=eye), None
     surface = refine_points(gb, eye, verts, res)
-    return virtual_vertices(gb, res, verts, relative=True, surface=surface[:2]), surface
+    return virtual_vertices(gb, res, verts, relative=True, surface=surface[:2], rule=rule, eye=eye), surface
 
 
 class VertexSearch:
@@ -116,11 +116,11 @@ class VertexSearch:
         if stencil.any():
             t = time.perf_counter()
             box = stencil_box(stencil) if opt.crop_virtual else (0, view.camera.height, 0, view.camera.width)
-            if opt.tessellate is None:
+            if opt.tessellate is None and opt.silhouette != "clip":
                 parts = virtual_parts(self.scene, view.meshes, refl)
             else:
-                parts, report["tessellation"] = tessellated_parts(self.scene, view.meshes, refl, view.vertices, opt,
-                                                                  view.camera.eye)
+                parts, counts = refined_parts(self.scene, view.meshes, refl, view.vertices, opt, view.camera.eye)
+                report.update(counts)
                 times["tessellate"] = 1000 * (time.perf_counter() - t)
                 t = time.perf_counter()
             out.colour, out.reflected_id, out.covered, report["virtual_objects_culled"] = virtual_pass(
@@ -136,7 +136,7 @@ class VertexSearch:
         iterations = {}
         skipped = {"reflectors_outside_view": [], "gbuffers_reused": [], "searches_reused": {},
                    "virtual_objects_culled": {}, "widen_off": []}
-        tessellation = {}
+        tessellation, silhouette = {}, {}
         for k, r in results.items():
             rep = r.report
             for flag, name in (("outside_view", "reflectors_outside_view"), ("gbuffer_reused", "gbuffers_reused")):
@@ -149,11 +149,15 @@ class VertexSearch:
                     skipped[name][str(k)] = rep[name]
             if "tessellation" in rep:
                 tessellation[str(k)] = rep["tessellation"]
+            if "silhouette" in rep:
+                silhouette[str(k)] = rep["silhouette"]
             res = r.state.result
             it = res.iterations[(res.flags & CULLED) == 0]
             iterations[str(k)] = {"mean": float(it.mean()) if len(it) else 0.0, "max": int(it.max()) if len(it) else 0}
         if self.options.tessellate is not None:
             skipped["tessellation"] = tessellation  # reported beside the skips (what was added, not skipped)
+        if self.options.silhouette == "clip":
+            skipped["silhouette"] = silhouette
         return {"iterations": iterations, "skipped": skipped}
 
     # --- the stages --------------------------------------------------------------------------
@@ -197,7 +201,7 @@ class VertexSearch:
             report["searches_reused"] = int(reuse.sum())
         else:
             res = search(gb, eye, verts, opt.neighbourhood, opt.inverse, prev, opt.cap, method=opt.method)
-        rel, surface = virtual_relative(gb, res, verts, eye, opt.refine)
+        rel, surface = virtual_relative(gb, res, verts, eye, opt.refine, opt.virtual)
         world64 = rel.astype(np.float64) + gb.origin
         refl = Reflection(k, gb, res, world64.astype(rel.dtype), world64, surface)
         if opt.reuse:

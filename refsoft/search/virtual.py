@@ -40,25 +40,67 @@ def virtual_parts(scene, meshes, refl):
     return parts
 
 
-def tessellated_parts(scene, meshes, refl, verts, opt, eye):
-    """One part holding the reflected geometry after :func:`refsoft.search.tessellate.tessellate`
-    (same layout as :func:`virtual_parts`), and that function's counts (dict)."""
+def refined_parts(scene, meshes, refl, verts, opt, eye):
+    """One part holding the reflected geometry after the options that add vertices: Szabo's
+    adaptive tessellation (``opt.tessellate``, :func:`refsoft.search.tessellate.tessellate`),
+    then the cut at the silhouette (``opt.silhouette == "clip"``,
+    :func:`refsoft.search.silhouette.clip_at_silhouette`); same layout as :func:`virtual_parts`.
+
+    Returns
+    -------
+    parts : list of one part
+    counts : dict
+        ``tessellation`` (vertices searched, levels, triangles) and ``silhouette`` (edges cut,
+        searches) when those ran.
+    """
+    from .silhouette import clip_at_silhouette
+
     ids = [k for k, obj in enumerate(scene.objects, start=1) if not obj.reflector]
     reflected = concatenate([meshes[k - 1] for k in ids], ids)
-    res = refl.result
-    t = tessellate(refl.gbuffer, eye, verts, reflected.normals, reflected.faces, reflected.face_object, res.pixel,
-                   res.flags, opt.tessellate, opt.max_level, opt.neighbourhood, opt.inverse, opt.cap,
-                   surface=refl.surface, method=opt.method)
-    n0 = len(verts)
-    new = t.vertices[n0:]
-    m = len(new)
-    res_new = SearchResult(t.pixel[n0:], np.zeros(m), np.zeros(m), np.ones(m, np.int32), t.flags[n0:],
-                           res.neighbourhood, res.inverse, res.cap, res.method)
-    surface = None if refl.surface is None else tuple(a[n0:] for a in t.surface[:2])
-    rel = virtual_vertices(refl.gbuffer, res_new, new, relative=True, surface=surface)
-    virtual = np.concatenate([refl.virtual64, rel.astype(np.float64) + refl.gbuffer.origin])
-    counts = {"vertices_searched": int(t.searched), "levels": int(t.levels), "triangles": int(len(t.faces))}
-    return [(virtual, t.normals, t.faces, t.face_obj, t.flags)], counts
+    res, gb = refl.result, refl.gbuffer
+    vertices, normals, faces, face_obj = verts, reflected.normals, reflected.faces, reflected.face_object
+    pixel, flags, surface, virtual = res.pixel, res.flags, refl.surface, refl.virtual64
+    counts = {}
+    if opt.tessellate is not None:
+        t = tessellate(gb, eye, verts, normals, faces, face_obj, pixel, flags, opt.tessellate, opt.max_level,
+                       opt.neighbourhood, opt.inverse, opt.cap, surface=surface, method=opt.method)
+        virtual = np.concatenate([virtual, _new_virtual(refl, opt, eye, t.vertices[len(verts):], t.pixel[len(verts):],
+                                                        t.flags[len(verts):],
+                                                        None if surface is None else t.surface, len(verts))])
+        vertices, normals, faces, face_obj, pixel, flags = t.vertices, t.normals, t.faces, t.face_obj, t.pixel, t.flags
+        counts["tessellation"] = {"vertices_searched": int(t.searched), "levels": int(t.levels),
+                                  "triangles": int(len(t.faces))}
+    if opt.silhouette == "clip":
+        c = clip_at_silhouette(gb, eye, vertices, normals, faces, face_obj, pixel, flags, opt.neighbourhood, opt.cap,
+                               opt.method)
+        new_surface = None
+        if opt.refine and len(c.vertices):
+            from .refine import refine as refine_points
+
+            new_surface = refine_points(gb, eye, c.vertices, _result(res, c.pixel, c.flags))
+        virtual = np.concatenate([virtual, _new_virtual(refl, opt, eye, c.vertices, c.pixel, c.flags, new_surface, 0)])
+        vertices = np.concatenate([vertices, c.vertices])
+        normals = np.concatenate([normals, c.normals])
+        flags = np.concatenate([flags, c.flags])
+        faces, face_obj = c.faces, c.face_obj
+        counts["silhouette"] = {"edges_cut": int(c.cut), "vertices_searched": int(c.searched)}
+    return [(virtual, normals, faces, face_obj, flags)], counts
+
+
+def _result(like, pixel, flags):
+    """A SearchResult of the given pixels and flags (scores unknown), with ``like``'s options."""
+    m = len(pixel)
+    return SearchResult(pixel, np.zeros(m), np.zeros(m), np.ones(m, np.int32), flags, like.neighbourhood, like.inverse,
+                        like.cap, like.method)
+
+
+def _new_virtual(refl, opt, eye, new, pixel, flags, surface, first):
+    """float64 world virtual vertices of vertices added to the reflected geometry (their rows of
+    ``surface`` start at ``first``)."""
+    sub = None if surface is None else tuple(a[first:] for a in surface[:2])
+    rel = virtual_vertices(refl.gbuffer, _result(refl.result, pixel, flags), new, relative=True, surface=sub,
+                           rule=opt.virtual, eye=eye)
+    return rel.astype(np.float64) + refl.gbuffer.origin
 
 
 def virtual_pass(scene, parts, camera, stencil, box, inverse, cull=True):

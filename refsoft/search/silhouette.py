@@ -1,0 +1,160 @@
+"""Triangles cut at the reflector's silhouette (``silhouette="clip"``, beyond the papers).
+
+A reflected triangle with both visible and hidden vertices (HIDDEN: no reflection on the visible
+side of the reflector) is, in the papers, either drawn with made-up virtual vertices for the
+hidden ones (``inverse="plane"`` or ``"search"``: wrong triangles over the mirror) or left out
+(``"discard"``: a gap along the reflector's rim, where the truth shows the reflection reaching the
+rim). Here each edge from a visible vertex ``A`` to a hidden vertex ``B`` is cut where its
+reflection reaches the silhouette: points ``A + t (B - A)`` are searched (from the last visible
+point's pixel) and ``t`` bisected ``iterations`` times on whether the point is HIDDEN; the last
+visible point ``X`` becomes a new vertex (its own search result and virtual vertex; normal the
+renormalised interpolation of the end normals). The triangle is replaced by its visible part:
+
+- one hidden corner (``a, b`` visible, ``h`` hidden, in the triangle's order): ``(a, b, X_bh)``
+  and ``(a, X_bh, X_ha)``;
+- two hidden corners (``a`` visible): ``(a, X_ab, X_ca)``.
+
+The winding is kept. ``X`` reflects at the silhouette, so its virtual vertex projects onto the
+reflector's rim: the visible part's virtual image reaches the rim (the stencil clips the rest).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..scene.mesh import normalize_rows
+from . import CULLED, HIDDEN, search
+
+#: Bisection steps per cut edge: the cut lies within ``2**-iterations`` of the edge's length of
+#: where the vertex search's classification changes.
+CLIP_ITERATIONS = 10
+
+
+@dataclass(frozen=True, eq=False)
+class Clip:
+    """The new vertices and the faces after :func:`clip_at_silhouette` (the ``N`` input vertices
+    keep their indices; the new ones are ``N .. N + M - 1``).
+
+    Attributes
+    ----------
+    vertices, normals : ndarray (M, 3) float64
+        The cut points and their normals.
+    pixel : ndarray (M, 2) int32
+    flags : ndarray (M,) uint8
+        Their search results (never HIDDEN).
+    faces : ndarray (T', 3) int64
+        Every face: the unmixed ones as they were, each mixed one replaced by its visible part
+        (in place, in the face order).
+    face_obj : ndarray (T',) int32
+    cut : int
+        Edges cut.
+    searched : int
+        Searches run by the bisection.
+    """
+
+    vertices: np.ndarray
+    normals: np.ndarray
+    pixel: np.ndarray
+    flags: np.ndarray
+    faces: np.ndarray
+    face_obj: np.ndarray
+    cut: int
+    searched: int
+
+
+def mixed_faces(faces, flags) -> np.ndarray:
+    """(T,) bool: faces with a hidden and a visible corner and no CULLED corner."""
+    f = flags[faces]
+    hidden = (f & HIDDEN) != 0
+    culled = np.any((f & CULLED) != 0, axis=1)
+    return hidden.any(axis=1) & ~hidden.all(axis=1) & ~culled
+
+
+def clip_at_silhouette(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, neighbourhood="cross",
+                       cap=None, method="walk", iterations: int = CLIP_ITERATIONS) -> Clip:
+    """Cut the reflected triangles of one reflector at its silhouette (see the module's text).
+
+    Parameters
+    ----------
+    gbuffer : GBuffer
+    eye : (3,)
+    vertices, normals : ndarray (N, 3) float64
+        World positions and normals of the reflected vertices.
+    faces : ndarray (T, 3) int
+    face_obj : ndarray (T,) int32
+    pixel, flags : ndarray (N, 2) int32, (N,) uint8
+        Their search results in this G-buffer (HIDDEN marks the hidden vertices).
+    neighbourhood, cap, method
+        The search's options (the bisection's searches use them).
+    iterations : int
+        Bisection steps per cut edge.
+
+    Returns
+    -------
+    Clip
+    """
+    faces = np.asarray(faces, dtype=np.int64)
+    hidden = (flags & HIDDEN) != 0
+    mixed = np.flatnonzero(mixed_faces(faces, flags))
+    n = len(vertices)
+    empty = Clip(np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 2), np.int32), np.zeros(0, np.uint8), faces,
+                 np.asarray(face_obj), 0, 0)
+    if len(mixed) == 0:
+        return empty
+    # the cut edges: (visible end, hidden end), once each
+    f = faces[mixed]
+    a, b = np.concatenate([f[:, 0], f[:, 1], f[:, 2]]), np.concatenate([f[:, 1], f[:, 2], f[:, 0]])
+    cross = hidden[a] != hidden[b]
+    vis = np.where(hidden[a], b, a)[cross]
+    hid = np.where(hidden[a], a, b)[cross]
+    key = np.unique(vis * np.int64(n) + hid)
+    vis, hid = key // n, key % n
+    lo_t = np.zeros(len(key))
+    hi_t = np.ones(len(key))
+    p_vis, p_hid = vertices[vis], vertices[hid]
+    start = pixel[vis].astype(np.int64)
+    got_pixel = pixel[vis].astype(np.int32)
+    got_flags = flags[vis].astype(np.uint8)
+    for _ in range(iterations):
+        t = 0.5 * (lo_t + hi_t)
+        mid = p_vis + t[:, None] * (p_hid - p_vis)
+        res = search(gbuffer, eye, mid, neighbourhood, "discard", start, cap, method=method)
+        seen = (res.flags & (HIDDEN | CULLED)) == 0
+        lo_t = np.where(seen, t, lo_t)
+        hi_t = np.where(seen, hi_t, t)
+        start = np.where(seen[:, None], res.pixel, start)
+        got_pixel = np.where(seen[:, None], res.pixel, got_pixel)
+        got_flags = np.where(seen, res.flags, got_flags).astype(np.uint8)
+    cut_v = p_vis + lo_t[:, None] * (p_hid - p_vis)
+    cut_n = normalize_rows(normals[vis] + lo_t[:, None] * (normals[hid] - normals[vis]))
+    new_faces = _visible_parts(f, hidden, key, n)
+    counts = np.full(len(faces), 1, dtype=np.int64)
+    counts[mixed] = [len(x) for x in new_faces]
+    out = np.repeat(faces, counts, axis=0)
+    out_obj = np.repeat(np.asarray(face_obj), counts)
+    first = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    for j, i in enumerate(mixed):
+        out[first[i]:first[i] + counts[i]] = new_faces[j]
+    return Clip(cut_v, cut_n, got_pixel, got_flags, out, out_obj, len(key), len(key) * iterations)
+
+
+def _visible_parts(f, hidden, key, n) -> list:
+    """The visible part of each mixed face ``f[j]`` as a list of faces, the cut point of edge
+    (visible u, hidden v) being vertex ``n + searchsorted(key, u * n + v)``."""
+    def cut(u, v):
+        return n + int(np.searchsorted(key, u * n + v))
+
+    parts = []
+    for tri in f:
+        h = hidden[tri]
+        if h.sum() == 1:
+            k = int(np.flatnonzero(h)[0])
+            x, y, z = tri[(k + 1) % 3], tri[(k + 2) % 3], tri[k]  # x, y visible; z hidden
+            parts.append([(x, y, cut(y, z)), (x, cut(y, z), cut(x, z))])
+        else:
+            k = int(np.flatnonzero(~h)[0])
+            x, y, z = tri[k], tri[(k + 1) % 3], tri[(k + 2) % 3]  # x visible
+            parts.append([(x, cut(x, y), cut(x, z))])
+    return parts
