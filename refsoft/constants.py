@@ -43,6 +43,8 @@ DIFFUSE = 0.7
 BACKGROUND_COLOR = np.array([0.08, 0.09, 0.12])
 
 # --- Option vocabularies (the choices the API and the CLI accept) ---------------------------
+#: Presets of :class:`refsoft.RenderOptions` (refsoft.options.PRESETS lists what each sets).
+PRESET_NAMES = ("paper", "accurate")
 #: Reflection methods: the vertex search's linear walk from a start pixel (Estalella, the
 #: papers' method) and Szabo's ray-cone hierarchy.
 METHODS = ("walk", "hierarchy")

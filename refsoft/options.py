@@ -1,8 +1,21 @@
-"""The options of a render (:class:`RenderOptions`), checked once at the boundary."""
+"""The options of a render (:class:`RenderOptions`) and its presets, checked once at the boundary.
+
+A preset names a set of options (:data:`PRESETS`); options given one by one override it:
+
+- ``paper``: the papers' method verbatim (the crosshair walk from the bounding box's centre, the
+  plane rule for hidden vertices, virtual vertices mirrored across the texel's tangent plane, no
+  refinement, no tessellation). ``refsoft bench table1`` and the golden set's paper cases use it.
+- ``accurate`` (the default): the configuration chosen by measurement against the ray-traced
+  truth (docs/accuracy.md): the 3x3 walk, hidden vertices' triangles cut at the silhouette and
+  their hidden part left out, sub-texel reflection points, virtual vertices unfolded onto the
+  eye's ray, adaptive tessellation.
+"""
 
 from __future__ import annotations
 
 from dataclasses import dataclass, fields, replace
+
+from .constants import PRESET_NAMES
 
 from . import validate
 from .constants import (INVERSE_MODES, MAX_TESSELLATION_LEVEL, METHODS, NEIGHBOURHOODS, PRECISIONS, SKIPS,
@@ -10,12 +23,34 @@ from .constants import (INVERSE_MODES, MAX_TESSELLATION_LEVEL, METHODS, NEIGHBOU
 from .errors import RefsoftError
 
 
+class _FromPreset:
+    """The default of the options a preset sets: "take the preset's value"."""
+
+    def __repr__(self):
+        return "FROM_PRESET"
+
+
+#: Default of :class:`RenderOptions`' preset-controlled fields.
+FROM_PRESET = _FromPreset()
+
+#: The presets: every option each one sets (the others keep their defaults).
+PRESETS = {
+    "paper": dict(method="walk", neighbourhood="cross", inverse="plane", refine=False, tessellate=None,
+                  virtual="mirror", silhouette="texel"),
+    "accurate": dict(method="walk", neighbourhood="box", inverse="discard", refine=True, tessellate=1e-4,
+                     virtual="unfold", silhouette="clip"),
+}
+
+
 @dataclass(frozen=True)
 class RenderOptions:
-    """Options of :func:`refsoft.render` (the defaults are the papers' method).
+    """Options of :func:`refsoft.render`: a preset, and options given one by one over it.
 
     Parameters
     ----------
+    preset : {"accurate", "paper"}
+        The options not given take this preset's values (:data:`PRESETS`; default
+        ``accurate``).
     method : {"walk", "hierarchy"}
         The reflection method: the vertex search's linear walk from a start pixel (Estalella),
         or Szabo's ray-cone pyramid (no coherence).
@@ -59,9 +94,10 @@ class RenderOptions:
         (:mod:`refsoft.search.silhouette`, beyond the papers).
     """
 
-    method: str = "walk"
-    neighbourhood: str = "cross"
-    inverse: str = "plane"
+    preset: str = "accurate"
+    method: str = FROM_PRESET
+    neighbourhood: str = FROM_PRESET
+    inverse: str = FROM_PRESET
     widen: float = 1.0
     gbuffer_size: tuple | None = None
     precision: str = "float32"
@@ -72,13 +108,17 @@ class RenderOptions:
     cull_virtual: bool = True
     crop_virtual: bool = True
     adaptive_widen: bool = False
-    tessellate: float | None = None
+    tessellate: float | None = FROM_PRESET
     max_level: int = 3
-    refine: bool = False
-    virtual: str = "mirror"
-    silhouette: str = "texel"
+    refine: bool = FROM_PRESET
+    virtual: str = FROM_PRESET
+    silhouette: str = FROM_PRESET
 
     def __post_init__(self):
+        validate.choice(self.preset, PRESET_NAMES, "preset")
+        for name, value in PRESETS[self.preset].items():
+            if getattr(self, name) is FROM_PRESET:
+                object.__setattr__(self, name, value)
         if self.neighbourhood == "hierarchy":
             raise RefsoftError("neighbourhood must be one of ['cross', 'box']; the hierarchy search is "
                                "method='hierarchy'")
@@ -102,8 +142,13 @@ class RenderOptions:
         against)."""
         return replace(self, **dict.fromkeys(SKIPS, False))
 
+    @classmethod
+    def from_preset(cls, preset: str = "accurate", **options) -> "RenderOptions":
+        """``RenderOptions(preset=preset, **options)``."""
+        return cls(preset=preset, **options)
+
     def as_dict(self) -> dict:
-        """Every option by name (tuples as lists), as ``stats.json`` and golden manifests record
-        them."""
+        """The preset and every option by name (tuples as lists), as ``stats.json`` and golden
+        manifests record them."""
         return {f.name: (list(v) if isinstance(v, tuple) else v) for f in fields(self)
                 for v in [getattr(self, f.name)]}

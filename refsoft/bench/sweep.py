@@ -21,8 +21,11 @@ import numpy as np
 from ..errors import RefsoftError
 from ._common import machine, markdown_table, median_time, plt_or_none, progress, write_csv, write_text
 
-#: The knobs and their values; the first value of each is the default.
+#: The knobs and their values; the first value of each is the paper preset's. Each other value
+#: is one setting: the paper preset with that knob changed (``preset=accurate``: the accurate
+#: preset itself).
 KNOBS = {
+    "preset": ("paper", "accurate"),
     "gbuffer_scale": (1.0, 0.5, 2.0),
     "widen": (1.0, 1.25, 1.5),
     "neighbourhood": ("cross", "box"),
@@ -31,13 +34,16 @@ KNOBS = {
     "inverse": ("plane", "search", "discard"),
     "tessellate": (None, 1e-3),
     "refine": (False, True),
+    "virtual": ("mirror", "unfold"),
+    "silhouette": ("texel", "clip"),
 }
 COLUMNS = ["scene", "setting", "knob", "value", "time_ms", "disagreement", "interior_disagreement",
            "color_error_mean", "virtual_distance_mean", "pixel_distance_mean", "iterations_mean", "pareto"]
 
 
 def settings(knobs=None) -> list:
-    """``[(name, knob, value, options)]``: the defaults, then each knob's other values."""
+    """``[(name, knob, value, options)]``: the paper preset ("default"), then each knob's other
+    values."""
     knobs = KNOBS if knobs is None else {k: v for k, v in KNOBS.items() if k in knobs}
     out = [("default", "", "", {})]
     for knob, values in knobs.items():
@@ -50,11 +56,12 @@ def _options(setting, width, height):
     from ..options import RenderOptions
 
     opts = dict(setting)
+    preset = opts.pop("preset", "paper")
     scale = opts.pop("gbuffer_scale", 1.0)
     widen = opts.get("widen", 1.0)
     if scale != 1.0:
         opts["gbuffer_size"] = (max(1, math.ceil(width * widen * scale)), max(1, math.ceil(height * widen * scale)))
-    return RenderOptions(**opts)
+    return RenderOptions(preset=preset, **opts)
 
 
 def _errors(frames, truths) -> dict:

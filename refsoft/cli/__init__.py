@@ -74,8 +74,8 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--frames", type=int, default=None, metavar="N", help="frames per scene (sweep: 3; table1: all)")
     b.add_argument("--repeats", type=int, default=3, metavar="N", help="timed runs per setting (median)")
     b.add_argument("--knob", action="append", default=None, metavar="NAME",
-                   help="sweep only these knobs (repeatable): gbuffer_scale, widen, method, neighbourhood, "
-                        "precision, inverse, tessellate, refine")
+                   help="sweep only these knobs (repeatable): preset, gbuffer_scale, widen, neighbourhood, method, "
+                        "precision, inverse, tessellate, refine, virtual, silhouette")
     b.add_argument("--max-vertices", type=int, default=1 << 20, metavar="N", help="scaling: largest vertex count")
     b.add_argument("--max-subdivisions", type=int, default=7, metavar="N",
                    help="scaling: largest icosphere subdivision")

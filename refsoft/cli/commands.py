@@ -57,8 +57,11 @@ def cmd_trace(args) -> int:
     from ..search.trace import trace_vertex
 
     scene = _scene(args)
+    from ..options import RenderOptions
+
     opts = search_kwargs(args)
-    coherence = opts.pop("coherence")
+    coherence = opts.pop("coherence", True)
+    neighbourhood = RenderOptions(**opts).neighbourhood
     rp = trace_vertex(scene, args.vertex, args.reflector, args.frame, coherence, **opts)
     name = lambda k: scene.object_by_id(k).name  # noqa: E731
     tr = rp.trace
@@ -74,7 +77,7 @@ def cmd_trace(args) -> int:
         print(f"wrote {args.out}/{' and '.join(written)}")
         return 0
     print(f"vertex {rp.vertex} (object {rp.vertex_object} {name(rp.vertex_object)!r}, its vertex {rp.local_index}) "
-          f"in reflector {rp.reflector} ({name(rp.reflector)!r}), frame {rp.frame}, {opts['neighbourhood']}, start "
+          f"in reflector {rp.reflector} ({name(rp.reflector)!r}), frame {rp.frame}, {neighbourhood}, start "
           f"({tr.start[0]}, {tr.start[1]}){' after a restart' if tr.restarted else ''}")
     print(tr.table())
     write_trace(args.out, rp)
@@ -101,7 +104,8 @@ def cmd_render(args) -> int:
     keep = done if write is None else [f for f in done if f.index in write]
     summ = stats["summary"]
     median_ms = np.median([f.time_ms["total"] for f in keep])
-    print(f"{scene.name}: {len(keep)} frame(s) written to {args.out} in {time.perf_counter() - t0:.1f} s "
+    print(f"{scene.name}: {len(keep)} frame(s), preset {args.preset}, written to {args.out} in "
+          f"{time.perf_counter() - t0:.1f} s "
           f"(median {median_ms:.0f} ms per frame; the first includes compiling on a first run); search iterations: "
           f"max frame mean {summ['max_frame_mean_iterations']:.1f}, total mean {summ['total_mean_iterations']:.1f}")
     return 0

@@ -43,21 +43,25 @@ def one_frame_options() -> argparse.ArgumentParser:
 
 
 def method_options() -> argparse.ArgumentParser:
-    """The reflection method and the search's options."""
+    """The preset, the reflection method and the search's options (each overrides the preset)."""
     p = _parser()
-    p.add_argument("--method", choices=constants.METHODS, default="walk",
+    p.add_argument("--preset", choices=constants.PRESET_NAMES, default="accurate",
+                   help="a named set of the options below: 'accurate' (the default: chosen against the ray-traced "
+                        "truth, docs/accuracy.md) or 'paper' (the papers' method verbatim); options given one by "
+                        "one override it")
+    p.add_argument("--method", choices=constants.METHODS, default=None,
                    help="the vertex search: the linear walk from a start pixel (the papers) or Szabo's ray-cone "
-                        "hierarchy (default walk)")
-    p.add_argument("--neighbourhood", choices=tuple(constants.NEIGHBOURHOODS), default="cross",
-                   help="the walk's candidates per step: the crosshair or the 3x3 box (default cross)")
+                        "hierarchy (both presets: walk)")
+    p.add_argument("--neighbourhood", choices=tuple(constants.NEIGHBOURHOODS), default=None,
+                   help="the walk's candidates per step: the crosshair or the 3x3 box (paper: cross, accurate: box)")
     p.add_argument("--search", choices=("cross", "box", "hierarchy"), default=None, help=argparse.SUPPRESS)
-    p.add_argument("--inverse", choices=constants.INVERSE_MODES, default="plane",
+    p.add_argument("--inverse", choices=constants.INVERSE_MODES, default=None,
                    help="hidden vertices: Estalella's plane rule, an inverse search, or their triangles "
-                        "discarded (default plane)")
-    p.add_argument("--widen", type=float, default=1.0, metavar="FACTOR",
+                        "discarded (paper: plane, accurate: discard)")
+    p.add_argument("--widen", type=float, default=None, metavar="FACTOR",
                    help="wider field of view of the G-buffers, for reflectors cut by the image border "
                         "(Estalella 5.2; default 1 = off)")
-    p.add_argument("--precision", choices=constants.PRECISIONS, default="float32",
+    p.add_argument("--precision", choices=constants.PRECISIONS, default=None,
                    help="G-buffer and search arithmetic (default float32, as a GPU)")
     p.add_argument("--no-coherence", action="store_true",
                    help="start every search at the default start, not at the last frame's pixel")
@@ -65,16 +69,23 @@ def method_options() -> argparse.ArgumentParser:
 
 
 def render_options() -> argparse.ArgumentParser:
-    """What only a render takes: tessellation, refinement, the skips."""
+    """What only a render takes: tessellation, refinement, virtual vertices, silhouette, skips
+    (each overrides the preset)."""
     p = _parser()
-    p.add_argument("--tessellate", type=float, default=None, metavar="THRESHOLD",
+    p.add_argument("--tessellate", type=_threshold, default=None, metavar="THRESHOLD",
                    help="Szabo's adaptive tessellation of reflected triangles whose edge error exceeds THRESHOLD "
-                        "(e.g. 1e-3; 0 = full tessellation), crack-free")
-    p.add_argument("--max-level", type=int, default=3, metavar="L",
+                        "(e.g. 1e-3; 0 = full tessellation; 'off' = none), crack-free (paper: off, accurate: 1e-4)")
+    p.add_argument("--max-level", type=int, default=None, metavar="L",
                    help="tessellation levels at most (default 3)")
-    p.add_argument("--refine", action="store_true",
+    p.add_argument("--refine", action=argparse.BooleanOptionalAction, default=None,
                    help="beyond the papers: sub-texel reflection points (one Gauss-Newton step from the texel "
-                        "found); with --tessellate, edge errors between refined points")
+                        "found) (paper: off, accurate: on)")
+    p.add_argument("--virtual", choices=constants.VIRTUAL_RULES, default=None,
+                   help="virtual vertices: mirrored across the reflection point's tangent plane (the papers), or "
+                        "unfolded onto the eye's ray through it (beyond the papers) (paper: mirror, accurate: unfold)")
+    p.add_argument("--silhouette", choices=constants.SILHOUETTE_RULES, default=None,
+                   help="triangles with visible and hidden vertices: left to --inverse (the papers), or cut where "
+                        "their reflection reaches the silhouette (paper: texel, accurate: clip)")
     p.add_argument("--adaptive-widen", action="store_true",
                    help="approximation: use --widen only on frames where a reflector is cut by the image border")
     p.add_argument("--no-skip", action="append", metavar="NAME",
@@ -83,6 +94,13 @@ def render_options() -> argparse.ArgumentParser:
                         + "; outputs are identical either way, only the time changes")
     p.add_argument("--no-skips", action="store_true", help="turn every exact skip off")
     return p
+
+
+def _threshold(text):
+    """--tessellate's value: a number, or 'off'/'none' for no tessellation."""
+    if text.lower() in ("off", "none"):
+        return "off"
+    return float(text)
 
 
 def memory_options() -> argparse.ArgumentParser:
@@ -99,19 +117,32 @@ def out_option(default: str) -> argparse.ArgumentParser:
 
 
 def search_kwargs(args) -> dict:
-    """``method``, ``neighbourhood`` and the other search options of :func:`method_options`, as
+    """The preset and the search options of :func:`method_options` that were given, as
     :class:`refsoft.RenderOptions` fields (the hidden ``--search`` spelling mapped onto them)."""
+    out = {"preset": args.preset}
     method, neighbourhood = args.method, args.neighbourhood
     if args.search is not None:
         print("refsoft: note: --search is now --method walk|hierarchy with --neighbourhood cross|box",
               file=sys.stderr)
-        method, neighbourhood = ("hierarchy", "cross") if args.search == "hierarchy" else ("walk", args.search)
-    return dict(method=method, neighbourhood=neighbourhood, inverse=args.inverse, widen=args.widen,
-                precision=args.precision, coherence=not args.no_coherence)
+        method, neighbourhood = ("hierarchy", neighbourhood) if args.search == "hierarchy" else ("walk", args.search)
+    given = dict(method=method, neighbourhood=neighbourhood, inverse=args.inverse, widen=args.widen,
+                 precision=args.precision)
+    out.update({k: v for k, v in given.items() if v is not None})
+    if args.no_coherence:
+        out["coherence"] = False
+    return out
 
 
 def render_kwargs(args) -> dict:
-    """Every :class:`refsoft.RenderOptions` field a ``refsoft render`` command line sets."""
+    """The preset and every :class:`refsoft.RenderOptions` field a ``refsoft render`` command
+    line gives."""
+    out = search_kwargs(args)
+    given = dict(max_level=args.max_level, refine=args.refine, virtual=args.virtual, silhouette=args.silhouette)
+    out.update({k: v for k, v in given.items() if v is not None})
+    if args.tessellate is not None:
+        out["tessellate"] = None if args.tessellate == "off" else args.tessellate
+    if args.adaptive_widen:
+        out["adaptive_widen"] = True
     off = set(constants.SKIPS) if args.no_skips else {n.replace("-", "_") for n in args.no_skip or ()}
-    return dict(search_kwargs(args), adaptive_widen=args.adaptive_widen, tessellate=args.tessellate,
-                max_level=args.max_level, refine=args.refine, **{name: name not in off for name in constants.SKIPS})
+    out.update({name: False for name in off})
+    return out

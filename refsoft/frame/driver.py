@@ -257,7 +257,7 @@ def resolve_scene(scene, width=None, height=None, subdivide=None) -> Scene:
 
 
 def render(scene, frames=None, out=None, progress=False, memory_limit=None, keep=True, write=None,
-           width=None, height=None, subdivide=None, **options):
+           width=None, height=None, subdivide=None, preset="accurate", **options):
     """Render frames of a scene (the Python face of ``refsoft render``).
 
     Parameters
@@ -283,8 +283,11 @@ def render(scene, frames=None, out=None, progress=False, memory_limit=None, keep
         so a long render to ``out`` holds one frame at a time).
     write : set of int, optional
         Frame indices to write to ``out`` (default all).
+    preset : {"accurate", "paper"}
+        The options not given take this preset's values (:data:`refsoft.options.PRESETS`).
     **options
-        :class:`RenderOptions` fields (``method``, ``neighbourhood``, ``inverse``, ``widen``, ...).
+        :class:`RenderOptions` fields (``method``, ``neighbourhood``, ``inverse``, ``widen``, ...),
+        each overriding the preset.
 
     Returns
     -------
@@ -298,12 +301,12 @@ def render(scene, frames=None, out=None, progress=False, memory_limit=None, keep
     from ..limits import check_frame_memory
 
     scene = resolve_scene(scene, width, height, subdivide)
-    opts = RenderOptions(**options)
+    opts = RenderOptions(preset=preset, **options)
     indices = frame_indices(scene, frames)
     driver = FrameDriver(scene, opts, memory_limit)
     check_frame_memory(scene, opts, len(indices) if keep else 1, memory_limit)
     done = run_frames(driver, indices, out, progress, f"render {scene.name}", keep, write)
-    stats = frame_stats(done if write is None else [f for f in done if f.index in write])
+    stats = frame_stats(done if write is None else [f for f in done if f.index in write], opts)
     if out is not None:
         write_json(os.path.join(out, "stats.json"), stats)
     return done, stats

@@ -24,12 +24,14 @@ def write_frame(out_dir, frame):
     write_png(base + ".png", frame.arrays[keys.IMAGE])
 
 
-def frame_stats(frames) -> dict:
-    """The ``stats.json`` content of rendered frames: per frame its stage milliseconds and what
-    its reflection method reports (the vertex search: mean and max iterations per reflector,
-    the skips taken; the truth: reflector pixels and hits); a summary over the frames."""
-    out = {"frames": [{"frame": f.index, "time_ms": {k: round(v, 3) for k, v in f.time_ms.items()}, **f.report}
-                      for f in frames]}
+def frame_stats(frames, options=None) -> dict:
+    """The ``stats.json`` content of rendered frames: the options (their preset and every
+    resolved value, when given), per frame its stage milliseconds and what its reflection method
+    reports (the vertex search: mean and max iterations per reflector, the skips taken; the
+    truth: reflector pixels and hits); a summary over the frames."""
+    out = {} if options is None else {"options": options.as_dict()}
+    out["frames"] = [{"frame": f.index, "time_ms": {k: round(v, 3) for k, v in f.time_ms.items()}, **f.report}
+                     for f in frames]
     summary = {}
     means = [np.mean([v["mean"] for v in f.report["iterations"].values()]) for f in frames
              if f.report.get("iterations")]
