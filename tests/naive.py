@@ -329,11 +329,12 @@ def naive_start_pixel(mask):
     return min(pts, key=lambda p: ((p[0] - r) ** 2 + (p[1] - c) ** 2, p[0], p[1]))
 
 
-def naive_virtual_vertices(gbuffer, result, vertices, surface=None):
+def naive_virtual_vertices(gbuffer, result, vertices, surface=None, rule="mirror", eye=None):
     """DESIGN 4.6's virtual vertices in NumPy, relative to the G-buffer's origin, in its
     precision (refsoft.search.virtual_vertices with relative=True): V - 2 (d.N) N for visible
-    vertices, by mode for hidden ones (plane: P + N (2 d.N) - d; search: V; discard: the mirror
-    formula), V for CULLED ones; ``surface`` (P, N) per vertex in place of the texel's."""
+    vertices (``rule="unfold"``: P + normalize(P - O) |V - P|), by mode for hidden ones (plane:
+    P + N (2 d.N) - d; search: V; discard: the mirror formula), V for CULLED ones; ``surface``
+    (P, N) per vertex in place of the texel's."""
     HIDDEN, CULLED = 1, 16
     dt = gbuffer.position.dtype.type
     v = (np.asarray(vertices, np.float64) - gbuffer.origin).astype(dt)
@@ -349,6 +350,12 @@ def naive_virtual_vertices(gbuffer, result, vertices, surface=None):
     two = dt(2.0)
     mirror = v - (two * dn)[:, None] * nrm
     hidden = ok & ((result.flags & HIDDEN) != 0)
+    if rule == "unfold":
+        e = (np.asarray(eye, np.float64) - gbuffer.origin).astype(dt)
+        length = np.sqrt((d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1]) + d[:, 2] * d[:, 2])
+        ux, uy, uz = naive_normalize(p[:, 0] - e[0], p[:, 1] - e[1], p[:, 2] - e[2], dt)
+        unfolded = np.stack([p[:, 0] + ux * length, p[:, 1] + uy * length, p[:, 2] + uz * length], axis=1)
+        mirror = np.where(hidden[:, None], mirror, unfolded)
     out = np.where(ok[:, None], mirror, v)
     if result.inverse == "plane":
         out = np.where(hidden[:, None], p + nrm * (two * dn)[:, None] - d, out)

@@ -43,7 +43,10 @@ def test_widened_and_float64(tmp_path):
 
 def test_scenes_lists_builtins(capsys):
     assert cli.main(["scenes"]) == 0
-    assert re.search(r"^sphere\s+\d+\s+\d+\s+1\s+1", capsys.readouterr().out, re.M)
+    out = capsys.readouterr().out
+    assert re.search(r"^sphere\s+(\d+) -> \1\s+(\d+) -> \2\s+1\s+1\s", out, re.M)  # not subdivided
+    before, after = map(int, re.search(r"^kitchen\s+(\d+) -> (\d+)", out, re.M).groups())
+    assert 11000 < before < after < 16000  # the loader's subdivision, as the paper's 11,379 -> 14,979
 
 
 @pytest.mark.parametrize("args, message", [

@@ -550,9 +550,10 @@ def test_kernel_equals_the_recording_walk(name):
             assert np.any(res.flags & search.HIDDEN)
 
 
+@pytest.mark.parametrize("rule", ["mirror", "unfold"])
 @pytest.mark.parametrize("precision", ["float32", "float64"])
 @pytest.mark.parametrize("inverse", ["plane", "search", "discard"])
-def test_virtual_vertex_kernel_equals_numpy_bit_for_bit(precision, inverse):
+def test_virtual_vertex_kernel_equals_numpy_bit_for_bit(precision, inverse, rule):
     from naive import naive_virtual_vertices
 
     from refsoft.search.refine import refine
@@ -565,13 +566,15 @@ def test_virtual_vertex_kernel_equals_numpy_bit_for_bit(precision, inverse):
         res = search.search(gb, cam.eye, verts, "cross", inverse)
         if name == "sphere":
             assert np.any(res.flags & search.HIDDEN)
-        got = search.virtual_vertices(gb, res, verts, relative=True)
+        got = search.virtual_vertices(gb, res, verts, relative=True, rule=rule, eye=cam.eye)
         assert got.dtype == np.dtype(precision)
-        np.testing.assert_array_equal(got, naive_virtual_vertices(gb, res, verts))
+        np.testing.assert_array_equal(got, naive_virtual_vertices(gb, res, verts, rule=rule, eye=cam.eye))
         p, n, _ = refine(gb, cam.eye, verts, res)
-        np.testing.assert_array_equal(search.virtual_vertices(gb, res, verts, relative=True, surface=(p, n)),
-                                      naive_virtual_vertices(gb, res, verts, surface=(p, n)))
+        np.testing.assert_array_equal(
+            search.virtual_vertices(gb, res, verts, relative=True, surface=(p, n), rule=rule, eye=cam.eye),
+            naive_virtual_vertices(gb, res, verts, surface=(p, n), rule=rule, eye=cam.eye))
     # culled vertices (an empty G-buffer) give V itself
     empty = raster.gbuffer(primitives.icosphere(1, 0.1), Camera(eye=(0, 0, -5), target=(0, 0, -10)), precision)
     res = search.search(empty, (0, 0, -5), verts[:4], "cross", inverse)
-    np.testing.assert_array_equal(search.virtual_vertices(empty, res, verts[:4]), verts[:4].astype(precision))
+    np.testing.assert_array_equal(search.virtual_vertices(empty, res, verts[:4], rule=rule, eye=(0, 0, -5)),
+                                  verts[:4].astype(precision))

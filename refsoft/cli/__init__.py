@@ -64,14 +64,21 @@ def build_parser() -> argparse.ArgumentParser:
     ck.add_argument("--verbose", action="store_true", help="also print the outputs that pass")
     ck.set_defaults(func=commands.cmd_check)
 
-    b = sub.add_parser("bench", help="run time against error: sweep, scaling, table1 (docs/benchmarks.md)")
-    b.add_argument("what", choices=["sweep", "scaling", "table1"], help="which benchmark")
+    b = sub.add_parser("bench", help="run time against error: accuracy, sweep, scaling, table1 (docs/benchmarks.md, "
+                                     "docs/accuracy.md)")
+    b.add_argument("what", choices=["accuracy", "sweep", "scaling", "table1"], help="which benchmark")
     b.add_argument("--scenes", nargs="+", default=None, metavar="SCENE",
-                   help="built-in scenes (sweep: sphere quad kitchen; table1: kitchen ufo ants)")
+                   help="built-in scenes (accuracy: all; sweep: sphere quad kitchen; table1: kitchen ufo ants)")
+    b.add_argument("--sizes", nargs="+", default=None, metavar="WxH",
+                   help="accuracy: image sizes (default 640x480 1024x768)")
+    b.add_argument("--setting", action="append", default=None, metavar="NAME",
+                   help="accuracy: only these settings (repeatable; default all: paper, accurate, and the accurate "
+                        "preset with one part changed)")
     b.add_argument("--out", default=None, metavar="DIR", help="output folder (default: out/bench/WHAT)")
     b.add_argument("--width", type=int, default=None, help="image width (sweep 320, others 1024)")
     b.add_argument("--height", type=int, default=None, help="image height (sweep 240, others 768)")
-    b.add_argument("--frames", type=int, default=None, metavar="N", help="frames per scene (sweep: 3; table1: all)")
+    b.add_argument("--frames", type=int, default=None, metavar="N",
+                   help="frames per scene (accuracy: 5 spread over each animation; sweep: 3; table1: all)")
     b.add_argument("--repeats", type=int, default=3, metavar="N", help="timed runs per setting (median)")
     b.add_argument("--knob", action="append", default=None, metavar="NAME",
                    help="sweep only these knobs (repeatable): preset, gbuffer_scale, widen, neighbourhood, method, "

@@ -167,7 +167,20 @@ def cmd_bench(args) -> int:
 
     out = args.out or os.path.join("out", "bench", args.what)
     t0 = time.perf_counter()
-    if args.what == "sweep":
+    if args.what != "accuracy" and (args.sizes or args.setting):
+        raise RefsoftError("--sizes and --setting are for bench accuracy")
+    if args.what == "accuracy":
+        if args.knob or args.width or args.height:
+            raise RefsoftError("bench accuracy takes --sizes WxH, not --width/--height or --knob")
+        sizes = [_size(s) for s in args.sizes] if args.sizes else [(640, 480), (1024, 768)]
+        rows = bench.accuracy(args.scenes, out, sizes, args.frames or 5, args.setting, progress_bar=True)
+        for r in bench.accuracy_summary(rows):
+            if r["setting"] in ("paper", "accurate"):
+                print(f"{r['scene']:<10} {r['size']:>9} {r['setting']:<9} agreement median {100 * r['median']:6.2f}% "
+                      f"worst {100 * r['worst']:6.2f}%, {r['ms'] or 0:7.1f} ms/frame")
+        print(f"accuracy: {len(rows)} frames in {time.perf_counter() - t0:.0f} s; {out}/accuracy.csv, accuracy.md, "
+              f"agreement_*.png" + (", accuracy.png" if os.path.exists(os.path.join(out, "accuracy.png")) else ""))
+    elif args.what == "sweep":
         scenes = args.scenes or ["sphere", "quad", "kitchen"]
         rows = bench.sweep(scenes, out, args.width or 320, args.height or 240, args.frames or 3, args.repeats,
                            args.knob, progress_bar=True)
@@ -195,6 +208,14 @@ def cmd_bench(args) -> int:
                   f"(paper {r['paper_ms_per_frame']})")
         print(f"{out}/table1.csv, table1.md")
     return 0
+
+
+def _size(text):
+    try:
+        w, h = (int(x) for x in text.lower().split("x"))
+    except ValueError:
+        raise RefsoftError(f"--sizes takes WxH like 640x480, got {text!r}") from None
+    return w, h
 
 
 def cmd_compare(args) -> int:

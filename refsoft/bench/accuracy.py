@@ -1,0 +1,191 @@
+"""``refsoft bench accuracy``: every built-in scene against its ray-traced truth, for both presets
+and the accurate preset with one of its parts taken back (which says what each part buys).
+
+For each scene, size and setting: frames spread evenly over the animation (rendered in order, each
+coherent with the previous one rendered), and per frame the share of reflector pixels whose
+reflected object agrees with the truth (all, interior, within :data:`RIM` pixels of a reflector's
+rim), the mean colour error, for spherical reflectors the mean pixel distance of the reflection
+points from the exact ones, and the frame time (the frames after the first, warm). Writes
+``accuracy.csv`` (a row per scene, size, setting and frame), ``accuracy.md`` (median and worst
+frame per scene, size and setting), ``agreement_SCENE_WxH.png`` (the accurate preset's worst
+frame: render | truth | agreement map) and, with matplotlib, ``accuracy.png`` (agreement against
+time per scene).
+"""
+
+from __future__ import annotations
+
+import os
+import time
+
+import numpy as np
+
+from ..errors import RefsoftError
+from ._common import machine, markdown_table, plt_or_none, progress, write_csv, write_text
+
+#: Rim width of the rim agreement, pixels.
+RIM = 2
+#: The settings: the two presets, then the accurate preset with one part changed.
+SETTINGS = {
+    "paper": {"preset": "paper"},
+    "accurate": {"preset": "accurate"},
+    "accurate, cross": {"preset": "accurate", "neighbourhood": "cross"},
+    "accurate, mirror": {"preset": "accurate", "virtual": "mirror"},
+    "accurate, no clip": {"preset": "accurate", "silhouette": "texel"},
+    "accurate, no refine": {"preset": "accurate", "refine": False},
+    "accurate, no tessellation": {"preset": "accurate", "tessellate": None},
+    "accurate, tessellate 1e-3": {"preset": "accurate", "tessellate": 1e-3},
+    "accurate, hierarchy": {"preset": "accurate", "method": "hierarchy"},
+}
+COLUMNS = ["scene", "size", "setting", "frame", "agreement", "interior", "rim", "color_error", "pixel_distance",
+           "ms"]
+SUMMARY = ["scene", "size", "setting", "frames", "median", "worst", "interior", "rim", "color_error", "ms"]
+
+
+def frames_of(scene, n: int) -> list:
+    """``n`` frames spread evenly over the animation, first and last included (frame 0 of a
+    static scene)."""
+    if scene.animation is None:
+        return [0]
+    return sorted({int(round(x)) for x in np.linspace(0, scene.n_frames - 1, max(1, n))})
+
+
+def accuracy(scenes=None, out=None, sizes=((640, 480), (1024, 768)), frames: int = 5, settings=None,
+             progress_bar=False) -> list:
+    """Run the accuracy benchmark; returns the per-frame rows (also written to ``out``).
+
+    Parameters
+    ----------
+    scenes : list of str, optional
+        Built-in scenes (default all).
+    out : str or PathLike, optional
+    sizes : list of (width, height)
+    frames : int
+        Frames per animation, spread evenly.
+    settings : list of str, optional
+        Names from :data:`SETTINGS` (default all).
+    progress_bar : bool
+    """
+    from ..frame import FrameDriver
+    from ..options import RenderOptions
+    from ..scene import builtin_names, load_scene
+    from ..truth import TruthRenderer
+
+    scenes = list(builtin_names() if scenes is None else scenes)
+    names = list(SETTINGS) if settings is None else list(settings)
+    unknown = [s for s in names if s not in SETTINGS]
+    if unknown:
+        raise RefsoftError(f"unknown setting {unknown[0]!r} (settings: {', '.join(SETTINGS)})")
+    if frames < 1:
+        raise RefsoftError(f"frames must be at least 1, got {frames}")
+    rows, worst_pictures = [], {}
+    work = [(s, tuple(z)) for s in scenes for z in sizes]
+    for name, (w, h) in progress(work, "accuracy", progress_bar):
+        scene = load_scene(name, width=w, height=h)
+        picks = frames_of(scene, frames)
+        truth = TruthRenderer(scene, exact=True)
+        truths = {f: truth.render_frame(f).arrays for f in picks}
+        for label in names:
+            opts = RenderOptions(**SETTINGS[label])
+            FrameDriver(scene, opts).render_frame(picks[0])  # compile outside the timing
+            driver = FrameDriver(scene, opts)
+            for i, f in enumerate(picks):
+                t0 = time.perf_counter()
+                fr = driver.render_frame(f)
+                ms = 1000 * (time.perf_counter() - t0)
+                row = {"scene": name, "size": f"{w}x{h}", "setting": label, "frame": f,
+                       "ms": ms if (i > 0 or len(picks) == 1) else None}
+                row.update(_frame_errors(fr.arrays, truths[f]))
+                rows.append(row)
+                if label == "accurate":
+                    key = (name, f"{w}x{h}")
+                    if key not in worst_pictures or row["agreement"] < worst_pictures[key][0]:
+                        worst_pictures[key] = (row["agreement"], f, fr.arrays, truths[f])
+    if out is not None:
+        _write(out, rows, worst_pictures, frames)
+    return rows
+
+
+def _frame_errors(render, truth) -> dict:
+    from ..truth.metrics import color_error, disagreement, pixel_distance, reflector_pixels, rim
+
+    rid, tid, obj = render["reflected_id"], truth["reflected_id"], truth["object_id"]
+    edge = np.zeros(tid.shape, dtype=bool)
+    for k in np.unique(obj[tid >= 0]):
+        edge |= rim(obj == k, RIM)
+    out = {"agreement": 1.0 - disagreement(rid, tid), "interior": 1.0 - disagreement(rid, tid, ~edge),
+           "rim": 1.0 - disagreement(rid, tid, edge),
+           "color_error": color_error(render["image"], truth["image"], reflector_pixels(tid))["mean"]}
+    dists = []
+    for key in truth:
+        if key.startswith("exact_reflection_point_"):
+            k = key.rsplit("_", 1)[1]
+            exact = truth[key]
+            ok = np.all(np.isfinite(exact), axis=1) & ((render[f"flags_{k}"] & 1) == 0)
+            d = pixel_distance(render[f"reflection_pixel_{k}"], exact, render[f"gbuffer_view_proj_{k}"],
+                               render[f"gbuffer_mask_{k}"].shape)[ok]
+            dists.append(d)
+    if dists and sum(len(d) for d in dists):
+        out["pixel_distance"] = float(np.concatenate(dists).mean())
+    return out
+
+
+def summarize(rows) -> list:
+    """Per scene, size and setting: the median and worst frame's agreement, the median interior
+    and rim agreement, colour error and warm ms per frame."""
+    out = []
+    keys = sorted({(r["scene"], r["size"], r["setting"]) for r in rows},
+                  key=lambda k: ([r["scene"] for r in rows].index(k[0]), k[1], list(SETTINGS).index(k[2])))
+    for scene, size, setting in keys:
+        sel = [r for r in rows if (r["scene"], r["size"], r["setting"]) == (scene, size, setting)]
+        a = np.array([r["agreement"] for r in sel])
+        ms = [r["ms"] for r in sel if r["ms"] is not None]
+        out.append({"scene": scene, "size": size, "setting": setting, "frames": len(sel),
+                    "median": float(np.median(a)), "worst": float(a.min()),
+                    "interior": float(np.median([r["interior"] for r in sel])),
+                    "rim": float(np.median([r["rim"] for r in sel])),
+                    "color_error": float(np.median([r["color_error"] for r in sel])),
+                    "ms": float(np.median(ms)) if ms else None})
+    return out
+
+
+def _write(out, rows, worst_pictures, frames):
+    from ..io import atomic_path, write_png
+    from ..visualize import agreement_map, side_by_side
+
+    os.makedirs(out, exist_ok=True)
+    write_csv(os.path.join(out, "accuracy.csv"), rows, COLUMNS)
+    summary = summarize(rows)
+    m = machine()
+    pct = [dict(r, **{k: 100 * r[k] for k in ("median", "worst", "interior", "rim")}) for r in summary]
+    text = [f"# Accuracy against the ray-traced truth\n\nUp to {frames} frames spread over each animation; "
+            f"agreement is the share (%) of reflector pixels whose reflected object is the truth's (median and worst "
+            f"frame; interior and rim: more and less than {RIM} pixels from a reflector's rim, median); ms per warm "
+            f"frame; {m['cpu']}, {m['cores']} cores, numpy {m['numpy']}, numba {m['numba']}.\n\n",
+            markdown_table(pct, SUMMARY, ["scene", "size", "setting", "frames", "median %", "worst %", "interior %",
+                                          "rim %", "colour error", "ms/frame"])]
+    write_text(os.path.join(out, "accuracy.md"), "".join(text))
+    for (scene, size), (_, f, render, truth) in worst_pictures.items():
+        write_png(os.path.join(out, f"agreement_{scene}_{size}.png"),
+                  side_by_side(render["image"], truth["image"],
+                               agreement_map(render["reflected_id"], truth["reflected_id"], truth["image"])))
+    plt = plt_or_none()
+    if plt is None:
+        return
+    scenes = list(dict.fromkeys(r["scene"] for r in summary))
+    fig, axes = plt.subplots(1, len(scenes), figsize=(3.4 * len(scenes), 3.2), squeeze=False)
+    for ax, name in zip(axes[0], scenes):
+        for size, marker in zip(sorted({r["size"] for r in summary}), "os^"):
+            sel = [r for r in summary if r["scene"] == name and r["size"] == size and r["ms"] is not None]
+            ax.scatter([r["ms"] for r in sel], [100 * r["median"] for r in sel], marker=marker, s=16, label=size)
+            for r in sel:
+                if r["setting"] in ("paper", "accurate"):
+                    ax.annotate(r["setting"], (r["ms"], 100 * r["median"]), fontsize=6, xytext=(3, 2),
+                                textcoords="offset points")
+        ax.set_title(name)
+        ax.set_xlabel("ms per frame")
+        ax.set_ylabel("agreement %")
+        ax.legend(fontsize=6)
+    fig.tight_layout()
+    with atomic_path(os.path.join(out, "accuracy.png"), ".png") as tmp:
+        fig.savefig(tmp, dpi=110, format="png")
+    plt.close(fig)
