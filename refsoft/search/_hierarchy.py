@@ -16,7 +16,7 @@ import numpy as np
 from numba import prange
 
 from .._numba import kernel, like
-from ._kernels import BORDER, CAPPED, HIDDEN, _evaluate, walk
+from ._kernels import STOP_CAPPED, _evaluate, end_walk, walk
 
 #: Restarts with enlarged cones and spheres before a search gives up (flag CAPPED).
 MAX_ENLARGEMENTS = 8
@@ -248,29 +248,22 @@ def search_all(G, mask, sph_levels, cone_levels, offsets, sizes, n_levels, verti
                 v[k] = like(vertices[i, k] - origin[k], conv)
             r, c, tests, found, _ = traverse(G, sph_levels, cone_levels, offsets, sizes, n_levels, v, like(1.0, conv),
                                              like(1.0, conv), fc, fs, break_level, cap, conv, stack, empty, 0)
-            fl = 0
             if not found:
                 r, c = start_r, start_c
-                fl |= CAPPED
             s = _evaluate(G, r, c, v, False, conv)
             m = like(2.0, conv)
-            gp = G[r, c]
-            d = ((v[0] - gp[0]) * gp[3] + (v[1] - gp[1]) * gp[4]) + (v[2] - gp[2]) * gp[5]
             border = False
             for dr, dc in ((0, -1), (-1, 0), (0, 1), (1, 0)):
                 rr, cc = r + dr, c + dc
                 if rr < 0 or rr >= h or cc < 0 or cc >= w or not mask[rr, cc]:
                     border = True
-            if d < like(0.0, conv):
-                fl |= HIDDEN
-                if inverse_search:
-                    r, c, s, m, it2, stop, border, _ = walk(G, mask, v, r, c, 5, cap, True, conv, empty_walk, 0, 1,
-                                                            scratch, seen)
-                    tests += it2
-                    if stop == 1:
-                        fl |= CAPPED
-            if border:
-                fl |= BORDER
+            gp = G[r, c]
+            fl, tests, inverse = end_walk(0, 0, tests, not found, border, 0, v, gp[0:3], gp[3:6], inverse_search, conv)
+            if inverse:
+                r, c, s, m, it, stop, border, _ = walk(G, mask, v, r, c, 5, cap, True, conv, empty_walk, 0, 1, scratch,
+                                                       seen)
+                fl, tests, _ = end_walk(fl, tests, it, stop == STOP_CAPPED, border, 1, v, gp[0:3], gp[3:6],
+                                        inverse_search, conv)
             pixel[i, 0] = r
             pixel[i, 1] = c
             best[i] = s

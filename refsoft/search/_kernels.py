@@ -193,6 +193,29 @@ def walk(G, mask, v, r, c, n_candidates, cap, inverse, conv, record, n_record, p
         r, c = best_r, best_c
 
 
+@kernel(inline=True)
+def end_walk(flags, total, it, capped, border, phase, v, p, n, inverse_search, conv):
+    """The end of a walk of ``it`` steps for vertex ``v`` (3,) at a pixel with position ``p`` and
+    normal ``n`` (3,) (DESIGN 4.4, 4.6), shared by every search: ``flags`` gains CAPPED when the
+    walk was ``capped``; after the first walk (``phase`` 0) HIDDEN when the vertex is behind the
+    pixel's tangent plane, ``dot(v - p, n) < 0``; then BORDER when ``border`` (a neighbour
+    uncovered or outside), unless the inverse search follows. Returns ``(flags, total + it,
+    inverse)``: ``inverse`` True when the inverse search (``inverse_search``) is to start from
+    that pixel, its walk to end here again with phase 1, these flags and this total."""
+    if capped:
+        flags |= CAPPED
+    total += it
+    if phase == 0:
+        d = ((v[0] - p[0]) * n[0] + (v[1] - p[1]) * n[1]) + (v[2] - p[2]) * n[2]
+        if d < like(0.0, conv):
+            flags |= HIDDEN
+            if inverse_search:
+                return flags, total, True
+    if border:
+        flags |= BORDER
+    return flags, total, False
+
+
 @kernel
 def search_one(G, mask, v, start_r, start_c, n_candidates, cap, inverse_search, conv, record, scratch, seen):
     """Standard search from (start_r, start_c) in the packed G-buffer ``G``, then the inverse
@@ -200,23 +223,14 @@ def search_one(G, mask, v, start_r, start_c, n_candidates, cap, inverse_search, 
     ``(r, c, score, margin, iterations, flags, n_record)``."""
     r, c, best, margin, it, stop, border, n_rec = walk(G, mask, v, start_r, start_c, n_candidates,
                                                       cap, False, conv, record, 0, 0, scratch, seen)
-    flags = 0
-    if stop == STOP_CAPPED:
-        flags |= CAPPED
-    # hidden: V behind the tangent plane at the end pixel (dot(V - P_R, N_R) < 0)
     g = G[r, c]
-    d = ((v[0] - g[0]) * g[3] + (v[1] - g[1]) * g[4]) + (v[2] - g[2]) * g[5]
-    if d < like(0.0, conv):
-        flags |= HIDDEN
-        if inverse_search:
-            r, c, best, margin, it2, stop, border, n_rec = walk(G, mask, v, r, c, n_candidates, cap,
-                                                                True, conv, record, n_rec, 1, scratch, seen)
-            it += it2
-            if stop == STOP_CAPPED:
-                flags |= CAPPED
-    if border:
-        flags |= BORDER
-    return r, c, best, margin, it, flags, n_rec
+    flags, total, inverse = end_walk(0, 0, it, stop == STOP_CAPPED, border, 0, v, g[0:3], g[3:6], inverse_search, conv)
+    if inverse:
+        r, c, best, margin, it, stop, border, n_rec = walk(G, mask, v, r, c, n_candidates, cap, True, conv, record,
+                                                          n_rec, 1, scratch, seen)
+        flags, total, _ = end_walk(flags, total, it, stop == STOP_CAPPED, border, 1, v, g[0:3], g[3:6],
+                                   inverse_search, conv)
+    return r, c, best, margin, total, flags, n_rec
 
 
 #: A start's row in the search's inputs: the default start; the default start after a restart

@@ -31,7 +31,7 @@ import numpy as np
 from numba import prange
 
 from .._numba import kernel, like
-from ._kernels import BORDER, CAPPED, HIDDEN, OFFSETS, RESTART, RESTARTED, REUSE, _normalize, score_pnu
+from ._kernels import OFFSETS, RESTART, RESTARTED, REUSE, _normalize, end_walk, score_pnu
 
 #: Walks advanced together by one thread.
 LANES = 16
@@ -211,30 +211,22 @@ def _end(P, N, eye, inverse_search, conv, s, it, best_k, best, second, border, V
     else:  # capped: the walk keeps the pixel whose neighbourhood it evaluated last
         res_s = s0
         res_m = best - s0
-    fl = FL[s]
-    if best_k != 0:
-        fl |= CAPPED
-    if PH[s] == 0:
-        d = ((V[s, 0] - P[r, c, 0]) * N[r, c, 0] + (V[s, 1] - P[r, c, 1]) * N[r, c, 1]) \
-            + (V[s, 2] - P[r, c, 2]) * N[r, c, 2]
-        if d < like(0.0, conv):
-            fl |= HIDDEN
-            if inverse_search:
-                PH[s] = 1
-                FL[s] = fl
-                IT0[s] = it
-                IT[s] = 0
-                MOVED[s] = 0
-                S0[s] = _score_at(P, N, eye, r, c, V[s], True, conv)
-                return False
-    if border:
-        fl |= BORDER
+    fl, total, inverse = end_walk(FL[s], IT0[s], it, best_k != 0, border, PH[s], V[s], P[r, c], N[r, c],
+                                  inverse_search, conv)
+    if inverse:
+        PH[s] = 1
+        FL[s] = fl
+        IT0[s] = total
+        IT[s] = 0
+        MOVED[s] = 0
+        S0[s] = _score_at(P, N, eye, r, c, V[s], True, conv)
+        return False
     i = VI[s]
     pixel[i, 0] = r
     pixel[i, 1] = c
     best_out[i] = res_s
     margin_out[i] = res_m
-    iterations[i] = IT0[s] + it
+    iterations[i] = total
     flags_out[i] = fl
     return True
 
