@@ -10,6 +10,7 @@ import numpy as np
 from numba import prange
 
 from .._numba import kernel, like
+from ..constants import SUBPIXEL_HALF, SUBPIXEL_ONE
 
 
 #: Triangles are binned in this many contiguous chunks, in parallel; the result does not
@@ -90,13 +91,13 @@ def raster_tiles(starts, items, X, Y, Z, tri, bbox, area, bias, width, height, t
             inv_area = 1.0 / np.float64(area[t])
             face = tri[t]
             b0, b1, b2 = np.int64(bias[t, 0]), np.int64(bias[t, 1]), np.int64(bias[t, 2])
-            # column steps of each edge function: E(c+1) = E(c) - (yb - ya) * 256
-            s0 = -(y2 - y1) * 256
-            s1 = -(y0 - y2) * 256
-            s2 = -(y1 - y0) * 256
-            px0 = np.int64(c0) * 256 + 128
+            # column steps of each edge function: E(c+1) = E(c) - (yb - ya) * SUBPIXEL_ONE
+            s0 = -(y2 - y1) * SUBPIXEL_ONE
+            s1 = -(y0 - y2) * SUBPIXEL_ONE
+            s2 = -(y1 - y0) * SUBPIXEL_ONE
+            px0 = np.int64(c0) * SUBPIXEL_ONE + SUBPIXEL_HALF
             for r in range(r0, r1 + 1):
-                py = np.int64(height - 1 - r) * 256 + 128
+                py = np.int64(height - 1 - r) * SUBPIXEL_ONE + SUBPIXEL_HALF
                 # biased edge values: covered when all three are >= 0
                 e0 = (x2 - x1) * (py - y1) - (y2 - y1) * (px0 - x1) + b0
                 e1 = (x0 - x2) * (py - y2) - (y0 - y2) * (px0 - x2) + b1
@@ -127,8 +128,8 @@ def _barycentrics(t, r, c, height, X, Y, IW, slot, B, conv):
     in it).
     An unclipped triangle maps through the identity (``slot == -1``) or swaps vertices 1 and 2
     (``slot == -2``): both exact, equal to multiplying by the permutation matrix."""
-    py = np.int64(height - 1 - r) * 256 + 128
-    px = np.int64(c) * 256 + 128
+    py = np.int64(height - 1 - r) * SUBPIXEL_ONE + SUBPIXEL_HALF
+    px = np.int64(c) * SUBPIXEL_ONE + SUBPIXEL_HALF
     x0, x1, x2 = np.int64(X[t, 0]), np.int64(X[t, 1]), np.int64(X[t, 2])
     y0, y1, y2 = np.int64(Y[t, 0]), np.int64(Y[t, 1]), np.int64(Y[t, 2])
     a0 = like((x2 - x1) * (py - y1) - (y2 - y1) * (px - x1), conv) * IW[t, 0]

@@ -16,12 +16,16 @@ import numpy as np
 from numba import prange
 
 from .._numba import kernel, like
+from ..constants import LONE_MARGIN, NO_SCORE
+from ._kernels import RECORD_WIDTH as WALK_RECORD_WIDTH
 from ._kernels import STOP_CAPPED, _evaluate, end_walk, walk
 
 #: Restarts with enlarged cones and spheres before a search gives up (flag CAPPED).
 MAX_ENLARGEMENTS = 8
 # record columns: attempt, level, row, col, outcome (1 pushed / 0 rejected / 2 popped / 3 chosen)
 RECORD_WIDTH = 5
+#: Vertices searched by one thread one after another (its work arrays are allocated once per group).
+SEARCH_GROUP = 256
 
 
 @kernel(inline=True)
@@ -159,7 +163,7 @@ def traverse(G, sph_levels, cone_levels, offsets, sizes, n_levels, v, kc0, ks0, 
     top = n_levels - 1
     stop_level = max(break_level, 1)
     for attempt in range(MAX_ENLARGEMENTS + 1):
-        best = like(-3.0, conv)
+        best = like(NO_SCORE, conv)
         br, bc = -1, -1
         stack[0, 0] = top
         stack[0, 1] = 0
@@ -237,13 +241,13 @@ def search_all(G, mask, sph_levels, cone_levels, offsets, sizes, n_levels, verti
     n = vertices.shape[0]
     h, w = mask.shape
     empty = np.empty((0, 5), dtype=np.float64)
-    empty_walk = np.empty((0, 22), dtype=best.dtype)
-    for g in prange((n + 255) // 256):
+    empty_walk = np.empty((0, WALK_RECORD_WIDTH), dtype=best.dtype)
+    for g in prange((n + SEARCH_GROUP - 1) // SEARCH_GROUP):
         stack = np.empty((3 * n_levels + 4, 3), dtype=np.int64)
         scratch = np.empty((2, 9), dtype=best.dtype)
         seen = np.zeros((2, 9), dtype=np.bool_)
         v = np.empty(3, dtype=best.dtype)
-        for i in range(g * 256, min(n, (g + 1) * 256)):
+        for i in range(g * SEARCH_GROUP, min(n, (g + 1) * SEARCH_GROUP)):
             for k in range(3):
                 v[k] = like(vertices[i, k] - origin[k], conv)
             r, c, tests, found, _ = traverse(G, sph_levels, cone_levels, offsets, sizes, n_levels, v, like(1.0, conv),
@@ -251,7 +255,7 @@ def search_all(G, mask, sph_levels, cone_levels, offsets, sizes, n_levels, verti
             if not found:
                 r, c = start_r, start_c
             s = _evaluate(G, r, c, v, False, conv)
-            m = like(2.0, conv)
+            m = like(LONE_MARGIN, conv)
             border = False
             for dr, dc in ((0, -1), (-1, 0), (0, 1), (1, 0)):
                 rr, cc = r + dr, c + dc

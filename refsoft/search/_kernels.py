@@ -14,6 +14,7 @@ import numpy as np
 from numba import prange
 
 from .._numba import kernel, like
+from ..constants import LONE_MARGIN, NO_SCORE, NOT_A_CANDIDATE
 
 HIDDEN = 1
 BORDER = 2
@@ -131,7 +132,7 @@ def walk(G, mask, v, r, c, n_candidates, cap, inverse, conv, record, n_record, p
         it += 1
         best = scores[0]
         best_k = 0
-        second = like(-3.0, conv)
+        second = like(NO_SCORE, conv)
         border = False
         rec = n_record < record.shape[0]
         if rec:
@@ -174,11 +175,11 @@ def walk(G, mask, v, r, c, n_candidates, cap, inverse, conv, record, n_record, p
                 second = s
         if rec:
             for k in range(n_candidates, 9):
-                record[n_record, 4 + k] = OUTSIDE + 1  # not part of this neighbourhood
+                record[n_record, 4 + k] = NOT_A_CANDIDATE
             record[n_record, 3] = best_k if best_k > 0 else -1
             n_record += 1
         if best_k == 0:
-            margin = best - second if second > like(-3.0, conv) else like(2.0, conv)
+            margin = best - second if second > like(NO_SCORE, conv) else like(LONE_MARGIN, conv)
             return r, c, best, margin, it, CONVERGED, border, n_record
         if it >= cap:
             # capped: the search keeps the pixel whose neighbourhood it evaluated last
@@ -348,14 +349,14 @@ def score_field(G, mask, v, inverse, conv, out):
 @kernel(parallel=True)
 def scores_at(G, mask, vertices, origin, pixels, inverse, conv, out):
     """The (inverse, where ``inverse[i]``) score of vertex ``i`` at crop pixel ``pixels[i]``,
-    with the search's own arithmetic; ``-3`` where that pixel is outside the crop or uncovered.
+    with the search's own arithmetic; ``NO_SCORE`` (-3) where that pixel is outside the crop or uncovered.
     For ``refsoft check``'s tie rule."""
     h, w = mask.shape
     for i in prange(vertices.shape[0]):
         r = pixels[i, 0]
         c = pixels[i, 1]
         if r < 0 or r >= h or c < 0 or c >= w or not mask[r, c]:
-            out[i] = like(-3.0, conv)
+            out[i] = like(NO_SCORE, conv)
             continue
         v = np.empty(3, dtype=out.dtype)
         for k in range(3):

@@ -31,6 +31,7 @@ import numpy as np
 from numba import prange
 
 from .._numba import kernel, like
+from ..constants import LONE_MARGIN, NO_SCORE
 from ._kernels import OFFSETS, RESTART, RESTARTED, REUSE, _normalize, end_walk, score_pnu
 
 #: Walks advanced together by one thread.
@@ -159,12 +160,12 @@ def _compare(s, NB, S0, PREV, IDX, OUT, CUR, conv):
     """Walk ``s``'s neighbourhood in the visiting order, as ``_kernels.walk`` compares it: its
     scores into ``CUR`` (the current pixel's first; uncovered candidates left as they were).
     Returns ``(best_k, best, second, border)``: the best candidate (0: the current pixel), its
-    score, the second-best score (-3 when there is none) and whether a candidate is uncovered
+    score, the second-best score (``NO_SCORE`` when there is none) and whether a candidate is uncovered
     or outside."""
     s0 = S0[s]
     best = s0
     best_k = 0
-    second = like(-3.0, conv)
+    second = like(NO_SCORE, conv)
     border = False
     CUR[0] = s0
     for k in range(1, NB + 1):
@@ -207,7 +208,7 @@ def _end(P, N, eye, inverse_search, conv, s, it, best_k, best, second, border, V
     s0 = S0[s]
     if best_k == 0:
         res_s = best
-        res_m = best - second if second > like(-3.0, conv) else like(2.0, conv)
+        res_m = best - second if second > like(NO_SCORE, conv) else like(LONE_MARGIN, conv)
     else:  # capped: the walk keeps the pixel whose neighbourhood it evaluated last
         res_s = s0
         res_m = best - s0
