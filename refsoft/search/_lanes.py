@@ -20,7 +20,7 @@ vertices : (N, 3), the vertices relative to the G-buffer's origin, in the workin
 search order (vertices starting near each other one after another: ``_kernels.gather``)
 starts : (N, 2) int32, start pixel, or (DEFAULT_START or RESTART, -1) for the default start
 default_r, default_c : the default start
-cap : int; inverse_search : bool; conv : a scalar of the working precision
+cap : int; inverse_search : bool; fp : a scalar of the working precision
 pixel (N, 2) int32, best_out, margin_out, iterations (N,) int32, flags_out (N,)
 uint8 : the outputs, row ``i`` for row ``i`` of the inputs
 
@@ -43,23 +43,23 @@ SEARCH_GROUP = 256
 
 
 @kernel(inline=True)
-def _normalize_select(x, y, z, conv):
+def _normalize_select(x, y, z, fp):
     """``_kernels._normalize`` with selects in place of its branch (same values, vectorizable):
     ``x * (1 / sqrt(...))``, zero where the length is not positive."""
-    zero = like(0.0, conv)
+    zero = like(0.0, fp)
     length = np.sqrt((x * x + y * y) + z * z)
-    q = like(1.0, conv) / length
+    q = like(1.0, fp) / length
     pos = length > zero
     return (x * q if pos else zero), (y * q if pos else zero), (z * q if pos else zero)
 
 
 @kernel
-def score_batch(n, P0, P1, P2, N0, N1, N2, ex, ey, ez, VX, VY, VZ, INV, OUT, conv):
+def score_batch(n, P0, P1, P2, N0, N1, N2, ex, ey, ez, VX, VY, VZ, INV, OUT, fp):
     """``OUT[j]``: the score (the inverse score where ``INV[j]``) of vertex ``(VX, VY, VZ)[j]`` at
     the pixel whose P and N are ``(P0, P1, P2)[j]`` and ``(N0, N1, N2)[j]``, seen from the eye
     ``(ex, ey, ez)``: the arithmetic of :func:`refsoft.search._kernels.score_pnu` with
     ``U = normalize(O - P)``, written without branches (selects) so that the loop vectorizes."""
-    two = like(2.0, conv)
+    two = like(2.0, fp)
     for j in range(n):
         px = P0[j]
         py = P1[j]
@@ -75,22 +75,22 @@ def score_batch(n, P0, P1, P2, N0, N1, N2, ex, ey, ez, VX, VY, VZ, INV, OUT, con
         wx = vx - t * nx if inv else vx
         wy = vy - t * ny if inv else vy
         wz = vz - t * nz if inv else vz
-        ux, uy, uz = _normalize_select(ex - px, ey - py, ez - pz, conv)
-        bx, by, bz = _normalize_select(wx - px, wy - py, wz - pz, conv)
-        hx, hy, hz = _normalize_select(ux + bx, uy + by, uz + bz, conv)
+        ux, uy, uz = _normalize_select(ex - px, ey - py, ez - pz, fp)
+        bx, by, bz = _normalize_select(wx - px, wy - py, wz - pz, fp)
+        hx, hy, hz = _normalize_select(ux + bx, uy + by, uz + bz, fp)
         OUT[j] = (nx * hx + ny * hy) + nz * hz
 
 
 @kernel(inline=True)
-def _score_at(P, N, eye, r, c, v, inverse, conv):
+def _score_at(P, N, eye, r, c, v, inverse, fp):
     """The (inverse) score of vertex ``v`` at pixel (r, c), one at a time."""
-    ux, uy, uz = _normalize(eye[0] - P[r, c, 0], eye[1] - P[r, c, 1], eye[2] - P[r, c, 2], conv)
+    ux, uy, uz = _normalize(eye[0] - P[r, c, 0], eye[1] - P[r, c, 1], eye[2] - P[r, c, 2], fp)
     return score_pnu(P[r, c, 0], P[r, c, 1], P[r, c, 2], N[r, c, 0], N[r, c, 1], N[r, c, 2], ux, uy, uz, v[0], v[1],
-                     v[2], inverse, conv)
+                     v[2], inverse, fp)
 
 
 @kernel(inline=True)
-def _begin(P, N, eye, vertices, starts, default_r, default_c, conv, i, s, V, VI, R, C, S0, IT, IT0, PH, FL, MOVED):
+def _begin(P, N, eye, vertices, starts, default_r, default_c, fp, i, s, V, VI, R, C, S0, IT, IT0, PH, FL, MOVED):
     """Walk slot ``s`` takes the vertex of row ``i``: its start (previous pixel, else the
     default start) and the start's score; counters cleared, flags RESTARTED or none."""
     VI[s] = i
@@ -104,7 +104,7 @@ def _begin(P, N, eye, vertices, starts, default_r, default_c, conv, i, s, V, VI,
         c0 = default_c
     R[s] = r0
     C[s] = c0
-    S0[s] = _score_at(P, N, eye, r0, c0, V[s], False, conv)
+    S0[s] = _score_at(P, N, eye, r0, c0, V[s], False, fp)
     IT[s] = 0
     IT0[s] = 0
     PH[s] = 0
@@ -156,7 +156,7 @@ def _gather(P, N, mask, NB, V, VI, R, C, PH, MOVED, P0, P1, P2, N0, N1, N2, VX, 
 
 
 @kernel(inline=True)
-def _compare(s, NB, S0, PREV, IDX, OUT, CUR, conv):
+def _compare(s, NB, S0, PREV, IDX, OUT, CUR, fp):
     """Walk ``s``'s neighbourhood in the visiting order, as ``_kernels.walk`` compares it: its
     scores into ``CUR`` (the current pixel's first; uncovered candidates left as they were).
     Returns ``(best_k, best, second, border)``: the best candidate (0: the current pixel), its
@@ -165,7 +165,7 @@ def _compare(s, NB, S0, PREV, IDX, OUT, CUR, conv):
     s0 = S0[s]
     best = s0
     best_k = 0
-    second = like(NO_SCORE, conv)
+    second = like(NO_SCORE, fp)
     border = False
     CUR[0] = s0
     for k in range(1, NB + 1):
@@ -198,7 +198,7 @@ def _move(s, NB, best_k, best, it, CUR, PREV, MOVED, S0, R, C, IT):
 
 
 @kernel(inline=True)
-def _end(P, N, eye, inverse_search, conv, s, it, best_k, best, second, border, V, VI, R, C, S0, IT, IT0, PH, FL,
+def _end(P, N, eye, inverse_search, fp, s, it, best_k, best, second, border, V, VI, R, C, S0, IT, IT0, PH, FL,
          MOVED, pixel, best_out, margin_out, iterations, flags_out):
     """Walk ``s`` stops after ``it`` steps: converged (``best_k`` 0) or capped. A hidden vertex's
     walk goes on as the inverse search from there (with ``inverse_search``: returns False);
@@ -208,19 +208,19 @@ def _end(P, N, eye, inverse_search, conv, s, it, best_k, best, second, border, V
     s0 = S0[s]
     if best_k == 0:
         res_s = best
-        res_m = best - second if second > like(NO_SCORE, conv) else like(LONE_MARGIN, conv)
+        res_m = best - second if second > like(NO_SCORE, fp) else like(LONE_MARGIN, fp)
     else:  # capped: the walk keeps the pixel whose neighbourhood it evaluated last
         res_s = s0
         res_m = best - s0
     fl, total, inverse = end_walk(FL[s], IT0[s], it, best_k != 0, border, PH[s], V[s], P[r, c], N[r, c],
-                                  inverse_search, conv)
+                                  inverse_search, fp)
     if inverse:
         PH[s] = 1
         FL[s] = fl
         IT0[s] = total
         IT[s] = 0
         MOVED[s] = 0
-        S0[s] = _score_at(P, N, eye, r, c, V[s], True, conv)
+        S0[s] = _score_at(P, N, eye, r, c, V[s], True, fp)
         return False
     i = VI[s]
     pixel[i, 0] = r
@@ -233,7 +233,7 @@ def _end(P, N, eye, inverse_search, conv, s, it, best_k, best, second, border, V
 
 
 @kernel(inline=True)
-def _search_group(P, N, mask, eye, vertices, starts, default_r, default_c, cap, inverse_search, conv, pixel, best_out,
+def _search_group(P, N, mask, eye, vertices, starts, default_r, default_c, cap, inverse_search, fp, pixel, best_out,
                   margin_out, iterations, flags_out, NB, lo, hi):
     """The searches of rows ``lo`` to ``hi - 1``, ``LANES`` walks at a time, each of
     ``NB`` neighbours around its current pixel."""
@@ -272,25 +272,25 @@ def _search_group(P, N, mask, eye, vertices, starts, default_r, default_c, cap, 
     active = 0
     for s in range(LANES):
         if nxt < hi:
-            _begin(P, N, eye, vertices, starts, default_r, default_c, conv, nxt, s, V, VI, R, C, S0, IT, IT0, PH, FL,
+            _begin(P, N, eye, vertices, starts, default_r, default_c, fp, nxt, s, V, VI, R, C, S0, IT, IT0, PH, FL,
                    MOVED)
             nxt += 1
             active += 1
     while active > 0:
         m = _gather(P, N, mask, NB, V, VI, R, C, PH, MOVED, P0, P1, P2, N0, N1, N2, VX, VY, VZ, INV, IDX)
         score_batch((m + VECTOR - 1) // VECTOR * VECTOR, P0, P1, P2, N0, N1, N2, eye[0], eye[1], eye[2], VX, VY, VZ,
-                    INV, OUT, conv)
+                    INV, OUT, fp)
         for s in range(LANES):
             if VI[s] < 0:
                 continue
-            best_k, best, second, border = _compare(s, NB, S0, PREV, IDX, OUT, CUR, conv)
+            best_k, best, second, border = _compare(s, NB, S0, PREV, IDX, OUT, CUR, fp)
             it = IT[s] + 1
             if best_k != 0 and it < cap:
                 _move(s, NB, best_k, best, it, CUR, PREV, MOVED, S0, R, C, IT)
-            elif _end(P, N, eye, inverse_search, conv, s, it, best_k, best, second, border, V, VI, R, C, S0, IT, IT0,
+            elif _end(P, N, eye, inverse_search, fp, s, it, best_k, best, second, border, V, VI, R, C, S0, IT, IT0,
                       PH, FL, MOVED, pixel, best_out, margin_out, iterations, flags_out):
                 if nxt < hi:  # the slot takes the group's next vertex
-                    _begin(P, N, eye, vertices, starts, default_r, default_c, conv, nxt, s, V, VI, R, C, S0, IT, IT0,
+                    _begin(P, N, eye, vertices, starts, default_r, default_c, fp, nxt, s, V, VI, R, C, S0, IT, IT0,
                            PH, FL, MOVED)
                     nxt += 1
                 else:
@@ -305,11 +305,11 @@ def _make_search(n_neighbours):
     NB = n_neighbours
 
     @kernel(parallel=True)
-    def search_lanes(P, N, mask, eye, vertices, starts, default_r, default_c, cap, inverse_search, conv, pixel, best_out,
+    def search_lanes(P, N, mask, eye, vertices, starts, default_r, default_c, cap, inverse_search, fp, pixel, best_out,
                      margin_out, iterations, flags_out):
         n = vertices.shape[0]
         for g in prange((n + SEARCH_GROUP - 1) // SEARCH_GROUP):
-            _search_group(P, N, mask, eye, vertices, starts, default_r, default_c, cap, inverse_search, conv, pixel,
+            _search_group(P, N, mask, eye, vertices, starts, default_r, default_c, cap, inverse_search, fp, pixel,
                           best_out, margin_out, iterations, flags_out, NB, g * SEARCH_GROUP,
                           min(n, (g + 1) * SEARCH_GROUP))
 
