@@ -261,13 +261,13 @@ def search_all(G, mask, sph_levels, cone_levels, offsets, sizes, n_levels, verti
                 rr, cc = r + dr, c + dc
                 if rr < 0 or rr >= h or cc < 0 or cc >= w or not mask[rr, cc]:
                     border = True
-            gp = G[r, c]
-            fl, tests, inverse = end_walk(0, 0, tests, not found, border, 0, v, gp[0:3], gp[3:6], inverse_search, fp)
+            fl, tests, inverse = end_walk(0, 0, tests, not found, border, 0, v[0], v[1], v[2], G, G, r, c, 3,
+                                          inverse_search, fp)
             if inverse:
                 r, c, s, m, it, stop, border, _ = walk(G, mask, v, r, c, 5, cap, True, fp, empty_walk, 0, 1, scratch,
                                                        seen)
-                fl, tests, _ = end_walk(fl, tests, it, stop == STOP_CAPPED, border, 1, v, gp[0:3], gp[3:6],
-                                        inverse_search, fp)
+                fl, tests, _ = end_walk(fl, tests, it, stop == STOP_CAPPED, border, 1, v[0], v[1], v[2], G, G, r, c,
+                                        3, inverse_search, fp)
             pixel[i, 0] = r
             pixel[i, 1] = c
             best[i] = s

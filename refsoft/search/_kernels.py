@@ -195,11 +195,12 @@ def walk(G, mask, v, r, c, n_candidates, cap, inverse, fp, record, n_record, pha
 
 
 @kernel(inline=True)
-def end_walk(flags, total, it, capped, border, phase, v, p, n, inverse_search, fp):
-    """The end of a walk of ``it`` steps for vertex ``v`` (3,) at a pixel with position ``p`` and
-    normal ``n`` (3,) (DESIGN 4.4, 4.6), shared by every search: ``flags`` gains CAPPED when the
+def end_walk(flags, total, it, capped, border, phase, vx, vy, vz, P, N, r, c, n0, inverse_search, fp):
+    """The end of a walk of ``it`` steps for vertex ``(vx, vy, vz)`` at pixel (r, c), whose
+    position is ``P[r, c, 0:3]`` and normal ``N[r, c, n0:n0 + 3]`` (the packed G-buffer: ``P = N =
+    G``, ``n0 = 3``) (DESIGN 4.4, 4.6), shared by every search: ``flags`` gains CAPPED when the
     walk was ``capped``; after the first walk (``phase`` 0) HIDDEN when the vertex is behind the
-    pixel's tangent plane, ``dot(v - p, n) < 0``; then BORDER when ``border`` (a neighbour
+    pixel's tangent plane, ``dot(V - P, N) < 0``; then BORDER when ``border`` (a neighbour
     uncovered or outside), unless the inverse search follows. Returns ``(flags, total + it,
     inverse)``: ``inverse`` True when the inverse search (``inverse_search``) is to start from
     that pixel, its walk to end here again with phase 1, these flags and this total."""
@@ -207,7 +208,8 @@ def end_walk(flags, total, it, capped, border, phase, v, p, n, inverse_search, f
         flags |= CAPPED
     total += it
     if phase == 0:
-        d = ((v[0] - p[0]) * n[0] + (v[1] - p[1]) * n[1]) + (v[2] - p[2]) * n[2]
+        d = ((vx - P[r, c, 0]) * N[r, c, n0] + (vy - P[r, c, 1]) * N[r, c, n0 + 1]) \
+            + (vz - P[r, c, 2]) * N[r, c, n0 + 2]
         if d < like(0.0, fp):
             flags |= HIDDEN
             if inverse_search:
@@ -224,13 +226,13 @@ def search_one(G, mask, v, start_r, start_c, n_candidates, cap, inverse_search, 
     ``(r, c, score, margin, iterations, flags, n_record)``."""
     r, c, best, margin, it, stop, border, n_rec = walk(G, mask, v, start_r, start_c, n_candidates,
                                                       cap, False, fp, record, 0, 0, scratch, seen)
-    g = G[r, c]
-    flags, total, inverse = end_walk(0, 0, it, stop == STOP_CAPPED, border, 0, v, g[0:3], g[3:6], inverse_search, fp)
+    flags, total, inverse = end_walk(0, 0, it, stop == STOP_CAPPED, border, 0, v[0], v[1], v[2], G, G, r, c, 3,
+                                     inverse_search, fp)
     if inverse:
         r, c, best, margin, it, stop, border, n_rec = walk(G, mask, v, r, c, n_candidates, cap, True, fp, record,
                                                           n_rec, 1, scratch, seen)
-        flags, total, _ = end_walk(flags, total, it, stop == STOP_CAPPED, border, 1, v, g[0:3], g[3:6],
-                                   inverse_search, fp)
+        flags, total, _ = end_walk(flags, total, it, stop == STOP_CAPPED, border, 1, v[0], v[1], v[2], G, G, r, c,
+                                   3, inverse_search, fp)
     return r, c, best, margin, total, flags, n_rec
 
 

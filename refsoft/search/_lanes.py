@@ -212,8 +212,8 @@ def _end(P, N, eye, inverse_search, fp, s, it, best_k, best, second, border, V, 
     else:  # capped: the walk keeps the pixel whose neighbourhood it evaluated last
         res_s = s0
         res_m = best - s0
-    fl, total, inverse = end_walk(FL[s], IT0[s], it, best_k != 0, border, PH[s], V[s], P[r, c], N[r, c],
-                                  inverse_search, fp)
+    fl, total, inverse = end_walk(FL[s], IT0[s], it, best_k != 0, border, PH[s], V[s, 0], V[s, 1], V[s, 2], P, N,
+                                  r, c, 0, inverse_search, fp)
     if inverse:
         PH[s] = 1
         FL[s] = fl
