@@ -23,8 +23,10 @@ def kernel(fn=None, *, parallel=False, inline=False):
 def like(value, prototype):
     """``value`` converted to the float type of ``prototype`` (a float32 or float64 scalar).
 
-    Kernels take a prototype scalar to choose their precision; the conversion is resolved when
-    the kernel is compiled (no call at run time), unlike a function passed as an argument."""
+    Kernels take ``fp``, a scalar of the working precision (``np.float32(0)`` or
+    ``np.float64(0)``), and write their float constants as ``like(2.0, fp)``; the conversion is
+    resolved when the kernel is compiled (no call at run time), unlike a function passed as an
+    argument."""
     return type(prototype)(value)
 
 

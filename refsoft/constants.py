@@ -73,3 +73,16 @@ CAMERA_PARALLEL_TOL = 1e-9
 #: Two reflection pixels are a tie when the oracle's scores differ by at most this many float32
 #: ULP of the better one (``refsoft check``, ``refsoft.conformance.precision``).
 TIE_ULPS = 8
+
+# --- Kernel sentinels ---
+#: The score of "no candidate" (a missing second-best) and of an uncovered or outside pixel:
+#: below every score (scores are cosines, in [-1, 1]).
+NO_SCORE = -3.0
+#: The margin of a search that ends on a pixel with no other covered candidate, and of the
+#: hierarchy search (which compares no neighbours): above every margin of two scores.
+LONE_MARGIN = 2.0
+#: A search record's status of a candidate slot the neighbourhood does not have (the box's
+#: corners in a crosshair walk), after EVALUATED, UNCOVERED and OUTSIDE (0, 1, 2).
+NOT_A_CANDIDATE = 3
+#: Half a pixel in snapped units: pixel centres lie at ``SUBPIXEL_ONE * k + SUBPIXEL_HALF``.
+SUBPIXEL_HALF = SUBPIXEL_ONE >> 1

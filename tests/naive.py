@@ -427,3 +427,105 @@ def naive_subdivide(vertices, faces, normals, max_edge, scale=(1.0, 1.0, 1.0)):
                 new += [(v0, m0, m2), (v1, m1, m0), (v2, m2, m1), (m0, m1, m2)]
         F = new
     return np.array(P, dtype=np.float64), np.array(F, dtype=np.int64), np.array(N, dtype=np.float64)
+
+
+# ------------------------------------------------------------------------------------ shading
+def naive_shade(normals, object_id, table, light, ambient, diffuse):
+    """DESIGN 5's shading one pixel at a time, in float32 scalars: ``table[id] * (ambient +
+    diffuse * |n . light|)`` with the dot product summed x, then y, then z; ``table[0]`` (the
+    background colour) where ``id == 0``. Returns (H, W, 3) float32."""
+    f32 = np.float32
+    h, w = object_id.shape
+    lx, ly, lz = (f32(x) for x in light)
+    out = np.empty((h, w, 3), dtype=np.float32)
+    for r in range(h):
+        for c in range(w):
+            k = int(object_id[r, c])
+            if k == 0:
+                out[r, c] = [f32(x) for x in table[0]]
+                continue
+            nx, ny, nz = (f32(x) for x in normals[r, c])
+            d = nx * lx + ny * ly
+            d = d + nz * lz
+            f = f32(ambient) + f32(diffuse) * abs(d)
+            for ch in range(3):
+                out[r, c, ch] = f32(table[k, ch]) * f
+    return out
+
+
+def naive_object_ids(triangle, face_offset):
+    """Per pixel the object of the visible triangle ``t`` (1-based: object ``k`` owns triangles
+    ``face_offset[k - 1]`` to ``face_offset[k] - 1``) and ``t``'s index within it; (0, -1) where
+    ``t < 0``. Found by walking the offsets, not by a table."""
+    h, w = triangle.shape
+    ids = np.zeros((h, w), dtype=np.int32)
+    local = np.full((h, w), -1, dtype=np.int32)
+    for r in range(h):
+        for c in range(w):
+            t = int(triangle[r, c])
+            if t < 0:
+                continue
+            k = 1
+            while face_offset[k] <= t:
+                k += 1
+            ids[r, c] = k
+            local[r, c] = t - face_offset[k - 1]
+    return ids, local
+
+
+def naive_to_uint8(color):
+    """``round(clip(c, 0, 1) * 255)`` element by element in Python floats (``round`` rounds
+    half to even); NaN gives 0."""
+    flat = [float(x) for x in np.asarray(color).reshape(-1)]
+    out = [0 if x != x else int(round(min(max(x, 0.0), 1.0) * 255.0)) for x in flat]
+    return np.array(out, dtype=np.uint8).reshape(np.shape(color))
+
+
+# ------------------------------------------------------------------------------------ skips
+def naive_outside_box(clip3, bounds):
+    """One triangle's clip vertices (3, 4) all strictly beyond one side of the NDC ``bounds``
+    ``(x_lo, x_hi, y_lo, y_hi)`` (``x > x_hi w`` and the like) or all behind the near plane
+    (``z < -w``)."""
+    x_lo, x_hi, y_lo, y_hi = bounds
+    sides = (lambda x, y, z, w: x > x_hi * w, lambda x, y, z, w: x < x_lo * w,
+             lambda x, y, z, w: y > y_hi * w, lambda x, y, z, w: y < y_lo * w,
+             lambda x, y, z, w: z < -w)
+    return any(all(side(*(float(a) for a in v)) for v in clip3) for side in sides)
+
+
+def naive_triangles_outside_box(clip, faces, bounds):
+    """:func:`naive_outside_box` of every triangle, bool (F,)."""
+    return np.array([naive_outside_box([clip[int(i)] for i in f], bounds) for f in faces], dtype=bool)
+
+
+# ------------------------------------------------------------------------------------ tessellation
+def naive_split(faces, midpoints, only=None):
+    """Red-green refinement one triangle at a time. ``midpoints`` maps an undirected edge
+    ``(min, max)`` to its new vertex. A triangle (a, b, c) with its edges ab, bc, ca split gives
+    (a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca); with one edge v0-v1 split (v2 opposite)
+    (v0, m, v2), (m, v1, v2); with all but edge v0-v1 split (v0, v1, m12), (v0, m12, m20),
+    (m20, m12, v2). ``only`` (bool per triangle): the others are left whole. Returns
+    ``(faces (T', 3) int64, parent (T',) int64)``, children in their parents' order."""
+    out, parent = [], []
+    for t, face in enumerate(faces):
+        v = [int(x) for x in face]
+        m = [midpoints.get((min(v[i], v[(i + 1) % 3]), max(v[i], v[(i + 1) % 3])), -1) for i in range(3)]
+        if only is not None and not only[t]:
+            m = [-1, -1, -1]
+        n = sum(x >= 0 for x in m)
+        if n == 0:
+            kids = [v]
+        elif n == 3:
+            kids = [[v[0], m[0], m[2]], [m[0], v[1], m[1]], [m[2], m[1], v[2]], [m[0], m[1], m[2]]]
+        else:
+            # turn the triangle so that its edge 0 (v0-v1) is the one split (n == 1) or unsplit (2)
+            k = [x >= 0 for x in m].index(n == 1)
+            v0, v1, v2 = v[k], v[(k + 1) % 3], v[(k + 2) % 3]
+            m01, m12, m20 = m[k], m[(k + 1) % 3], m[(k + 2) % 3]
+            if n == 1:
+                kids = [[v0, m01, v2], [m01, v1, v2]]
+            else:
+                kids = [[v0, v1, m12], [v0, m12, m20], [m20, m12, v2]]
+        out += kids
+        parent += [t] * len(kids)
+    return np.array(out, dtype=np.int64).reshape(-1, 3), np.array(parent, dtype=np.int64)

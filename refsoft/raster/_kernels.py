@@ -10,6 +10,7 @@ import numpy as np
 from numba import prange
 
 from .._numba import kernel, like
+from ..constants import SUBPIXEL_HALF, SUBPIXEL_ONE
 
 
 #: Triangles are binned in this many contiguous chunks, in parallel; the result does not
@@ -90,13 +91,13 @@ def raster_tiles(starts, items, X, Y, Z, tri, bbox, area, bias, width, height, t
             inv_area = 1.0 / np.float64(area[t])
             face = tri[t]
             b0, b1, b2 = np.int64(bias[t, 0]), np.int64(bias[t, 1]), np.int64(bias[t, 2])
-            # column steps of each edge function: E(c+1) = E(c) - (yb - ya) * 256
-            s0 = -(y2 - y1) * 256
-            s1 = -(y0 - y2) * 256
-            s2 = -(y1 - y0) * 256
-            px0 = np.int64(c0) * 256 + 128
+            # column steps of each edge function: E(c+1) = E(c) - (yb - ya) * SUBPIXEL_ONE
+            s0 = -(y2 - y1) * SUBPIXEL_ONE
+            s1 = -(y0 - y2) * SUBPIXEL_ONE
+            s2 = -(y1 - y0) * SUBPIXEL_ONE
+            px0 = np.int64(c0) * SUBPIXEL_ONE + SUBPIXEL_HALF
             for r in range(r0, r1 + 1):
-                py = np.int64(height - 1 - r) * 256 + 128
+                py = np.int64(height - 1 - r) * SUBPIXEL_ONE + SUBPIXEL_HALF
                 # biased edge values: covered when all three are >= 0
                 e0 = (x2 - x1) * (py - y1) - (y2 - y1) * (px0 - x1) + b0
                 e1 = (x0 - x2) * (py - y2) - (y0 - y2) * (px0 - x2) + b1
@@ -121,19 +122,19 @@ def raster_tiles(starts, items, X, Y, Z, tri, bbox, area, bias, width, height, t
 
 
 @kernel
-def _barycentrics(t, r, c, height, X, Y, IW, slot, B, conv):
+def _barycentrics(t, r, c, height, X, Y, IW, slot, B, fp):
     """Perspective-correct barycentrics of pixel (r, c) w.r.t. the input triangle of clip
-    triangle ``t``, computed in the precision of the scalar ``conv`` (``IW`` and ``B`` already
+    triangle ``t``, computed in the precision of the scalar ``fp`` (``IW`` and ``B`` already
     in it).
     An unclipped triangle maps through the identity (``slot == -1``) or swaps vertices 1 and 2
     (``slot == -2``): both exact, equal to multiplying by the permutation matrix."""
-    py = np.int64(height - 1 - r) * 256 + 128
-    px = np.int64(c) * 256 + 128
+    py = np.int64(height - 1 - r) * SUBPIXEL_ONE + SUBPIXEL_HALF
+    px = np.int64(c) * SUBPIXEL_ONE + SUBPIXEL_HALF
     x0, x1, x2 = np.int64(X[t, 0]), np.int64(X[t, 1]), np.int64(X[t, 2])
     y0, y1, y2 = np.int64(Y[t, 0]), np.int64(Y[t, 1]), np.int64(Y[t, 2])
-    a0 = like((x2 - x1) * (py - y1) - (y2 - y1) * (px - x1), conv) * IW[t, 0]
-    a1 = like((x0 - x2) * (py - y2) - (y0 - y2) * (px - x2), conv) * IW[t, 1]
-    a2 = like((x1 - x0) * (py - y0) - (y1 - y0) * (px - x0), conv) * IW[t, 2]
+    a0 = like((x2 - x1) * (py - y1) - (y2 - y1) * (px - x1), fp) * IW[t, 0]
+    a1 = like((x0 - x2) * (py - y2) - (y0 - y2) * (px - x2), fp) * IW[t, 1]
+    a2 = like((x1 - x0) * (py - y0) - (y1 - y0) * (px - x0), fp) * IW[t, 2]
     s = a0 + a1 + a2
     l0 = a0 / s
     l1 = a1 / s
@@ -150,10 +151,10 @@ def _barycentrics(t, r, c, height, X, Y, IW, slot, B, conv):
 
 
 @kernel(parallel=True)
-def interpolate_rows(index, X, Y, IW, slot, B, tri, faces, attributes, height, r_org, c_org, normalize, conv, out):
+def interpolate_rows(index, X, Y, IW, slot, B, tri, faces, attributes, height, r_org, c_org, normalize, fp, out):
     """Perspective-correct attributes of the visible triangle at every covered pixel.
 
-    In the precision of the scalar ``conv`` (``np.float32(0)`` or ``np.float64(0)``, matching
+    In the precision of the scalar ``fp`` (``np.float32(0)`` or ``np.float64(0)``, matching
     the dtype of ``attributes``, ``IW``, ``B`` and ``out``): ``a_i = e_i * (1 / w_i)``,
     ``l_i = a_i / (a0 + a1 + a2)``, original barycentrics
     ``b_j = l0 B[0, j] + l1 B[1, j] + l2 B[2, j]`` (``B`` the clip vertices' barycentrics,
@@ -172,7 +173,7 @@ def interpolate_rows(index, X, Y, IW, slot, B, tri, faces, attributes, height, r
             t = irow[c]
             if t < 0:
                 continue
-            b0, b1, b2 = _barycentrics(t, r + r_org, c + c_org, height, X, Y, IW, slot, B, conv)
+            b0, b1, b2 = _barycentrics(t, r + r_org, c + c_org, height, X, Y, IW, slot, B, fp)
             f = tri[t]
             v0, v1, v2 = faces[f, 0], faces[f, 1], faces[f, 2]
             for ch in range(n_ch):
@@ -191,7 +192,7 @@ def interpolate_rows(index, X, Y, IW, slot, B, tri, faces, attributes, height, r
 
 
 @kernel(parallel=True)
-def interpolate_pair(index, X, Y, IW, slot, B, tri, faces, attr_a, attr_b, height, r_org, c_org, conv, out_a, out_b):
+def interpolate_pair(index, X, Y, IW, slot, B, tri, faces, attr_a, attr_b, height, r_org, c_org, fp, out_a, out_b):
     """:func:`interpolate_rows` of two 3-vector attributes at once, the second renormalised (the
     G-buffer's positions and normals share each pixel's barycentrics). Same arithmetic."""
     h, w = index.shape
@@ -203,7 +204,7 @@ def interpolate_pair(index, X, Y, IW, slot, B, tri, faces, attr_a, attr_b, heigh
             t = irow[c]
             if t < 0:
                 continue
-            b0, b1, b2 = _barycentrics(t, r + r_org, c + c_org, height, X, Y, IW, slot, B, conv)
+            b0, b1, b2 = _barycentrics(t, r + r_org, c + c_org, height, X, Y, IW, slot, B, fp)
             f = tri[t]
             v0, v1, v2 = faces[f, 0], faces[f, 1], faces[f, 2]
             for ch in range(3):

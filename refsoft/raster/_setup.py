@@ -13,6 +13,7 @@ import numpy as np
 from numba import prange
 
 from .._numba import kernel
+from ..constants import SUBPIXEL_BITS, SUBPIXEL_HALF, SUBPIXEL_ONE
 
 # Number of clip planes: near, then x <= g w, x >= -g w, y <= g w, y >= -g w.
 N_PLANES = 5
@@ -140,7 +141,7 @@ def count_clip_triangles(clip, faces, codes, gx, gy):
 @kernel
 def _snap_xy(v):
     """Window coordinate ``(v + 1) * (size / 2)`` snapped to 1/256 px, round half to even."""
-    return np.int32(np.rint(v * 256.0))
+    return np.int32(np.rint(v * np.float64(SUBPIXEL_ONE)))
 
 
 @kernel
@@ -203,12 +204,12 @@ def _emit(t, f, x0, y0, z0, w0, x1, y1, z1, w1, x2, y2, z2, w2, width, height, r
     xmax = max(x0, max(x1, x2))
     ymin = min(y0, min(y1, y2))
     ymax = max(y0, max(y1, y2))
-    # pixel centres lie at 256 k + 128: first and last k whose centre lies in [min, max];
-    # ceil(n / 256) = (n + 255) >> 8 and floor(n / 256) = n >> 8 (arithmetic shifts)
-    k0 = max((xmin - 128 + 255) >> 8, 0)
-    k1 = min((xmax - 128) >> 8, width - 1)
-    j0 = max((ymin - 128 + 255) >> 8, 0)
-    j1 = min((ymax - 128) >> 8, height - 1)
+    # pixel centres lie at ONE k + HALF: first and last k whose centre lies in [min, max];
+    # ceil(n / ONE) = (n + ONE - 1) >> BITS and floor(n / ONE) = n >> BITS (arithmetic shifts)
+    k0 = max((xmin - SUBPIXEL_HALF + (SUBPIXEL_ONE - 1)) >> SUBPIXEL_BITS, 0)
+    k1 = min((xmax - SUBPIXEL_HALF) >> SUBPIXEL_BITS, width - 1)
+    j0 = max((ymin - SUBPIXEL_HALF + (SUBPIXEL_ONE - 1)) >> SUBPIXEL_BITS, 0)
+    j1 = min((ymax - SUBPIXEL_HALF) >> SUBPIXEL_BITS, height - 1)
     # clamp to the region rasterized (rows region[0]..region[1], cols region[2]..region[3])
     top = max(height - 1 - j1, region[0])
     bottom = min(height - 1 - j0, region[1])

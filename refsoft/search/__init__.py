@@ -115,15 +115,15 @@ def _packed(gbuffer: GBuffer, eye):
     :func:`scores_at`), cropped to the covered pixels. (:func:`search` reads the positions and
     normals where they are and computes U with each score: the same values.)
 
-    Returns ``(G, mask, conv, offset)``: ``G`` (h, w, 9) holds P, N and
+    Returns ``(G, mask, fp, offset)``: ``G`` (h, w, 9) holds P, N and
     ``U = normalize(O - P)`` per covered pixel (the eye direction does not depend on the vertex,
     so it is computed once per pixel, with the same arithmetic), relative to the G-buffer's
     origin; ``mask`` (h, w) the coverage; both cover the covered pixels' bounding box plus a
     one-pixel margin (clipped to the buffer, so a neighbour outside the crop is outside the
-    buffer); ``offset`` = (row, col) of the crop's first pixel; ``conv`` a prototype scalar of
+    buffer); ``offset`` = (row, col) of the crop's first pixel; ``fp`` a prototype scalar of
     the precision."""
     dt = _check_gbuffer(gbuffer)
-    conv = dt(0)  # prototype scalar: the kernels compute in its precision
+    fp = dt(0)  # prototype scalar: the kernels compute in its precision
     h, w = gbuffer.mask.shape
     rows = np.flatnonzero(gbuffer.mask.any(axis=1))
     cols = np.flatnonzero(gbuffer.mask.any(axis=0))
@@ -135,8 +135,8 @@ def _packed(gbuffer: GBuffer, eye):
     mask = np.ascontiguousarray(gbuffer.mask[r0:r1, c0:c1])
     eye_rel = (np.asarray(eye, dtype=np.float64) - gbuffer.origin).astype(dt)
     G = _kernels.pack(np.ascontiguousarray(gbuffer.position[r0:r1, c0:c1]),
-                      np.ascontiguousarray(gbuffer.normal[r0:r1, c0:c1]), mask, eye_rel, conv)
-    return G, mask, conv, (r0, c0)
+                      np.ascontiguousarray(gbuffer.normal[r0:r1, c0:c1]), mask, eye_rel, fp)
+    return G, mask, fp, (r0, c0)
 
 
 def _check_options(gbuffer, neighbourhood, inverse, cap, method="walk"):
@@ -223,7 +223,7 @@ def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", invers
     if start is None or not n:
         _check_starts(starts, gbuffer.mask.shape)
         return SearchResult(*_culled_results(n, dt), neighbourhood, inverse, int(cap))
-    conv = dt(0)  # prototype scalar: the kernels compute in its precision
+    fp = dt(0)  # prototype scalar: the kernels compute in its precision
     P = np.ascontiguousarray(gbuffer.position)
     N = np.ascontiguousarray(gbuffer.normal)
     mask = np.ascontiguousarray(gbuffer.mask)
@@ -234,7 +234,7 @@ def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", invers
     keys = np.empty(n, dtype=np.int64)
     rel = np.empty((n, 3), dtype=dt)
     first = np.empty((n, 2), dtype=np.int32)
-    if _kernels.prepare(verts, gbuffer.origin, starts, mask, gbuffer.view_proj, LOCALITY_CELL, conv, keys, rel, first):
+    if _kernels.prepare(verts, gbuffer.origin, starts, mask, gbuffer.view_proj, LOCALITY_CELL, fp, keys, rel, first):
         _check_starts(starts, (h, w))
     order, rank = _kernels.order_by_key(keys, -(-h // LOCALITY_CELL) * -(-w // LOCALITY_CELL))
     rows = np.empty_like(rel)
@@ -247,7 +247,7 @@ def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", invers
     # same values), which costs less than packing the whole G-buffer for a few steps per vertex
     eye_rel = (eye - gbuffer.origin).astype(dt)
     _lanes.SEARCH[NEIGHBOURHOODS[neighbourhood]](P, N, mask, eye_rel, rows, row_starts, start[0], start[1], int(cap),
-                                                 inverse == "search", conv, *sorted_out)
+                                                 inverse == "search", fp, *sorted_out)
     pixel, score, margin, iterations, flags = (np.empty_like(a) for a in sorted_out)
     _kernels.scatter(rank, *sorted_out, pixel, score, margin, iterations, flags)
     return SearchResult(pixel, score, margin, iterations, flags, neighbourhood, inverse, int(cap))
@@ -264,11 +264,11 @@ def _hierarchy_search(gbuffer, eye, vertices, neighbourhood, inverse, cap, cone_
     pixel, score, margin, iterations, flags = _culled_results(n, dt)
     start = start_pixel(gbuffer.mask)
     if start is not None and n:
-        G, mask, conv, (r0, c0) = _packed(gbuffer, eye)
-        sph, cone, offsets, sizes = hierarchy.build(G, mask, conv)
+        G, mask, fp, (r0, c0) = _packed(gbuffer, eye)
+        sph, cone, offsets, sizes = hierarchy.build(G, mask, fp)
         _hierarchy.search_all(G, mask, sph, cone, offsets, sizes, len(sizes), np.ascontiguousarray(verts),
                               gbuffer.origin, dt(cone_factor), dt(sphere_factor), int(break_level), int(cap),
-                              inverse == "search", start[0] - r0, start[1] - c0, conv, pixel, score, margin,
+                              inverse == "search", start[0] - r0, start[1] - c0, fp, pixel, score, margin,
                               iterations, flags)
         pixel += np.array([r0, c0], dtype=np.int32)
     return SearchResult(pixel, score, margin, iterations, flags, neighbourhood, inverse, int(cap), "hierarchy")
@@ -286,14 +286,14 @@ def trace_hierarchy(gbuffer: GBuffer, eye, vertex, cone_factor: float = 1.5, sph
     e = validate.point(eye, "eye")
     if start_pixel(gbuffer.mask) is None:
         raise RefsoftError("the reflector covers no pixel of its G-buffer: there is nothing to search")
-    G, mask, conv, (r0, c0) = _packed(gbuffer, e)
-    sph, cone, offsets, sizes = hierarchy.build(G, mask, conv)
+    G, mask, fp, (r0, c0) = _packed(gbuffer, e)
+    sph, cone, offsets, sizes = hierarchy.build(G, mask, fp)
     record = np.zeros((8 * cap + 64, _hierarchy.RECORD_WIDTH), dtype=np.float64)
     stack = np.empty((3 * len(sizes) + 4, 3), dtype=np.int64)
     v_rel = (v - gbuffer.origin).astype(dt)
     r, c, tests, found, n_rec = _hierarchy.traverse(G, sph, cone, offsets, sizes, len(sizes), v_rel, dt(1.0), dt(1.0),
                                                     dt(cone_factor), dt(sphere_factor), int(break_level), int(cap),
-                                                    conv, stack, record, 0)
+                                                    fp, stack, record, 0)
     names = {0: "rejected", 1: "pushed", 2: "popped", 3: "chosen"}
     steps = []
     for a, lvl, i, j, ev in record[:n_rec]:
@@ -373,8 +373,8 @@ def scores_at(gbuffer: GBuffer, eye, vertices, pixels, inverse=None) -> np.ndarr
     if not gbuffer.mask.any() or not len(verts):
         out[:] = -3
         return out
-    G, mask, conv, (r0, c0) = _packed(gbuffer, validate.point(eye, "eye"))
-    _kernels.scores_at(G, mask, np.ascontiguousarray(verts), gbuffer.origin, pix - [r0, c0], inv, conv, out)
+    G, mask, fp, (r0, c0) = _packed(gbuffer, validate.point(eye, "eye"))
+    _kernels.scores_at(G, mask, np.ascontiguousarray(verts), gbuffer.origin, pix - [r0, c0], inv, fp, out)
     return out
 
 

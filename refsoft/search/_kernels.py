@@ -5,7 +5,7 @@ One function, :func:`search_one`, walks the G-buffer for one vertex, recording e
 :mod:`refsoft.search._lanes`, several walks at a time, and are tested to give its results bit for
 bit.
 
-Arithmetic, in the precision of ``conv`` (float32 by default):
+Arithmetic, in the precision of ``fp`` (float32 by default):
 ``normalize(x) = x * (1 / sqrt((x.x * x.x + x.y * x.y) + x.z * x.z))`` and zero for ``x = 0``;
 ``s(p) = (N.x h.x + N.y h.y) + N.z h.z`` with ``h = normalize(normalize(O - P) + normalize(V - P))``.
 """
@@ -14,6 +14,7 @@ import numpy as np
 from numba import prange
 
 from .._numba import kernel, like
+from ..constants import LONE_MARGIN, NO_SCORE, NOT_A_CANDIDATE
 
 HIDDEN = 1
 BORDER = 2
@@ -36,12 +37,12 @@ RECORD_WIDTH = 4 + 9 + 9
 
 
 @kernel(inline=True)
-def _normalize(x, y, z, conv):
+def _normalize(x, y, z, fp):
     length = np.sqrt((x * x + y * y) + z * z)
-    if length > like(0.0, conv):
-        inv = like(1.0, conv) / length
+    if length > like(0.0, fp):
+        inv = like(1.0, fp) / length
         return x * inv, y * inv, z * inv
-    return like(0.0, conv), like(0.0, conv), like(0.0, conv)
+    return like(0.0, fp), like(0.0, fp), like(0.0, fp)
 
 
 # Packed G-buffer channels: position P (0-2), normal N (3-5), and the unit direction to the eye
@@ -50,7 +51,7 @@ PACKED = 9
 
 
 @kernel(parallel=True)
-def pack(P, N, mask, eye, conv):
+def pack(P, N, mask, eye, fp):
     """(H, W, 9) array of P, N and U = normalize(O - P) at covered pixels (zeros elsewhere)."""
     h, w = mask.shape
     G = np.zeros((h, w, PACKED), dtype=P.dtype)
@@ -60,7 +61,7 @@ def pack(P, N, mask, eye, conv):
                 for k in range(3):
                     G[r, c, k] = P[r, c, k]
                     G[r, c, 3 + k] = N[r, c, k]
-                ux, uy, uz = _normalize(eye[0] - P[r, c, 0], eye[1] - P[r, c, 1], eye[2] - P[r, c, 2], conv)
+                ux, uy, uz = _normalize(eye[0] - P[r, c, 0], eye[1] - P[r, c, 1], eye[2] - P[r, c, 2], fp)
                 G[r, c, 6] = ux
                 G[r, c, 7] = uy
                 G[r, c, 8] = uz
@@ -68,24 +69,24 @@ def pack(P, N, mask, eye, conv):
 
 
 @kernel(inline=True)
-def score_pnu(px, py, pz, nx, ny, nz, ux, uy, uz, vx, vy, vz, inverse, conv):
+def score_pnu(px, py, pz, nx, ny, nz, ux, uy, uz, vx, vy, vz, inverse, fp):
     """``dot(N, normalize(U + normalize(V - P)))`` (DESIGN 4.1) at a pixel with position P, normal
     N and eye direction ``U = normalize(O - P)``; with ``inverse`` the inverse score, ``V``
     replaced by its mirror image ``W = V - 2 dot(V - P, N) N`` (DESIGN 4.6, ``search``)."""
     if inverse:
-        k = like(2.0, conv) * (((vx - px) * nx + (vy - py) * ny) + (vz - pz) * nz)
+        k = like(2.0, fp) * (((vx - px) * nx + (vy - py) * ny) + (vz - pz) * nz)
         vx, vy, vz = vx - k * nx, vy - k * ny, vz - k * nz
-    bx, by, bz = _normalize(vx - px, vy - py, vz - pz, conv)
-    hx, hy, hz = _normalize(ux + bx, uy + by, uz + bz, conv)
+    bx, by, bz = _normalize(vx - px, vy - py, vz - pz, fp)
+    hx, hy, hz = _normalize(ux + bx, uy + by, uz + bz, fp)
     return (nx * hx + ny * hy) + nz * hz
 
 
 @kernel(inline=True)
-def _evaluate(G, r, c, v, inverse, conv):
+def _evaluate(G, r, c, v, inverse, fp):
     """The (inverse) score of vertex ``v`` at packed pixel (r, c) (U precomputed by ``pack``,
     with the arithmetic of ``_normalize``: the same values as computing it here)."""
     g = G[r, c]
-    return score_pnu(g[0], g[1], g[2], g[3], g[4], g[5], g[6], g[7], g[8], v[0], v[1], v[2], inverse, conv)
+    return score_pnu(g[0], g[1], g[2], g[3], g[4], g[5], g[6], g[7], g[8], v[0], v[1], v[2], inverse, fp)
 
 
 def _reuse_table():
@@ -105,7 +106,7 @@ REUSE = _reuse_table()
 
 
 @kernel
-def walk(G, mask, v, r, c, n_candidates, cap, inverse, conv, record, n_record, phase, scratch, seen):
+def walk(G, mask, v, r, c, n_candidates, cap, inverse, fp, record, n_record, phase, scratch, seen):
     """Hill-climb from (r, c) until the current pixel scores highest among its candidates.
 
     Returns ``(r, c, best, margin, iterations, stop, border, n_record)``: the end pixel, its
@@ -125,13 +126,13 @@ def walk(G, mask, v, r, c, n_candidates, cap, inverse, conv, record, n_record, p
         prev_known[k] = False
     it = 0
     moved = -1
-    scores[0] = _evaluate(G, r, c, v, inverse, conv)
+    scores[0] = _evaluate(G, r, c, v, inverse, fp)
     known[0] = True
     while True:
         it += 1
         best = scores[0]
         best_k = 0
-        second = like(-3.0, conv)
+        second = like(NO_SCORE, fp)
         border = False
         rec = n_record < record.shape[0]
         if rec:
@@ -159,7 +160,7 @@ def walk(G, mask, v, r, c, n_candidates, cap, inverse, conv, record, n_record, p
             if j >= 0 and j < n_candidates and prev_known[j]:
                 s = prev[j]
             else:
-                s = _evaluate(G, rr, cc, v, inverse, conv)
+                s = _evaluate(G, rr, cc, v, inverse, fp)
             scores[k] = s
             known[k] = True
             if rec:
@@ -174,11 +175,11 @@ def walk(G, mask, v, r, c, n_candidates, cap, inverse, conv, record, n_record, p
                 second = s
         if rec:
             for k in range(n_candidates, 9):
-                record[n_record, 4 + k] = OUTSIDE + 1  # not part of this neighbourhood
+                record[n_record, 4 + k] = NOT_A_CANDIDATE
             record[n_record, 3] = best_k if best_k > 0 else -1
             n_record += 1
         if best_k == 0:
-            margin = best - second if second > like(-3.0, conv) else like(2.0, conv)
+            margin = best - second if second > like(NO_SCORE, fp) else like(LONE_MARGIN, fp)
             return r, c, best, margin, it, CONVERGED, border, n_record
         if it >= cap:
             # capped: the search keeps the pixel whose neighbourhood it evaluated last
@@ -193,30 +194,46 @@ def walk(G, mask, v, r, c, n_candidates, cap, inverse, conv, record, n_record, p
         r, c = best_r, best_c
 
 
+@kernel(inline=True)
+def end_walk(flags, total, it, capped, border, phase, vx, vy, vz, P, N, r, c, n0, inverse_search, fp):
+    """The end of a walk of ``it`` steps for vertex ``(vx, vy, vz)`` at pixel (r, c), whose
+    position is ``P[r, c, 0:3]`` and normal ``N[r, c, n0:n0 + 3]`` (the packed G-buffer: ``P = N =
+    G``, ``n0 = 3``) (DESIGN 4.4, 4.6), shared by every search: ``flags`` gains CAPPED when the
+    walk was ``capped``; after the first walk (``phase`` 0) HIDDEN when the vertex is behind the
+    pixel's tangent plane, ``dot(V - P, N) < 0``; then BORDER when ``border`` (a neighbour
+    uncovered or outside), unless the inverse search follows. Returns ``(flags, total + it,
+    inverse)``: ``inverse`` True when the inverse search (``inverse_search``) is to start from
+    that pixel, its walk to end here again with phase 1, these flags and this total."""
+    if capped:
+        flags |= CAPPED
+    total += it
+    if phase == 0:
+        d = ((vx - P[r, c, 0]) * N[r, c, n0] + (vy - P[r, c, 1]) * N[r, c, n0 + 1]) \
+            + (vz - P[r, c, 2]) * N[r, c, n0 + 2]
+        if d < like(0.0, fp):
+            flags |= HIDDEN
+            if inverse_search:
+                return flags, total, True
+    if border:
+        flags |= BORDER
+    return flags, total, False
+
+
 @kernel
-def search_one(G, mask, v, start_r, start_c, n_candidates, cap, inverse_search, conv, record, scratch, seen):
+def search_one(G, mask, v, start_r, start_c, n_candidates, cap, inverse_search, fp, record, scratch, seen):
     """Standard search from (start_r, start_c) in the packed G-buffer ``G``, then the inverse
     search for a hidden vertex when ``inverse_search``. Returns
     ``(r, c, score, margin, iterations, flags, n_record)``."""
     r, c, best, margin, it, stop, border, n_rec = walk(G, mask, v, start_r, start_c, n_candidates,
-                                                      cap, False, conv, record, 0, 0, scratch, seen)
-    flags = 0
-    if stop == STOP_CAPPED:
-        flags |= CAPPED
-    # hidden: V behind the tangent plane at the end pixel (dot(V - P_R, N_R) < 0)
-    g = G[r, c]
-    d = ((v[0] - g[0]) * g[3] + (v[1] - g[1]) * g[4]) + (v[2] - g[2]) * g[5]
-    if d < like(0.0, conv):
-        flags |= HIDDEN
-        if inverse_search:
-            r, c, best, margin, it2, stop, border, n_rec = walk(G, mask, v, r, c, n_candidates, cap,
-                                                                True, conv, record, n_rec, 1, scratch, seen)
-            it += it2
-            if stop == STOP_CAPPED:
-                flags |= CAPPED
-    if border:
-        flags |= BORDER
-    return r, c, best, margin, it, flags, n_rec
+                                                      cap, False, fp, record, 0, 0, scratch, seen)
+    flags, total, inverse = end_walk(0, 0, it, stop == STOP_CAPPED, border, 0, v[0], v[1], v[2], G, G, r, c, 3,
+                                     inverse_search, fp)
+    if inverse:
+        r, c, best, margin, it, stop, border, n_rec = walk(G, mask, v, r, c, n_candidates, cap, True, fp, record,
+                                                          n_rec, 1, scratch, seen)
+        flags, total, _ = end_walk(flags, total, it, stop == STOP_CAPPED, border, 1, v[0], v[1], v[2], G, G, r, c,
+                                   3, inverse_search, fp)
+    return r, c, best, margin, total, flags, n_rec
 
 
 #: A start's row in the search's inputs: the default start; the default start after a restart
@@ -227,10 +244,10 @@ BAD_START = -3
 
 
 @kernel(parallel=True)
-def prepare(vertices, origin, starts, mask, view_proj, cell, conv, keys, rel, first):
+def prepare(vertices, origin, starts, mask, view_proj, cell, fp, keys, rel, first):
     """Per vertex ``i``: the locality key ``keys[i]`` (the ``cell`` x ``cell`` G-buffer cell where
     its search starts: its previous pixel, else its projection, clamped); ``rel[i]`` the vertex
-    relative to ``origin``, rounded to the working precision (``like(v - o, conv)``); ``first[i]``
+    relative to ``origin``, rounded to the working precision (``like(v - o, fp)``); ``first[i]``
     the pixel its search starts from, or (DEFAULT_START, RESTART or BAD_START, -1).
     ``starts[i]`` is the previous pixel or (-1, -1). Returns the number of bad starts."""
     n = vertices.shape[0]
@@ -239,7 +256,7 @@ def prepare(vertices, origin, starts, mask, view_proj, cell, conv, keys, rel, fi
     n_bad = 0
     for i in prange(n):
         for k in range(3):
-            rel[i, k] = like(vertices[i, k] - origin[k], conv)
+            rel[i, k] = like(vertices[i, k] - origin[k], fp)
         r = np.int64(starts[i, 0])
         c = np.int64(starts[i, 1])
         first[i, 1] = -1
@@ -321,43 +338,43 @@ def scatter(rank, pixel_s, score_s, margin_s, iterations_s, flags_s, pixel, scor
 
 
 @kernel(parallel=True)
-def score_field(G, mask, v, inverse, conv, out):
+def score_field(G, mask, v, inverse, fp, out):
     """The (inverse) score of vertex ``v`` at every covered pixel of the packed G-buffer;
     ``out`` (H, W) stays as given elsewhere. For pictures and the exhaustive checks."""
     h, w = mask.shape
     for r in prange(h):
         for c in range(w):
             if mask[r, c]:
-                out[r, c] = _evaluate(G, r, c, v, inverse, conv)
+                out[r, c] = _evaluate(G, r, c, v, inverse, fp)
 
 
 @kernel(parallel=True)
-def scores_at(G, mask, vertices, origin, pixels, inverse, conv, out):
+def scores_at(G, mask, vertices, origin, pixels, inverse, fp, out):
     """The (inverse, where ``inverse[i]``) score of vertex ``i`` at crop pixel ``pixels[i]``,
-    with the search's own arithmetic; ``-3`` where that pixel is outside the crop or uncovered.
+    with the search's own arithmetic; ``NO_SCORE`` (-3) where that pixel is outside the crop or uncovered.
     For ``refsoft check``'s tie rule."""
     h, w = mask.shape
     for i in prange(vertices.shape[0]):
         r = pixels[i, 0]
         c = pixels[i, 1]
         if r < 0 or r >= h or c < 0 or c >= w or not mask[r, c]:
-            out[i] = like(-3.0, conv)
+            out[i] = like(NO_SCORE, fp)
             continue
         v = np.empty(3, dtype=out.dtype)
         for k in range(3):
-            v[k] = like(vertices[i, k] - origin[k], conv)
-        out[i] = _evaluate(G, r, c, v, inverse[i], conv)
+            v[k] = like(vertices[i, k] - origin[k], fp)
+        out[i] = _evaluate(G, r, c, v, inverse[i], fp)
 
 
 @kernel(inline=True)
-def _virtual_one(vx, vy, vz, px, py, pz, nx, ny, nz, fl, mode, conv):
+def _virtual_one(vx, vy, vz, px, py, pz, nx, ny, nz, fl, mode, fp):
     """DESIGN 4.6 for one vertex, relative to the G-buffer's origin (``mode``: 0 plane,
     1 search, 2 discard), the operations in the order ``virtual_vertices`` documents."""
     if fl & CULLED:
         return vx, vy, vz
     dx, dy, dz = vx - px, vy - py, vz - pz
     dn = (dx * nx + dy * ny) + dz * nz
-    k = like(2.0, conv) * dn
+    k = like(2.0, fp) * dn
     if fl & HIDDEN:
         if mode == 0:  # equation (1): P + N (2 d.N) - d
             return (px + nx * k) - dx, (py + ny * k) - dy, (pz + nz * k) - dz
@@ -367,31 +384,31 @@ def _virtual_one(vx, vy, vz, px, py, pz, nx, ny, nz, fl, mode, conv):
 
 
 @kernel(parallel=True)
-def virtual_from_texels(P, N, pixel, vertices, origin, flags, mode, conv, out):
+def virtual_from_texels(P, N, pixel, vertices, origin, flags, mode, fp, out):
     """Virtual vertices from each vertex's reflection texel (``vertices`` world float64, made
     relative to ``origin`` and rounded to the working precision here)."""
     for i in prange(vertices.shape[0]):
-        vx = like(vertices[i, 0] - origin[0], conv)
-        vy = like(vertices[i, 1] - origin[1], conv)
-        vz = like(vertices[i, 2] - origin[2], conv)
+        vx = like(vertices[i, 0] - origin[0], fp)
+        vy = like(vertices[i, 1] - origin[1], fp)
+        vz = like(vertices[i, 2] - origin[2], fp)
         r = pixel[i, 0] if pixel[i, 0] >= 0 else 0
         c = pixel[i, 1] if pixel[i, 1] >= 0 else 0
         x, y, z = _virtual_one(vx, vy, vz, P[r, c, 0], P[r, c, 1], P[r, c, 2], N[r, c, 0], N[r, c, 1], N[r, c, 2],
-                               flags[i], mode, conv)
+                               flags[i], mode, fp)
         out[i, 0] = x
         out[i, 1] = y
         out[i, 2] = z
 
 
 @kernel(parallel=True)
-def virtual_from_points(p, n, vertices, origin, flags, mode, conv, out):
+def virtual_from_points(p, n, vertices, origin, flags, mode, fp, out):
     """Virtual vertices from per-vertex surface points ``p`` and normals ``n`` (relative)."""
     for i in prange(vertices.shape[0]):
-        vx = like(vertices[i, 0] - origin[0], conv)
-        vy = like(vertices[i, 1] - origin[1], conv)
-        vz = like(vertices[i, 2] - origin[2], conv)
+        vx = like(vertices[i, 0] - origin[0], fp)
+        vy = like(vertices[i, 1] - origin[1], fp)
+        vz = like(vertices[i, 2] - origin[2], fp)
         x, y, z = _virtual_one(vx, vy, vz, p[i, 0], p[i, 1], p[i, 2], n[i, 0], n[i, 1], n[i, 2], flags[i], mode,
-                               conv)
+                               fp)
         out[i, 0] = x
         out[i, 1] = y
         out[i, 2] = z

@@ -20,7 +20,7 @@ vertices : (N, 3), the vertices relative to the G-buffer's origin, in the workin
 search order (vertices starting near each other one after another: ``_kernels.gather``)
 starts : (N, 2) int32, start pixel, or (DEFAULT_START or RESTART, -1) for the default start
 default_r, default_c : the default start
-cap : int; inverse_search : bool; conv : a scalar of the working precision
+cap : int; inverse_search : bool; fp : a scalar of the working precision
 pixel (N, 2) int32, best_out, margin_out, iterations (N,) int32, flags_out (N,)
 uint8 : the outputs, row ``i`` for row ``i`` of the inputs
 
@@ -31,7 +31,8 @@ import numpy as np
 from numba import prange
 
 from .._numba import kernel, like
-from ._kernels import BORDER, CAPPED, HIDDEN, OFFSETS, RESTART, RESTARTED, REUSE, _normalize, score_pnu
+from ..constants import LONE_MARGIN, NO_SCORE
+from ._kernels import OFFSETS, RESTART, RESTARTED, REUSE, _normalize, end_walk, score_pnu
 
 #: Walks advanced together by one thread.
 LANES = 16
@@ -42,23 +43,23 @@ SEARCH_GROUP = 256
 
 
 @kernel(inline=True)
-def _normalize_select(x, y, z, conv):
+def _normalize_select(x, y, z, fp):
     """``_kernels._normalize`` with selects in place of its branch (same values, vectorizable):
     ``x * (1 / sqrt(...))``, zero where the length is not positive."""
-    zero = like(0.0, conv)
+    zero = like(0.0, fp)
     length = np.sqrt((x * x + y * y) + z * z)
-    q = like(1.0, conv) / length
+    q = like(1.0, fp) / length
     pos = length > zero
     return (x * q if pos else zero), (y * q if pos else zero), (z * q if pos else zero)
 
 
 @kernel
-def score_batch(n, P0, P1, P2, N0, N1, N2, ex, ey, ez, VX, VY, VZ, INV, OUT, conv):
+def score_batch(n, P0, P1, P2, N0, N1, N2, ex, ey, ez, VX, VY, VZ, INV, OUT, fp):
     """``OUT[j]``: the score (the inverse score where ``INV[j]``) of vertex ``(VX, VY, VZ)[j]`` at
     the pixel whose P and N are ``(P0, P1, P2)[j]`` and ``(N0, N1, N2)[j]``, seen from the eye
     ``(ex, ey, ez)``: the arithmetic of :func:`refsoft.search._kernels.score_pnu` with
     ``U = normalize(O - P)``, written without branches (selects) so that the loop vectorizes."""
-    two = like(2.0, conv)
+    two = like(2.0, fp)
     for j in range(n):
         px = P0[j]
         py = P1[j]
@@ -74,22 +75,22 @@ def score_batch(n, P0, P1, P2, N0, N1, N2, ex, ey, ez, VX, VY, VZ, INV, OUT, con
         wx = vx - t * nx if inv else vx
         wy = vy - t * ny if inv else vy
         wz = vz - t * nz if inv else vz
-        ux, uy, uz = _normalize_select(ex - px, ey - py, ez - pz, conv)
-        bx, by, bz = _normalize_select(wx - px, wy - py, wz - pz, conv)
-        hx, hy, hz = _normalize_select(ux + bx, uy + by, uz + bz, conv)
+        ux, uy, uz = _normalize_select(ex - px, ey - py, ez - pz, fp)
+        bx, by, bz = _normalize_select(wx - px, wy - py, wz - pz, fp)
+        hx, hy, hz = _normalize_select(ux + bx, uy + by, uz + bz, fp)
         OUT[j] = (nx * hx + ny * hy) + nz * hz
 
 
 @kernel(inline=True)
-def _score_at(P, N, eye, r, c, v, inverse, conv):
+def _score_at(P, N, eye, r, c, v, inverse, fp):
     """The (inverse) score of vertex ``v`` at pixel (r, c), one at a time."""
-    ux, uy, uz = _normalize(eye[0] - P[r, c, 0], eye[1] - P[r, c, 1], eye[2] - P[r, c, 2], conv)
+    ux, uy, uz = _normalize(eye[0] - P[r, c, 0], eye[1] - P[r, c, 1], eye[2] - P[r, c, 2], fp)
     return score_pnu(P[r, c, 0], P[r, c, 1], P[r, c, 2], N[r, c, 0], N[r, c, 1], N[r, c, 2], ux, uy, uz, v[0], v[1],
-                     v[2], inverse, conv)
+                     v[2], inverse, fp)
 
 
 @kernel(inline=True)
-def _begin(P, N, eye, vertices, starts, default_r, default_c, conv, i, s, V, VI, R, C, S0, IT, IT0, PH, FL, MOVED):
+def _begin(P, N, eye, vertices, starts, default_r, default_c, fp, i, s, V, VI, R, C, S0, IT, IT0, PH, FL, MOVED):
     """Walk slot ``s`` takes the vertex of row ``i``: its start (previous pixel, else the
     default start) and the start's score; counters cleared, flags RESTARTED or none."""
     VI[s] = i
@@ -103,11 +104,198 @@ def _begin(P, N, eye, vertices, starts, default_r, default_c, conv, i, s, V, VI,
         c0 = default_c
     R[s] = r0
     C[s] = c0
-    S0[s] = _score_at(P, N, eye, r0, c0, V[s], False, conv)
+    S0[s] = _score_at(P, N, eye, r0, c0, V[s], False, fp)
     IT[s] = 0
     IT0[s] = 0
     PH[s] = 0
     MOVED[s] = 0
+
+
+@kernel(inline=True)
+def _gather(P, N, mask, NB, V, VI, R, C, PH, MOVED, P0, P1, P2, N0, N1, N2, VX, VY, VZ, INV, IDX):
+    """Gathers the candidates of this round that need a score, those of every active walk that
+    are covered and not in its previous neighbourhood (whose scores are known): entry ``m`` of
+    ``P0, P1, P2``, ``N0, N1, N2`` and ``VX, VY, VZ`` (rows of one (9, NB * LANES) block) holds P,
+    N of the candidate's pixel and its walk's vertex, ``INV[m]`` whether that walk is in its
+    inverse phase. ``IDX[s * NB + k - 1]`` is where walk ``s``'s candidate ``k`` is: entry ``m``;
+    -1 uncovered or outside; ``-2 - j`` known, the previous neighbourhood's candidate ``j``.
+    Returns the number of entries filled."""
+    h, w = mask.shape
+    m = 0
+    for s in range(LANES):
+        if VI[s] < 0:
+            continue
+        r = R[s]
+        c = C[s]
+        moved = MOVED[s]
+        for k in range(1, NB + 1):
+            q = s * NB + k - 1
+            rr = r + OFFSETS[k, 0]
+            cc = c + OFFSETS[k, 1]
+            if not (rr >= 0 and rr < h and cc >= 0 and cc < w and mask[rr, cc]):
+                IDX[q] = -1
+                continue
+            if moved > 0:
+                j = REUSE[moved, k]
+                if j >= 0 and j < NB + 1:
+                    IDX[q] = -2 - j
+                    continue
+            IDX[q] = m
+            P0[m] = P[rr, cc, 0]
+            P1[m] = P[rr, cc, 1]
+            P2[m] = P[rr, cc, 2]
+            N0[m] = N[rr, cc, 0]
+            N1[m] = N[rr, cc, 1]
+            N2[m] = N[rr, cc, 2]
+            VX[m] = V[s, 0]
+            VY[m] = V[s, 1]
+            VZ[m] = V[s, 2]
+            INV[m] = PH[s] == 1
+            m += 1
+    return m
+
+
+@kernel(inline=True)
+def _compare(s, NB, S0, PREV, IDX, OUT, CUR, fp):
+    """Walk ``s``'s neighbourhood in the visiting order, as ``_kernels.walk`` compares it: its
+    scores into ``CUR`` (the current pixel's first; uncovered candidates left as they were).
+    Returns ``(best_k, best, second, border)``: the best candidate (0: the current pixel), its
+    score, the second-best score (``NO_SCORE`` when there is none) and whether a candidate is uncovered
+    or outside."""
+    s0 = S0[s]
+    best = s0
+    best_k = 0
+    second = like(NO_SCORE, fp)
+    border = False
+    CUR[0] = s0
+    for k in range(1, NB + 1):
+        j = IDX[s * NB + k - 1]
+        if j == -1:
+            border = True
+            continue
+        sc = PREV[s, -2 - j] if j < -1 else OUT[j]
+        CUR[k] = sc
+        if sc > best:  # strictly larger: ties never move, earlier candidates win
+            second = best
+            best = sc
+            best_k = k
+        elif sc > second:
+            second = sc
+    return best_k, best, second, border
+
+
+@kernel(inline=True)
+def _move(s, NB, best_k, best, it, CUR, PREV, MOVED, S0, R, C, IT):
+    """Walk ``s`` moves to its candidate ``best_k`` (score ``best``) after ``it`` steps; the
+    neighbourhood's scores are kept for the next round."""
+    for k in range(NB + 1):
+        PREV[s, k] = CUR[k]
+    MOVED[s] = best_k
+    S0[s] = best
+    R[s] = R[s] + OFFSETS[best_k, 0]
+    C[s] = C[s] + OFFSETS[best_k, 1]
+    IT[s] = it
+
+
+@kernel(inline=True)
+def _end(P, N, eye, inverse_search, fp, s, it, best_k, best, second, border, V, VI, R, C, S0, IT, IT0, PH, FL,
+         MOVED, pixel, best_out, margin_out, iterations, flags_out):
+    """Walk ``s`` stops after ``it`` steps: converged (``best_k`` 0) or capped. A hidden vertex's
+    walk goes on as the inverse search from there (with ``inverse_search``: returns False);
+    otherwise the vertex's results are written (returns True: the slot is free)."""
+    r = R[s]
+    c = C[s]
+    s0 = S0[s]
+    if best_k == 0:
+        res_s = best
+        res_m = best - second if second > like(NO_SCORE, fp) else like(LONE_MARGIN, fp)
+    else:  # capped: the walk keeps the pixel whose neighbourhood it evaluated last
+        res_s = s0
+        res_m = best - s0
+    fl, total, inverse = end_walk(FL[s], IT0[s], it, best_k != 0, border, PH[s], V[s, 0], V[s, 1], V[s, 2], P, N,
+                                  r, c, 0, inverse_search, fp)
+    if inverse:
+        PH[s] = 1
+        FL[s] = fl
+        IT0[s] = total
+        IT[s] = 0
+        MOVED[s] = 0
+        S0[s] = _score_at(P, N, eye, r, c, V[s], True, fp)
+        return False
+    i = VI[s]
+    pixel[i, 0] = r
+    pixel[i, 1] = c
+    best_out[i] = res_s
+    margin_out[i] = res_m
+    iterations[i] = total
+    flags_out[i] = fl
+    return True
+
+
+@kernel(inline=True)
+def _search_group(P, N, mask, eye, vertices, starts, default_r, default_c, cap, inverse_search, fp, pixel, best_out,
+                  margin_out, iterations, flags_out, NB, lo, hi):
+    """The searches of rows ``lo`` to ``hi - 1``, ``LANES`` walks at a time, each of
+    ``NB`` neighbours around its current pixel."""
+    dt = best_out.dtype
+    # per candidate of a round: P, N of its pixel and its vertex (one row per channel), whether
+    # its walk is in the inverse phase, its score; where each walk's candidates are (_gather)
+    cand = np.zeros((9, NB * LANES), dt)
+    P0 = cand[0]
+    P1 = cand[1]
+    P2 = cand[2]
+    N0 = cand[3]
+    N1 = cand[4]
+    N2 = cand[5]
+    VX = cand[6]
+    VY = cand[7]
+    VZ = cand[8]
+    INV = np.zeros(NB * LANES, np.bool_)
+    OUT = np.zeros(NB * LANES, dt)
+    IDX = np.zeros(NB * LANES, np.int64)
+    CUR = np.zeros(NB + 1, dt)
+    # per walk slot: vertex (relative), vertex index (-1 free), pixel, score there, the
+    # previous neighbourhood's scores and the candidate moved to (0: none), iterations
+    # (this phase, first phase), phase (1: inverse search), flags
+    V = np.zeros((LANES, 3), dt)
+    VI = np.full(LANES, -1, np.int64)
+    R = np.zeros(LANES, np.int64)
+    C = np.zeros(LANES, np.int64)
+    S0 = np.zeros(LANES, dt)
+    PREV = np.zeros((LANES, NB + 1), dt)
+    MOVED = np.zeros(LANES, np.int64)
+    IT = np.zeros(LANES, np.int64)
+    IT0 = np.zeros(LANES, np.int64)
+    PH = np.zeros(LANES, np.int64)
+    FL = np.zeros(LANES, np.int64)
+    nxt = lo
+    active = 0
+    for s in range(LANES):
+        if nxt < hi:
+            _begin(P, N, eye, vertices, starts, default_r, default_c, fp, nxt, s, V, VI, R, C, S0, IT, IT0, PH, FL,
+                   MOVED)
+            nxt += 1
+            active += 1
+    while active > 0:
+        m = _gather(P, N, mask, NB, V, VI, R, C, PH, MOVED, P0, P1, P2, N0, N1, N2, VX, VY, VZ, INV, IDX)
+        score_batch((m + VECTOR - 1) // VECTOR * VECTOR, P0, P1, P2, N0, N1, N2, eye[0], eye[1], eye[2], VX, VY, VZ,
+                    INV, OUT, fp)
+        for s in range(LANES):
+            if VI[s] < 0:
+                continue
+            best_k, best, second, border = _compare(s, NB, S0, PREV, IDX, OUT, CUR, fp)
+            it = IT[s] + 1
+            if best_k != 0 and it < cap:
+                _move(s, NB, best_k, best, it, CUR, PREV, MOVED, S0, R, C, IT)
+            elif _end(P, N, eye, inverse_search, fp, s, it, best_k, best, second, border, V, VI, R, C, S0, IT, IT0,
+                      PH, FL, MOVED, pixel, best_out, margin_out, iterations, flags_out):
+                if nxt < hi:  # the slot takes the group's next vertex
+                    _begin(P, N, eye, vertices, starts, default_r, default_c, fp, nxt, s, V, VI, R, C, S0, IT, IT0,
+                           PH, FL, MOVED)
+                    nxt += 1
+                else:
+                    VI[s] = -1
+                    active -= 1
 
 
 def _make_search(n_neighbours):
@@ -115,170 +303,15 @@ def _make_search(n_neighbours):
     around the current pixel; the count is a constant of the compiled code (one source, two
     kernels, each as fast as one written for its neighbourhood alone)."""
     NB = n_neighbours
-    NC = NB + 1
-    BATCH = NB * LANES
 
     @kernel(parallel=True)
-    def search_lanes(P, N, mask, eye, vertices, starts, default_r, default_c, cap, inverse_search, conv, pixel, best_out,
+    def search_lanes(P, N, mask, eye, vertices, starts, default_r, default_c, cap, inverse_search, fp, pixel, best_out,
                      margin_out, iterations, flags_out):
         n = vertices.shape[0]
-        h, w = mask.shape
-        n_groups = (n + SEARCH_GROUP - 1) // SEARCH_GROUP
-        for g in prange(n_groups):
-            dt = best_out.dtype
-            # per candidate of the round: P, N of its pixel and its vertex, one row per channel
-            cand = np.zeros((9, BATCH), dt)
-            P0 = cand[0]
-            P1 = cand[1]
-            P2 = cand[2]
-            N0 = cand[3]
-            N1 = cand[4]
-            N2 = cand[5]
-            VX = cand[6]
-            VY = cand[7]
-            VZ = cand[8]
-            INV = np.zeros(BATCH, np.bool_)
-            OUT = np.zeros(BATCH, dt)
-            # the candidate's slot in the batch; -1 uncovered or outside; -2 - j: known, the
-            # previous neighbourhood's candidate j
-            IDX = np.zeros(BATCH, np.int64)
-            CUR = np.zeros(NC, dt)
-            # per walk slot: vertex (relative), vertex index (-1 free), pixel, score there, the
-            # previous neighbourhood's scores and the candidate moved to (0: none), iterations
-            # (this phase, first phase), phase (1: inverse search), flags
-            V = np.zeros((LANES, 3), dt)
-            VI = np.full(LANES, -1, np.int64)
-            R = np.zeros(LANES, np.int64)
-            C = np.zeros(LANES, np.int64)
-            S0 = np.zeros(LANES, dt)
-            PREV = np.zeros((LANES, NC), dt)
-            MOVED = np.zeros(LANES, np.int64)
-            IT = np.zeros(LANES, np.int64)
-            IT0 = np.zeros(LANES, np.int64)
-            PH = np.zeros(LANES, np.int64)
-            FL = np.zeros(LANES, np.int64)
-            lo = g * SEARCH_GROUP
-            hi = min(n, (g + 1) * SEARCH_GROUP)
-            nxt = lo
-            active = 0
-            for s in range(LANES):
-                if nxt < hi:
-                    _begin(P, N, eye, vertices, starts, default_r, default_c, conv, nxt, s, V, VI, R, C, S0, IT, IT0,
-                           PH, FL, MOVED)
-                    nxt += 1
-                    active += 1
-            while active > 0:
-                # gather the candidates to score: covered, and not in the previous neighbourhood
-                m = 0
-                for s in range(LANES):
-                    if VI[s] < 0:
-                        continue
-                    r = R[s]
-                    c = C[s]
-                    moved = MOVED[s]
-                    for k in range(1, NC):
-                        q = s * NB + k - 1
-                        rr = r + OFFSETS[k, 0]
-                        cc = c + OFFSETS[k, 1]
-                        if not (rr >= 0 and rr < h and cc >= 0 and cc < w and mask[rr, cc]):
-                            IDX[q] = -1
-                            continue
-                        if moved > 0:
-                            j = REUSE[moved, k]
-                            if j >= 0 and j < NC:
-                                IDX[q] = -2 - j
-                                continue
-                        IDX[q] = m
-                        P0[m] = P[rr, cc, 0]
-                        P1[m] = P[rr, cc, 1]
-                        P2[m] = P[rr, cc, 2]
-                        N0[m] = N[rr, cc, 0]
-                        N1[m] = N[rr, cc, 1]
-                        N2[m] = N[rr, cc, 2]
-                        VX[m] = V[s, 0]
-                        VY[m] = V[s, 1]
-                        VZ[m] = V[s, 2]
-                        INV[m] = PH[s] == 1
-                        m += 1
-                score_batch((m + VECTOR - 1) // VECTOR * VECTOR, P0, P1, P2, N0, N1, N2, eye[0], eye[1], eye[2], VX, VY, VZ,
-                            INV, OUT, conv)
-                for s in range(LANES):
-                    i = VI[s]
-                    if i < 0:
-                        continue
-                    r = R[s]
-                    c = C[s]
-                    s0 = S0[s]
-                    it = IT[s] + 1
-                    best = s0
-                    best_k = 0
-                    second = like(-3.0, conv)
-                    border = False
-                    CUR[0] = s0
-                    for k in range(1, NC):
-                        j = IDX[s * NB + k - 1]
-                        if j == -1:
-                            border = True
-                            continue
-                        sc = PREV[s, -2 - j] if j < -1 else OUT[j]
-                        CUR[k] = sc
-                        if sc > best:  # strictly larger: ties never move, earlier candidates win
-                            second = best
-                            best = sc
-                            best_k = k
-                        elif sc > second:
-                            second = sc
-                    capped = False
-                    if best_k == 0:
-                        res_s = best
-                        res_m = best - second if second > like(-3.0, conv) else like(2.0, conv)
-                    elif it >= cap:
-                        capped = True
-                        res_s = s0
-                        res_m = best - s0
-                    else:
-                        for k in range(NC):
-                            PREV[s, k] = CUR[k]
-                        MOVED[s] = best_k
-                        S0[s] = best
-                        R[s] = r + OFFSETS[best_k, 0]
-                        C[s] = c + OFFSETS[best_k, 1]
-                        IT[s] = it
-                        continue
-                    fl = FL[s]
-                    if capped:
-                        fl |= CAPPED
-                    if PH[s] == 0:
-                        d = ((V[s, 0] - P[r, c, 0]) * N[r, c, 0] + (V[s, 1] - P[r, c, 1]) * N[r, c, 1]) \
-                            + (V[s, 2] - P[r, c, 2]) * N[r, c, 2]
-                        if d < like(0.0, conv):
-                            fl |= HIDDEN
-                            if inverse_search:
-                                PH[s] = 1
-                                FL[s] = fl
-                                IT0[s] = it
-                                IT[s] = 0
-                                MOVED[s] = 0
-                                S0[s] = _score_at(P, N, eye, r, c, V[s], True, conv)
-                                continue
-                        total = it
-                    else:
-                        total = IT0[s] + it
-                    if border:
-                        fl |= BORDER
-                    pixel[i, 0] = r
-                    pixel[i, 1] = c
-                    best_out[i] = res_s
-                    margin_out[i] = res_m
-                    iterations[i] = total
-                    flags_out[i] = fl
-                    if nxt < hi:
-                        _begin(P, N, eye, vertices, starts, default_r, default_c, conv, nxt, s, V, VI, R, C, S0, IT,
-                               IT0, PH, FL, MOVED)
-                        nxt += 1
-                    else:
-                        VI[s] = -1
-                        active -= 1
+        for g in prange((n + SEARCH_GROUP - 1) // SEARCH_GROUP):
+            _search_group(P, N, mask, eye, vertices, starts, default_r, default_c, cap, inverse_search, fp, pixel,
+                          best_out, margin_out, iterations, flags_out, NB, g * SEARCH_GROUP,
+                          min(n, (g + 1) * SEARCH_GROUP))
 
     return search_lanes
 

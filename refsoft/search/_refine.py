@@ -10,16 +10,16 @@ MAX_OFFSET = 1.0
 
 
 @kernel(inline=True)
-def _residual(P, N, r, c, vx, vy, vz, ex, ey, ez, conv):
+def _residual(P, N, r, c, vx, vy, vz, ex, ey, ez, fp):
     """``N - h`` at texel (r, c): h the bisector of the directions to the eye and to V."""
-    ux, uy, uz = _normalize(ex - P[r, c, 0], ey - P[r, c, 1], ez - P[r, c, 2], conv)
-    bx, by, bz = _normalize(vx - P[r, c, 0], vy - P[r, c, 1], vz - P[r, c, 2], conv)
-    hx, hy, hz = _normalize(ux + bx, uy + by, uz + bz, conv)
+    ux, uy, uz = _normalize(ex - P[r, c, 0], ey - P[r, c, 1], ez - P[r, c, 2], fp)
+    bx, by, bz = _normalize(vx - P[r, c, 0], vy - P[r, c, 1], vz - P[r, c, 2], fp)
+    hx, hy, hz = _normalize(ux + bx, uy + by, uz + bz, fp)
     return N[r, c, 0] - hx, N[r, c, 1] - hy, N[r, c, 2] - hz
 
 
 @kernel(inline=True)
-def _stencil(mask, r, c, dr, dc, conv):
+def _stencil(mask, r, c, dr, dc, fp):
     """The two texels whose difference times ``scale`` is the derivative along (dr, dc) at
     (r, c): central when both neighbours are covered, one-sided next to an uncovered one, none
     (scale 0) when neither is. Returns (r_plus, c_plus, r_minus, c_minus, scale)."""
@@ -28,20 +28,20 @@ def _stencil(mask, r, c, dr, dc, conv):
     minus = 0 <= rm < h and 0 <= cm < w and mask[rm, cm]
     plus = 0 <= rp < h and 0 <= cp < w and mask[rp, cp]
     if minus and plus:
-        return rp, cp, rm, cm, like(0.5, conv)
+        return rp, cp, rm, cm, like(0.5, fp)
     if plus:
-        return rp, cp, r, c, like(1.0, conv)
+        return rp, cp, r, c, like(1.0, fp)
     if minus:
-        return r, c, rm, cm, like(1.0, conv)
-    return r, c, r, c, like(0.0, conv)
+        return r, c, rm, cm, like(1.0, fp)
+    return r, c, r, c, like(0.0, fp)
 
 
 @kernel(inline=True)
-def surface_values(P, N, mask, r, c, t0, t1, conv):
+def surface_values(P, N, mask, r, c, t0, t1, fp):
     """P and unit N at (r + t0, c + t1) by the first-order model at texel (r, c):
     ``(px, py, pz, nx, ny, nz)``."""
-    ar, ac, br, bc, sa = _stencil(mask, r, c, 1, 0, conv)
-    cr, cc, dr, dc, sb = _stencil(mask, r, c, 0, 1, conv)
+    ar, ac, br, bc, sa = _stencil(mask, r, c, 1, 0, fp)
+    cr, cc, dr, dc, sb = _stencil(mask, r, c, 0, 1, fp)
     ka = t0 * sa
     kb = t1 * sb
     px = (P[r, c, 0] + ka * (P[ar, ac, 0] - P[br, bc, 0])) + kb * (P[cr, cc, 0] - P[dr, dc, 0])
@@ -50,14 +50,14 @@ def surface_values(P, N, mask, r, c, t0, t1, conv):
     nx, ny, nz = _normalize((N[r, c, 0] + ka * (N[ar, ac, 0] - N[br, bc, 0])) + kb * (N[cr, cc, 0] - N[dr, dc, 0]),
                             (N[r, c, 1] + ka * (N[ar, ac, 1] - N[br, bc, 1])) + kb * (N[cr, cc, 1] - N[dr, dc, 1]),
                             (N[r, c, 2] + ka * (N[ar, ac, 2] - N[br, bc, 2])) + kb * (N[cr, cc, 2] - N[dr, dc, 2]),
-                            conv)
+                            fp)
     return px, py, pz, nx, ny, nz
 
 
 @kernel(inline=True)
-def _surface(P, N, mask, r, c, t0, t1, conv, out_p, out_n, i):
+def _surface(P, N, mask, r, c, t0, t1, fp, out_p, out_n, i):
     """:func:`surface_values` written to row ``i`` of ``out_p`` and ``out_n``."""
-    px, py, pz, nx, ny, nz = surface_values(P, N, mask, r, c, t0, t1, conv)
+    px, py, pz, nx, ny, nz = surface_values(P, N, mask, r, c, t0, t1, fp)
     out_p[i, 0] = px
     out_p[i, 1] = py
     out_p[i, 2] = pz
@@ -67,14 +67,14 @@ def _surface(P, N, mask, r, c, t0, t1, conv, out_p, out_n, i):
 
 
 @kernel(parallel=True)
-def refine(P, N, mask, vertices, eye, pixel, flags, conv, out_p, out_n, out_offset):
+def refine(P, N, mask, vertices, eye, pixel, flags, fp, out_p, out_n, out_offset):
     """For each vertex: one Gauss-Newton step on ``N(x) - h(x) = 0`` from its reflection pixel,
     with the residual's derivatives by central differences (one-sided next to uncovered texels,
     none along an axis with no covered neighbour), then P and N at the new point by the same
-    first-order model (:func:`_surface`). Arithmetic in the precision of ``conv``. Vertices
+    first-order model (:func:`_surface`). Arithmetic in the precision of ``fp``. Vertices
     CULLED or HIDDEN keep their texel's P and N (offset 0; zeros when CULLED)."""
-    zero = like(0.0, conv)
-    lim = like(MAX_OFFSET, conv)
+    zero = like(0.0, fp)
+    lim = like(MAX_OFFSET, fp)
     ex, ey, ez = eye[0], eye[1], eye[2]
     for i in prange(vertices.shape[0]):
         r = pixel[i, 0]
@@ -92,14 +92,14 @@ def refine(P, N, mask, vertices, eye, pixel, flags, conv, out_p, out_n, out_offs
                 out_n[i, k] = N[r, c, k]
             continue
         vx, vy, vz = vertices[i, 0], vertices[i, 1], vertices[i, 2]
-        d0 = _residual(P, N, r, c, vx, vy, vz, ex, ey, ez, conv)
+        d0 = _residual(P, N, r, c, vx, vy, vz, ex, ey, ez, fp)
         # the residual's derivatives along rows (j0) and columns (j1)
-        ar, ac, br, bc, sa = _stencil(mask, r, c, 1, 0, conv)
-        pa = _residual(P, N, ar, ac, vx, vy, vz, ex, ey, ez, conv)
-        pb = _residual(P, N, br, bc, vx, vy, vz, ex, ey, ez, conv)
-        cr, cc, dr, dc, sb = _stencil(mask, r, c, 0, 1, conv)
-        pc = _residual(P, N, cr, cc, vx, vy, vz, ex, ey, ez, conv)
-        pd = _residual(P, N, dr, dc, vx, vy, vz, ex, ey, ez, conv)
+        ar, ac, br, bc, sa = _stencil(mask, r, c, 1, 0, fp)
+        pa = _residual(P, N, ar, ac, vx, vy, vz, ex, ey, ez, fp)
+        pb = _residual(P, N, br, bc, vx, vy, vz, ex, ey, ez, fp)
+        cr, cc, dr, dc, sb = _stencil(mask, r, c, 0, 1, fp)
+        pc = _residual(P, N, cr, cc, vx, vy, vz, ex, ey, ez, fp)
+        pd = _residual(P, N, dr, dc, vx, vy, vz, ex, ey, ez, fp)
         j00, j01, j02 = (pa[0] - pb[0]) * sa, (pa[1] - pb[1]) * sa, (pa[2] - pb[2]) * sa
         j10, j11, j12 = (pc[0] - pd[0]) * sb, (pc[1] - pd[1]) * sb, (pc[2] - pd[2]) * sb
         # normal equations of min |d0 + J t|^2, t = (rows, cols)
@@ -111,7 +111,7 @@ def refine(P, N, mask, vertices, eye, pixel, flags, conv, out_p, out_n, out_offs
         det = a00 * a11 - a01 * a01
         t0 = zero
         t1 = zero
-        if det > like(1e-6, conv) * (a00 * a11):
+        if det > like(1e-6, fp) * (a00 * a11):
             t0 = (a11 * b0 - a01 * b1) / det
             t1 = (a00 * b1 - a01 * b0) / det
         elif a11 == zero and a00 > zero:
@@ -122,12 +122,12 @@ def refine(P, N, mask, vertices, eye, pixel, flags, conv, out_p, out_n, out_offs
         t1 = min(max(t1, -lim), lim)
         out_offset[i, 0] = t0
         out_offset[i, 1] = t1
-        _surface(P, N, mask, r, c, t0, t1, conv, out_p, out_n, i)
+        _surface(P, N, mask, r, c, t0, t1, fp, out_p, out_n, i)
 
 
 @kernel(parallel=True)
-def surface_at(P, N, mask, pixel, offset, conv, out_p, out_n):
+def surface_at(P, N, mask, pixel, offset, fp, out_p, out_n):
     """P and unit N at texel ``pixel[i]`` plus ``offset[i]`` (rows, cols), by the first-order
     model of :func:`refine`."""
     for i in prange(pixel.shape[0]):
-        _surface(P, N, mask, pixel[i, 0], pixel[i, 1], offset[i, 0], offset[i, 1], conv, out_p, out_n, i)
+        _surface(P, N, mask, pixel[i, 0], pixel[i, 1], offset[i, 0], offset[i, 1], fp, out_p, out_n, i)

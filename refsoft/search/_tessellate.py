@@ -17,7 +17,7 @@ def _unit(x, y, z):
 
 
 @kernel(parallel=True)
-def edge_errors(P, N, mask, origin, eye, verts, pixel, offset, e0, e1, subtexel, conv, out):
+def edge_errors(P, N, mask, origin, eye, verts, pixel, offset, e0, e1, subtexel, fp, out):
     """``out[i]``: the thesis's error of edge (e0[i], e1[i]) (see
     :func:`refsoft.search.tessellate.edge_errors`), 1 where an end has no pixel or the point the error
     is taken at is not covered."""
@@ -40,7 +40,7 @@ def edge_errors(P, N, mask, origin, eye, verts, pixel, offset, e0, e1, subtexel,
                 c = hc
                 if not mask[r, c]:
                     continue
-            px, py, pz, nx, ny, nz = surface_values(P, N, mask, r, c, like(mr - r, conv), like(mc - c, conv), conv)
+            px, py, pz, nx, ny, nz = surface_values(P, N, mask, r, c, like(mr - r, fp), like(mc - c, fp), fp)
             px = np.float64(px) + origin[0]
             py = np.float64(py) + origin[1]
             pz = np.float64(pz) + origin[2]

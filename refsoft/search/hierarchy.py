@@ -36,18 +36,18 @@ CONE_FACTOR = 1.5
 SPHERE_FACTOR = 2.0
 
 
-def build(G, mask, conv):
+def build(G, mask, fp):
     """The pyramid of a packed, cropped G-buffer: ``(spheres, cones, offsets, sizes)`` with the
     levels concatenated (level l's texel (i, j) at row ``offsets[l] + i * sizes[l] + j``)."""
     h, w = mask.shape
     size = 1
     while size < max(h, w):
         size *= 2
-    sph, cone = _hierarchy.base_level(G, mask, size, conv)
+    sph, cone = _hierarchy.base_level(G, mask, size, fp)
     s_levels, c_levels = [sph.reshape(-1, 4)], [cone.reshape(-1, 4)]
     sizes = [size]
     while sph.shape[0] > 1:
-        sph, cone = _hierarchy.next_level(sph, cone, conv)
+        sph, cone = _hierarchy.next_level(sph, cone, fp)
         s_levels.append(sph.reshape(-1, 4))
         c_levels.append(cone.reshape(-1, 4))
         sizes.append(sph.shape[0])

@@ -122,12 +122,12 @@ def trace_search(gbuffer, eye, vertex, neighbourhood="cross", inverse="plane", p
             start = (pr, pc)
         else:
             restarted = True
-    G, M, conv, (r0, c0) = _packed(gbuffer, e)
+    G, M, fp, (r0, c0) = _packed(gbuffer, e)
     v_rel = (v - gbuffer.origin).astype(dt)
     record = np.zeros((2 * cap + 2, _kernels.RECORD_WIDTH), dtype=np.float64)
     n_cand = NEIGHBOURHOODS[neighbourhood]
     r, c, s, m, it, fl, n_rec = _kernels.search_one(G, M, v_rel, start[0] - r0, start[1] - c0, n_cand, cap,
-                                                    inverse == "search", conv, record,
+                                                    inverse == "search", fp, record,
                                                     np.empty((2, 9), dtype=dt), np.zeros((2, 9), dtype=bool))
     r, c = r + r0, c + c0
     record[:n_rec, 1] += r0
@@ -149,11 +149,11 @@ def trace_search(gbuffer, eye, vertex, neighbourhood="cross", inverse="plane", p
                       "move_to": move})
     capped_last = bool(steps) and steps[-1]["move_to"] is not None
     field_std = np.full((h, w), np.nan, dtype=dt)
-    _kernels.score_field(G, M, v_rel, False, conv, field_std[r0:r0 + M.shape[0], c0:c0 + M.shape[1]])
+    _kernels.score_field(G, M, v_rel, False, fp, field_std[r0:r0 + M.shape[0], c0:c0 + M.shape[1]])
     field_inv = None
     if any(st["phase"] == "inverse" for st in steps):
         field_inv = np.full((h, w), np.nan, dtype=dt)
-        _kernels.score_field(G, M, v_rel, True, conv, field_inv[r0:r0 + M.shape[0], c0:c0 + M.shape[1]])
+        _kernels.score_field(G, M, v_rel, True, fp, field_inv[r0:r0 + M.shape[0], c0:c0 + M.shape[1]])
     return Trace(v, e, neighbourhood, inverse, cap, [int(start[0]), int(start[1])], restarted, steps,
                  [int(r), int(c)], float(s), float(m), int(it), int(fl), "capped" if capped_last else "converged",
                  field_std, field_inv)
