@@ -36,9 +36,9 @@ FROM_PRESET = _FromPreset()
 #: The presets: every option each one sets (the others keep their defaults).
 PRESETS = {
     "paper": dict(method="walk", neighbourhood="cross", inverse="plane", refine=False, tessellate=None,
-                  virtual="mirror", silhouette="texel"),
+                  tessellate_span=0, virtual="mirror", silhouette="texel"),
     "accurate": dict(method="walk", neighbourhood="box", inverse="discard", refine=True, tessellate=1e-4,
-                     virtual="unfold", silhouette="clip"),
+                     tessellate_span=1, virtual="unfold", silhouette="clip"),
 }
 
 
@@ -81,6 +81,9 @@ class RenderOptions:
         (:mod:`refsoft.search.tessellate`): split triangles whose largest edge error exceeds
         this threshold (0: every triangle), crack-free, up to ``max_level`` levels. Default off.
     max_level : int
+    tessellate_span : int
+        Edges whose ends reflect at most this many pixels apart (along both axes) are not split
+        (beyond the thesis; paper 0: every edge measured, accurate 1).
     refine : bool
         Sub-texel reflection points (:mod:`refsoft.search.refine`, beyond the papers; off by
         default): one Gauss-Newton step from the texel found before mirroring the vertex.
@@ -110,6 +113,7 @@ class RenderOptions:
     adaptive_widen: bool = False
     tessellate: float | None = FROM_PRESET
     max_level: int = 3
+    tessellate_span: int = FROM_PRESET
     refine: bool = FROM_PRESET
     virtual: str = FROM_PRESET
     silhouette: str = FROM_PRESET
@@ -132,6 +136,7 @@ class RenderOptions:
         if self.tessellate is not None:
             validate.number(self.tessellate, "tessellate", minimum=0.0, what="a threshold >= 0 (or None)")
         validate.integer(self.max_level, "max_level", 0, MAX_TESSELLATION_LEVEL)
+        validate.integer(self.tessellate_span, "tessellate_span", 0)
         if self.cap is not None:
             validate.integer(self.cap, "cap", 1)
         for name in SKIPS + ("adaptive_widen", "coherence", "refine"):

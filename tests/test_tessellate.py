@@ -90,3 +90,22 @@ def test_no_crack_where_the_thesis_rule_leaves_some(monkeypatch):
     monkeypatch.setattr(tess, "tessellate", lambda *a, **k: original(*a, **dict(k, crack_free=False)))
     thesis = FrameDriver(scene, RenderOptions(**opts)).render_frame(0).arrays["reflected_id"]
     assert np.sum(thesis[inner] == 0) > 10
+
+
+def test_splitting_only_the_touched_faces_gives_the_full_split(rng):
+    """``_split_some`` runs the red-green split on the faces two of whose corners end split
+    edges and keeps the others: the same faces and parents as splitting them all."""
+    from refsoft.search.tessellate import KEY_BASE, _edge_keys, _split, _split_some
+
+    mesh = primitives.icosphere(3)
+    faces = mesh.faces.astype(np.int64)
+    n = mesh.n_vertices
+    for share in (0.01, 0.2, 1.0):
+        pick = faces[rng.random(len(faces)) < share]
+        keys = np.unique(np.concatenate([_edge_keys(pick[:, i], pick[:, (i + 1) % 3], KEY_BASE) for i in range(3)]))
+        mids = n + np.arange(len(keys), dtype=np.int64)
+        ea, eb = keys // KEY_BASE, keys % KEY_BASE
+        want = _split(faces, keys, mids, KEY_BASE)
+        got = _split_some(faces, keys, mids, ea, eb, n + len(keys))
+        np.testing.assert_array_equal(got[0], want[0])
+        np.testing.assert_array_equal(got[1], want[1])

@@ -77,6 +77,9 @@ def render_options() -> argparse.ArgumentParser:
                         "(e.g. 1e-3; 0 = full tessellation; 'off' = none), crack-free (paper: off, accurate: 1e-4)")
     p.add_argument("--max-level", type=int, default=None, metavar="L",
                    help="tessellation levels at most (default 3)")
+    p.add_argument("--tessellate-span", type=int, default=None, metavar="PX",
+                   help="beyond the thesis: edges whose ends reflect at most PX pixels apart are not split "
+                        "(paper: 0, accurate: 1)")
     p.add_argument("--refine", action=argparse.BooleanOptionalAction, default=None,
                    help="beyond the papers: sub-texel reflection points (one Gauss-Newton step from the texel "
                         "found) (paper: off, accurate: on)")
@@ -137,7 +140,8 @@ def render_kwargs(args) -> dict:
     """The preset and every :class:`refsoft.RenderOptions` field a ``refsoft render`` command
     line gives."""
     out = search_kwargs(args)
-    given = dict(max_level=args.max_level, refine=args.refine, virtual=args.virtual, silhouette=args.silhouette)
+    given = dict(max_level=args.max_level, tessellate_span=args.tessellate_span, refine=args.refine,
+                 virtual=args.virtual, silhouette=args.silhouette)
     out.update({k: v for k, v in given.items() if v is not None})
     if args.tessellate is not None:
         out["tessellate"] = None if args.tessellate == "off" else args.tessellate

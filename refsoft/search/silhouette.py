@@ -52,6 +52,10 @@ class Clip:
         Edges cut.
     searched : int
         Searches run by the bisection.
+    ends : ndarray (M, 2) int64
+        Each cut edge's visible and hidden end (vertex indices).
+    t : ndarray (M,) float64
+        Where along the edge the cut point lies (0 at the visible end).
     """
 
     vertices: np.ndarray
@@ -62,6 +66,8 @@ class Clip:
     face_obj: np.ndarray
     cut: int
     searched: int
+    ends: np.ndarray
+    t: np.ndarray
 
 
 def mixed_faces(faces, flags) -> np.ndarray:
@@ -100,7 +106,7 @@ def clip_at_silhouette(gbuffer, eye, vertices, normals, faces, face_obj, pixel, 
     mixed = np.flatnonzero(mixed_faces(faces, flags))
     n = len(vertices)
     empty = Clip(np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 2), np.int32), np.zeros(0, np.uint8), faces,
-                 np.asarray(face_obj), 0, 0)
+                 np.asarray(face_obj), 0, 0, np.zeros((0, 2), np.int64), np.zeros(0))
     if len(mixed) == 0:
         return empty
     # the cut edges: (visible end, hidden end), once each
@@ -129,32 +135,39 @@ def clip_at_silhouette(gbuffer, eye, vertices, normals, faces, face_obj, pixel, 
         got_flags = np.where(seen, res.flags, got_flags).astype(np.uint8)
     cut_v = p_vis + lo_t[:, None] * (p_hid - p_vis)
     cut_n = normalize_rows(normals[vis] + lo_t[:, None] * (normals[hid] - normals[vis]))
-    new_faces = _visible_parts(f, hidden, key, n)
-    counts = np.full(len(faces), 1, dtype=np.int64)
-    counts[mixed] = [len(x) for x in new_faces]
+    parts, per_face = _visible_parts(f, hidden, key, n)
+    counts = np.ones(len(faces), dtype=np.int64)
+    counts[mixed] = per_face
+    first = np.concatenate([[0], np.cumsum(counts)[:-1]])
     out = np.repeat(faces, counts, axis=0)
     out_obj = np.repeat(np.asarray(face_obj), counts)
-    first = np.concatenate([[0], np.cumsum(counts)[:-1]])
-    for j, i in enumerate(mixed):
-        out[first[i]:first[i] + counts[i]] = new_faces[j]
-    return Clip(cut_v, cut_n, got_pixel, got_flags, out, out_obj, len(key), len(key) * iterations)
+    rows = np.repeat(first[mixed], per_face) + (np.arange(len(parts)) - np.repeat(np.cumsum(per_face) - per_face,
+                                                                                   per_face))
+    out[rows] = parts
+    return Clip(cut_v, cut_n, got_pixel, got_flags, out, out_obj, len(key), len(key) * iterations,
+                np.c_[vis, hid], lo_t)
 
 
-def _visible_parts(f, hidden, key, n) -> list:
-    """The visible part of each mixed face ``f[j]`` as a list of faces, the cut point of edge
-    (visible u, hidden v) being vertex ``n + searchsorted(key, u * n + v)``."""
+def _visible_parts(f, hidden, key, n):
+    """The visible part of each mixed face ``f[j]`` (M, 3): its faces, in face order (2 for a
+    face with one hidden corner, 1 for two), and their count per face; the cut point of edge
+    (visible u, hidden v) is vertex ``n + searchsorted(key, u * n + v)``."""
     def cut(u, v):
-        return n + int(np.searchsorted(key, u * n + v))
+        return n + np.searchsorted(key, u * n + v)
 
-    parts = []
-    for tri in f:
-        h = hidden[tri]
-        if h.sum() == 1:
-            k = int(np.flatnonzero(h)[0])
-            x, y, z = tri[(k + 1) % 3], tri[(k + 2) % 3], tri[k]  # x, y visible; z hidden
-            parts.append([(x, y, cut(y, z)), (x, cut(y, z), cut(x, z))])
-        else:
-            k = int(np.flatnonzero(~h)[0])
-            x, y, z = tri[k], tri[(k + 1) % 3], tri[(k + 2) % 3]  # x visible
-            parts.append([(x, cut(x, y), cut(x, z))])
-    return parts
+    h = hidden[f]
+    one = h.sum(axis=1) == 1
+    rows = np.arange(len(f))
+    k = np.where(one, np.argmax(h, axis=1), np.argmax(~h, axis=1))
+    # one hidden corner z = f[k]: x, y, z = f[k+1], f[k+2], f[k]; two: x = f[k] visible, then y, z
+    x = np.where(one, f[rows, (k + 1) % 3], f[rows, k])
+    y = np.where(one, f[rows, (k + 2) % 3], f[rows, (k + 1) % 3])
+    z = np.where(one, f[rows, k], f[rows, (k + 2) % 3])
+    per_face = np.where(one, 2, 1)
+    first = np.where(one, np.c_[x, y, cut(y, z)].T, np.c_[x, cut(x, y), cut(x, z)].T).T
+    second = np.c_[x, cut(y, z), cut(x, z)]
+    parts = np.empty((int(per_face.sum()), 3), dtype=np.int64)
+    at = np.cumsum(per_face) - per_face
+    parts[at] = first
+    parts[at[one] + 1] = second[one]
+    return parts, per_face

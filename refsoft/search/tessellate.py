@@ -128,6 +128,30 @@ def _split(faces, edge_keys, edge_mid, n_vertices, only=None):
     return out, parent
 
 
+def _split_some(faces, keys, mids, ea, eb, n_vertices, only=None):
+    """:func:`_split` of ``faces``, run on the faces with two corners among the split edges'
+    ends only (the others are kept whole, as :func:`_split` keeps them): the same faces and
+    parents in the same order."""
+    marked = np.zeros(n_vertices, dtype=bool)
+    marked[ea] = True
+    marked[eb] = True
+    sel = np.flatnonzero(marked[faces].sum(axis=1) >= 2)
+    sub_faces, sub_parent = _split(faces[sel], keys, mids, KEY_BASE, None if only is None else only[sel])
+    counts = np.ones(len(faces), dtype=np.int64)
+    counts[sel] = np.bincount(sub_parent, minlength=len(sel))
+    parent = np.repeat(np.arange(len(faces)), counts)
+    out = faces[parent]
+    first = np.cumsum(counts) - counts
+    out[np.repeat(first[sel], counts[sel]) + (np.arange(len(sub_parent)) - first_of(sub_parent))] = sub_faces
+    return out, parent
+
+
+def first_of(parent) -> np.ndarray:
+    """For sorted group ids ``parent``, the index of each element's group's first element."""
+    starts = np.flatnonzero(np.r_[True, parent[1:] != parent[:-1]])
+    return np.repeat(starts, np.diff(np.r_[starts, len(parent)]))
+
+
 @dataclass(frozen=True, eq=False)
 class Tessellation:
     """The reflected geometry of one reflector after :func:`tessellate`: the ``N`` input
@@ -162,7 +186,7 @@ class Tessellation:
 
 def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, threshold, max_level,
                neighbourhood="cross", inverse="plane", cap=None, crack_free=True, surface=None,
-               method="walk") -> Tessellation:
+               method="walk", min_span: int = 0) -> Tessellation:
     """Refine the reflected triangles of one reflector until every triangle's largest edge error
     is at most ``threshold`` (0: every triangle, i.e. full tessellation) or ``max_level`` levels.
 
@@ -188,6 +212,10 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
 
     method : {"walk", "hierarchy"}
         The search the new vertices get (as the original vertices').
+    min_span : int
+        Beyond the thesis: an edge whose ends' reflection pixels are at most this many pixels
+        apart along both axes is not a reason to split (its reflection covers a few pixels
+        whatever its error; 0: the thesis's rule, every edge is measured).
 
     Returns
     -------
@@ -215,7 +243,12 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
             break
         f = faces[cand]
         e0, e1 = f.reshape(-1), f[:, [1, 2, 0]].reshape(-1)
-        err = _edge_errors(gbuffer, eye, allv, allp, None if surf is None else np.concatenate(surf[2]), e0, e1)
+        err = np.zeros(len(e0))
+        need = np.ones(len(e0), dtype=bool)
+        if min_span > 0:  # an edge reflected within min_span pixels: nothing to draw between its ends
+            need = np.abs(allp[e0].astype(np.int64) - allp[e1]).max(axis=1) > min_span
+        err[need] = _edge_errors(gbuffer, eye, allv, allp, None if surf is None else np.concatenate(surf[2]),
+                                 e0[need], e1[need])
         err = err.reshape(-1, 3)
         bad = ((allf[f] & CULLED) != 0).any(axis=1)  # no reflection to refine
         if threshold > 0:
@@ -256,7 +289,7 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
         if not crack_free:
             only = np.zeros(len(faces), dtype=bool)
             only[split_tri] = True
-        new_faces, parent = _split(faces, keys, mids, KEY_BASE, only)
+        new_faces, parent = _split_some(faces, keys, mids, ea, eb, n_total, only)
         touched = np.zeros(len(faces), dtype=bool)
         touched[np.unique(parent[np.bincount(parent, minlength=len(faces))[parent] > 1])] = True
         active = touched[parent]

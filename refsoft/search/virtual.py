@@ -63,7 +63,8 @@ def refined_parts(scene, meshes, refl, verts, opt, eye):
     counts = {}
     if opt.tessellate is not None:
         t = tessellate(gb, eye, verts, normals, faces, face_obj, pixel, flags, opt.tessellate, opt.max_level,
-                       opt.neighbourhood, opt.inverse, opt.cap, surface=surface, method=opt.method)
+                       opt.neighbourhood, opt.inverse, opt.cap, surface=surface, method=opt.method,
+                       min_span=opt.tessellate_span)
         virtual = np.concatenate([virtual, _new_virtual(refl, opt, eye, t.vertices[len(verts):], t.pixel[len(verts):],
                                                         t.flags[len(verts):],
                                                         None if surface is None else t.surface, len(verts))])
