@@ -154,3 +154,18 @@ def test_kernel_matches_the_scipy_solver_on_a_scene_reflector():
     new = sphere_reflection_points(centre, radius, eye, verts)
     assert np.isfinite(new).all(axis=1).sum() > 100
     assert np.array_equal(new, naive_sphere_reflection_points(centre, radius, eye, verts), equal_nan=True)
+
+
+def test_sample_block_is_speed_only():
+    from refsoft.truth import analytic
+
+    rng = np.random.default_rng(5)
+    centre, radius, eye = np.array([0.0, 0.5, -1.0]), 0.8, np.array([-3.0, 1.0, 2.0])
+    pts = mixed_points(rng, centre, radius, eye, 500)
+    ref = naive_sphere_reflection_points(centre, radius, eye, pts)
+    block = analytic.SAMPLE_BLOCK
+    try:
+        for analytic.SAMPLE_BLOCK in (1, 3, analytic.ARC_SAMPLES, 2 * analytic.ARC_SAMPLES):
+            assert np.array_equal(sphere_reflection_points(centre, radius, eye, pts), ref, equal_nan=True)
+    finally:
+        analytic.SAMPLE_BLOCK = block

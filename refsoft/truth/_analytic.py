@@ -99,9 +99,79 @@ def _brent(lo, hi, f_lo, f_hi, xtol, rtol, maxiter, a0, a1, a2, b0, b1, b2, c0, 
     return cur
 
 
+@kernel
+def _solve_point(i, c0, c1, c2, rho, o0, o1, o2, a0, a1, a2, points, dirs, cos_phi, phi, samples, block, xtol,
+                 rtol, maxiter, ts, fs, out):
+    """Reflection point of ``points[i]`` into ``out[i]`` (untouched if none); ``ts``, ``fs``
+    (``samples + 1``,) are scratch."""
+    v0, v1, v2 = points[i, 0], points[i, 1], points[i, 2]
+    # the arc's second axis: the point's direction less its component along the eye's
+    cp = cos_phi[i]
+    b0 = dirs[i, 0] - cp * a0
+    b1 = dirs[i, 1] - cp * a1
+    b2 = dirs[i, 2] - cp * a2
+    nb = math.sqrt(b0 * b0 + b1 * b1 + b2 * b2)
+    if nb < 1e-15:
+        # the point is (anti)parallel to the eye: any great circle through the eye, a x e_x
+        b0 = a1 * 0.0 - a2 * 0.0
+        b1 = a2 * 1.0 - a0 * 0.0
+        b2 = a0 * 0.0 - a1 * 1.0
+        if math.sqrt(b0 * b0 + b1 * b1 + b2 * b2) < 1e-6:
+            b0 = a1 * 0.0 - a2 * 1.0  # a x e_y
+            b1 = a2 * 0.0 - a0 * 0.0
+            b2 = a0 * 1.0 - a1 * 0.0
+        nb = math.sqrt(b0 * b0 + b1 * b1 + b2 * b2)
+    b0 /= nb
+    b1 /= nb
+    b2 /= nb
+    ph = phi[i]
+    # candidates in arc order (sampled zeros, roots of sign-change brackets), each solved as it
+    # is met: the first accepted one is the answer, so samples past it are not needed. Samples
+    # are evaluated ``block`` at a time, a branch-free loop the compiler vectorizes.
+    done = -1  # last evaluated sample
+    for k in range(samples + 1):
+        if k + 1 > done and done < samples:
+            hi = min(k + block, samples)
+            for q in range(done + 1, hi + 1):
+                ts[q] = ph * (q / samples)
+                fs[q] = _arc_f(ts[q], a0, a1, a2, b0, b1, b2, c0, c1, c2, rho, o0, o1, o2, v0, v1, v2)
+            done = hi
+        if k < samples:
+            if fs[k] == 0.0:
+                t = ts[k]
+            elif fs[k] * fs[k + 1] < 0.0:
+                t = _brent(ts[k], ts[k + 1], fs[k], fs[k + 1], xtol, rtol, maxiter,
+                           a0, a1, a2, b0, b1, b2, c0, c1, c2, rho, o0, o1, o2, v0, v1, v2)
+            else:
+                continue
+        elif fs[k] == 0.0 and ph > 0.0:
+            t = ts[k]  # a zero at the arc's end
+        else:
+            continue
+        ct = math.cos(t)
+        st = math.sin(t)
+        n0 = ct * a0 + st * b0
+        n1 = ct * a1 + st * b1
+        n2 = ct * a2 + st * b2
+        r0 = c0 + rho * n0
+        r1 = c1 + rho * n1
+        r2 = c2 + rho * n2
+        # both the eye and the point outside the tangent plane
+        if ((o0 - r0) * n0 + (o1 - r1) * n1 + (o2 - r2) * n2 > 0.0
+                and (v0 - r0) * n0 + (v1 - r1) * n1 + (v2 - r2) * n2 > 0.0):
+            out[i, 0] = r0
+            out[i, 1] = r1
+            out[i, 2] = r2
+            return
+
+
+#: Points per parallel task (each task allocates its scratch once).
+CHUNK = 256
+
+
 @kernel(parallel=True)
-def reflection_points_kernel(centre, rho, eye, eye_dir, points, dirs, cos_phi, phi, todo, samples, xtol, rtol,
-                             maxiter, out):
+def reflection_points_kernel(centre, rho, eye, eye_dir, points, dirs, cos_phi, phi, todo, samples, block, xtol,
+                             rtol, maxiter, out):
     """Solve Alhazen's problem for ``points[todo]`` into ``out`` (rows left untouched: no root).
 
     Parameters
@@ -118,6 +188,8 @@ def reflection_points_kernel(centre, rho, eye, eye_dir, points, dirs, cos_phi, p
         Rows to solve (points outside the sphere).
     samples : int
         Arc intervals sampled to bracket the roots.
+    block : int
+        Samples evaluated at a time (speed only: the result does not depend on it).
     xtol, rtol, maxiter :
         Brent's stopping rule (``brentq``'s meaning).
     out : ndarray, shape (N, 3), float64
@@ -126,60 +198,10 @@ def reflection_points_kernel(centre, rho, eye, eye_dir, points, dirs, cos_phi, p
     c0, c1, c2 = centre[0], centre[1], centre[2]
     o0, o1, o2 = eye[0], eye[1], eye[2]
     a0, a1, a2 = eye_dir[0], eye_dir[1], eye_dir[2]
-    for j in prange(len(todo)):
-        i = todo[j]
-        v0, v1, v2 = points[i, 0], points[i, 1], points[i, 2]
-        # the arc's second axis: the point's direction less its component along the eye's
-        cp = cos_phi[i]
-        b0 = dirs[i, 0] - cp * a0
-        b1 = dirs[i, 1] - cp * a1
-        b2 = dirs[i, 2] - cp * a2
-        nb = math.sqrt(b0 * b0 + b1 * b1 + b2 * b2)
-        if nb < 1e-15:
-            # the point is (anti)parallel to the eye: any great circle through the eye, a x e_x
-            b0 = a1 * 0.0 - a2 * 0.0
-            b1 = a2 * 1.0 - a0 * 0.0
-            b2 = a0 * 0.0 - a1 * 1.0
-            if math.sqrt(b0 * b0 + b1 * b1 + b2 * b2) < 1e-6:
-                b0 = a1 * 0.0 - a2 * 1.0  # a x e_y
-                b1 = a2 * 0.0 - a0 * 0.0
-                b2 = a0 * 1.0 - a1 * 0.0
-            nb = math.sqrt(b0 * b0 + b1 * b1 + b2 * b2)
-        b0 /= nb
-        b1 /= nb
-        b2 /= nb
-        ph = phi[i]
+    m = len(todo)
+    for chunk in prange((m + CHUNK - 1) // CHUNK):
         ts = np.empty(samples + 1)
         fs = np.empty(samples + 1)
-        for k in range(samples + 1):
-            ts[k] = ph * (k / samples)
-            fs[k] = _arc_f(ts[k], a0, a1, a2, b0, b1, b2, c0, c1, c2, rho, o0, o1, o2, v0, v1, v2)
-        # candidates in arc order: sampled zeros, then roots of the sign-change brackets
-        for k in range(samples + 1):
-            if k < samples:
-                if fs[k] == 0.0:
-                    t = ts[k]
-                elif fs[k] * fs[k + 1] < 0.0:
-                    t = _brent(ts[k], ts[k + 1], fs[k], fs[k + 1], xtol, rtol, maxiter,
-                               a0, a1, a2, b0, b1, b2, c0, c1, c2, rho, o0, o1, o2, v0, v1, v2)
-                else:
-                    continue
-            elif fs[k] == 0.0 and ph > 0.0:
-                t = ts[k]
-            else:
-                continue
-            ct = math.cos(t)
-            st = math.sin(t)
-            n0 = ct * a0 + st * b0
-            n1 = ct * a1 + st * b1
-            n2 = ct * a2 + st * b2
-            r0 = c0 + rho * n0
-            r1 = c1 + rho * n1
-            r2 = c2 + rho * n2
-            # both the eye and the point outside the tangent plane
-            if ((o0 - r0) * n0 + (o1 - r1) * n1 + (o2 - r2) * n2 > 0.0
-                    and (v0 - r0) * n0 + (v1 - r1) * n1 + (v2 - r2) * n2 > 0.0):
-                out[i, 0] = r0
-                out[i, 1] = r1
-                out[i, 2] = r2
-                break
+        for j in range(chunk * CHUNK, min(m, (chunk + 1) * CHUNK)):
+            _solve_point(todo[j], c0, c1, c2, rho, o0, o1, o2, a0, a1, a2, points, dirs, cos_phi, phi, samples,
+                         block, xtol, rtol, maxiter, ts, fs, out)

@@ -23,6 +23,8 @@ ARC_SAMPLES = 64
 XTOL = 1e-15
 RTOL = 4 * np.finfo(np.float64).eps
 MAXITER = 200
+#: Arc samples the kernel evaluates at a time (speed only).
+SAMPLE_BLOCK = 8
 
 
 def _inputs(centre, radius, eye, points):
@@ -69,7 +71,7 @@ def sphere_reflection_points(centre, radius, eye, points) -> np.ndarray:
     # NumPy's arccos, not the kernel's libm one: the two differ in the last bit for some inputs
     phi = np.arccos(np.clip(cos_phi, -1.0, 1.0))
     reflection_points_kernel(c, rho, o, eye_dir, pts, dirs, cos_phi, phi, todo.astype(np.int64), ARC_SAMPLES,
-                             XTOL, RTOL, MAXITER, out)
+                             SAMPLE_BLOCK, XTOL, RTOL, MAXITER, out)
     return out
 
 
