@@ -58,8 +58,10 @@ def sphere_reflection_points(centre, radius, eye, points) -> np.ndarray:
         sphere or behind it, hidden from every visible point of the surface).
     """
     c, rho, o, pts = _inputs(centre, radius, eye, points)
+    c, o, pts = np.ascontiguousarray(c), np.ascontiguousarray(o), np.ascontiguousarray(pts)
     out = np.full((len(pts), 3), np.nan)
     eye_dir = (o - c) / np.linalg.norm(o - c)
+    # per-point arc setup in NumPy (norms and dot products summed left to right, like the kernel)
     d = pts - c
     dist = np.linalg.norm(d, axis=1)
     todo = np.flatnonzero(dist > rho)
