@@ -2,9 +2,10 @@
 
 Each ``prange`` task solves a fixed run of points, each writing only its own output row: results
 do not depend on the thread count. The arithmetic follows the NumPy formulation term by term
-(sums of three products left to right, no fused multiply-add; libm's ``cos``, ``sin`` and ``sqrt``,
-which NumPy's float64 ufuncs match), so the arc samples, their signs and the Brent iterates are
-the same doubles as the SciPy-based reference solver's (``tests/naive.py``).
+(sums of three products left to right, no fused multiply-add; libm's ``cos``, ``sin`` and
+``sqrt``, which give NumPy's float64 results, whereas its ``arccos`` may not: the arc angle comes
+from NumPy), so the arc samples, their signs and the Brent iterates are the same doubles as the
+SciPy-based reference solver's (``tests/naive.py``).
 """
 
 from __future__ import annotations
