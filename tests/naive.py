@@ -529,3 +529,73 @@ def naive_split(faces, midpoints, only=None):
         out += kids
         parent += [t] * len(kids)
     return np.array(out, dtype=np.int64).reshape(-1, 3), np.array(parent, dtype=np.int64)
+
+
+def _naive_arc(eye_dir, point_dir):
+    """Orthonormal (a, b) spanning the arc from eye_dir towards point_dir, and its angle."""
+    a = eye_dir
+    b = point_dir - (point_dir @ a) * a
+    nb = np.linalg.norm(b)
+    phi = float(np.arccos(np.clip(point_dir @ a, -1.0, 1.0)))
+    if nb < 1e-15:
+        b = np.cross(a, [1.0, 0.0, 0.0])
+        if np.linalg.norm(b) < 1e-6:
+            b = np.cross(a, [0.0, 1.0, 0.0])
+        b /= np.linalg.norm(b)
+    else:
+        b = b / nb
+    return a, b, phi
+
+
+def _naive_arc_function(t, a, b, c, rho, o, v):
+    """``(u + v) . T`` at arc angle ``t`` (broadcasting over leading axes; last axis xyz)."""
+    n = np.cos(t) * a + np.sin(t) * b
+    r = c + rho * n
+    u = o - r
+    w = v - r
+    s = u / np.linalg.norm(u, axis=-1, keepdims=True) + w / np.linalg.norm(w, axis=-1, keepdims=True)
+    return np.sum(s * (-np.sin(t) * a + np.cos(t) * b), axis=-1)
+
+
+def naive_sphere_reflection_points(centre, radius, eye, points, samples=64):
+    """refsoft.truth.analytic.sphere_reflection_points with SciPy: the arc from the eye's
+    direction to the point's sampled at ``samples`` + 1 angles, each sign change solved by
+    ``scipy.optimize.brentq`` (xtol 1e-15, rtol 4 eps, 200 iterations), the first root with the
+    eye and the point outside the tangent plane kept; NaN rows where there is none."""
+    from scipy.optimize import brentq
+
+    c = np.asarray(centre, dtype=np.float64).reshape(3)
+    rho = float(radius)
+    o = np.asarray(eye, dtype=np.float64).reshape(3)
+    pts = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    out = np.full((len(pts), 3), np.nan)
+    eye_dir = (o - c) / np.linalg.norm(o - c)
+    outside = np.flatnonzero(np.linalg.norm(pts - c, axis=1) > rho)
+    if len(outside) == 0:
+        return out
+    arcs = [_naive_arc(eye_dir, (pts[i] - c) / np.linalg.norm(pts[i] - c)) for i in outside]
+    A = np.array([a for a, _, _ in arcs])
+    B = np.array([b for _, b, _ in arcs])
+    phi = np.array([p for _, _, p in arcs])
+    # bracket the roots of every point at once: f on samples + 1 points of each arc
+    ts = phi[:, None] * np.linspace(0.0, 1.0, samples + 1)[None, :]
+    fs = _naive_arc_function(ts[..., None], A[:, None], B[:, None], c, rho, o, pts[outside][:, None])
+    for j, i in enumerate(outside):
+        a, b, v = A[j], B[j], pts[i]
+
+        def f(t):
+            return float(_naive_arc_function(t, a, b, c, rho, o, v))
+
+        candidates = [ts[j, k] if fs[j, k] == 0.0 else (ts[j, k], ts[j, k + 1])
+                      for k in range(samples) if fs[j, k] == 0.0 or fs[j, k] * fs[j, k + 1] < 0.0]
+        if fs[j, -1] == 0.0 and phi[j] > 0:
+            candidates.append(ts[j, -1])
+        for cand in candidates:
+            t = cand if np.isscalar(cand) else brentq(f, cand[0], cand[1], xtol=1e-15,
+                                                       rtol=4 * np.finfo(float).eps, maxiter=200)
+            n = np.cos(t) * a + np.sin(t) * b
+            r = c + rho * n
+            if (o - r) @ n > 0.0 and (v - r) @ n > 0.0:
+                out[i] = r
+                break
+    return out

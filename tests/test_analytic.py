@@ -1,10 +1,18 @@
-"""The analytic sphere reflection point: Brent on the arc against Eberly's quartic."""
+"""The analytic sphere reflection point: the Numba kernel against the SciPy solver it replaces
+(bit for bit, any thread count), and Brent on the arc against Eberly's quartic."""
 
+import numba
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
+import refsoft
+from naive import naive_sphere_reflection_points
 from refsoft import RefsoftError
-from refsoft.truth.analytic import reflection_residual, sphere_reflection_points, sphere_reflection_points_quartic
+from refsoft.search.reflect import scene_vertices
+from refsoft.truth.analytic import (fit_sphere, reflection_residual, sphere_reflection_points,
+                                    sphere_reflection_points_quartic)
 
 
 def random_pairs(rng, n, grazing=False):
@@ -71,3 +79,93 @@ def test_bad_inputs():
         sphere_reflection_points([0, 0, 0], 1.0, [0, 0, 0.5], [[0, 0, 3.0]])
     with pytest.raises(RefsoftError, match="radius"):
         sphere_reflection_points([0, 0, 0], -1.0, [0, 0, 5], [[0, 0, 3.0]])
+
+
+def mixed_points(rng, centre, radius, eye, n):
+    """Points of every kind around a sphere: far and near, inside, behind it, near the horizon
+    of the visible cap, on the eye's ray (in front and behind), on the surface's doorstep."""
+    e = (eye - centre) / np.linalg.norm(eye - centre)
+    d = rng.normal(size=(n, 3))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    dist = radius * rng.uniform(1.001, 8.0, n)
+    kind = rng.integers(0, 6, n)
+    # horizon of the cap seen from the point's side: directions almost opposite the eye
+    back = -e + 0.35 * d
+    d = np.where((kind == 1)[:, None], back / np.linalg.norm(back, axis=1, keepdims=True), d)
+    d = np.where((kind == 2)[:, None], np.where(rng.random((n, 1)) < 0.5, e, -e), d)
+    dist = np.where(kind == 3, radius * rng.uniform(0.0, 0.999, n), dist)  # inside
+    dist = np.where(kind == 4, radius * (1.0 + rng.uniform(1e-12, 1e-6, n)), dist)  # just outside
+    return centre + d * dist[:, None]
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), radius=st.floats(1e-3, 1e3), eye_dist=st.floats(1.0001, 50.0))
+def test_kernel_matches_the_scipy_solver_bit_for_bit(seed, radius, eye_dist):
+    rng = np.random.default_rng(seed)
+    centre = rng.uniform(-5, 5, 3) * radius
+    e = rng.normal(size=3)
+    eye = centre + e / np.linalg.norm(e) * eye_dist * radius
+    pts = mixed_points(rng, centre, radius, eye, 40)
+    new = sphere_reflection_points(centre, radius, eye, pts)
+    old = naive_sphere_reflection_points(centre, radius, eye, pts)
+    assert np.array_equal(new, old, equal_nan=True)
+
+
+def test_kernel_matches_the_scipy_solver_at_grazing_angles():
+    rng = np.random.default_rng(7)
+    centre, eye, pts = random_pairs(rng, 300, grazing=True)
+    new = sphere_reflection_points(centre, 1.0, eye, pts)
+    assert np.isfinite(new).all(axis=1).sum() > 100
+    assert np.array_equal(new, naive_sphere_reflection_points(centre, 1.0, eye, pts), equal_nan=True)
+
+
+def test_degenerate_arcs_match_the_scipy_solver():
+    # points on the eye's ray (the arc's plane is arbitrary) and none outside the sphere at all
+    for eye in ([0.0, 0.0, 3.0], [2.5, 0.0, 0.0], [0.0, 4.0, 0.0]):
+        e = np.array(eye) / np.linalg.norm(eye)
+        pts = np.array([2.0 * e, -2.0 * e, 7.0 * e, -1.5 * e, 0.5 * e])
+        new = sphere_reflection_points([0, 0, 0], 1.0, eye, pts)
+        assert np.array_equal(new, naive_sphere_reflection_points([0, 0, 0], 1.0, eye, pts), equal_nan=True)
+        assert np.isfinite(new[0]).all() and np.isnan(new[1]).all() and np.isnan(new[4]).all()
+    assert np.isnan(sphere_reflection_points([0, 0, 0], 2.0, [0, 0, 5.0], [[0, 0, 1.0], [1, 0, 0]])).all()
+
+
+def test_kernel_is_bit_identical_across_thread_counts():
+    rng = np.random.default_rng(3)
+    centre, radius, eye = np.array([1.0, -2.0, 0.5]), 1.7, np.array([4.0, 3.0, -6.0])
+    pts = mixed_points(rng, centre, radius, eye, 3000)
+    a = sphere_reflection_points(centre, radius, eye, pts)
+    numba.set_num_threads(1)
+    try:
+        b = sphere_reflection_points(centre, radius, eye, pts)
+    finally:
+        numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+    assert numba.config.NUMBA_NUM_THREADS > 1
+    assert np.isfinite(a).all(axis=1).sum() > 1000
+    assert np.array_equal(a, b, equal_nan=True)
+
+
+def test_kernel_matches_the_scipy_solver_on_a_scene_reflector():
+    scene = refsoft.load_scene("sphere")
+    verts, _ = scene_vertices(scene, 0)
+    k = scene.reflector_ids[0]
+    centre, radius = fit_sphere(scene.world_mesh(k, 0, proxy=True).vertices)
+    eye = scene.camera_at(0).eye
+    new = sphere_reflection_points(centre, radius, eye, verts)
+    assert np.isfinite(new).all(axis=1).sum() > 100
+    assert np.array_equal(new, naive_sphere_reflection_points(centre, radius, eye, verts), equal_nan=True)
+
+
+def test_sample_block_is_speed_only():
+    from refsoft.truth import analytic
+
+    rng = np.random.default_rng(5)
+    centre, radius, eye = np.array([0.0, 0.5, -1.0]), 0.8, np.array([-3.0, 1.0, 2.0])
+    pts = mixed_points(rng, centre, radius, eye, 500)
+    ref = naive_sphere_reflection_points(centre, radius, eye, pts)
+    block = analytic.SAMPLE_BLOCK
+    try:
+        for analytic.SAMPLE_BLOCK in (1, 3, analytic.ARC_SAMPLES, 2 * analytic.ARC_SAMPLES):
+            assert np.array_equal(sphere_reflection_points(centre, radius, eye, pts), ref, equal_nan=True)
+    finally:
+        analytic.SAMPLE_BLOCK = block

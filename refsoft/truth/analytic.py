@@ -3,8 +3,9 @@
 :func:`sphere_reflection_points` solves on the great-circle arc between the directions to the
 eye and to the point: ``f(t) = (u + v) . T(t) = 0`` with ``u``, ``v`` the unit directions from
 the arc point to the eye and to the point and ``T`` the arc's tangent. The arc is sampled to
-bracket every sign change, each bracket is solved with Brent's method (``scipy.optimize.brentq``),
-and the root where both the eye and the point lie outside the tangent plane is kept.
+bracket every sign change, each bracket is solved with Brent's method (the algorithm of
+``scipy.optimize.brentq``, in a Numba kernel parallel over points: :mod:`._analytic`), and the
+first root along the arc where both the eye and the point lie outside the tangent plane is kept.
 :func:`sphere_reflection_points_quartic` is Eberly's closed form ("Computing a Point of
 Reflection on a Sphere"), kept to cross-check the solver; it loses accuracy near grazing angles.
 """
@@ -14,9 +15,16 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import RefsoftError
+from ._analytic import reflection_points_kernel
 
 #: Samples along the arc used to bracket the roots.
 ARC_SAMPLES = 64
+#: Brent's stopping rule: half the bracket below ``(XTOL + RTOL |t|) / 2`` radians, or MAXITER steps.
+XTOL = 1e-15
+RTOL = 4 * np.finfo(np.float64).eps
+MAXITER = 200
+#: Arc samples the kernel evaluates at a time (speed only).
+SAMPLE_BLOCK = 8
 
 
 def _inputs(centre, radius, eye, points):
@@ -30,22 +38,6 @@ def _inputs(centre, radius, eye, points):
     if np.linalg.norm(o - c) <= radius:
         raise RefsoftError("the eye must lie outside the sphere")
     return c, float(radius), o, p
-
-
-def _arc(eye_dir, point_dir):
-    """Orthonormal (a, b) spanning the arc from eye_dir towards point_dir, and its angle."""
-    a = eye_dir
-    b = point_dir - (point_dir @ a) * a
-    nb = np.linalg.norm(b)
-    phi = float(np.arccos(np.clip(point_dir @ a, -1.0, 1.0)))
-    if nb < 1e-15:
-        b = np.cross(a, [1.0, 0.0, 0.0])
-        if np.linalg.norm(b) < 1e-6:
-            b = np.cross(a, [0.0, 1.0, 0.0])
-        b /= np.linalg.norm(b)
-    else:
-        b = b / nb
-    return a, b, phi
 
 
 def sphere_reflection_points(centre, radius, eye, points) -> np.ndarray:
@@ -65,50 +57,24 @@ def sphere_reflection_points(centre, radius, eye, points) -> np.ndarray:
         The reflection point of each point; NaN where there is none (the point is inside the
         sphere or behind it, hidden from every visible point of the surface).
     """
-    from scipy.optimize import brentq
-
     c, rho, o, pts = _inputs(centre, radius, eye, points)
+    c, o, pts = np.ascontiguousarray(c), np.ascontiguousarray(o), np.ascontiguousarray(pts)
     out = np.full((len(pts), 3), np.nan)
     eye_dir = (o - c) / np.linalg.norm(o - c)
-    outside = np.flatnonzero(np.linalg.norm(pts - c, axis=1) > rho)
-    if len(outside) == 0:
+    # per-point arc setup in NumPy (norms and dot products summed left to right, like the kernel)
+    d = pts - c
+    dist = np.linalg.norm(d, axis=1)
+    todo = np.flatnonzero(dist > rho)
+    if len(todo) == 0:
         return out
-    arcs = [_arc(eye_dir, (pts[i] - c) / np.linalg.norm(pts[i] - c)) for i in outside]
-    A = np.array([a for a, _, _ in arcs])
-    B = np.array([b for _, b, _ in arcs])
-    phi = np.array([p for _, _, p in arcs])
-    # bracket the roots of every point at once: f on ARC_SAMPLES + 1 samples of each arc
-    ts = phi[:, None] * np.linspace(0.0, 1.0, ARC_SAMPLES + 1)[None, :]
-    fs = _arc_function(ts[..., None], A[:, None], B[:, None], c, rho, o, pts[outside][:, None])
-    for j, i in enumerate(outside):
-        a, b, v = A[j], B[j], pts[i]
-
-        def f(t):
-            return float(_arc_function(t, a, b, c, rho, o, v))
-
-        candidates = [ts[j, k] if fs[j, k] == 0.0 else (ts[j, k], ts[j, k + 1])
-                      for k in range(ARC_SAMPLES) if fs[j, k] == 0.0 or fs[j, k] * fs[j, k + 1] < 0.0]
-        if fs[j, -1] == 0.0 and phi[j] > 0:
-            candidates.append(ts[j, -1])
-        for cand in candidates:
-            t = cand if np.isscalar(cand) else brentq(f, cand[0], cand[1], xtol=1e-15,
-                                                       rtol=4 * np.finfo(float).eps, maxiter=200)
-            n = np.cos(t) * a + np.sin(t) * b
-            r = c + rho * n
-            if (o - r) @ n > 0.0 and (v - r) @ n > 0.0:
-                out[i] = r
-                break
+    with np.errstate(divide="ignore", invalid="ignore"):
+        dirs = d / dist[:, None]
+    cos_phi = np.sum(dirs * eye_dir, axis=1)
+    # NumPy's arccos, not the kernel's libm one: the two differ in the last bit for some inputs
+    phi = np.arccos(np.clip(cos_phi, -1.0, 1.0))
+    reflection_points_kernel(c, rho, o, eye_dir, pts, dirs, cos_phi, phi, todo.astype(np.int64), ARC_SAMPLES,
+                             SAMPLE_BLOCK, XTOL, RTOL, MAXITER, out)
     return out
-
-
-def _arc_function(t, a, b, c, rho, o, v):
-    """``(u + v) . T`` at arc angle ``t`` (broadcasting over leading axes; last axis xyz)."""
-    n = np.cos(t) * a + np.sin(t) * b
-    r = c + rho * n
-    u = o - r
-    w = v - r
-    s = u / np.linalg.norm(u, axis=-1, keepdims=True) + w / np.linalg.norm(w, axis=-1, keepdims=True)
-    return np.sum(s * (-np.sin(t) * a + np.cos(t) * b), axis=-1)
 
 
 def fit_sphere(vertices, rtol=1e-9):
