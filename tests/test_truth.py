@@ -242,3 +242,19 @@ def test_flip_is_information_only_and_called_reference_first(monkeypatch):
     assert calls == [(1.0, 0.0, "LDR")]  # the truth (second argument) is FLIP's reference, in [0, 1]
     monkeypatch.setitem(sys.modules, "flip_evaluator", None)  # not installed
     assert metrics.flip_mean(a, b) is None
+
+
+def test_closed_meshes_are_told_from_open_ones():
+    from refsoft.scene.builtin.shapes import bowl as make_bowl
+    from refsoft.scene.primitives import box as refsoft_box
+    from refsoft.truth.raytrace import _is_closed
+
+    ball = icosphere(2)
+    assert _is_closed(ball.faces, ball.n_vertices)
+    assert not _is_closed(ball.faces[1:], ball.n_vertices)  # a hole
+    doubled = np.concatenate([ball.faces, ball.faces[:1]])
+    assert not _is_closed(doubled, ball.n_vertices)  # an edge shared by three or four triangles
+    bowl, _ = make_bowl(1.0, 4, 8)
+    assert not _is_closed(bowl.faces, bowl.n_vertices)
+    box = refsoft_box(3)
+    assert _is_closed(box.faces, box.n_vertices) == (box.boundary_edges() == 0 and len(np.unique(box.vertices, axis=0)) == box.n_vertices)

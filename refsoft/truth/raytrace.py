@@ -112,12 +112,13 @@ class _Targets:
         return tri, hit, obj, normal
 
 
-def _is_closed(faces) -> bool:
-    """Every edge is shared by exactly two triangles (a watertight surface)."""
+def _is_closed(faces, n_vertices: int) -> bool:
+    """Every edge is shared by exactly two triangles (a watertight surface): the sorted edge keys
+    ``min * n + max`` come in equal pairs and no key appears more than twice."""
     f = np.asarray(faces, dtype=np.int64)
-    edges = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
-    _, counts = np.unique(edges, axis=0, return_counts=True)
-    return bool(np.all(counts == 2))
+    a, b = np.concatenate([f[:, 0], f[:, 1], f[:, 2]]), np.concatenate([f[:, 1], f[:, 2], f[:, 0]])
+    key = np.sort(np.minimum(a, b) * np.int64(n_vertices) + np.maximum(a, b))
+    return bool(len(key) % 2 == 0 and np.all(key[0::2] == key[1::2]) and np.all(key[1:-1:2] != key[2::2]))
 
 
 def exact_sphere_vertices(scene: Scene, reflector: int, frame: int, vertices):
@@ -134,7 +135,9 @@ def exact_sphere_vertices(scene: Scene, reflector: int, frame: int, vertices):
         Mirror images of the vertices across the exact tangent planes; NaN likewise.
     """
     mesh = scene.world_mesh(reflector, frame, proxy=True)
-    fit = fit_sphere(mesh.vertices) if _is_closed(mesh.faces) else None  # a whole sphere, not a bowl
+    fit = fit_sphere(mesh.vertices)
+    if fit is not None and not _is_closed(mesh.faces, mesh.n_vertices):  # a whole sphere, not a bowl
+        fit = None
     if fit is None:
         return None
     centre, radius = fit
