@@ -8,7 +8,7 @@ Run: ``pytest benchmarks/test_bench_analytic.py --benchmark-columns=min,median,r
 import pytest
 
 import refsoft
-from refsoft.search.reflect import scene_vertices
+from refsoft.scene import scene_vertices
 from refsoft.truth.analytic import fit_sphere, sphere_reflection_points
 
 

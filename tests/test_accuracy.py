@@ -116,7 +116,7 @@ def test_visible_parts_keep_the_winding_and_replace_every_mixed_face(clipped):
 def test_the_cut_brings_the_floor_reflection_to_the_rim():
     """Against the truth on the sphere scene's rim (2 pixels of the ball's stencil): cutting the
     mixed triangles at the silhouette agrees with the truth on more rim pixels than leaving them
-    out (measured at 240x180: 90.9% against 87.8%)."""
+    out (measured at 240x180 without tessellation: 91.4% against 51.0%)."""
     scene = refsoft.load_scene("sphere", width=240, height=180)
     truth = TruthRenderer(scene, exact=False).render_frame(0).arrays
     edge = rim(truth["object_id"] == 1, 2)
@@ -124,7 +124,7 @@ def test_the_cut_brings_the_floor_reflection_to_the_rim():
     for rule in ("texel", "clip"):
         fr = FrameDriver(scene, RenderOptions(preset="accurate", silhouette=rule, tessellate=None)).render_frame(0)
         got[rule] = 1 - disagreement(fr.arrays["reflected_id"], truth["reflected_id"], edge)
-    assert got["clip"] >= got["texel"] + 0.02, got
+    assert got["clip"] >= got["texel"] + 0.3, got
 
 
 # --- presets -----------------------------------------------------------------------------------
@@ -161,9 +161,10 @@ def test_golden_cases_name_their_preset():
 
 
 # --- the accurate preset against the truth --------------------------------------------------------
-#: Agreement (%) of the accurate preset with the truth at 192x144 on the first and last frame,
-#: measured with this code (the floors below are one point under the measurement).
-MEASURED = {"sphere": 99.4, "ellipsoid": 99.5, "quad": 99.6, "kitchen": 99.5, "ufo": 99.6, "ants": 98.5}
+#: Agreement (%) of the accurate preset with the truth at 192x144, the worse of the first and the
+#: last frame, as measured (the floors are one point under the measurement; docs/accuracy.md has
+#: the figures at 640x480 and 1024x768).
+MEASURED = {"sphere": 99.78, "ellipsoid": 99.59, "quad": 99.49, "kitchen": 99.57, "ufo": 98.88, "ants": 95.16}
 
 
 @pytest.mark.parametrize("name", sorted(MEASURED))

@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 import refsoft
 from naive import naive_sphere_reflection_points
 from refsoft import RefsoftError
-from refsoft.search.reflect import scene_vertices
+from refsoft.scene import scene_vertices
 from refsoft.truth.analytic import (fit_sphere, reflection_residual, sphere_reflection_points,
                                     sphere_reflection_points_quartic)
 

@@ -147,7 +147,7 @@ def test_refine_with_tessellation_converges_to_the_truth():
     truth = refsoft.TruthRenderer(scene).render_frame(0).arrays["reflected_id"]
 
     def agreement(**kw):
-        fr = FrameDriver(scene, RenderOptions(inverse="search", **kw)).render_frame(0)
+        fr = FrameDriver(scene, RenderOptions(preset="paper", inverse="search", **kw)).render_frame(0)
         m = truth >= 0
         return np.mean(fr.arrays["reflected_id"][m] == truth[m]), fr.skipped.get("tessellation", {}).get("1", {})
 
@@ -164,7 +164,8 @@ def test_refine_with_tessellation_converges_to_the_truth():
 def test_cli_refine_switch(tmp_path):
     from refsoft import cli
 
-    common = ["render", "quad", "--width", "64", "--height", "48", "--frames", "1", "--inverse", "search"]
+    common = ["render", "quad", "--width", "64", "--height", "48", "--frames", "1", "--preset", "paper", "--inverse",
+              "search"]
     assert cli.main(common + ["--out", str(tmp_path / "a")]) == 0
     assert cli.main(common + ["--refine", "--tessellate", "1e-5", "--out", str(tmp_path / "b")]) == 0
     a = np.load(tmp_path / "a" / "frame_0000.npz")

@@ -56,12 +56,12 @@ def test_conforming_split_keeps_a_closed_mesh_closed(seed):
 
 def test_a_high_threshold_changes_nothing_and_levels_are_bounded():
     scene = refsoft.load_scene("quad", width=96, height=72)
-    plain = FrameDriver(scene, RenderOptions(inverse="search")).render_frame(0)
-    same = FrameDriver(scene, RenderOptions(inverse="search", tessellate=1.0)).render_frame(0)
+    plain = FrameDriver(scene, RenderOptions(preset="paper", inverse="search")).render_frame(0)
+    same = FrameDriver(scene, RenderOptions(preset="paper", inverse="search", tessellate=1.0)).render_frame(0)
     np.testing.assert_array_equal(plain.image, same.image)
     assert same.skipped["tessellation"]["1"]["vertices_searched"] == 0
     for level in (1, 2):
-        fr = FrameDriver(scene, RenderOptions(inverse="search", tessellate=0.0, max_level=level)).render_frame(0)
+        fr = FrameDriver(scene, RenderOptions(preset="paper", inverse="search", tessellate=0.0, max_level=level)).render_frame(0)
         assert fr.skipped["tessellation"]["1"]["levels"] == level
     with pytest.raises(refsoft.RefsoftError, match="tessellate"):
         RenderOptions(tessellate=-1.0)

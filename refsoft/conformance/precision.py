@@ -42,9 +42,10 @@ def scores64(gbuffer, eye, vertices, pixels) -> np.ndarray:
     return np.einsum("ij,ij->i", n, h)
 
 
-def compare_precisions(scene, frame: int = 0, **options) -> dict:
-    """Search every reflector of ``scene`` at ``frame`` in float32 and in float64 (cold, the
-    other options as :func:`refsoft.search.reflect.reflect`) and classify the differences.
+def compare_precisions(scene, frame: int = 0, preset: str = "paper", **options) -> dict:
+    """Search every reflector of ``scene`` at ``frame`` in float32 and in float64 (cold; the
+    papers' search unless ``preset`` or ``options`` say otherwise, as
+    :func:`refsoft.search.reflect.reflect` takes them) and classify the differences.
 
     Returns
     -------
@@ -53,15 +54,15 @@ def compare_precisions(scene, frame: int = 0, **options) -> dict:
         (counts), ``identical_share``, ``max_distance`` (pixels, among differing vertices) and
         ``median_margin_differing`` / ``median_margin_all`` (the float32 search's margins).
     """
-    verts, _, r32 = reflect(scene, frame, precision="float32", **options)
-    _, _, r64 = reflect(scene, frame, precision="float64", **options)
+    verts, _, r32 = reflect(scene, frame, precision="float32", preset=preset, **options)
+    _, _, r64 = reflect(scene, frame, precision="float64", preset=preset, **options)
     eye = scene.camera_at(frame).eye
     out = {}
     for k in r32:
         a, b = r32[k].result, r64[k].result
         ok = ((a.flags | b.flags) & CULLED) == 0
         if not np.array_equal(r32[k].gbuffer.mask, r64[k].gbuffer.mask):  # pragma: no cover - a rasterizer bug
-            raise AssertionError("float32 and float64 G-buffers cover different pixels")
+            raise RuntimeError("float32 and float64 G-buffers cover different pixels (an internal error)")
         same = ok & np.all(a.pixel == b.pixel, axis=1)
         diff = ok & ~same
         gb = r64[k].gbuffer
