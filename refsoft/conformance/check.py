@@ -353,8 +353,11 @@ def _compare_vertices(ctx, k, G, C, cand_traces, prev_pixels):
             res = SearchResult(cp[sub].astype(np.int32), np.zeros(len(sub)), np.zeros(len(sub)), np.ones(len(sub), np.int32),
                                gflags[sub], o.case.options.get("neighbourhood", "cross"),
                                o.case.options.get("inverse", "plane"), 1, o.case.options.get("method", "walk"))
-            gv[sub] = virtual_vertices(gb, res, o.verts[sub], rule=o.case.options.get("virtual", "mirror"),
-                                       eye=o.scene.camera_at(ctx.frame).eye).astype(np.float64)
+            from ..search.method import virtual_relative
+
+            rel, _ = virtual_relative(gb, res, o.verts[sub], o.scene.camera_at(ctx.frame).eye,
+                                      o.case.options.get("refine", False), o.case.options.get("virtual", "mirror"))
+            gv[sub] = (rel.astype(np.float64) + gb.origin).astype(rel.dtype).astype(np.float64)
         if extent is None:
             extent = ctx.oracle().extent if not np.array_equal(gv[agree | tie], cv[agree | tie]) else 1.0
         findings += _compare_float_field(ctx, vk, gv, cv, agree | tie, extent)

@@ -85,8 +85,8 @@ def pixel_grid_scene():
 
 #: The canonical cases: every built-in scene with the paper preset (three coherent frames of
 #: each animation), both neighbourhoods, every hidden-vertex mode, the wider frustum, float64,
-#: cold searches, the pixel-grid conformance scene, and Szabo's hierarchy search. Each case names
-#: its preset, so a change of the default preset never changes a case.
+#: cold searches, the pixel-grid conformance scene, Szabo's hierarchy search, and the accurate
+#: preset. Each case names its preset, so a change of the default preset never changes a case.
 CASES = (
     Case("sphere", "sphere", (0,), {"preset": "paper"}),
     Case("ellipsoid", "ellipsoid", (0, 1, 2), {"preset": "paper"}),
@@ -107,6 +107,8 @@ CASES = (
     Case("kitchen_widen", "kitchen", (20, 21), {"preset": "paper", "widen": 1.3}),
     Case("planar_cold", "planar", (0, 1), {"preset": "paper", "coherence": False}),
     Case("sphere_hierarchy", "sphere", (0,), {"preset": "paper", "method": "hierarchy"}),
+    Case("sphere_accurate", "sphere", (0,), {"preset": "accurate"}),
+    Case("kitchen_accurate", "kitchen", (0, 1, 2), {"preset": "accurate"}),
 )
 
 
