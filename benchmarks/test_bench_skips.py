@@ -1,5 +1,5 @@
 """Each built-in animation rendered with the exact skips on and off (outputs are
-bit-identical either way: tests/test_skips.py), 640x480, the first 6 frames, coherent.
+bit-identical either way: tests/search/test_skips.py), 640x480, the first 6 frames, coherent.
 ``extra_info`` lists what was skipped.
 
 Run: ``pytest benchmarks/test_bench_skips.py --benchmark-columns=min,median,rounds``.

@@ -8,7 +8,7 @@ plain bytes or a suffix: ``512M``, ``4G``, ``1.5GiB``.
 The estimate counts the arrays a frame keeps (its section 7 outputs) and the largest working set
 of one stage (a reflector's G-buffer, packed copy and search arrays; the rasterizer's per-pixel
 and per-triangle buffers), from byte counts per pixel, vertex and triangle listed below. It is
-an estimate (within about 2x of the measured peak on the built-in scenes: tests/test_limits.py),
+an estimate (within about 2x of the measured peak on the built-in scenes: tests/frame/test_limits.py),
 meant to stop a typo like ``--width 100000`` before the machine swaps, not to budget tightly.
 """
 

@@ -8,9 +8,9 @@ import os
 import subprocess
 import sys
 
-SUBSET = ["tests/test_stress.py", "tests/test_raster_vs_naive.py", "tests/test_skips.py",
-          "tests/test_search.py::test_trace_ends_where_the_kernel_ends_for_every_vertex",
-          "tests/test_search.py::test_trace_records_every_candidate"]
+SUBSET = ["tests/test_stress.py", "tests/raster/test_raster_vs_naive.py", "tests/search/test_skips.py",
+          "tests/search/test_search.py::test_trace_ends_where_the_kernel_ends_for_every_vertex",
+          "tests/search/test_search.py::test_trace_records_every_candidate"]
 
 PROBE = """
 import numpy as np

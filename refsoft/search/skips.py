@@ -1,7 +1,7 @@
 """Tests that let the frame driver skip work a frame does not need .
 
 Every skip here is *exact*: the frame's outputs are bit for bit those of the full computation
-(tests/test_skips.py renders every built-in animation with each skip on and off). A skip that
+(tests/search/test_skips.py renders every built-in animation with each skip on and off). A skip that
 changes results by design is an approximation, named as such and off by default
 (:func:`projection_clipped`, used by ``RenderOptions.adaptive_widen``).
 

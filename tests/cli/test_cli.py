@@ -11,7 +11,7 @@ import pytest
 from refsoft import cli
 from scene_data import ANIMATED
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 
 def run_cli(*args, cwd=None):
