@@ -49,6 +49,24 @@ def build_parser() -> argparse.ArgumentParser:
                        help="render frames with curved reflections (frame_NNNN.npz/.png, stats.json)")
     r.set_defaults(func=commands.cmd_render)
 
+    _port_commands(sub)
+    _bench_command(sub)
+    tr = sub.add_parser("truth", parents=[scene, frame_range_options(), memory, out_option("out/truth")],
+                        help="ray-trace the reflections (Embree) as the reference for compare")
+    tr.add_argument("--no-exact", action="store_true",
+                    help="skip the exact reflection points of spherical reflectors (per-vertex truth)")
+    tr.set_defaults(func=commands.cmd_truth)
+
+    c = sub.add_parser("compare", help="metrics of a render against its truth, agreement maps, side-by-side pictures")
+    c.add_argument("render_dir", help="folder written by refsoft render")
+    c.add_argument("truth_dir", help="folder written by refsoft truth")
+    c.add_argument("--out", default=None, metavar="DIR", help="output folder (default: RENDER_DIR/compare)")
+    c.set_defaults(func=commands.cmd_compare)
+    return p
+
+
+def _port_commands(sub):
+    """``golden`` and ``check``."""
     go = sub.add_parser("golden", parents=[out_option("golden")], help="write the golden set for ports")
     go.add_argument("--case", action="append", default=None, metavar="NAME",
                     help="only this case (repeatable; --list shows them)")
@@ -64,6 +82,10 @@ def build_parser() -> argparse.ArgumentParser:
     ck.add_argument("--verbose", action="store_true", help="also print the outputs that pass")
     ck.set_defaults(func=commands.cmd_check)
 
+
+
+def _bench_command(sub):
+    """``bench``."""
     b = sub.add_parser("bench", help="run time against error: accuracy, sweep, scaling, table1 (docs/benchmarks.md, "
                                      "docs/accuracy.md)")
     b.add_argument("what", choices=["accuracy", "sweep", "scaling", "table1"], help="which benchmark")
@@ -89,18 +111,6 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--max-width", type=int, default=2048, metavar="W", help="scaling: largest image width")
     b.set_defaults(func=commands.cmd_bench)
 
-    tr = sub.add_parser("truth", parents=[scene, frame_range_options(), memory, out_option("out/truth")],
-                        help="ray-trace the reflections (Embree) as the reference for compare")
-    tr.add_argument("--no-exact", action="store_true",
-                    help="skip the exact reflection points of spherical reflectors (per-vertex truth)")
-    tr.set_defaults(func=commands.cmd_truth)
-
-    c = sub.add_parser("compare", help="metrics of a render against its truth, agreement maps, side-by-side pictures")
-    c.add_argument("render_dir", help="folder written by refsoft render")
-    c.add_argument("truth_dir", help="folder written by refsoft truth")
-    c.add_argument("--out", default=None, metavar="DIR", help="output folder (default: RENDER_DIR/compare)")
-    c.set_defaults(func=commands.cmd_compare)
-    return p
 
 
 def main(argv=None) -> int:

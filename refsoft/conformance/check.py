@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .. import constants
+from .. import constants, keys
 from ..errors import RefsoftError
 
 STATUSES = ("pass", "accepted", "fail", "missing")
@@ -283,86 +283,19 @@ def _first_divergence(expected, observed):
 
 
 def _compare_vertices(ctx, k, G, C, cand_traces, prev_pixels):
-    """reflection_pixel_k, virtual_vertex_k, flags_k, iterations_k, score_k, vertex_object_k."""
-    from ..search import CULLED, HIDDEN, SearchResult, scores_at, virtual_vertices
+    """The per-vertex outputs of reflector ``k``: reflection pixels (ties by the oracle's scores),
+    virtual vertices, flags and vertex objects, iterations, scores, and supplied traces."""
+    from ..search import CULLED
 
-    findings = []
-    gp, cp = G[f"reflection_pixel_{k}"], C[f"reflection_pixel_{k}"]
-    gflags = G[f"flags_{k}"]
-    live = (gflags & CULLED) == 0
-    n = int(live.sum())
+    live = (G[keys.FLAGS(k)] & CULLED) == 0
+    gp, cp = G[keys.REFLECTION_PIXEL(k)], C[keys.REFLECTION_PIXEL(k)]
     agree = live & np.all(gp == cp, axis=1)
-    differ = np.flatnonzero(live & ~agree)
-    tie = np.zeros(len(gp), dtype=bool)
-    details = []
-    extent = None
-    if len(differ):
-        o = ctx.oracle()
-        extent = o.extent
-        gb = o.gbuffer(k)
-        eye = o.scene.camera_at(ctx.frame).eye
-        inverse = (o.case.options.get("inverse") == "search") & ((gflags[differ] & HIDDEN) != 0)
-        s_g = scores_at(gb, eye, o.verts[differ], gp[differ], inverse).astype(np.float64)
-        s_c = scores_at(gb, eye, o.verts[differ], cp[differ], inverse).astype(np.float64)
-        covered = s_c > -3
-        best = np.maximum(s_g, s_c)
-        ok = covered & (np.abs(s_g - s_c) <= constants.TIE_ULPS * _f32_ulp(best))
-        tie[differ[ok]] = True
-        for j, i in enumerate(differ[:5]):
-            msg = (f"vertex {int(i)}: expected {_where(gp[i])} / observed {_where(cp[i])}, oracle scores "
-                   f"{s_g[j]:.9g} / {s_c[j]:.9g}" + (" (tie)" if ok[j] else ""))
-            if cand_traces is not None and i in cand_traces.get(k, {}):
-                prev = None if prev_pixels is None else prev_pixels[i]
-                path = cand_traces[k][i].get("path", [])
-                div = _first_divergence(_oracle_trace(ctx, k, int(i), prev), path)
-                if div:
-                    msg += f"; traces part at step {div[0]}: expected {div[1]} / observed {div[2]}"
-                elif path and list(path[-1]) != [int(x) for x in cp[i]]:
-                    msg += f"; the supplied trace follows the oracle's walk but ends at {path[-1]}, not at the reported pixel"
-                else:
-                    msg += "; the supplied trace follows the oracle's walk step for step"
-            details.append(msg)
-    nfail = len(differ) - int(tie.sum())
-    key = f"reflection_pixel_{k}"
-    if nfail or tie.sum() > TIE_SHARE_MAX * max(n, 1):
-        findings.append(ctx.finding(key, "pixel", "fail", f"{nfail} differ beyond ties, {int(tie.sum())} ties "
-                                    f"(at most {TIE_SHARE_MAX:.0%} allowed)", len(differ), n, details=details))
-    elif tie.any():
-        findings.append(ctx.finding(key, "pixel", "accepted", "differing pixels are ties (oracle scores within "
-                                    f"{constants.TIE_ULPS} float32 ULP)", int(tie.sum()), n, details=details))
-    else:
-        findings.append(ctx.finding(key, "pixel", "pass", "identical", 0, n))
-    if ctx.out is not None:
-        gbm = G.get(f"gbuffer_mask_{k}")
-        if gbm is not None:
-            from ..io import write_png
-
-            img = np.where(gbm[..., None], 60, 0).astype(np.uint8) * np.ones(3, np.uint8)
-            for sel, col in ((agree, (0, 160, 0)), (tie, (230, 200, 0)), (live & ~agree & ~tie, (220, 0, 0))):
-                pix = gp[sel]
-                img[pix[:, 0], pix[:, 1]] = col
-            write_png(os.path.join(ctx.out, f"{ctx.case}_frame_{ctx.frame:04d}_{key}.png"), img)
-    # virtual vertices: the float rule where the pixels agree, recomputed from the candidate's pixel at ties
-    vk = f"virtual_vertex_{k}"
-    if vk in G and vk in C and G[vk].shape == C[vk].shape:
-        gv, cv = G[vk].astype(np.float64), C[vk].astype(np.float64)
-        if tie.any():
-            o = ctx.oracle()
-            gb = o.gbuffer(k)
-            sub = np.flatnonzero(tie)
-            res = SearchResult(cp[sub].astype(np.int32), np.zeros(len(sub)), np.zeros(len(sub)), np.ones(len(sub), np.int32),
-                               gflags[sub], o.case.options.get("neighbourhood", "cross"),
-                               o.case.options.get("inverse", "plane"), 1, o.case.options.get("method", "walk"))
-            from ..search.method import virtual_relative
-
-            rel, _ = virtual_relative(gb, res, o.verts[sub], o.scene.camera_at(ctx.frame).eye,
-                                      o.case.options.get("refine", False), o.case.options.get("virtual", "mirror"))
-            gv[sub] = (rel.astype(np.float64) + gb.origin).astype(rel.dtype).astype(np.float64)
-        if extent is None:
-            extent = ctx.oracle().extent if not np.array_equal(gv[agree | tie], cv[agree | tie]) else 1.0
-        findings += _compare_float_field(ctx, vk, gv, cv, agree | tie, extent)
-    for name, kind in ((f"flags_{k}", "flags"), (f"vertex_object_{k}", "ids")):
-        if name in G and name in C and G[name].shape == C[name].shape:
+    findings, tie = _compare_pixels(ctx, k, G, C, live, agree, cand_traces, prev_pixels)
+    _paint_pixels(ctx, k, G, live, agree, tie)
+    n = int(live.sum())
+    findings += _compare_virtual(ctx, k, G, C, agree, tie)
+    for name, kind in ((keys.FLAGS(k), "flags"), (keys.VERTEX_OBJECT(k), "ids")):
+        if _comparable(G, C, name):
             bad = agree & (G[name] != C[name])
             if bad.any():
                 i = int(np.flatnonzero(bad)[0])
@@ -370,8 +303,8 @@ def _compare_vertices(ctx, k, G, C, cand_traces, prev_pixels):
                                             f"vertex {i}: expected {G[name][i]} / observed {C[name][i]}"))
             else:
                 findings.append(ctx.finding(name, kind, "pass", "identical where the pixels agree", 0, n))
-    name = f"iterations_{k}"
-    if name in G and name in C and G[name].shape == C[name].shape:
+    name = keys.ITERATIONS(k)
+    if _comparable(G, C, name):
         bad = agree & (G[name] != C[name])
         i = int(np.flatnonzero(bad)[0]) if bad.any() else None
         worst = f"vertex {i}: expected {G[name][i]} / observed {C[name][i]}" if bad.any() else ""
@@ -379,24 +312,126 @@ def _compare_vertices(ctx, k, G, C, cand_traces, prev_pixels):
         findings.append(ctx.finding(name, "iterations", status, f"differ where the pixels agree (at most "
                                     f"{ITERATION_SHARE_MAX:.0%} allowed)" if bad.any() else "identical", int(bad.sum()), n,
                                     worst))
-    name = f"score_{k}"
-    if name in G and name in C and G[name].shape == C[name].shape:
+    name = keys.SCORE(k)
+    if _comparable(G, C, name):
         findings += _compare_float_field(ctx, name, G[name], C[name], agree, 0.0)
-    # traces the candidate supplies: the first step at which each walk leaves the oracle's
     if cand_traces is not None and k in cand_traces:
-        parted = []
-        for i, rec in sorted(cand_traces[k].items()):
-            if not (0 <= i < len(gp)) or not live[i]:
-                continue
-            prev = None if prev_pixels is None else prev_pixels[i]
-            div = _first_divergence(_oracle_trace(ctx, k, i, prev), rec.get("path", []))
-            if div:
-                parted.append(f"vertex {i}: step {div[0]}, expected {div[1]} / observed {div[2]}")
-        status = "fail" if parted else "pass"
-        findings.append(ctx.finding(f"traces_{k}", "trace", status, "walks part from the oracle's" if parted
-                                    else "every supplied walk follows the oracle's", len(parted), len(cand_traces[k]),
-                                    details=parted[:5]))
+        findings.append(_compare_traces(ctx, k, live, cand_traces[k], prev_pixels))
     return findings
+
+
+def _comparable(G, C, name) -> bool:
+    return name in G and name in C and G[name].shape == C[name].shape
+
+
+def _compare_pixels(ctx, k, G, C, live, agree, cand_traces, prev_pixels):
+    """The reflection-pixel rule: identical, or a tie by the oracle's own scores of both pixels.
+    Returns (findings, tie (N,) bool)."""
+    from ..search import HIDDEN, scores_at
+
+    gp, cp, gflags = G[keys.REFLECTION_PIXEL(k)], C[keys.REFLECTION_PIXEL(k)], G[keys.FLAGS(k)]
+    n = int(live.sum())
+    differ = np.flatnonzero(live & ~agree)
+    tie = np.zeros(len(gp), dtype=bool)
+    details = []
+    if len(differ):
+        o = ctx.oracle()
+        gb = o.gbuffer(k)
+        eye = o.scene.camera_at(ctx.frame).eye
+        inverse = (o.case.options.get("inverse") == "search") & ((gflags[differ] & HIDDEN) != 0)
+        s_g = scores_at(gb, eye, o.verts[differ], gp[differ], inverse).astype(np.float64)
+        s_c = scores_at(gb, eye, o.verts[differ], cp[differ], inverse).astype(np.float64)
+        covered = s_c > constants.NO_SCORE
+        best = np.maximum(s_g, s_c)
+        ok = covered & (np.abs(s_g - s_c) <= constants.TIE_ULPS * _f32_ulp(best))
+        tie[differ[ok]] = True
+        for j, i in enumerate(differ[:5]):
+            msg = (f"vertex {int(i)}: expected {_where(gp[i])} / observed {_where(cp[i])}, oracle scores "
+                   f"{s_g[j]:.9g} / {s_c[j]:.9g}" + (" (tie)" if ok[j] else ""))
+            details.append(msg + _trace_note(ctx, k, int(i), cp[i], cand_traces, prev_pixels))
+    nfail = len(differ) - int(tie.sum())
+    key = keys.REFLECTION_PIXEL(k)
+    if nfail or tie.sum() > TIE_SHARE_MAX * max(n, 1):
+        f = ctx.finding(key, "pixel", "fail", f"{nfail} differ beyond ties, {int(tie.sum())} ties "
+                        f"(at most {TIE_SHARE_MAX:.0%} allowed)", len(differ), n, details=details)
+    elif tie.any():
+        f = ctx.finding(key, "pixel", "accepted", "differing pixels are ties (oracle scores within "
+                        f"{constants.TIE_ULPS} float32 ULP)", int(tie.sum()), n, details=details)
+    else:
+        f = ctx.finding(key, "pixel", "pass", "identical", 0, n)
+    return [f], tie
+
+
+def _trace_note(ctx, k, i, observed, cand_traces, prev_pixels) -> str:
+    """Where the candidate's supplied trace of vertex ``i`` parts from the oracle's walk, as a
+    note for a differing pixel ("" without a trace)."""
+    if cand_traces is None or i not in cand_traces.get(k, {}):
+        return ""
+    prev = None if prev_pixels is None else prev_pixels[i]
+    path = cand_traces[k][i].get("path", [])
+    div = _first_divergence(_oracle_trace(ctx, k, i, prev), path)
+    if div:
+        return f"; traces part at step {div[0]}: expected {div[1]} / observed {div[2]}"
+    if path and list(path[-1]) != [int(x) for x in observed]:
+        return f"; the supplied trace follows the oracle's walk but ends at {path[-1]}, not at the reported pixel"
+    return "; the supplied trace follows the oracle's walk step for step"
+
+
+def _paint_pixels(ctx, k, G, live, agree, tie):
+    """The reflection pixels' error mask over the G-buffer: green agree, yellow tie, red fail."""
+    gbm = G.get(keys.GBUFFER_MASK(k))
+    if ctx.out is None or gbm is None:
+        return
+    from ..io import write_png
+
+    gp = G[keys.REFLECTION_PIXEL(k)]
+    img = np.where(gbm[..., None], 60, 0).astype(np.uint8) * np.ones(3, np.uint8)
+    for sel, col in ((agree, (0, 160, 0)), (tie, (230, 200, 0)), (live & ~agree & ~tie, (220, 0, 0))):
+        pix = gp[sel]
+        img[pix[:, 0], pix[:, 1]] = col
+    write_png(os.path.join(ctx.out, f"{ctx.case}_frame_{ctx.frame:04d}_{keys.REFLECTION_PIXEL(k)}.png"), img)
+
+
+def _compare_virtual(ctx, k, G, C, agree, tie) -> list:
+    """Virtual vertices: the float rule where the pixels agree; at a tie, against the oracle's
+    virtual vertex recomputed from the candidate's pixel (the case's refine and virtual rule)."""
+    from ..search import SearchResult
+    from ..search.method import virtual_relative
+
+    vk = keys.VIRTUAL_VERTEX(k)
+    if not _comparable(G, C, vk):
+        return []
+    gv, cv = G[vk].astype(np.float64), C[vk].astype(np.float64)
+    if tie.any():
+        o = ctx.oracle()
+        gb, opts = o.gbuffer(k), o.case.options
+        sub = np.flatnonzero(tie)
+        m = len(sub)
+        res = SearchResult(C[keys.REFLECTION_PIXEL(k)][sub].astype(np.int32), np.zeros(m), np.zeros(m),
+                           np.ones(m, np.int32), G[keys.FLAGS(k)][sub], opts.get("neighbourhood", "cross"),
+                           opts.get("inverse", "plane"), 1, opts.get("method", "walk"))
+        rel, _ = virtual_relative(gb, res, o.verts[sub], o.scene.camera_at(ctx.frame).eye, opts.get("refine", False),
+                                  opts.get("virtual", "mirror"))
+        gv[sub] = (rel.astype(np.float64) + gb.origin).astype(rel.dtype).astype(np.float64)
+    sel = agree | tie
+    extent = ctx.oracle().extent if not np.array_equal(gv[sel], cv[sel]) else 1.0
+    return _compare_float_field(ctx, vk, gv, cv, sel, extent)
+
+
+def _compare_traces(ctx, k, live, traces, prev_pixels):
+    """The traces the candidate supplies: the first step at which each walk leaves the
+    oracle's."""
+    parted = []
+    for i, rec in sorted(traces.items()):
+        if not (0 <= i < len(live)) or not live[i]:
+            continue
+        prev = None if prev_pixels is None else prev_pixels[i]
+        div = _first_divergence(_oracle_trace(ctx, k, i, prev), rec.get("path", []))
+        if div:
+            parted.append(f"vertex {i}: step {div[0]}, expected {div[1]} / observed {div[2]}")
+    return ctx.finding(f"traces_{k}", "trace", "fail" if parted else "pass",
+                       "walks part from the oracle's" if parted else "every supplied walk follows the oracle's",
+                       len(parted), len(traces), details=parted[:5])
 
 
 def _vertex_keys(k):

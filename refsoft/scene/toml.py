@@ -128,6 +128,25 @@ def scene_from_dict(data: dict, path: str = "<scene>", base_dir: str = ".", subd
         sc = ctx.table(data["scene"], "scene", SCENE_KEYS)
         if "subdivide" in sc:
             default_subdivide = ctx.max_edge(sc["subdivide"], "scene.subdivide")
+    camera = _camera(ctx, data)
+    objects = _objects(ctx, data, base_dir, default_subdivide)
+    animation = _animation(ctx, data["animation"], camera, objects) if "animation" in data else None
+    name = data.get("name", os.path.splitext(os.path.basename(str(path)))[0])
+    try:
+        scene = Scene(tuple(objects), camera, animation, name)
+        if animation is not None:
+            for f in range(animation.frames):  # every keyed camera must be valid
+                scene.camera_at(f)
+    except RefsoftError as exc:
+        raise SceneError(f"{path}: {exc}") from None
+    try:
+        return apply_subdivision(scene, subdivide)
+    except RefsoftError as exc:  # keep the type: a LimitError stays one
+        raise type(exc)(f"{path}: {exc}") from None
+
+
+def _camera(ctx, data) -> Camera:
+    """The ``[camera]`` table."""
     if "camera" not in data:
         ctx.fail("camera", "missing table [camera]")
     cam = ctx.table(data["camera"], "camera", CAMERA_KEYS)
@@ -147,10 +166,13 @@ def scene_from_dict(data: dict, path: str = "<scene>", base_dir: str = ".", subd
     if "projection" in cam:
         kw["projection"] = cam["projection"]
     try:
-        camera = Camera(**kw)
+        return Camera(**kw)
     except RefsoftError as exc:
         ctx.fail("camera", str(exc))
 
+
+def _objects(ctx, data, base_dir, default_subdivide) -> list:
+    """The ``[[objects]]`` entries, in order."""
     objs = data.get("objects")
     if not isinstance(objs, list) or not objs:
         ctx.fail("objects", "needs at least one [[objects]] entry")
@@ -163,76 +185,71 @@ def scene_from_dict(data: dict, path: str = "<scene>", base_dir: str = ".", subd
             ctx.fail(f"{key}.name", f"must be a non-empty string, got {name!r}")
         if any(prev.name == name for prev in objects):
             ctx.fail(f"{key}.name", f"duplicate object name {name!r}")
-        if ("mesh" in o) == ("primitive" in o):
-            ctx.fail(key, "needs exactly one of 'mesh' or 'primitive'")
-        mesh = _load_mesh_ref(ctx, o.get("mesh", o.get("primitive")), f"{key}.{'mesh' if 'mesh' in o else 'primitive'}", base_dir)
-        proxy = _load_mesh_ref(ctx, o["closed_proxy"], f"{key}.closed_proxy", base_dir) if "closed_proxy" in o else None
-        color = ctx.vec3(o["color"], f"{key}.color") if "color" in o else [0.8, 0.8, 0.8]
-        reflector = o.get("reflector", False)
-        if not isinstance(reflector, bool):
-            ctx.fail(f"{key}.reflector", f"must be true or false, got {reflector!r}")
-        reflectivity = ctx.number(o["reflectivity"], f"{key}.reflectivity") if "reflectivity" in o else 1.0
-        is_open = o.get("open", False)
-        if not isinstance(is_open, bool):
-            ctx.fail(f"{key}.open", f"must be true or false, got {is_open!r}")
-        if "subdivide" in o:
-            sub = ctx.max_edge(o["subdivide"], f"{key}.subdivide")
-        else:  # the scene-wide default is for the reflected objects, not the reflectors
-            sub = None if reflector else default_subdivide
-        try:
-            objects.append(SceneObject(name, mesh, tuple(color), _transform(ctx, o, key), reflector, proxy, reflectivity,
-                                       is_open, sub))
-        except SceneError as exc:
-            if str(exc).startswith(str(path)):
-                raise
-            ctx.fail(key, str(exc))
+        objects.append(_object(ctx, o, key, name, base_dir, default_subdivide))
+    return objects
 
-    animation = None
-    if "animation" in data:
-        a = ctx.table(data["animation"], "animation", ANIMATION_KEYS)
-        if "frames" not in a:
-            ctx.fail("animation.frames", "missing key")
-        frames = ctx.integer(a["frames"], "animation.frames")
-        cam_keys = []
-        for i, k in enumerate(a.get("camera", [])):
-            key = f"animation.camera[{i}]"
-            ctx.table(k, key, ANIM_CAMERA_KEYS)
-            if "frame" not in k:
-                ctx.fail(f"{key}.frame", "missing key")
-            values = {}
-            for name in ("eye", "target", "up"):
-                values[name] = ctx.vec3(k[name], f"{key}.{name}") if name in k else getattr(camera, name).tolist()
-            values["fov_y"] = ctx.number(k["fov_y"], f"{key}.fov_y") if "fov_y" in k else camera.fov_y
-            cam_keys.append((ctx.integer(k["frame"], f"{key}.frame"), values))
-        obj_keys = {}
-        by_name = {o.name: o for o in objects}
-        for i, k in enumerate(a.get("objects", [])):
-            key = f"animation.objects[{i}]"
-            ctx.table(k, key, ANIM_OBJECT_KEYS)
-            for req in ("name", "frame"):
-                if req not in k:
-                    ctx.fail(f"{key}.{req}", "missing key")
-            if k["name"] not in by_name:
-                ctx.fail(f"{key}.name", f"no object named {k['name']!r}")
-            base = by_name[k["name"]].transform  # unkeyed fields keep the object's own
-            obj_keys.setdefault(k["name"], []).append((ctx.integer(k["frame"], f"{key}.frame"),
-                                                       _transform(ctx, k, key, base)))
-        try:
-            animation = Animation(frames, tuple(cam_keys), {n: tuple(v) for n, v in obj_keys.items()})
-        except SceneError as exc:
-            ctx.fail("animation", str(exc))
-    name = data.get("name", os.path.splitext(os.path.basename(str(path)))[0])
+
+def _object(ctx, o, key, name, base_dir, default_subdivide) -> SceneObject:
+    """One ``[[objects]]`` entry (its name checked)."""
+    if ("mesh" in o) == ("primitive" in o):
+        ctx.fail(key, "needs exactly one of 'mesh' or 'primitive'")
+    mesh = _load_mesh_ref(ctx, o.get("mesh", o.get("primitive")), f"{key}.{'mesh' if 'mesh' in o else 'primitive'}",
+                          base_dir)
+    proxy = _load_mesh_ref(ctx, o["closed_proxy"], f"{key}.closed_proxy", base_dir) if "closed_proxy" in o else None
+    color = ctx.vec3(o["color"], f"{key}.color") if "color" in o else [0.8, 0.8, 0.8]
+    flags = {}
+    for flag in ("reflector", "open"):
+        flags[flag] = o.get(flag, False)
+        if not isinstance(flags[flag], bool):
+            ctx.fail(f"{key}.{flag}", f"must be true or false, got {flags[flag]!r}")
+    reflectivity = ctx.number(o["reflectivity"], f"{key}.reflectivity") if "reflectivity" in o else 1.0
+    if "subdivide" in o:
+        sub = ctx.max_edge(o["subdivide"], f"{key}.subdivide")
+    else:  # the scene-wide default is for the reflected objects, not the reflectors
+        sub = None if flags["reflector"] else default_subdivide
     try:
-        scene = Scene(tuple(objects), camera, animation, name)
-        if animation is not None:
-            for f in range(animation.frames):  # every keyed camera must be valid
-                scene.camera_at(f)
-    except RefsoftError as exc:
-        raise SceneError(f"{path}: {exc}") from None
+        return SceneObject(name, mesh, tuple(color), _transform(ctx, o, key), flags["reflector"], proxy, reflectivity,
+                           flags["open"], sub)
+    except SceneError as exc:
+        if str(exc).startswith(str(ctx.path)):
+            raise
+        ctx.fail(key, str(exc))
+
+
+def _animation(ctx, table, camera, objects) -> Animation:
+    """The ``[animation]`` table: camera keys and object keys."""
+    a = ctx.table(table, "animation", ANIMATION_KEYS)
+    if "frames" not in a:
+        ctx.fail("animation.frames", "missing key")
+    frames = ctx.integer(a["frames"], "animation.frames")
+    cam_keys = []
+    for i, k in enumerate(a.get("camera", [])):
+        key = f"animation.camera[{i}]"
+        ctx.table(k, key, ANIM_CAMERA_KEYS)
+        if "frame" not in k:
+            ctx.fail(f"{key}.frame", "missing key")
+        values = {}
+        for name in ("eye", "target", "up"):
+            values[name] = ctx.vec3(k[name], f"{key}.{name}") if name in k else getattr(camera, name).tolist()
+        values["fov_y"] = ctx.number(k["fov_y"], f"{key}.fov_y") if "fov_y" in k else camera.fov_y
+        cam_keys.append((ctx.integer(k["frame"], f"{key}.frame"), values))
+    obj_keys = {}
+    by_name = {o.name: o for o in objects}
+    for i, k in enumerate(a.get("objects", [])):
+        key = f"animation.objects[{i}]"
+        ctx.table(k, key, ANIM_OBJECT_KEYS)
+        for req in ("name", "frame"):
+            if req not in k:
+                ctx.fail(f"{key}.{req}", "missing key")
+        if k["name"] not in by_name:
+            ctx.fail(f"{key}.name", f"no object named {k['name']!r}")
+        base = by_name[k["name"]].transform  # unkeyed fields keep the object's own
+        obj_keys.setdefault(k["name"], []).append((ctx.integer(k["frame"], f"{key}.frame"),
+                                                   _transform(ctx, k, key, base)))
     try:
-        return apply_subdivision(scene, subdivide)
-    except RefsoftError as exc:  # keep the type: a LimitError stays one
-        raise type(exc)(f"{path}: {exc}") from None
+        return Animation(frames, tuple(cam_keys), {n: tuple(v) for n, v in obj_keys.items()})
+    except SceneError as exc:
+        ctx.fail("animation", str(exc))
 
 
 def load_scene_file(path: str | os.PathLike, subdivide: float | None = None) -> Scene:

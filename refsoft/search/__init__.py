@@ -337,23 +337,16 @@ def virtual_vertices(gbuffer: GBuffer, result: SearchResult, vertices, relative:
     out = np.empty((len(verts), 3), dtype=dt)
     flags = np.ascontiguousarray(result.flags, dtype=np.uint8)
     mode = INVERSE_MODES.index(result.inverse)
-    if rule == "unfold":
-        if eye is None:
-            raise RefsoftError("virtual_vertices(rule='unfold') needs the eye")
-        e = (validate.point(eye, "eye") - o).astype(dt)
+    unfold = rule == "unfold"
+    if unfold and eye is None:
+        raise RefsoftError("virtual_vertices(rule='unfold') needs the eye")
+    e = np.zeros(3, dtype=dt) if eye is None else (validate.point(eye, "eye") - o).astype(dt)
     if surface is None:
-        if rule == "unfold":
-            _virtual.unfold_from_texels(gbuffer.position, gbuffer.normal, np.ascontiguousarray(result.pixel), verts, o,
-                                        e, flags, mode, dt(0), out)
-        else:
-            _kernels.virtual_from_texels(gbuffer.position, gbuffer.normal, np.ascontiguousarray(result.pixel), verts,
-                                         o, flags, mode, dt(0), out)
+        _virtual.virtual_from_texels(gbuffer.position, gbuffer.normal, np.ascontiguousarray(result.pixel), verts, o, e,
+                                     flags, mode, unfold, dt(0), out)
     else:
         p, nrm = (np.ascontiguousarray(np.asarray(a, dtype=dt).reshape(len(verts), 3)) for a in surface)
-        if rule == "unfold":
-            _virtual.unfold_from_points(p, nrm, verts, o, e, flags, mode, dt(0), out)
-        else:
-            _kernels.virtual_from_points(p, nrm, verts, o, flags, mode, dt(0), out)
+        _virtual.virtual_from_points(p, nrm, verts, o, e, flags, mode, unfold, dt(0), out)
     if relative:
         return out
     return (out.astype(np.float64) + o).astype(dt)

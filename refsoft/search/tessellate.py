@@ -128,6 +128,55 @@ def _split(faces, edge_keys, edge_mid, n_vertices, only=None):
     return out, parent
 
 
+def _triangle_errors(gbuffer, eye, verts, pixel, flags, offset, f, threshold, min_span) -> np.ndarray:
+    """Each triangle's largest edge error (:func:`edge_errors`), (T,) float64; -inf for a
+    triangle with a CULLED corner (no reflection to refine) and, when adaptive (``threshold >
+    0``), for one all of whose corners are hidden (no visible reflection whose error could be
+    measured; full tessellation still splits it). Edges whose ends' pixels are at most
+    ``min_span`` apart count 0."""
+    e0, e1 = f.reshape(-1), f[:, [1, 2, 0]].reshape(-1)
+    err = np.zeros(len(e0))
+    need = np.ones(len(e0), dtype=bool)
+    if min_span > 0:  # an edge reflected within min_span pixels: nothing to draw between its ends
+        need = np.abs(pixel[e0].astype(np.int64) - pixel[e1]).max(axis=1) > min_span
+    err[need] = _edge_errors(gbuffer, eye, verts, pixel, offset, e0[need], e1[need])
+    bad = ((flags[f] & CULLED) != 0).any(axis=1)
+    if threshold > 0:
+        bad |= ((flags[f] & HIDDEN) != 0).all(axis=1)
+    return np.where(bad, -np.inf, err.reshape(-1, 3).max(axis=1))
+
+
+def _apply_split(faces, face_obj, keys, mids, ea, eb, n_vertices, only=None):
+    """One level's split of ``faces``: the neighbours of split triangles that share a split edge
+    are split too (crack-free), unless ``only`` (the split triangles' indices) restricts the
+    split to those (the thesis's rule). Returns the new faces, their object ids and which of
+    them the level touched (the next level's candidates)."""
+    mask = None
+    if only is not None:
+        mask = np.zeros(len(faces), dtype=bool)
+        mask[only] = True
+    new_faces, parent = _split_some(faces, keys, mids, ea, eb, n_vertices, mask)
+    touched = np.zeros(len(faces), dtype=bool)
+    touched[np.unique(parent[np.bincount(parent, minlength=len(faces))[parent] > 1])] = True
+    return new_faces, face_obj[parent], touched[parent]
+
+
+def _split_edges(tris) -> np.ndarray:
+    """The sorted unique edge keys of triangles ``tris`` (T, 3)."""
+    return np.unique(np.concatenate([_edge_keys(tris[:, i], tris[:, (i + 1) % 3], KEY_BASE) for i in range(3)]))
+
+
+def _midpoint_starts(mask, pa, pb) -> np.ndarray:
+    """Search starts of new midpoints from their parents' pixels ``pa``, ``pb`` (M, 2): the
+    pixel halfway between, where covered; else the first parent's; (-1, -1) where neither."""
+    start = (pa + pb) // 2
+    h, w = mask.shape
+    ok = np.all(pa >= 0, axis=1) & np.all(pb >= 0, axis=1)
+    ok &= mask[np.clip(start[:, 0], 0, h - 1), np.clip(start[:, 1], 0, w - 1)]
+    start = np.where(ok[:, None], start, pa)
+    return np.where(np.all(start >= 0, axis=1)[:, None], start, -1)
+
+
 def _split_some(faces, keys, mids, ea, eb, n_vertices, only=None):
     """:func:`_split` of ``faces``, run on the faces with two corners among the split edges'
     ends only (the others are kept whole, as :func:`_split` keeps them): the same faces and
@@ -221,10 +270,10 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
     -------
     Tessellation
     """
-    if not (isinstance(threshold, (int, float)) and np.isfinite(threshold) and threshold >= 0):
-        raise RefsoftError(f"tessellation threshold must be a number >= 0, got {threshold!r}")
-    if isinstance(max_level, bool) or not isinstance(max_level, (int, np.integer)) or max_level < 0:
-        raise RefsoftError(f"max_level must be a non-negative integer, got {max_level!r}")
+    from .. import validate
+
+    validate.number(threshold, "tessellation threshold", minimum=0.0)
+    validate.integer(max_level, "max_level", 0)
     verts = [np.asarray(vertices, dtype=np.float64)]
     norms = [np.asarray(normals, dtype=np.float64)]
     pix = [np.asarray(pixel, dtype=np.int32)]
@@ -242,59 +291,29 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
         if len(cand) == 0:
             break
         f = faces[cand]
-        e0, e1 = f.reshape(-1), f[:, [1, 2, 0]].reshape(-1)
-        err = np.zeros(len(e0))
-        need = np.ones(len(e0), dtype=bool)
-        if min_span > 0:  # an edge reflected within min_span pixels: nothing to draw between its ends
-            need = np.abs(allp[e0].astype(np.int64) - allp[e1]).max(axis=1) > min_span
-        err[need] = _edge_errors(gbuffer, eye, allv, allp, None if surf is None else np.concatenate(surf[2]),
-                                 e0[need], e1[need])
-        err = err.reshape(-1, 3)
-        bad = ((allf[f] & CULLED) != 0).any(axis=1)  # no reflection to refine
-        if threshold > 0:
-            # adaptive: a triangle all of whose vertices are hidden has no visible reflection
-            # whose error could be measured (full tessellation still splits it)
-            bad |= ((allf[f] & HIDDEN) != 0).all(axis=1)
-        split_tri = cand[(err.max(axis=1) > threshold) & ~bad]
+        err = _triangle_errors(gbuffer, eye, allv, allp, allf, None if surf is None else np.concatenate(surf[2]), f,
+                               threshold, min_span)
+        split_tri = cand[err > threshold]
         if len(split_tri) == 0:
             break
-        ends = faces[split_tri]
-        keys = np.unique(np.concatenate([_edge_keys(ends[:, i], ends[:, (i + 1) % 3], KEY_BASE) for i in range(3)]))
+        keys = _split_edges(faces[split_tri])
         ea, eb = keys // KEY_BASE, keys % KEY_BASE
         mids = n_total + np.arange(len(keys), dtype=np.int64)
         new_v = 0.5 * (allv[ea] + allv[eb])
         new_n = normalize_rows(np.concatenate(norms)[ea] + np.concatenate(norms)[eb])
-        # each new vertex starts from its parents' pixels: their midpoint, else the first parent's
-        pa, pb = allp[ea].astype(np.int64), allp[eb].astype(np.int64)
-        start = (pa + pb) // 2
-        h, w = gbuffer.mask.shape
-        okm = np.all(pa >= 0, axis=1) & np.all(pb >= 0, axis=1)
-        okm &= gbuffer.mask[np.clip(start[:, 0], 0, h - 1), np.clip(start[:, 1], 0, w - 1)]
-        start = np.where(okm[:, None], start, pa)
-        start = np.where(np.all(start >= 0, axis=1)[:, None], start, -1)
+        start = _midpoint_starts(gbuffer.mask, allp[ea].astype(np.int64), allp[eb].astype(np.int64))
         res = search(gbuffer, eye, new_v, neighbourhood, inverse, start, cap, method=method)
-        searched += len(new_v)
-        verts.append(new_v)
-        norms.append(new_n)
-        pix.append(res.pixel)
-        fl.append(res.flags)
+        for lst, a in zip((verts, norms, pix, fl), (new_v, new_n, res.pixel, res.flags)):
+            lst.append(a)
         if surf is not None:
             from .refine import refine
 
             for lst, a in zip(surf, refine(gbuffer, eye, new_v, res)):
                 lst.append(a)
+        searched += len(new_v)
         n_total += len(new_v)
-        # neighbours of split triangles that share a split edge are refined too (crack-free)
-        only = None
-        if not crack_free:
-            only = np.zeros(len(faces), dtype=bool)
-            only[split_tri] = True
-        new_faces, parent = _split_some(faces, keys, mids, ea, eb, n_total, only)
-        touched = np.zeros(len(faces), dtype=bool)
-        touched[np.unique(parent[np.bincount(parent, minlength=len(faces))[parent] > 1])] = True
-        active = touched[parent]
-        face_obj = face_obj[parent]
-        faces = new_faces
+        faces, face_obj, active = _apply_split(faces, face_obj, keys, mids, ea, eb, n_total,
+                                               None if crack_free else split_tri)
         levels += 1
     return Tessellation(np.concatenate(verts), np.concatenate(norms), np.concatenate(pix), np.concatenate(fl), faces,
                         face_obj, searched, levels,

@@ -140,3 +140,13 @@ def test_trace_command_coherent_frame_starts_at_previous_pixel(tmp_path, capsys)
 def test_trace_bad_input(tmp_path, args, message):
     r = run_cli(*args, "--out", str(tmp_path / "o"), cwd=tmp_path)
     assert r.returncode == 2 and message in r.stderr and "Traceback" not in r.stderr
+
+
+def test_every_option_of_every_command_has_help_text():
+    import argparse
+
+    parser = cli.build_parser()
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    missing = [f"{name} {act.option_strings or act.dest}" for name, p in sub.choices.items() for act in p._actions
+               if not isinstance(act, argparse._HelpAction) and not act.help]
+    assert not missing, missing
