@@ -84,7 +84,7 @@ def frame_figure():
     from refsoft.frame import FrameDriver, RenderOptions
 
     scene = refsoft.load_scene("sphere", width=320, height=240)
-    pics = [FrameDriver(scene, RenderOptions(inverse=mode)).render_frame(0).image
+    pics = [FrameDriver(scene, RenderOptions(preset="paper", inverse=mode)).render_frame(0).image
             for mode in ("plane", "search", "discard")]
     write_png(os.path.join(FIG, "frame_inverse_modes.png"), side_by_side(*pics))
     kitchen = refsoft.load_scene("kitchen", width=480, height=360)
@@ -97,18 +97,51 @@ def frame_figure():
 
 
 def truth_figure():
-    """Render | truth | agreement map, for the sphere (discard) and the quad (search)."""
+    """Render | truth | agreement map of the sphere and the ufo scenes (frame 30), the paper
+    preset above the accurate one."""
     from refsoft.frame import FrameDriver, RenderOptions
     from refsoft.truth.raytrace import TruthRenderer
     from refsoft.visualize import agreement_map
 
     rows = []
-    for name, mode in (("sphere", "discard"), ("quad", "search")):
+    for name, frame in (("sphere", 0), ("ufo", 30)):
         scene = refsoft.load_scene(name, width=320, height=240)
-        r = FrameDriver(scene, RenderOptions(inverse=mode)).render_frame(0).arrays
-        t = TruthRenderer(scene, exact=False).render_frame(0).arrays
-        rows.append(side_by_side(r["image"], t["image"], agreement_map(r["reflected_id"], t["reflected_id"], t["image"])))
+        t = TruthRenderer(scene, exact=False).render_frame(frame).arrays
+        for preset in ("paper", "accurate"):
+            r = FrameDriver(scene, RenderOptions(preset=preset)).render_frame(frame).arrays
+            rows.append(side_by_side(r["image"], t["image"],
+                                     agreement_map(r["reflected_id"], t["reflected_id"], t["image"])))
     write_png(os.path.join(FIG, "truth_compare.png"), np.concatenate(rows, axis=0))
+
+
+def accuracy_figure():
+    """Agreement maps (green agrees with the truth, red not) of the six convex scenes at 640x480,
+    a middle frame, cropped to the reflectors: the paper preset (left of each pair) and the
+    accurate preset (right)."""
+    from refsoft.frame import FrameDriver, RenderOptions
+    from refsoft.truth.raytrace import TruthRenderer
+    from refsoft.visualize import agreement_map
+
+    tiles = []
+    for name in ("sphere", "ellipsoid", "quad", "kitchen", "ufo", "ants"):
+        scene = refsoft.load_scene(name, width=640, height=480)
+        f = scene.n_frames // 2
+        t = TruthRenderer(scene, exact=False).render_frame(f).arrays
+        rows, cols = np.nonzero(t["reflected_id"] >= 0)
+        crop = (slice(max(rows.min() - 3, 0), rows.max() + 4), slice(max(cols.min() - 3, 0), cols.max() + 4))
+        pair = []
+        for preset in ("paper", "accurate"):
+            d = FrameDriver(scene, RenderOptions(preset=preset))
+            for g in range(f + 1):
+                r = d.render_frame(g).arrays
+            pic = agreement_map(r["reflected_id"], t["reflected_id"], t["image"])[crop]
+            zoom = max(1, int(200 / pic.shape[0]))
+            pair.append(np.repeat(np.repeat(pic, zoom, axis=0), zoom, axis=1))
+        tiles.append(side_by_side(*pair))
+    h = max(t.shape[0] for t in tiles)
+    tiles = [np.pad(t, ((0, h - t.shape[0]), (0, 0), (0, 0))) for t in tiles]
+    write_png(os.path.join(FIG, "accuracy_maps.png"), side_by_side(*tiles[:3]))
+    write_png(os.path.join(FIG, "accuracy_maps_paper_scenes.png"), side_by_side(*tiles[3:]))
 
 
 def refine_figure():
@@ -124,7 +157,7 @@ def refine_figure():
     crop = (slice(rows.min() - 2, rows.max() + 3), slice(cols.min() - 2, cols.max() + 3))
     pics = []
     for kw in ({}, {"refine": True}, {"tessellate": 1e-3}, {"refine": True, "tessellate": 1e-5}):
-        r = FrameDriver(scene, RenderOptions(inverse="search", **kw)).render_frame(0).arrays
+        r = FrameDriver(scene, RenderOptions(preset="paper", inverse="search", **kw)).render_frame(0).arrays
         pic = agreement_map(r["reflected_id"], t["reflected_id"], t["image"])[crop]
         pics.append(np.repeat(np.repeat(pic, 2, axis=0), 2, axis=1))
     write_png(os.path.join(FIG, "refine_quad.png"), side_by_side(*pics))
@@ -167,6 +200,7 @@ if __name__ == "__main__":
     trace_figure()
     frame_figure()
     truth_figure()
+    accuracy_figure()
     refine_figure()
     check_figure()
     try:
