@@ -73,6 +73,53 @@ CAMERA_PARALLEL_TOL = 1e-9
 #: Two reflection pixels are a tie when the oracle's scores differ by at most this many float32
 #: ULP of the better one (``refsoft check``, ``refsoft.conformance.precision``).
 TIE_ULPS = 8
+#: Float outputs (G-buffer positions and normals, virtual vertices, scores) pass within this many
+#: float32 ULP of the oracle's...
+F32_ULP_TOL = 4
+#: ...or within this share of the scene's extent.
+EXTENT_TOL = 1e-6
+#: Normals also pass within this angle (radians).
+NORMAL_ANGLE_TOL = 1e-4
+#: A coverage difference is ambiguous (accepted) where the pixel centre lies this close (pixels)
+#: to an edge of the oracle's unsnapped triangles.
+EDGE_AMBIGUITY_PX = 1e-4
+#: At most this share of a reflector's vertices may differ by a tie...
+TIE_SHARE_MAX = 0.01
+#: ...and this share differ in iterations where the pixels agree.
+ITERATION_SHARE_MAX = 0.01
+#: 8-bit images pass within this per channel (the loose rule: this, with a 1-pixel window, and at
+#: most this share of pixels failing).
+IMAGE_TOL = 1
+IMAGE_TOL_LOOSE = 4
+IMAGE_LOOSE_SHARE = 0.001
+
+# --- Truth and metrics (DESIGN section 6) ---------------------------------------------------
+#: The rim of a reflector's stencil, in 8-neighbour steps: "interior" and "rim" agreement split
+#: there.
+RIM_PIXELS = 2
+
+# --- Search and its options beyond the papers ---------------------------------------------
+#: Edge, in pixels, of the cells vertices are grouped by before searching (cache locality).
+LOCALITY_CELL = 16
+#: The thesis's enlargement factors for cone angles and sphere radii after a failed traversal.
+CONE_FACTOR = 1.5
+SPHERE_FACTOR = 2.0
+#: Bisection steps per cut edge: the cut lies within ``2**-iterations`` of the edge's length of
+#: where the vertex search's classification changes.
+CLIP_ITERATIONS = 10
+#: Extra pixels around a stencil box before an object's virtual triangles count as outside it:
+#: more than the 1/512 px a snapped window coordinate can move (DESIGN section 2).
+BOX_MARGIN_PIXELS = 2.0
+#: Largest offset, in texels along each axis, one refinement step may move the point.
+MAX_OFFSET = 1.0
+
+# --- Exact reflection points on spheres (the truth) ------------------------------------------
+#: Samples along the arc used to bracket the roots.
+ARC_SAMPLES = 64
+#: Brent's stopping rule: half the bracket below ``(XTOL + RTOL |t|) / 2`` radians, or MAXITER steps.
+XTOL = 1e-15
+RTOL = 4 * np.finfo(np.float64).eps
+MAXITER = 200
 
 # --- Kernel sentinels ---
 #: The score of "no candidate" (a missing second-best) and of an uncovered or outside pixel:

@@ -24,9 +24,14 @@ def is_number(value) -> bool:
             and math.isfinite(value))
 
 
+def is_flag(value) -> bool:
+    """A Python or NumPy bool."""
+    return isinstance(value, (bool, np.bool_))
+
+
 def flag(value, name: str, error=RefsoftError) -> bool:
     """``value`` must be True or False (Python or NumPy bool)."""
-    if not isinstance(value, (bool, np.bool_)):
+    if not is_flag(value):
         raise error(f"{name} must be True or False, got {value!r}")
     return bool(value)
 

@@ -19,11 +19,11 @@ import time
 
 import numpy as np
 
+from .. import keys
+from ..constants import RIM_PIXELS as RIM
 from ..errors import RefsoftError
 from ._common import machine, markdown_table, plt_or_none, progress, write_csv, write_text
 
-#: Rim width of the rim agreement, pixels.
-RIM = 2
 #: The settings: the two presets, then the accurate preset with one part changed.
 SETTINGS = {
     "paper": {"preset": "paper"},
@@ -120,9 +120,9 @@ def _frame_errors(render, truth) -> dict:
         if key.startswith("exact_reflection_point_"):
             k = key.rsplit("_", 1)[1]
             exact = truth[key]
-            ok = np.all(np.isfinite(exact), axis=1) & ((render[f"flags_{k}"] & 1) == 0)
-            d = pixel_distance(render[f"reflection_pixel_{k}"], exact, render[f"gbuffer_view_proj_{k}"],
-                               render[f"gbuffer_mask_{k}"].shape)[ok]
+            ok = np.all(np.isfinite(exact), axis=1) & ((render[keys.FLAGS(k)] & 1) == 0)
+            d = pixel_distance(render[keys.REFLECTION_PIXEL(k)], exact, render[keys.GBUFFER_VIEW_PROJ(k)],
+                               render[keys.GBUFFER_MASK(k)].shape)[ok]
             dists.append(d)
     if dists and sum(len(d) for d in dists):
         out["pixel_distance"] = float(np.concatenate(dists).mean())

@@ -32,16 +32,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import constants, keys
+from ..constants import (EDGE_AMBIGUITY_PX, EXTENT_TOL, F32_ULP_TOL, IMAGE_LOOSE_SHARE, IMAGE_TOL, IMAGE_TOL_LOOSE,
+                         ITERATION_SHARE_MAX, NORMAL_ANGLE_TOL, TIE_SHARE_MAX)
 from ..errors import RefsoftError
 
 STATUSES = ("pass", "accepted", "fail", "missing")
-F32_ULP_TOL = 4
-EXTENT_TOL = 1e-6
-NORMAL_ANGLE_TOL = 1e-4
-EDGE_AMBIGUITY_PX = 1e-4
-TIE_SHARE_MAX = 0.01
-ITERATION_SHARE_MAX = 0.01
-IMAGE_TOL, IMAGE_TOL_LOOSE, IMAGE_LOOSE_SHARE = 1, 4, 0.001
 
 
 @dataclass
@@ -435,13 +430,12 @@ def _compare_traces(ctx, k, live, traces, prev_pixels):
 
 
 def _vertex_keys(k):
-    return {f"reflection_pixel_{k}", f"virtual_vertex_{k}", f"flags_{k}", f"iterations_{k}", f"score_{k}",
-            f"vertex_object_{k}", f"margin_{k}"}
+    return {name(k) for name in keys.VERTEX_ARRAYS}
 
 
 def check_frame(ctx, G, C, loose, cand_traces=None, prev_pixels=None):
     """Judge every output of one frame; appends to ``ctx.findings``."""
-    reflectors = sorted(int(key.rsplit("_", 1)[1]) for key in G if key.startswith("reflection_pixel_"))
+    reflectors = keys.reflectors(G)
     vertex_keys = set().union(*[_vertex_keys(k) for k in reflectors]) if reflectors else set()
     broken = set()
     for key in sorted(G):
@@ -463,19 +457,19 @@ def check_frame(ctx, G, C, loose, cand_traces=None, prev_pixels=None):
         if key in broken:
             continue
         g, c = G[key], C[key]
-        if key.startswith("gbuffer_mask_"):
-            _compare_mask(ctx, key, g, c, int(key.rsplit("_", 1)[1]))
-        elif key.startswith(("gbuffer_position_", "gbuffer_normal_")):
-            k = key.rsplit("_", 1)[1]
-            mk = f"gbuffer_mask_{k}"
+        name, k = keys.parse(key) or (None, None)
+        if name == keys.GBUFFER_MASK:
+            _compare_mask(ctx, key, g, c, k)
+        elif name in (keys.GBUFFER_POSITION, keys.GBUFFER_NORMAL):
+            mk = keys.GBUFFER_MASK(k)
             cover = G[mk] & C[mk] if mk in C and C[mk].shape == G[mk].shape else G[mk]
             extent = ctx.oracle().extent if not np.array_equal(g[cover], c[cover]) else 1.0
-            _compare_float_field(ctx, key, g, c, cover, extent, normals=key.startswith("gbuffer_normal_"))
-        elif key.startswith("gbuffer_view_proj_"):
+            _compare_float_field(ctx, key, g, c, cover, extent, normals=name == keys.GBUFFER_NORMAL)
+        elif name == keys.GBUFFER_VIEW_PROJ:
             _compare_float_field(ctx, key, g.reshape(1, -1), c.reshape(1, -1), np.ones(1, bool), 1.0)
-        elif key == "image":
+        elif key == keys.IMAGE:
             _compare_image(ctx, g, c, loose)
-        elif key in ("object_id", "reflected_id"):
+        elif key in (keys.OBJECT_ID, keys.REFLECTED_ID):
             d = int((g != c).sum())
             ctx.finding(key, "ids (reported)", "pass" if d == 0 else "accepted",
                         "identical" if d == 0 else "differ (reported, not judged)", d, g.size)
@@ -485,7 +479,7 @@ def check_frame(ctx, G, C, loose, cand_traces=None, prev_pixels=None):
             same = np.array_equal(g, c, equal_nan=True)
             ctx.finding(key, "other", "pass" if same else "accepted", "identical" if same else "differs (not judged)")
     for k in reflectors:
-        if f"reflection_pixel_{k}" in broken or f"flags_{k}" in broken:
+        if keys.REFLECTION_PIXEL(k) in broken or keys.FLAGS(k) in broken:
             continue
         _compare_vertices(ctx, k, G, C, cand_traces, prev_pixels.get(k) if prev_pixels else None)
 
@@ -552,7 +546,7 @@ def check(golden, candidate, loose=False, out=None, cases=None, progress=False) 
         traces = _load_traces(os.path.join(candidate, name, f"traces_{f:04d}.json"))
         coherent = entry["options"].get("coherence", True)
         check_frame(ctx, G, C, loose, traces, prev.get(name) if coherent else None)
-        prev[name] = {int(k.rsplit("_", 1)[1]): G[k] for k in G if k.startswith("reflection_pixel_")}
+        prev[name] = {k: G[keys.REFLECTION_PIXEL(k)] for k in keys.reflectors(G)}
         findings += ctx.findings
     counts = {s: sum(1 for f in findings if f.status == s) for s in STATUSES}
     summary = {"golden": os.path.abspath(golden), "candidate": os.path.abspath(candidate), "loose": bool(loose),

@@ -12,6 +12,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from .. import validate
 from .. import constants
 from ..errors import CameraError, LimitError
 
@@ -34,7 +35,7 @@ def check_image_size(width, height, what: str = "image") -> tuple[int, int]:
         ``(width, height)`` as Python ints.
     """
     for name, v in (("width", width), ("height", height)):
-        if isinstance(v, bool) or not isinstance(v, (int, np.integer)):
+        if not validate.is_integer(v):
             raise CameraError(f"{what} {name} must be an integer, got {v!r}")
         if v <= 0:
             raise CameraError(f"{what} {name} must be positive, got {v}")
@@ -98,7 +99,7 @@ class Camera:
             raise CameraError(f"camera projection must be 'perspective' or 'orthographic', got {self.projection!r}")
         for name in ("fov_y", "near", "far", "ortho_height"):
             v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) or not math.isfinite(v):
+            if not validate.is_number(v):
                 raise CameraError(f"camera {name} must be a finite number, got {v!r}")
             object.__setattr__(self, name, float(v))
         if self.projection == "perspective":
@@ -241,8 +242,7 @@ class Camera:
         -------
         Camera
         """
-        if isinstance(factor, bool) or not isinstance(factor, (int, float, np.integer, np.floating)) \
-                or not math.isfinite(factor) or factor < 1.0:
+        if not validate.is_number(factor) or factor < 1.0:
             raise CameraError(f"widen factor must be a finite number >= 1, got {factor!r}")
         factor = float(factor)
         if width is None:

@@ -12,6 +12,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from .camera import Camera
+from .. import validate
 from ..errors import SceneError
 from .mesh import Mesh
 
@@ -99,26 +100,25 @@ class SceneObject:
         if c.shape != (3,) or not np.all(np.isfinite(c)) or np.any(c < 0) or np.any(c > 1):
             raise SceneError(f"object {self.name!r}: color must be 3 numbers in [0, 1], got {np.asarray(self.color).tolist()}")
         object.__setattr__(self, "color", tuple(c))
-        if not isinstance(self.reflector, (bool, np.bool_)):
+        if not validate.is_flag(self.reflector):
             raise SceneError(f"object {self.name!r}: reflector must be true or false")
         if not (isinstance(self.reflectivity, (int, float)) and 0.0 <= self.reflectivity <= 1.0):
             raise SceneError(f"object {self.name!r}: reflectivity must be in [0, 1], got {self.reflectivity!r}")
         if self.closed_proxy is not None and not self.reflector:
             raise SceneError(f"object {self.name!r}: closed_proxy given but the object is not a reflector")
-        if not isinstance(self.open, (bool, np.bool_)):
+        if not validate.is_flag(self.open):
             raise SceneError(f"object {self.name!r}: open must be true or false")
         if self.open and not self.reflector:
             raise SceneError(f"object {self.name!r}: open is only for reflectors")
         sub = self.subdivide
         if sub is not None:
-            if isinstance(sub, (bool, np.bool_)) or not isinstance(sub, (int, float, np.integer, np.floating)) \
-                    or not np.isfinite(sub) or sub < 0:
+            if not validate.is_number(sub) or sub < 0:
                 raise SceneError(f"object {self.name!r}: subdivide must be a finite number >= 0 (0 = off), got {sub!r}")
             object.__setattr__(self, "subdivide", float(sub))
         if self.source_counts is not None:
             c = self.source_counts
             if (not isinstance(c, tuple) or len(c) != 2
-                    or not all(isinstance(x, (int, np.integer)) and not isinstance(x, bool) and x > 0 for x in c)):
+                    or not all(validate.is_integer(x) and x > 0 for x in c)):
                 raise SceneError(f"object {self.name!r}: source_counts must be (vertices, triangles), got {c!r}")
             object.__setattr__(self, "source_counts", (int(c[0]), int(c[1])))
         if self.closed_proxy is not None:
@@ -152,11 +152,11 @@ class Animation:
     object_keys: dict = field(default_factory=dict)
 
     def __post_init__(self):
-        if isinstance(self.frames, bool) or not isinstance(self.frames, (int, np.integer)) or self.frames < 1:
+        if not validate.is_integer(self.frames) or self.frames < 1:
             raise SceneError(f"animation frames must be a positive integer, got {self.frames!r}")
         for what, keys in [("camera", self.camera_keys)] + [(f"object {k!r}", v) for k, v in self.object_keys.items()]:
             frames = [k[0] for k in keys]
-            if any(not isinstance(f, (int, np.integer)) or isinstance(f, bool) for f in frames):
+            if any(not validate.is_integer(f) for f in frames):
                 raise SceneError(f"animation {what}: key frames must be integers")
             if any(f < 0 or f >= self.frames for f in frames):
                 raise SceneError(f"animation {what}: key frames must be in [0, {self.frames - 1}], got {frames}")

@@ -9,12 +9,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import validate
 from ..errors import SceneError
 from .mesh import Mesh, normalize_rows
 
 
 def _positive(value, name, kind=float):
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+    if not (validate.is_number(value) or isinstance(value, (float, np.floating))):  # inf, NaN: "positive" below
         raise SceneError(f"primitive {name} must be a number, got {value!r}")
     if kind is int and int(value) != value:
         raise SceneError(f"primitive {name} must be an integer, got {value!r}")

@@ -42,6 +42,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from .. import validate
 from .. import constants
 from ..errors import LimitError, SceneError
 from .mesh import Mesh, normalize_rows
@@ -52,8 +53,7 @@ MAX_PASSES = 256
 
 
 def _check_max_edge(value, who: str) -> float:
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)) \
-            or not math.isfinite(value) or value <= 0:
+    if not validate.is_number(value) or value <= 0:
         raise SceneError(f"{who}: max_edge must be a finite positive number, got {value!r}")
     return float(value)
 
@@ -280,8 +280,7 @@ def check_override(value) -> float | None:
     """A subdivision override as a float (None: no override); SceneError unless a finite number >= 0."""
     if value is None:
         return None
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer, np.floating)) \
-            or not math.isfinite(value) or value < 0:
+    if not validate.is_number(value) or value < 0:
         raise SceneError(f"subdivide override must be a finite number >= 0 (0 = off), got {value!r}")
     return float(value)
 

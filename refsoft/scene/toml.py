@@ -18,6 +18,7 @@ import sys
 import numpy as np
 
 from .camera import Camera
+from .. import validate
 from ..errors import RefsoftError, SceneError
 from .mesh import load_mesh
 from .primitives import make_primitive
@@ -55,18 +56,18 @@ class _Ctx:
         return value
 
     def number(self, value, key):
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        if not validate.is_number(value):
             self.fail(key, f"must be a finite number, got {value!r}")
         return float(value)
 
     def integer(self, value, key):
-        if isinstance(value, bool) or not isinstance(value, int):
+        if not validate.is_integer(value):
             self.fail(key, f"must be an integer, got {value!r}")
         return value
 
     def max_edge(self, value, key):
         """A loader subdivision length: a finite number >= 0 (0 = off)."""
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value < 0:
+        if not validate.is_number(value) or value < 0:
             self.fail(key, f"must be a finite number >= 0 (0 = off), got {value!r}")
         return float(value)
 

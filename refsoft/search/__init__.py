@@ -159,10 +159,6 @@ def _culled_results(n, dt):
             np.zeros(n, dtype=np.int32), np.full(n, CULLED, dtype=np.uint8))
 
 
-#: Edge, in pixels, of the cells vertices are grouped by before searching (cache locality).
-LOCALITY_CELL = 16
-
-
 def _check_starts(starts, shape):
     """Raise for the first previous pixel outside a G-buffer of ``shape`` ((-1, -1) is none)."""
     h, w = shape
@@ -372,3 +368,4 @@ def scores_at(gbuffer: GBuffer, eye, vertices, pixels, inverse=None) -> np.ndarr
 
 
 from .trace import HierarchyTrace, Trace, trace_search  # noqa: E402  (uses the names above)
+from ..constants import LOCALITY_CELL

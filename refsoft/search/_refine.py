@@ -4,9 +4,7 @@ from numba import prange
 
 from .._numba import kernel, like
 from ._kernels import CULLED, HIDDEN, _normalize
-
-#: Largest offset, in texels along each axis, one refinement step may move the point.
-MAX_OFFSET = 1.0
+from ..constants import MAX_OFFSET
 
 
 @kernel(inline=True)

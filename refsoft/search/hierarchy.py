@@ -28,12 +28,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import validate
 from ..errors import RefsoftError
 from . import _hierarchy
-
-#: The thesis's enlargement factors for cone angles and sphere radii after a failed traversal.
-CONE_FACTOR = 1.5
-SPHERE_FACTOR = 2.0
+from ..constants import CONE_FACTOR, SPHERE_FACTOR
 
 
 def build(G, mask, fp):
@@ -59,7 +57,7 @@ def build(G, mask, fp):
 
 def check_factors(cone_factor, sphere_factor, break_level):
     for name, f in (("cone_factor", cone_factor), ("sphere_factor", sphere_factor)):
-        if isinstance(f, bool) or not isinstance(f, (int, float)) or not np.isfinite(f) or f < 1.0:
+        if not validate.is_number(f) or f < 1.0:
             raise RefsoftError(f"{name} must be a number >= 1, got {f!r}")
-    if isinstance(break_level, bool) or not isinstance(break_level, (int, np.integer)) or break_level < 0:
+    if not validate.is_integer(break_level) or break_level < 0:
         raise RefsoftError(f"break_level must be a non-negative integer, got {break_level!r}")

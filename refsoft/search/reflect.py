@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import validate
 from ..errors import RefsoftError
 from ..raster import GBuffer, gbuffer
 from ..scene.model import Scene
@@ -40,7 +41,7 @@ def reflector_gbuffer(scene: Scene, reflector: int, frame: int = 0, widen: float
 def check_reflector(scene: Scene, reflector) -> int:
     """``reflector`` must be the object id of one of ``scene``'s reflectors."""
     n = len(scene.objects)
-    if isinstance(reflector, bool) or not isinstance(reflector, (int, np.integer)) or not 1 <= reflector <= n:
+    if not validate.is_integer(reflector) or not 1 <= reflector <= n:
         raise RefsoftError(f"scene {scene.name!r} has no object {reflector!r} (object ids are 1..{n}; "
                            f"reflectors: {scene.reflector_ids})")
     if reflector not in scene.reflector_ids:

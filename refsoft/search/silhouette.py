@@ -26,10 +26,7 @@ import numpy as np
 
 from ..scene.mesh import normalize_rows
 from . import CULLED, HIDDEN, search
-
-#: Bisection steps per cut edge: the cut lies within ``2**-iterations`` of the edge's length of
-#: where the vertex search's classification changes.
-CLIP_ITERATIONS = 10
+from ..constants import CLIP_ITERATIONS
 
 
 @dataclass(frozen=True, eq=False)

@@ -23,10 +23,7 @@ from numba import prange
 
 from .._numba import kernel
 from . import BORDER, CAPPED, CULLED, HIDDEN
-
-#: Extra pixels around a stencil box before an object's virtual triangles count as outside it:
-#: more than the 1/512 px a snapped window coordinate can move (DESIGN section 2).
-BOX_MARGIN_PIXELS = 2.0
+from ..constants import BOX_MARGIN_PIXELS
 
 
 def outside_frustum(clip) -> bool:

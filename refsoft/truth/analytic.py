@@ -16,13 +16,8 @@ import numpy as np
 
 from ..errors import RefsoftError
 from ._analytic import reflection_points_kernel
+from ..constants import ARC_SAMPLES, MAXITER, RTOL, XTOL
 
-#: Samples along the arc used to bracket the roots.
-ARC_SAMPLES = 64
-#: Brent's stopping rule: half the bracket below ``(XTOL + RTOL |t|) / 2`` radians, or MAXITER steps.
-XTOL = 1e-15
-RTOL = 4 * np.finfo(np.float64).eps
-MAXITER = 200
 #: Arc samples the kernel evaluates at a time (speed only).
 SAMPLE_BLOCK = 8
 

@@ -11,11 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import keys
+from ..constants import RIM_PIXELS
 from ..errors import RefsoftError
-
-#: Pixels within this many pixels (8-neighbour steps) of a reflector's silhouette form its rim;
-#: ``interior_disagreement`` leaves them out (region-C effects concentrate there).
-RIM_PIXELS = 3
 
 
 def score_error(score) -> np.ndarray:
@@ -169,27 +167,25 @@ def frame_metrics(render_arrays, truth_arrays) -> dict:
     if flip is not None:
         out["flip_mean"] = flip
     vertices = {}
-    for key in truth_arrays:
-        if not key.startswith("exact_reflection_point_"):
-            continue
-        k = key.rsplit("_", 1)[1]
-        if f"reflection_pixel_{k}" not in render_arrays:
+    for k in keys.reflectors(truth_arrays, keys.EXACT_REFLECTION_POINT):
+        key = keys.EXACT_REFLECTION_POINT(k)
+        if keys.REFLECTION_PIXEL(k) not in render_arrays:
             continue
         exact = np.asarray(truth_arrays[key])
-        flags = np.asarray(render_arrays[f"flags_{k}"])
+        flags = np.asarray(render_arrays[keys.FLAGS(k)])
         ok = np.all(np.isfinite(exact), axis=1) & ((flags & 1) == 0)  # visible (not HIDDEN) vertices
-        shape = np.asarray(render_arrays[f"gbuffer_mask_{k}"]).shape
-        dist = pixel_distance(render_arrays[f"reflection_pixel_{k}"], exact, render_arrays[f"gbuffer_view_proj_{k}"],
+        shape = np.asarray(render_arrays[keys.GBUFFER_MASK(k)]).shape
+        dist = pixel_distance(render_arrays[keys.REFLECTION_PIXEL(k)], exact, render_arrays[keys.GBUFFER_VIEW_PROJ(k)],
                               shape)[ok]
-        vdist = virtual_distance(render_arrays[f"virtual_vertex_{k}"], truth_arrays[f"exact_virtual_vertex_{k}"])[ok]
+        vdist = virtual_distance(render_arrays[keys.VIRTUAL_VERTEX(k)], truth_arrays[keys.EXACT_VIRTUAL_VERTEX(k)])[ok]
         entry = {"vertices": int(ok.sum())}
         if len(dist):
             entry.update(pixel_distance_mean=float(dist.mean()), pixel_distance_max=float(dist.max()),
                          virtual_distance_mean=float(vdist.mean()), virtual_distance_max=float(vdist.max()))
-        if f"score_{k}" in render_arrays and len(dist):
-            se = score_error(render_arrays[f"score_{k}"])[ok]
+        if keys.SCORE(k) in render_arrays and len(dist):
+            se = score_error(render_arrays[keys.SCORE(k)])[ok]
             entry.update(score_error_mean=float(se.mean()), score_error_max=float(se.max()))
-        vertices[k] = entry
+        vertices[str(k)] = entry
     if vertices:
         out["vertices"] = vertices
     return out

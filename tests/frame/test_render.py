@@ -133,10 +133,10 @@ def test_planar_mirror_equals_the_classic_planar_reflection():
 
 def test_interrupted_render_leaves_no_torn_file(tmp_path):
     out = tmp_path / "o"
-    script = ("import refsoft.cli, sys; sys.exit(refsoft.cli.main(['render', 'sphere', '--frames', '40', "
-              f"'--width', '160', '--height', '120', '--out', r'{out}']))")
+    script = ("import refsoft.cli, sys; sys.exit(refsoft.cli.main(['render', 'sphere', '--frames', '40', '--preset', "
+              f"'paper', '--width', '160', '--height', '120', '--out', r'{out}']))")
     proc = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    deadline = time.time() + 120
+    deadline = time.time() + 600  # a first run compiles the kernels
     while time.time() < deadline and not list(out.glob("frame_*.npz")):
         time.sleep(0.05)
     time.sleep(0.2)
