@@ -67,6 +67,29 @@ def ray_triangle(origins, directions, a, b, c):
     return t, np.stack([1.0 - u - v, u, v], axis=1)
 
 
+def primary_rays(camera, mesh, rows, cols, tri):
+    """The eye rays through pixels (rows, cols), their hits on the pixels' visible triangles
+    ``tri`` of ``mesh`` and their directions reflected about the interpolated normals there
+    (:mod:`refsoft.truth._primary`).
+
+    Returns
+    -------
+    hit, ray : ndarray (P, 3) float64
+    ok : ndarray (P,) bool
+        False where a ray is parallel to its triangle's plane.
+    """
+    from ._primary import primary_rays as kernel
+
+    n = len(rows)
+    hit, ray, ok = np.empty((n, 3)), np.empty((n, 3)), np.empty(n, dtype=bool)
+    kernel(np.asarray(rows, np.int64), np.asarray(cols, np.int64), float(camera.width), float(camera.height),
+           np.ascontiguousarray(np.linalg.inv(camera.view_proj())), np.asarray(camera.eye, np.float64),
+           camera.projection == "perspective", np.ascontiguousarray(mesh.vertices, np.float64),
+           np.ascontiguousarray(mesh.normals, np.float64), np.ascontiguousarray(mesh.faces, np.int64),
+           np.asarray(tri, np.int64), hit, ray, ok)
+    return hit, ray, ok
+
+
 def _interpolated_normals(normals, faces, tri, bary):
     n = np.einsum("nk,nkj->nj", bary, normals[faces[tri]])
     length = np.linalg.norm(n, axis=1, keepdims=True)
@@ -203,15 +226,7 @@ class RayTracedTruth:
         box = stencil_box(stencil)
         r0, r1, c0, c1 = box
         rows, cols = np.nonzero(stencil)
-        m = view.meshes[k - 1]
-        tri = view.view.triangle[rows, cols]
-        f = m.faces.astype(np.int64)[tri]
-        origin, direction = view.camera.rays(rows, cols)
-        tt, bary = ray_triangle(origin, direction, m.vertices[f[:, 0]], m.vertices[f[:, 1]], m.vertices[f[:, 2]])
-        ok = np.isfinite(tt)
-        hit = origin + np.where(ok, tt, 0.0)[:, None] * direction
-        normal = _interpolated_normals(m.normals, m.faces.astype(np.int64), tri, np.where(ok[:, None], bary, 0.0))
-        ray = direction - 2.0 * np.sum(direction * normal, axis=1, keepdims=True) * normal
+        hit, ray, ok = primary_rays(view.camera, view.meshes[k - 1], rows, cols, view.view.triangle[rows, cols])
         times["primary"] += 1000 * (time.perf_counter() - t)
         t = time.perf_counter()
         hit_tri, hit2, obj, nrm2 = self._targets_at(view.meshes).first_hits(hit[ok], ray[ok])

@@ -258,3 +258,26 @@ def test_closed_meshes_are_told_from_open_ones():
     assert not _is_closed(bowl.faces, bowl.n_vertices)
     box = refsoft_box(3)
     assert _is_closed(box.faces, box.n_vertices) == (box.boundary_edges() == 0 and len(np.unique(box.vertices, axis=0)) == box.n_vertices)
+
+
+def test_primary_ray_kernel_equals_the_numpy_rays_and_hits():
+    """The truth's primary-ray kernel against camera.rays, ray_triangle and the interpolated,
+    renormalised normal in NumPy, on the ball of the sphere scene (perspective) and an
+    orthographic view of it."""
+    from refsoft.truth.raytrace import _interpolated_normals, primary_rays
+
+    scene = load_scene("sphere", width=96, height=72)
+    for cam in (scene.camera, Camera(eye=(0, 0.5, 6), target=(0, 0, 0), width=96, height=72,
+                                     projection="orthographic", ortho_height=3.0)):
+        ball = scene.world_mesh(1)
+        view = color_pass([ball], [(1, 1, 1)], cam)
+        rows, cols = np.nonzero(view.object_id == 1)
+        tri = view.triangle[rows, cols]
+        hit, ray, ok = primary_rays(cam, ball, rows, cols, tri)
+        o, d = cam.rays(rows, cols)
+        f = ball.faces.astype(np.int64)[tri]
+        t, bary = ray_triangle(o, d, ball.vertices[f[:, 0]], ball.vertices[f[:, 1]], ball.vertices[f[:, 2]])
+        assert ok.all() and np.all(np.isfinite(t))
+        np.testing.assert_allclose(hit, o + t[:, None] * d, rtol=0, atol=1e-12)
+        n = _interpolated_normals(ball.normals, ball.faces.astype(np.int64), tri, bary)
+        np.testing.assert_allclose(ray, d - 2 * np.sum(d * n, axis=1, keepdims=True) * n, rtol=0, atol=1e-12)

@@ -1,0 +1,74 @@
+"""The truth's primary rays as one kernel (float64, parallel over pixels): per reflector pixel the
+eye ray through the pixel centre (:meth:`refsoft.scene.camera.Camera.rays`), its hit on the
+pixel's visible triangle (Moller-Trumbore, :func:`refsoft.truth.raytrace.ray_triangle`), the
+normal interpolated there and renormalised, and the reflected direction. The NumPy versions are
+the references it is tested against (``tests/truth/test_truth.py``)."""
+
+import numpy as np
+from numba import prange
+
+from .._numba import kernel
+
+
+@kernel(inline=True)
+def _unproject(inv, x, y, z):
+    """``inv @ (x, y, z, 1)`` divided by its w."""
+    w = ((inv[3, 0] * x + inv[3, 1] * y) + inv[3, 2] * z) + inv[3, 3]
+    px = (((inv[0, 0] * x + inv[0, 1] * y) + inv[0, 2] * z) + inv[0, 3]) / w
+    py = (((inv[1, 0] * x + inv[1, 1] * y) + inv[1, 2] * z) + inv[1, 3]) / w
+    pz = (((inv[2, 0] * x + inv[2, 1] * y) + inv[2, 2] * z) + inv[2, 3]) / w
+    return px, py, pz
+
+
+@kernel(parallel=True)
+def primary_rays(rows, cols, width, height, inv, eye, perspective, vertices, normals, faces, tri, hit, ray, ok):
+    """For pixel ``i`` at (rows[i], cols[i]) with visible triangle ``tri[i]``: ``hit[i]`` the ray's
+    point on that triangle's plane, ``ray[i]`` the direction reflected about the interpolated
+    normal, ``ok[i]`` False where the ray is parallel to the plane (then hit is the ray's origin
+    and ray its direction)."""
+    for i in prange(rows.shape[0]):
+        x = (cols[i] + 0.5) / width * 2.0 - 1.0
+        y = (height - rows[i] - 0.5) / height * 2.0 - 1.0
+        nx_, ny_, nz_ = _unproject(inv, x, y, -1.0)
+        fx, fy, fz = _unproject(inv, x, y, 1.0)
+        dx, dy, dz = fx - nx_, fy - ny_, fz - nz_
+        length = np.sqrt((dx * dx + dy * dy) + dz * dz)
+        dx, dy, dz = dx / length, dy / length, dz / length
+        if perspective:
+            ox, oy, oz = eye[0], eye[1], eye[2]
+        else:
+            ox, oy, oz = nx_, ny_, nz_
+        ia, ib, ic = faces[tri[i], 0], faces[tri[i], 1], faces[tri[i], 2]
+        ax, ay, az = vertices[ia, 0], vertices[ia, 1], vertices[ia, 2]
+        e1x, e1y, e1z = vertices[ib, 0] - ax, vertices[ib, 1] - ay, vertices[ib, 2] - az
+        e2x, e2y, e2z = vertices[ic, 0] - ax, vertices[ic, 1] - ay, vertices[ic, 2] - az
+        px, py, pz = dy * e2z - dz * e2y, dz * e2x - dx * e2z, dx * e2y - dy * e2x
+        det = (e1x * px + e1y * py) + e1z * pz
+        if det == 0.0:
+            ok[i] = False
+            hit[i, 0], hit[i, 1], hit[i, 2] = ox, oy, oz
+            ray[i, 0], ray[i, 1], ray[i, 2] = dx, dy, dz
+            continue
+        inv_det = 1.0 / det
+        sx, sy, sz = ox - ax, oy - ay, oz - az
+        u = ((sx * px + sy * py) + sz * pz) * inv_det
+        qx, qy, qz = sy * e1z - sz * e1y, sz * e1x - sx * e1z, sx * e1y - sy * e1x
+        v = ((dx * qx + dy * qy) + dz * qz) * inv_det
+        t = ((e2x * qx + e2y * qy) + e2z * qz) * inv_det
+        ok[i] = np.isfinite(t)
+        if not ok[i]:
+            t = 0.0
+            u = 0.0
+            v = 0.0
+        w0 = 1.0 - u - v if ok[i] else 0.0
+        hit[i, 0], hit[i, 1], hit[i, 2] = ox + t * dx, oy + t * dy, oz + t * dz
+        mx = (w0 * normals[ia, 0] + u * normals[ib, 0]) + v * normals[ic, 0]
+        my = (w0 * normals[ia, 1] + u * normals[ib, 1]) + v * normals[ic, 1]
+        mz = (w0 * normals[ia, 2] + u * normals[ib, 2]) + v * normals[ic, 2]
+        m = np.sqrt((mx * mx + my * my) + mz * mz)
+        if m > 0.0:
+            mx, my, mz = mx / m, my / m, mz / m
+        else:
+            mx, my, mz = 0.0, 0.0, 0.0
+        k = 2.0 * ((dx * mx + dy * my) + dz * mz)
+        ray[i, 0], ray[i, 1], ray[i, 2] = dx - k * mx, dy - k * my, dz - k * mz
