@@ -1,7 +1,5 @@
 """``python -m refsoft``: the command line."""
 
-import sys
+from ._start import run
 
-from .cli import main
-
-sys.exit(main())
+run()

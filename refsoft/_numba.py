@@ -37,3 +37,14 @@ def _like_impl(value, prototype):
     if prototype == types.float64:
         return lambda value, prototype: np.float64(value)
     return None
+
+
+def kernels_cached(minimum: int = 20) -> bool:
+    """Whether Numba's cache already holds compiled kernels of refsoft (at least ``minimum``
+    index files under the package's ``__pycache__`` folders, or under ``$NUMBA_CACHE_DIR``):
+    False on a first run, which compiles them (tens of seconds)."""
+    import glob
+    import os
+
+    root = os.environ.get("NUMBA_CACHE_DIR") or os.path.dirname(os.path.abspath(__file__))
+    return len(glob.glob(os.path.join(root, "**", "*.nbi"), recursive=True)) >= minimum

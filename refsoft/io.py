@@ -11,6 +11,10 @@ from contextlib import contextmanager
 import numpy as np
 
 
+#: Temporary files being written (removed by :func:`remove_temporaries` on a hard exit).
+_ACTIVE = set()
+
+
 @contextmanager
 def atomic_path(path, suffix=""):
     """Yield a temporary path next to ``path``; rename it to ``path`` if the block succeeds."""
@@ -18,6 +22,7 @@ def atomic_path(path, suffix=""):
     folder = os.path.dirname(os.path.abspath(path))
     os.makedirs(folder, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix="." + os.path.basename(path) + ".", suffix=".tmp" + suffix, dir=folder)
+    _ACTIVE.add(tmp)
     os.close(fd)
     umask = os.umask(0)
     os.umask(umask)
@@ -28,6 +33,16 @@ def atomic_path(path, suffix=""):
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
+        _ACTIVE.discard(tmp)
+
+
+def remove_temporaries() -> None:
+    """Remove the temporary files of writes in progress (before leaving without finishing them)."""
+    for tmp in list(_ACTIVE):
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
 
 
 def write_npz(path, **arrays):

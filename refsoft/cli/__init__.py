@@ -11,7 +11,7 @@ import sys
 
 from . import commands
 from .options import (frame_range_options, memory_options, method_options, one_frame_options, out_option,
-                      render_options, scene_options)
+                      render_options, run_folder_options, scene_options)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -45,13 +45,13 @@ def build_parser() -> argparse.ArgumentParser:
     t.set_defaults(func=commands.cmd_trace)
 
     r = sub.add_parser("render", parents=[scene, frame_range_options(), methods, render_options(), memory,
-                                          out_option("out/render")],
+                                          run_folder_options("out/SCENE")],
                        help="render frames with curved reflections (frame_NNNN.npz/.png, stats.json)")
     r.set_defaults(func=commands.cmd_render)
 
     _port_commands(sub)
     _bench_command(sub)
-    tr = sub.add_parser("truth", parents=[scene, frame_range_options(), memory, out_option("out/truth")],
+    tr = sub.add_parser("truth", parents=[scene, frame_range_options(), memory, run_folder_options("out/SCENE-truth")],
                         help="ray-trace the reflections (Embree) as the reference for compare")
     tr.add_argument("--no-exact", action="store_true",
                     help="skip the exact reflection points of spherical reflectors (per-vertex truth)")
@@ -101,7 +101,8 @@ def _bench_command(sub):
     b.add_argument("--height", type=int, default=None, help="image height (sweep 240, others 768)")
     b.add_argument("--frames", type=int, default=None, metavar="N",
                    help="frames per scene (accuracy: 5 spread over each animation; sweep: 3; table1: all)")
-    b.add_argument("--repeats", type=int, default=3, metavar="N", help="timed runs per setting (median)")
+    b.add_argument("--repeats", type=int, default=None, metavar="N",
+                   help="sweep and scaling: timed runs per setting, the median kept (default 3)")
     b.add_argument("--knob", action="append", default=None, metavar="NAME",
                    help="sweep only these knobs (repeatable): preset, gbuffer_scale, widen, neighbourhood, method, "
                         "precision, inverse, tessellate, refine, virtual, silhouette")
@@ -113,15 +114,21 @@ def _bench_command(sub):
 
 
 
-def main(argv=None) -> int:
+def main(argv=None, installed=False) -> int:
     """Run the command line; returns the exit status (0 done, 1 a check failed, 2 bad input,
-    130 interrupted)."""
+    130 interrupted). ``installed``: the interrupt handler is already in place
+    (:mod:`refsoft._start`)."""
+    from .. import interrupt
     from ..errors import RefsoftError
 
-    parser = build_parser()
-    args = parser.parse_args(argv)
+    if not installed:
+        interrupt.install()
     try:
-        return args.func(args)
+        parser = build_parser()
+        args = parser.parse_args(argv)
+        code = args.func(args)
+        interrupt.check()  # an interrupt a library swallowed
+        return code
     except RefsoftError as exc:
         print(f"refsoft: error: {exc}", file=sys.stderr)
         return 2
@@ -131,5 +138,13 @@ def main(argv=None) -> int:
         print(f"refsoft: error: {exc.strerror or exc}: {exc.filename or ''}".rstrip(": "), file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        print("refsoft: interrupted", file=sys.stderr)
+        print(interrupt.MESSAGE, file=sys.stderr)
         return 130
+    except SystemError:  # an interrupt inside a compiled call surfaces as "returned a result with an exception set"
+        if not interrupt.seen():
+            raise
+        print(interrupt.MESSAGE, file=sys.stderr)
+        return 130
+    finally:
+        if not installed:
+            interrupt.restore()

@@ -86,6 +86,29 @@ def cmd_trace(args) -> int:
     return 0
 
 
+def _first_run_notice(what: str, seconds: int) -> bool:
+    """Print one line before a first run compiles the kernels; True when it will."""
+    import sys
+
+    from .._numba import kernels_cached
+
+    if kernels_cached():
+        return False
+    print(f"refsoft: first run: compiling the {what} kernels (about {seconds} s on 2 cores; cached for later runs)",
+          file=sys.stderr, flush=True)
+    return True
+
+
+def _timing(frames, compiling: bool) -> str:
+    """The closing figures: the median frame time, the first frame apart when it compiled."""
+    ms = [f.time_ms["total"] for f in frames]
+    if compiling and len(ms) > 1:
+        return f"first frame {ms[0] / 1000:.1f} s (compiling), then median {np.median(ms[1:]):.0f} ms per frame"
+    if compiling:
+        return f"{ms[0] / 1000:.1f} s for the frame, compiling included"
+    return f"median {np.median(ms):.0f} ms per frame"
+
+
 def cmd_render(args) -> int:
     from ..frame import render
 
@@ -97,16 +120,16 @@ def cmd_render(args) -> int:
             raise RefsoftError(f"--frame must be in [0, {scene.n_frames - 1}], got {args.frame}")
         frames = list(range(args.frame + 1)) if not args.no_coherence else [args.frame]
         write = {args.frame}
+    out = args.out or os.path.join("out", scene.name)
+    compiling = _first_run_notice("render", 40)
     t0 = time.perf_counter()
     # every frame is written as soon as it is rendered, then dropped (one frame in memory)
-    done, stats = render(scene, frames=frames, out=args.out, progress=True, memory_limit=args.memory_limit,
-                         keep=False, write=write, **render_kwargs(args))
+    done, stats = render(scene, frames=frames, out=out, progress=True, memory_limit=args.memory_limit,
+                         keep=False, write=write, overwrite=args.overwrite, **render_kwargs(args))
     keep = done if write is None else [f for f in done if f.index in write]
     summ = stats["summary"]
-    median_ms = np.median([f.time_ms["total"] for f in keep])
-    print(f"{scene.name}: {len(keep)} frame(s), preset {args.preset}, written to {args.out} in "
-          f"{time.perf_counter() - t0:.1f} s "
-          f"(median {median_ms:.0f} ms per frame; the first includes compiling on a first run); search iterations: "
+    print(f"{scene.name}: {len(keep)} frame(s), preset {args.preset}, written to {out} in "
+          f"{time.perf_counter() - t0:.1f} s ({_timing(done, compiling)}); search iterations: "
           f"max frame mean {summ['max_frame_mean_iterations']:.1f}, total mean {summ['total_mean_iterations']:.1f}")
     return 0
 
@@ -120,12 +143,14 @@ def cmd_truth(args) -> int:
     if args.frame is not None:
         frames = [args.frame]
     frame_indices(scene, frames)  # checks the range before any work
+    out = args.out or os.path.join("out", f"{scene.name}-truth")
+    compiling = _first_run_notice("truth", 15)
     t0 = time.perf_counter()
-    done, stats = render_truth(scene, frames=frames, out=args.out, progress=True, exact=not args.no_exact,
-                               memory_limit=args.memory_limit)
+    done, stats = render_truth(scene, frames=frames, out=out, progress=True, exact=not args.no_exact,
+                               memory_limit=args.memory_limit, overwrite=args.overwrite)
     rays = sum(f.report["reflector_pixels"] for f in done)
-    print(f"{scene.name}: {len(done)} truth frame(s) written to {args.out} in {time.perf_counter() - t0:.1f} s "
-          f"(median {stats['summary']['median_total_ms']:.0f} ms per frame; {rays} reflected rays)")
+    print(f"{scene.name}: {len(done)} truth frame(s) written to {out} in {time.perf_counter() - t0:.1f} s "
+          f"({_timing(done, compiling)}; {rays} reflected rays)")
     return 0
 
 
@@ -167,11 +192,17 @@ def cmd_bench(args) -> int:
 
     out = args.out or os.path.join("out", "bench", args.what)
     t0 = time.perf_counter()
-    if args.what != "accuracy" and (args.sizes or args.setting):
-        raise RefsoftError("--sizes and --setting are for bench accuracy")
+    unused = {"accuracy": ("knob", "width", "height", "repeats", "max_vertices", "max_subdivisions", "max_width"),
+              "sweep": ("sizes", "setting", "max_vertices", "max_subdivisions", "max_width"),
+              "scaling": ("scenes", "knob", "frames", "sizes", "setting"),
+              "table1": ("knob", "repeats", "sizes", "setting", "max_vertices", "max_subdivisions", "max_width")}
+    given = [name for name in unused[args.what] if getattr(args, name) not in (None, False, [])
+             and getattr(args, name) != BENCH_DEFAULTS.get(name)]
+    if given:
+        flags = ", ".join("--" + name.replace("_", "-") for name in given)
+        raise RefsoftError(f"bench {args.what} takes no {flags}")
+    repeats = 3 if args.repeats is None else args.repeats
     if args.what == "accuracy":
-        if args.knob or args.width or args.height:
-            raise RefsoftError("bench accuracy takes --sizes WxH, not --width/--height or --knob")
         sizes = [_size(s) for s in args.sizes] if args.sizes else [(640, 480), (1024, 768)]
         rows = bench.accuracy(args.scenes, out, sizes, args.frames or 5, args.setting, progress_bar=True)
         for r in bench.accuracy_summary(rows):
@@ -182,24 +213,20 @@ def cmd_bench(args) -> int:
               f"agreement_*.png" + (", accuracy.png" if os.path.exists(os.path.join(out, "accuracy.png")) else ""))
     elif args.what == "sweep":
         scenes = args.scenes or ["sphere", "quad", "kitchen"]
-        rows = bench.sweep(scenes, out, args.width or 320, args.height or 240, args.frames or 3, args.repeats,
+        rows = bench.sweep(scenes, out, args.width or 320, args.height or 240, args.frames or 3, repeats,
                            args.knob, progress_bar=True)
         plot = "pareto.png" if os.path.exists(os.path.join(out, "pareto.png")) else \
             "no plot (pip install '.[plot]' for matplotlib)"
         print(f"sweep: {len(rows)} settings over {len(scenes)} scenes in {time.perf_counter() - t0:.0f} s; "
               f"{out}/sweep.csv, sweep.md, {plot}")
     elif args.what == "scaling":
-        if args.scenes or args.knob:
-            raise RefsoftError("bench scaling takes no --scenes or --knob")
         r = bench.scaling(out, args.width or 1024, args.height or 768, args.max_vertices, args.max_subdivisions,
-                          args.max_width, args.repeats, progress_bar=True)
+                          args.max_width, repeats, progress_bar=True)
         slopes = ", ".join(f"{k} {v:.2f}" for k, v in r["slopes"].items())
         plot = ".png" if os.path.exists(os.path.join(out, "scaling.png")) else \
             " (no plot: pip install '.[plot]' for matplotlib)"
         print(f"scaling in {time.perf_counter() - t0:.0f} s; fitted slopes: {slopes}; {out}/scaling.csv, .md{plot}")
     else:
-        if args.knob:
-            raise RefsoftError("bench table1 takes no --knob")
         rows = bench.table1(args.scenes or ["kitchen", "ufo", "ants"], out, args.width or 1024, args.height or 768,
                             args.frames, progress_bar=True)
         for r in rows:
@@ -208,6 +235,10 @@ def cmd_bench(args) -> int:
                   f"(paper {r['paper_ms_per_frame']})")
         print(f"{out}/table1.csv, table1.md")
     return 0
+
+
+#: The bench options' defaults in the parser (an option at its default counts as not given).
+BENCH_DEFAULTS = {"max_vertices": 1 << 20, "max_subdivisions": 7, "max_width": 2048}
 
 
 def _size(text):

@@ -119,6 +119,15 @@ def out_option(default: str) -> argparse.ArgumentParser:
     return p
 
 
+def run_folder_options(default: str) -> argparse.ArgumentParser:
+    """The folder a run owns, and leave to replace an earlier run's files there."""
+    p = _parser()
+    p.add_argument("--out", default=None, metavar="DIR", help=f"output folder (default: {default})")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace the files of an earlier run in the output folder (refused without it)")
+    return p
+
+
 def search_kwargs(args) -> dict:
     """The preset and the search options of :func:`method_options` that were given, as
     :class:`refsoft.RenderOptions` fields (the hidden ``--search`` spelling mapped onto them)."""

@@ -211,24 +211,36 @@ def frame_indices(scene: Scene, frames=None) -> list:
     return indices
 
 
-def run_frames(renderer, indices, out=None, progress=False, desc="frames", keep=True, write=None) -> list:
+def run_frames(renderer, indices, out=None, progress=False, desc="frames", keep=True, write=None, done=None,
+               on_frame=None) -> list:
     """``renderer.render_frame(f)`` for each index in order, each frame written to ``out`` (when
-    given) as soon as it is done; a tqdm bar on a terminal when ``progress`` and several frames.
+    given) as soon as it is done. With ``progress`` and several frames: a tqdm bar on a terminal,
+    else (a log) a line every tenth of the run.
 
     ``write``: the indices to write (default: all). ``keep=False`` drops each frame's arrays and
     per-reflector results once written (the returned frames keep their timings and reports), so
-    a long run holds one frame."""
+    a long run holds one frame. ``done``: a list the finished frames are appended to as they
+    finish (what was done when an interrupt stops the run); ``on_frame(done)`` is called after
+    each."""
     import os
+    import sys
+
+    from .. import interrupt
 
     if out is not None:
         os.makedirs(out, exist_ok=True)
-    it = indices
+    done = [] if done is None else done
+    it, lines = indices, 0
     if progress and len(indices) > 1:
-        from tqdm import tqdm
+        if sys.stderr.isatty():
+            from tqdm import tqdm
 
-        it = tqdm(indices, desc=desc, unit="frame", disable=None)  # no bar off a terminal
-    done = []
-    for f in it:
+            it = tqdm(indices, desc=desc, unit="frame")
+        else:
+            lines = max(1, -(-len(indices) // 10))
+    t0 = time.perf_counter()
+    for n, f in enumerate(it, start=1):
+        interrupt.check()
         fr = renderer.render_frame(f)
         if out is not None and (write is None or f in write):
             write_frame(out, fr)
@@ -236,6 +248,11 @@ def run_frames(renderer, indices, out=None, progress=False, desc="frames", keep=
             fr.arrays = {}
             fr.reflectors = {}
         done.append(fr)
+        if on_frame is not None:
+            on_frame(done)
+        if lines and (n % lines == 0 or n == len(indices)):
+            print(f"{desc}: {n}/{len(indices)} frames ({100 * n // len(indices)}%), "
+                  f"{time.perf_counter() - t0:.1f} s", file=sys.stderr, flush=True)
     return done
 
 
@@ -257,7 +274,7 @@ def resolve_scene(scene, width=None, height=None, subdivide=None) -> Scene:
 
 
 def render(scene, frames=None, out=None, progress=False, memory_limit=None, keep=True, write=None,
-           width=None, height=None, subdivide=None, preset="accurate", **options):
+           width=None, height=None, subdivide=None, preset="accurate", overwrite=False, **options):
     """Render frames of a scene (the Python face of ``refsoft render``).
 
     Parameters
@@ -268,7 +285,8 @@ def render(scene, frames=None, out=None, progress=False, memory_limit=None, keep
         A number of frames (0 .. n-1) or explicit frame indices (rendered in order, coherent
         from one to the next). Default: every frame of the animation (1 for a static scene).
     out : str or PathLike, optional
-        Folder to write ``frame_NNNN.npz``, ``frame_NNNN.png`` and ``stats.json`` into.
+        Folder to write ``run.json``, ``frame_NNNN.npz``, ``frame_NNNN.png`` and ``stats.json``
+        into; refused when it holds another run's files, unless ``overwrite``.
     progress : bool
         Show a tqdm progress bar.
     width, height : int, optional
@@ -285,6 +303,8 @@ def render(scene, frames=None, out=None, progress=False, memory_limit=None, keep
         Frame indices to write to ``out`` (default all).
     preset : {"accurate", "paper"}
         The options not given take this preset's values (:data:`refsoft.options.PRESETS`).
+    overwrite : bool
+        Replace an earlier run's files in ``out``.
     **options
         :class:`RenderOptions` fields (``method``, ``neighbourhood``, ``inverse``, ``widen``, ...),
         each overriding the preset.
@@ -305,8 +325,33 @@ def render(scene, frames=None, out=None, progress=False, memory_limit=None, keep
     indices = frame_indices(scene, frames)
     driver = FrameDriver(scene, opts, memory_limit)
     check_frame_memory(scene, opts, len(indices) if keep else 1, memory_limit)
-    done = run_frames(driver, indices, out, progress, f"render {scene.name}", keep, write)
-    stats = frame_stats(done if write is None else [f for f in done if f.index in write], opts)
+    return run_to_folder(driver, indices, out, "render", opts, progress, keep, write, overwrite)
+
+
+def run_to_folder(driver, indices, out, kind, options, progress=False, keep=True, write=None, overwrite=False):
+    """Run ``driver`` over ``indices`` into the folder ``out`` (when given): ``run.json`` first,
+    each frame as it is done and ``stats.json`` after it (so a run stopped at any moment leaves the
+    statistics of the frames it wrote). Returns (frames, stats)."""
+    import os
+
+    from ..io import write_json
+    from .outputs import prepare_run_folder, run_manifest
+
+    written = indices if write is None else [f for f in indices if f in write]
     if out is not None:
-        write_json(os.path.join(out, "stats.json"), stats)
-    return done, stats
+        prepare_run_folder(out, run_manifest(kind, driver.scene, written, options), overwrite)
+    done = []
+
+    def stats_of(frames):
+        return frame_stats(frames if write is None else [f for f in frames if f.index in write], options)
+
+    def save(frames):
+        write_json(os.path.join(out, "stats.json"), stats_of(frames))
+
+    try:
+        run_frames(driver, indices, out, progress, f"{kind} {driver.scene.name}", keep, write, done,
+                   None if out is None else save)
+    finally:
+        if out is not None:
+            save(done)
+    return done, stats_of(done)

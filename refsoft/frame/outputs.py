@@ -84,3 +84,51 @@ def write_gbuffers(scene, out, frame: int = 0, reflectors=None, widen: float = 1
     write_png(os.path.join(out, "view.png"), view.image)
     write_png(os.path.join(out, "gbuffer.png"), np.concatenate(pictures, axis=0))
     return done
+
+
+#: Format tag of ``run.json``.
+RUN_FORMAT = "refsoft-run-1"
+#: The files a run writes into its folder (and ``overwrite`` removes).
+RUN_FILES = ("frame_[0-9]*.npz", "frame_[0-9]*.png", "stats.json", "run.json")
+
+
+def run_manifest(kind: str, scene, frames, options=None) -> dict:
+    """``run.json``: what a run into a folder is (``kind``: "render" or "truth"), so that
+    ``compare`` and later runs can tell whose frames a folder holds."""
+    from .. import __version__
+
+    return {"format": RUN_FORMAT, "kind": kind, "scene": scene.name, "width": int(scene.camera.width),
+            "height": int(scene.camera.height), "frames": [int(f) for f in frames],
+            "vertices": int(sum(o.mesh.n_vertices for o in scene.objects if not o.reflector)),
+            "reflectors": list(scene.reflector_ids), "options": None if options is None else options.as_dict(),
+            "refsoft": __version__}
+
+
+def prepare_run_folder(out, manifest: dict, overwrite: bool = False) -> None:
+    """Make ``out`` this run's folder: refuse (:class:`refsoft.errors.RefsoftError`) when it holds
+    another run's frames, unless ``overwrite``, which removes that run's files (and only those,
+    :data:`RUN_FILES`); then write ``run.json``."""
+    import glob
+    import json
+
+    from ..errors import RefsoftError
+    from ..io import write_json
+
+    out = os.fspath(out)
+    if os.path.exists(out) and not os.path.isdir(out):
+        raise RefsoftError(f"--out {out} is a file, not a folder")
+    old = sorted(f for pattern in RUN_FILES for f in glob.glob(os.path.join(out, pattern)))
+    if old and not overwrite:
+        what = f"{sum(f.endswith('.npz') for f in old)} frame files"
+        try:
+            with open(os.path.join(out, "run.json")) as fh:
+                prev = json.load(fh)
+            what = (f"a {prev.get('kind', 'run')} of {prev.get('scene')!r}, {len(prev.get('frames', []))} frames at "
+                    f"{prev.get('width')}x{prev.get('height')}")
+        except (OSError, ValueError, AttributeError):
+            pass
+        raise RefsoftError(f"{out} already holds {what}; give --overwrite to replace it, or another --out")
+    for f in old:
+        os.unlink(f)
+    os.makedirs(out, exist_ok=True)
+    write_json(os.path.join(out, "run.json"), manifest)

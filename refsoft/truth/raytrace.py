@@ -20,15 +20,13 @@ Outputs follow DESIGN section 7: ``image``, ``object_id``, ``reflected_id``, plu
 
 from __future__ import annotations
 
-import os
 import time
 
 import numpy as np
 
 from .. import keys
 from ..errors import RefsoftError
-from ..frame.driver import FrameDriver, frame_indices, resolve_scene, run_frames
-from ..frame.outputs import frame_stats
+from ..frame.driver import FrameDriver, frame_indices, resolve_scene, run_to_folder
 from ..options import RenderOptions
 from ..raster import shade
 from ..scene.mesh import concatenate
@@ -268,7 +266,7 @@ class TruthRenderer(FrameDriver):
 
 
 def render_truth(scene, frames=None, out=None, progress=False, exact=True, memory_limit=None, width=None,
-                 height=None, subdivide=None):
+                 height=None, subdivide=None, overwrite=False):
     """Ray-trace frames of a scene (the Python face of ``refsoft truth``).
 
     Parameters
@@ -289,19 +287,15 @@ def render_truth(scene, frames=None, out=None, progress=False, exact=True, memor
         Image size (replaces the scene camera's).
     subdivide : float, optional
         Loader subdivision override, as :func:`refsoft.render`.
+    overwrite : bool
+        Replace an earlier run's files in ``out``.
 
     Returns
     -------
     frames : list of refsoft.frame.Frame
     stats : dict
     """
-    from ..io import write_json
-
     scene = resolve_scene(scene, width, height, subdivide)
     indices = frame_indices(scene, frames)
-    done = run_frames(TruthRenderer(scene, exact=exact, memory_limit=memory_limit), indices, out, progress,
-                      f"truth {scene.name}")
-    stats = frame_stats(done)
-    if out is not None:
-        write_json(os.path.join(out, "stats.json"), stats)
-    return done, stats
+    return run_to_folder(TruthRenderer(scene, exact=exact, memory_limit=memory_limit), indices, out, "truth", None,
+                         progress, overwrite=overwrite)

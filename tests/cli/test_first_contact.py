@@ -1,0 +1,90 @@
+"""What a new user meets: runs own their folders, a first run says it compiles, progress shows in
+logs, options a command does not use are refused, ids and frames are named the same everywhere."""
+
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+
+from refsoft import cli
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+SMALL = ["--width", "48", "--height", "36", "--preset", "paper"]
+
+
+def run_cli(*args, cwd=None):
+    env = dict(os.environ, PYTHONPATH=ROOT + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    return subprocess.run([sys.executable, "-m", "refsoft", *args], capture_output=True, text=True, env=env, cwd=cwd,
+                          timeout=600)
+
+
+def test_a_run_owns_its_folder(tmp_path, capsys):
+    out = tmp_path / "r"
+    assert cli.main(["render", "sphere", "--frames", "2", "--out", str(out), *SMALL]) == 0
+    run = json.loads((out / "run.json").read_text())
+    assert (run["kind"], run["scene"], run["frames"], run["width"]) == ("render", "sphere", [0, 1], 48)
+    capsys.readouterr()
+    # another run into the same folder is refused, and nothing is touched
+    before = {p.name: p.stat().st_mtime_ns for p in out.iterdir()}
+    assert cli.main(["render", "planar", "--frames", "1", "--out", str(out), *SMALL]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "already holds a render of 'sphere', 2 frames at 48x36" in err[0] and "--overwrite" in err[0]
+    assert {p.name: p.stat().st_mtime_ns for p in out.iterdir()} == before
+    # --overwrite replaces that run's files: no frame of the sphere is left beside the planar ones
+    assert cli.main(["render", "planar", "--frames", "1", "--out", str(out), "--overwrite", *SMALL]) == 0
+    assert sorted(p.name for p in out.glob("frame_*")) == ["frame_0000.npz", "frame_0000.png"]
+    stats = json.loads((out / "stats.json").read_text())
+    assert [f["frame"] for f in stats["frames"]] == [0] and json.loads((out / "run.json").read_text())["scene"] == "planar"
+
+
+def test_default_folders_are_named_after_the_scene(tmp_path):
+    r = run_cli("render", "sphere", "--frames", "1", *SMALL, cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    t = run_cli("truth", "sphere", "--frames", "1", "--width", "48", "--height", "36", cwd=tmp_path)
+    assert t.returncode == 0, t.stderr
+    assert (tmp_path / "out" / "sphere" / "frame_0000.npz").exists()
+    assert json.loads((tmp_path / "out" / "sphere-truth" / "run.json").read_text())["kind"] == "truth"
+
+
+def test_progress_shows_in_logs_and_the_closing_line_is_honest(tmp_path):
+    """Off a terminal (a log) a line every tenth of the run; the closing figure is a median of
+    the frames, with no word of compiling when nothing was compiled."""
+    r = run_cli("render", "planar", "--frames", "4", *SMALL, "--out", str(tmp_path / "o"))
+    assert r.returncode == 0, r.stderr
+    lines = [ln for ln in r.stderr.splitlines() if ln.startswith("render planar: ")]
+    assert [ln.split(" frames")[0] for ln in lines] == [f"render planar: {n}/4" for n in (1, 2, 3, 4)]
+    assert "median" in r.stdout and "compiling" not in r.stdout
+
+
+def test_a_first_run_says_it_compiles(monkeypatch, capsys):
+    from refsoft import _numba
+    from refsoft.cli import commands
+
+    monkeypatch.setattr(_numba, "kernels_cached", lambda minimum=20: False)
+    assert commands._first_run_notice("render", 40) is True
+    assert capsys.readouterr().err.strip() == ("refsoft: first run: compiling the render kernels (about 40 s on 2 "
+                                               "cores; cached for later runs)")
+
+
+@pytest.mark.parametrize("args, message", [
+    (["bench", "table1", "--repeats", "2"], "bench table1 takes no --repeats"),
+    (["bench", "scaling", "--frames", "2"], "bench scaling takes no --frames"),
+    (["bench", "accuracy", "--width", "64"], "bench accuracy takes no --width"),
+    (["bench", "sweep", "--sizes", "64x48"], "bench sweep takes no --sizes"),
+    (["gbuffer", "sphere", "--reflector", "9"], "has no object 9 (object ids are 1..6"),
+    (["gbuffer", "sphere", "--reflector", "2"], "object 2 ('floor') of scene 'sphere' is not a reflector"),
+])
+def test_options_a_command_cannot_use_are_refused_by_name(args, message, capsys):
+    assert cli.main(args) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and message in err, err
+
+
+def test_static_scenes_take_any_frame_in_every_command(tmp_path):
+    """A static scene has every frame: gbuffer and trace accept --frame 5 as render does."""
+    assert cli.main(["gbuffer", "sphere", "--frame", "5", "--width", "48", "--height", "36",
+                     "--out", str(tmp_path / "g")]) == 0
+    assert cli.main(["trace", "sphere", "--vertex", "10", "--frame", "2", "--width", "48", "--height", "36",
+                     "--out", str(tmp_path / "t")]) == 0
