@@ -1,4 +1,4 @@
-"""Shared Numba settings: every kernel is compiled with these flags (DESIGN section 2)."""
+"""Shared Numba settings: every kernel is compiled with these flags (spec section 2)."""
 
 import numba
 import numpy as np

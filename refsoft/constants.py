@@ -6,7 +6,7 @@ glance which constants shape the outputs.
 
 import numpy as np
 
-# --- Rasterizer (DESIGN section 2) -------------------------------------------------------
+# --- Rasterizer (spec section 2) -------------------------------------------------------
 #: Fractional bits of snapped window coordinates (1/256 pixel, as llvmpipe).
 SUBPIXEL_BITS = 8
 #: One pixel in snapped units.
@@ -20,7 +20,7 @@ TILE_SIZE = 16
 #: Depth buffer clear value (window depth; LESS test).
 DEPTH_CLEAR = 1.0
 
-# --- Limits (DESIGN section 10) -----------------------------------------------------------
+# --- Limits (spec section 10) -----------------------------------------------------------
 #: Largest image edge accepted, in pixels.
 MAX_IMAGE_EDGE = 16384
 #: Largest image accepted, in pixels (width * height); about 1 GiB of G-buffer at float32.
@@ -32,7 +32,7 @@ MEMORY_LIMIT_BYTES = 4 << 30
 MAX_VERTICES = 1 << 26
 MAX_TRIANGLES = 1 << 26
 
-# --- Shading (DESIGN section 5) -----------------------------------------------------------
+# --- Shading (spec section 5) -----------------------------------------------------------
 #: Fixed world-space direction *towards* the light (normalised at import).
 LIGHT_DIRECTION = np.array([0.3, 0.8, 0.5]) / np.linalg.norm([0.3, 0.8, 0.5])
 #: colour * (AMBIENT + DIFFUSE * |dot(n, L)|): two-sided, so a surface's colour does not
@@ -50,7 +50,7 @@ PRESET_NAMES = ("paper", "accurate")
 METHODS = ("walk", "hierarchy")
 #: The walk's neighbourhoods -> candidates per iteration (current pixel included).
 NEIGHBOURHOODS = {"cross": 5, "box": 9}
-#: Hidden-vertex modes (DESIGN 4.6).
+#: Hidden-vertex modes (spec section 4.6).
 INVERSE_MODES = ("plane", "search", "discard")
 #: Working precisions of the G-buffer and the search.
 PRECISIONS = ("float32", "float64")
@@ -69,7 +69,7 @@ MAX_TESSELLATION_LEVEL = 8
 #: |cross(forward, up)| below this means up is parallel to the view direction.
 CAMERA_PARALLEL_TOL = 1e-9
 
-# --- Conformance (DESIGN section 8) --------------------------------------------------------
+# --- Conformance (spec section 8) --------------------------------------------------------
 #: Two reflection pixels are a tie when the oracle's scores differ by at most this many float32
 #: ULP of the better one (``refsoft check``, ``refsoft.conformance.precision``).
 TIE_ULPS = 8
@@ -93,7 +93,7 @@ IMAGE_TOL = 1
 IMAGE_TOL_LOOSE = 4
 IMAGE_LOOSE_SHARE = 0.001
 
-# --- Truth and metrics (DESIGN section 6) ---------------------------------------------------
+# --- Truth and metrics (spec section 6) ---------------------------------------------------
 #: The rim of a reflector's stencil, in 8-neighbour steps: "interior" and "rim" agreement split
 #: there.
 RIM_PIXELS = 2
@@ -108,7 +108,7 @@ SPHERE_FACTOR = 2.0
 #: where the vertex search's classification changes.
 CLIP_ITERATIONS = 10
 #: Extra pixels around a stencil box before an object's virtual triangles count as outside it:
-#: more than the 1/512 px a snapped window coordinate can move (DESIGN section 2).
+#: more than the 1/512 px a snapped window coordinate can move (spec section 2).
 BOX_MARGIN_PIXELS = 2.0
 #: Largest offset, in texels along each axis, one refinement step may move the point.
 MAX_OFFSET = 1.0

@@ -1,4 +1,4 @@
-"""The names of the output arrays of a frame (``frame_NNNN.npz``, DESIGN section 7), in one place.
+"""The names of the output arrays of a frame (``frame_NNNN.npz``, spec section 7), in one place.
 
 Frame-wide arrays have fixed names (:data:`IMAGE`, ...). Per-reflector arrays are named
 ``NAME_K`` with ``K`` the reflector's object id: each per-reflector name below is a string that,

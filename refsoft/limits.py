@@ -1,11 +1,11 @@
-"""The memory guard (DESIGN section 10): estimate what a run will hold before allocating it, and
+"""The memory guard (spec section 10): estimate what a run will hold before allocating it, and
 refuse clearly above a limit.
 
 The limit is, in order: the ``memory_limit`` argument (CLI ``--memory-limit``), the environment
 variable ``REFSOFT_MEMORY_LIMIT``, :data:`refsoft.constants.MEMORY_LIMIT_BYTES`. Sizes accept
 plain bytes or a suffix: ``512M``, ``4G``, ``1.5GiB``.
 
-The estimate counts the arrays a frame keeps (its section 7 outputs) and the largest working set
+The estimate counts the arrays a frame keeps (its spec section 7 outputs) and the largest working set
 of one stage (a reflector's G-buffer, packed copy and search arrays; the rasterizer's per-pixel
 and per-triangle buffers), from byte counts per pixel, vertex and triangle listed below. It is
 an estimate (within about 2x of the measured peak on the built-in scenes: tests/frame/test_limits.py),

@@ -1,4 +1,4 @@
-"""The reflection-method seam (DESIGN section 1): what the frame driver gives a reflection method
+"""The reflection-method seam (spec section 1): what the frame driver gives a reflection method
 for one reflector, and what the method gives back.
 
 The driver (:mod:`refsoft.frame.driver`) rasterizes the main view, then, for each reflector ``k``
@@ -92,7 +92,7 @@ class ReflectorResult:
     covered : ndarray (h, w) bool
         Pixels of the stencil where the reflection shows an object.
     arrays : dict
-        This reflector's DESIGN section 7 arrays, by key (:mod:`refsoft.keys`), in output order.
+        This reflector's spec section 7 arrays, by key (:mod:`refsoft.keys`), in output order.
     pixels : dict
         Per-pixel arrays over ``box`` named in the method's ``pixel_arrays``.
     time_ms : dict

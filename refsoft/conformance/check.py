@@ -1,4 +1,4 @@
-"""``refsoft check GOLDEN CANDIDATE``: a port's outputs against the golden set (DESIGN section 8).
+"""``refsoft check GOLDEN CANDIDATE``: a port's outputs against the golden set (spec section 8).
 
 Each output is compared by the rule of its kind and gets a status:
 

@@ -1,9 +1,9 @@
-"""The golden set for ports (DESIGN section 8): ``refsoft golden --out DIR``.
+"""The golden set for ports (spec section 8): ``refsoft golden --out DIR``.
 
 Layout (a port writes its outputs in the same layout for ``refsoft check``)::
 
     DIR/manifest.json                 versions, the options of each case, SHA-256 of every file
-    DIR/CASE/frame_NNNN.npz           the DESIGN section 7 arrays (plus score_k and margin_k)
+    DIR/CASE/frame_NNNN.npz           the spec section 7 arrays (plus score_k and margin_k)
     DIR/CASE/traces_NNNN.json         search traces of a sample of vertices per reflector
 
 Traces (``format: refsoft-traces-1``): ``{"reflectors": {"K": [{"vertex": i, "start": [r, c],

@@ -5,13 +5,13 @@ functions), so both searches walk the same pixel grid. For every vertex searched
 
 - ``identical``: the same reflection pixel;
 - ``tie``: different pixels whose float64 scores differ by at most :data:`TIE_ULPS` float32 ULP
-  of the better one (the rule ``refsoft check`` accepts, DESIGN section 8): a near-tie that
+  of the better one (the rule ``refsoft check`` accepts, spec section 8): a near-tie that
   float32 rounding decides either way;
 - ``diverged``: different pixels further apart in score: float32 rounding decided a near-tie
   earlier on the walk (or at a coherence restart), and the two walks then reached different
   local optima (only where the score has several: concave, saddle-shaped or occluded mirrors).
 
-The float64 scores are computed here in NumPy with the formula of DESIGN 4.1, from the float64
+The float64 scores are computed here in NumPy with the formula of spec section 4.1, from the float64
 G-buffer.
 """
 
@@ -25,7 +25,7 @@ from ..search import CULLED
 
 
 def scores64(gbuffer, eye, vertices, pixels) -> np.ndarray:
-    """``s`` of DESIGN 4.1 in float64 for each vertex at its pixel (row, col) of a float64
+    """``s`` of spec section 4.1 in float64 for each vertex at its pixel (row, col) of a float64
     G-buffer (positions relative to its origin), shape (N,)."""
     r, c = pixels[:, 0], pixels[:, 1]
     p = gbuffer.position[r, c].astype(np.float64)

@@ -1,4 +1,4 @@
-"""The frame driver and the output contract (DESIGN sections 1, 5 and 7): the main view, one
+"""The frame driver and the output contract (spec sections 1, 5 and 7): the main view, one
 reflection method per reflector, the composite, and the ``frame_NNNN.npz`` / ``stats.json``
 outputs, frame after frame."""
 

@@ -1,4 +1,4 @@
-"""The frame driver (DESIGN sections 1, 5 and 7): the main view, one reflection method per
+"""The frame driver (spec sections 1, 5 and 7): the main view, one reflection method per
 reflector, the composite, frame after frame.
 
 Per frame: the world meshes; the main view of every object (colour, object id, depth,
@@ -35,7 +35,7 @@ class Frame:
     ----------
     index : int
     arrays : dict
-        The DESIGN section 7 arrays by key (:mod:`refsoft.keys`), in output order.
+        The spec section 7 arrays by key (:mod:`refsoft.keys`), in output order.
     time_ms : dict
         Milliseconds per stage, and ``total``.
     report : dict

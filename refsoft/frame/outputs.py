@@ -1,4 +1,4 @@
-"""A frame's outputs on disk (DESIGN section 7): ``frame_NNNN.npz`` (every array), ``frame_NNNN.png``
+"""A frame's outputs on disk (spec section 7): ``frame_NNNN.npz`` (every array), ``frame_NNNN.png``
 and ``stats.json``, each written atomically."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The exact CPU rasterizer (DESIGN section 2), in two stages like a GPU pipeline:
+"""The exact CPU rasterizer (spec section 2), in two stages like a GPU pipeline:
 
 1. :func:`rasterize` — clip-space triangles to a visibility buffer: per pixel the window depth
    and the visible triangle (LESS depth test, first drawn wins ties);
@@ -88,7 +88,7 @@ def _check_faces(faces, n_vertices: int) -> np.ndarray:
 
 
 def rasterize(clip, faces, width: int, height: int, peel_depth=None, region=None) -> Fragments:
-    """Rasterize clip-space triangles with OpenGL's rules (DESIGN section 2).
+    """Rasterize clip-space triangles with OpenGL's rules (spec section 2).
 
     Parameters
     ----------
@@ -347,7 +347,7 @@ def gbuffer(mesh: Mesh, camera: Camera, precision="float32", origin=None, crop=T
 
 
 def to_uint8(color) -> np.ndarray:
-    """8-bit conversion of DESIGN section 5: ``round(clip(c, 0, 1) * 255)``, half to even, in
+    """8-bit conversion of spec section 5: ``round(clip(c, 0, 1) * 255)``, half to even, in
     float64 (a Numba kernel; equal to ``np.rint(np.clip(c, 0, 1) * 255)`` bit for bit)."""
     c = np.asarray(color)
     if c.dtype not in (np.float32, np.float64):

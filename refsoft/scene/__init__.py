@@ -1,4 +1,4 @@
-"""Scene input (DESIGN section 3): cameras, meshes, procedural primitives, the scene model with
+"""Scene input (spec section 3): cameras, meshes, procedural primitives, the scene model with
 its keyframed animation, TOML scene files, loader subdivision of long triangles and the built-in
 scenes.
 

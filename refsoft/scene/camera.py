@@ -1,4 +1,4 @@
-"""Cameras with OpenGL conventions (DESIGN section 2).
+"""Cameras with OpenGL conventions (spec section 2).
 
 World space is right-handed with y up; view space looks down -z. ``projection_matrix`` is the
 classic ``gluPerspective`` (or ``glOrtho``) matrix, so clip coordinates, NDC and window depth are
@@ -167,7 +167,7 @@ class Camera:
         return self.projection_matrix() @ self.view_matrix()
 
     def pixel_rays(self) -> tuple[np.ndarray, np.ndarray]:
-        """World-space rays through every pixel centre (DESIGN section 2 pixel convention).
+        """World-space rays through every pixel centre (spec section 2 pixel convention).
 
         Returns
         -------

@@ -2,7 +2,7 @@
 
 A :class:`Mesh` holds float64 ``vertices`` (V, 3), int32 ``faces`` (F, 3) and unit float64
 ``normals`` (V, 3). Vertex order is never changed: vertex ``i`` of a file is vertex ``i`` in
-every output (DESIGN section 3).
+every output (spec section 3).
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The scene model: objects, camera and optional keyframed animation (DESIGN section 3).
+"""The scene model: objects, camera and optional keyframed animation (spec section 3).
 
 Object ids are 1-based in scene order (0 is the background). An object's world mesh at a frame
 is its local mesh under ``translate @ rotate @ scale``, where the rotation is XYZ Euler angles in
@@ -71,7 +71,7 @@ class SceneObject:
     closed_proxy : Mesh, optional
         Watertight mesh for the G-buffer and the search of an open reflector.
     reflectivity : float
-        Blend weight of the virtual scene at this reflector's pixels (DESIGN section 5).
+        Blend weight of the virtual scene at this reflector's pixels (spec section 5).
     open : bool
         Search an open reflector's own mesh (a flat mirror, the inside of a bowl). An open
         reflector needs either this or a ``closed_proxy`` (Estalella section 5.3): without
@@ -274,7 +274,7 @@ class Scene:
 
 def scene_vertices(scene: Scene, frame: int = 0, meshes=None):
     """World-space vertices of every non-reflector object: the vertices a reflection method
-    reflects (DESIGN section 7's ``vertex_object_k`` rows).
+    reflects (spec section 7's ``vertex_object_k`` rows).
 
     Parameters
     ----------

@@ -1,4 +1,4 @@
-"""Loader subdivision of long triangles (DESIGN section 3; Estalella section 6).
+"""Loader subdivision of long triangles (spec section 3; Estalella section 6).
 
 :func:`subdivide` splits every triangle with an edge longer than ``L = max_edge`` until none is;
 :func:`apply_subdivision` does it to the objects of a scene that ask for it. The rule, exactly

@@ -1,4 +1,4 @@
-"""TOML scene files (DESIGN section 3).
+"""TOML scene files (spec section 3).
 
 Every key is checked: an unknown key, a wrong type or a bad value raises
 :class:`refsoft.errors.SceneError` with the file and the key path in the message, e.g.

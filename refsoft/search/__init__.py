@@ -1,4 +1,4 @@
-"""The reflection-point search (Estalella et al. 2006, section 4; DESIGN section 4).
+"""The reflection-point search (Estalella et al. 2006, section 4; spec section 4).
 
 For each vertex ``V`` and a reflector's G-buffer, :func:`search` walks from a start pixel to the
 pixel whose normal best matches the bisector of the directions to the eye and to ``V``;
@@ -35,7 +35,7 @@ def flag_names(flags: int) -> list[str]:
 
 
 def default_cap(shape) -> int:
-    """The iteration cap of DESIGN 4.4: ``2 * (width + height)`` of the G-buffer."""
+    """The iteration cap of spec section 4.4: ``2 * (width + height)`` of the G-buffer."""
     return 2 * (int(shape[0]) + int(shape[1]))
 
 
@@ -78,7 +78,7 @@ class SearchResult:
 
 
 def start_pixel(mask) -> tuple[int, int] | None:
-    """The search's start without history (DESIGN 4.3).
+    """The search's start without history (spec section 4.3).
 
     The centre of the covered pixels' bounding box, ``(floor((r0 + r1) / 2), floor((c0 + c1) /
     2))``; if that pixel is not covered, the covered pixel nearest to it (Euclidean distance,
@@ -304,7 +304,7 @@ def trace_hierarchy(gbuffer: GBuffer, eye, vertex, cone_factor: float = 1.5, sph
 
 def virtual_vertices(gbuffer: GBuffer, result: SearchResult, vertices, relative: bool = False,
                      surface=None, rule: str = "mirror", eye=None) -> np.ndarray:
-    """Virtual vertices V' (DESIGN 4.6), world space.
+    """Virtual vertices V' (spec section 4.6), world space.
 
     With ``d = V - P_R`` and ``N_R`` at the reflection pixel: a visible vertex (``d.N >= 0``)
     gives, by ``rule``, ``V - 2 (d.N) N`` (``mirror``: across the tangent plane, the papers) or
@@ -350,7 +350,7 @@ def virtual_vertices(gbuffer: GBuffer, result: SearchResult, vertices, relative:
 
 def scores_at(gbuffer: GBuffer, eye, vertices, pixels, inverse=None) -> np.ndarray:
     """The search's score (float32 or float64, its own arithmetic) of each vertex at a given
-    pixel; ``inverse`` (N,) bool picks the inverse score of DESIGN 4.6 per vertex. -3 where the
+    pixel; ``inverse`` (N,) bool picks the inverse score of spec section 4.6 per vertex. -3 where the
     pixel is not covered. Shape (N,)."""
     dt = _check_gbuffer(gbuffer)
     verts = validate.points(vertices, "vertices")

@@ -1,4 +1,4 @@
-"""Reflection-point search kernels (DESIGN section 4).
+"""Reflection-point search kernels (spec section 4).
 
 One function, :func:`search_one`, walks the G-buffer for one vertex, recording every step for
 :func:`refsoft.search.trace_search`; the searches of many vertices run in
@@ -70,9 +70,9 @@ def pack(P, N, mask, eye, fp):
 
 @kernel(inline=True)
 def score_pnu(px, py, pz, nx, ny, nz, ux, uy, uz, vx, vy, vz, inverse, fp):
-    """``dot(N, normalize(U + normalize(V - P)))`` (DESIGN 4.1) at a pixel with position P, normal
+    """``dot(N, normalize(U + normalize(V - P)))`` (spec section 4.1) at a pixel with position P, normal
     N and eye direction ``U = normalize(O - P)``; with ``inverse`` the inverse score, ``V``
-    replaced by its mirror image ``W = V - 2 dot(V - P, N) N`` (DESIGN 4.6, ``search``)."""
+    replaced by its mirror image ``W = V - 2 dot(V - P, N) N`` (spec section 4.6, ``search``)."""
     if inverse:
         k = like(2.0, fp) * (((vx - px) * nx + (vy - py) * ny) + (vz - pz) * nz)
         vx, vy, vz = vx - k * nx, vy - k * ny, vz - k * nz
@@ -198,7 +198,7 @@ def walk(G, mask, v, r, c, n_candidates, cap, inverse, fp, record, n_record, pha
 def end_walk(flags, total, it, capped, border, phase, vx, vy, vz, P, N, r, c, n0, inverse_search, fp):
     """The end of a walk of ``it`` steps for vertex ``(vx, vy, vz)`` at pixel (r, c), whose
     position is ``P[r, c, 0:3]`` and normal ``N[r, c, n0:n0 + 3]`` (the packed G-buffer: ``P = N =
-    G``, ``n0 = 3``) (DESIGN 4.4, 4.6), shared by every search: ``flags`` gains CAPPED when the
+    G``, ``n0 = 3``) (spec sections 4.4 and 4.6), shared by every search: ``flags`` gains CAPPED when the
     walk was ``capped``; after the first walk (``phase`` 0) HIDDEN when the vertex is behind the
     pixel's tangent plane, ``dot(V - P, N) < 0``; then BORDER when ``border`` (a neighbour
     uncovered or outside), unless the inverse search follows. Returns ``(flags, total + it,

@@ -1,4 +1,4 @@
-"""The linear search of many vertices, several walks at a time (DESIGN 4; the same results, bit
+"""The linear search of many vertices, several walks at a time (spec section 4; the same results, bit
 for bit, as :func:`refsoft.search._kernels.search_one`, the one-walk search the traces record).
 
 Each thread takes the vertices in groups of ``SEARCH_GROUP`` and advances ``LANES`` walks

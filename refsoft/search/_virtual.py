@@ -1,4 +1,4 @@
-"""Virtual-vertex kernels (DESIGN 4.6; :func:`refsoft.search.virtual_vertices` is their public
+"""Virtual-vertex kernels (spec section 4.6; :func:`refsoft.search.virtual_vertices` is their public
 face). Every vertex is relative to the G-buffer's origin, in the working precision ``fp``.
 
 A visible reflection's V' is, by rule, mirrored across the reflection point's tangent plane

@@ -17,7 +17,7 @@ corrections: when no path reaches the bottom, the traversal restarts with cone a
 radii enlarged by ``cone_factor`` (1.5) and ``sphere_factor`` (2), compounding, up to
 :data:`~refsoft.search._hierarchy.MAX_ENLARGEMENTS` times; and ``break_level`` > 0 stops the
 descent that many levels above the base (the pixel whose ray passes closest among the texel's
-base pixels). A search that still fails ends at the start pixel of DESIGN 4.3 with ``CAPPED``.
+base pixels). A search that still fails ends at the start pixel of spec section 4.3 with ``CAPPED``.
 
 There is no frame-to-frame coherence (the thesis: not possible with the pyramid); ``iterations``
 counts the texels tested. HIDDEN and BORDER are set as by the linear search (crosshair

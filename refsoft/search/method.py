@@ -1,4 +1,4 @@
-"""The vertex search as a reflection method (DESIGN sections 1, 4 and 5; the seam is
+"""The vertex search as a reflection method (spec sections 1, 4 and 5; the seam is
 :mod:`refsoft.seam`).
 
 Per reflector and frame: the G-buffer of its closed proxy (optionally widened), the search of
@@ -44,7 +44,7 @@ def empty_gbuffer(camera, precision) -> GBuffer:
 
 
 def gbuffer_outputs(gb: GBuffer, k: int) -> dict:
-    """The DESIGN section 7 G-buffer arrays of reflector ``k``: world-space float32 positions,
+    """The spec section 7 G-buffer arrays of reflector ``k``: world-space float32 positions,
     zero where not covered (as the rasterizer's maps), float32 normals, the mask and the
     view-projection matrix."""
     position = limits.zeros(gb.position.shape, np.float32)
@@ -58,7 +58,7 @@ def gbuffer_outputs(gb: GBuffer, k: int) -> dict:
 
 
 def vertex_outputs(refl: Reflection, owner, k: int) -> dict:
-    """The DESIGN section 7 per-vertex arrays of reflector ``k`` (plus its scores and margins)."""
+    """The spec section 7 per-vertex arrays of reflector ``k`` (plus its scores and margins)."""
     res = refl.result
     return {keys.REFLECTION_PIXEL(k): res.pixel.astype(np.int32),
             keys.VIRTUAL_VERTEX(k): refl.virtual.astype(np.float32),

@@ -9,7 +9,7 @@ search found, with the derivatives of the residual, of P and of N by central dif
 the texel's four neighbours; P and N at the new point come from the same first-order model (N
 renormalised). The step is limited to one texel per axis; uncovered neighbours give one-sided
 differences, or none along an axis with no covered neighbour. HIDDEN and CULLED vertices are
-not refined (their virtual vertices follow DESIGN 4.6 unchanged).
+not refined (their virtual vertices follow spec section 4.6 unchanged).
 
 The reflection pixel reported by the search is not changed; only the virtual vertex moves.
 """

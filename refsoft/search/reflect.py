@@ -1,4 +1,4 @@
-"""The vertex search's first stages for one reflector (DESIGN section 1): the G-buffer camera and
+"""The vertex search's first stages for one reflector (spec section 1): the G-buffer camera and
 G-buffer of its closed proxy, the coherent start pixels, and :class:`Reflection`, the record of
 one reflector's G-buffer, search and virtual vertices; :func:`reflect` runs them for a whole
 scene at one frame.

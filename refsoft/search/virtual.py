@@ -1,4 +1,4 @@
-"""The virtual scene of one reflector (DESIGN section 5): its virtual triangles rasterized with the
+"""The virtual scene of one reflector (spec section 5): its virtual triangles rasterized with the
 view camera into a z-buffer of their own, on the reflector's stencil only.
 
 Input: a :class:`refsoft.search.reflect.Reflection` (virtual vertices and search flags) and the

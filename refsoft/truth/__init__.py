@@ -1,4 +1,4 @@
-"""Truth and error (DESIGN section 6): the ray-traced truth (:mod:`.raytrace`), exact reflection
+"""Truth and error (spec section 6): the ray-traced truth (:mod:`.raytrace`), exact reflection
 points on spheres (:mod:`.analytic`) and the metrics of a render against its truth
 (:mod:`.metrics`)."""
 

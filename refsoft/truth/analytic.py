@@ -1,4 +1,4 @@
-"""Exact reflection points on a sphere (Alhazen's problem), float64 (DESIGN section 6).
+"""Exact reflection points on a sphere (Alhazen's problem), float64 (spec section 6).
 
 :func:`sphere_reflection_points` solves on the great-circle arc between the directions to the
 eye and to the point: ``f(t) = (u + v) . T(t) = 0`` with ``u``, ``v`` the unit directions from

@@ -1,4 +1,4 @@
-"""Error metrics of a render against the ray-traced truth (DESIGN section 6), all in one place.
+"""Error metrics of a render against the ray-traced truth (spec section 6), all in one place.
 
 Per vertex (where an analytic truth exists): ``1 - score``, the pixel distance between the
 found reflection pixel and the projection of the exact reflection point, and the distance
@@ -144,7 +144,7 @@ def flip_mean(render_image, truth_image):
 
 
 def frame_metrics(render_arrays, truth_arrays) -> dict:
-    """Every metric of one frame from the DESIGN section 7 arrays of a render and its truth.
+    """Every metric of one frame from the spec section 7 arrays of a render and its truth.
 
     Per-vertex metrics are given per reflector ``k`` when the truth holds that reflector's exact
     reflection points (spherical reflectors) and the render its search outputs.

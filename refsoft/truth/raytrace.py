@@ -1,4 +1,4 @@
-"""Ray-traced truth (DESIGN section 6): what a perfect mirror would show at every reflector pixel.
+"""Ray-traced truth (spec section 6): what a perfect mirror would show at every reflector pixel.
 
 The main view is the same rasterized pass as :func:`refsoft.render` (same ``object_id``, same
 reflector pixels). At each pixel where a reflector is visible, the eye ray through the pixel
@@ -13,7 +13,7 @@ also holds each searched vertex's exact reflection point (Alhazen's problem, sol
 :func:`refsoft.truth.analytic.sphere_reflection_points`) and its exact virtual vertex, so per-vertex
 errors can be measured (:mod:`refsoft.truth.metrics`).
 
-Outputs follow DESIGN section 7: ``image``, ``object_id``, ``reflected_id``, plus
+Outputs follow spec section 7: ``image``, ``object_id``, ``reflected_id``, plus
 ``reflected_hit`` (H, W, 3) float64, the world position hit by each reflected ray (valid where
 ``reflected_id > 0``, zero elsewhere).
 """
