@@ -1,4 +1,4 @@
-"""The bad-input corpus (DESIGN section 10): each case is a scene file (and mesh files)
+"""The bad-input corpus (spec section 10): each case is a scene file (and mesh files)
 or a command line that must be refused with one line naming the problem.
 
 A case: ``(id, files, argv, error, message)``. ``files`` maps names to text (written into a

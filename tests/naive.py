@@ -1,4 +1,4 @@
-"""Slow, plainly written NumPy references for the fast kernels (same conventions, DESIGN §2).
+"""Slow, plainly written NumPy references for the fast kernels (same conventions, spec section 2).
 
 Nothing here is fast or clever: one triangle at a time, whole bounding boxes evaluated with
 NumPy, Python lists for clipped polygons. The fast kernels must agree with these.
@@ -104,7 +104,7 @@ def naive_rasterize(clip, faces, width, height, peel=None):
 
 
 def naive_interpolate(which, tris, attributes, faces, dtype, normalize=False):
-    """Perspective-correct interpolation, pixel by pixel, in ``dtype`` (same formula as DESIGN §2)."""
+    """Perspective-correct interpolation, pixel by pixel, in ``dtype`` (same formula as spec section 2)."""
     h, w = which.shape
     attr = np.asarray(attributes, dtype=dtype)
     out = np.zeros((h, w, attr.shape[1]), dtype=dtype)
@@ -146,7 +146,7 @@ def naive_normalize(x, y, z, dt):
 
 
 def naive_scores(P, N, eye, v, dt, inverse=False):
-    """DESIGN 4.1 score (or the inverse score of 4.6) for arrays of pixels P, N (..., 3), in dt."""
+    """spec section 4.1 score (or the inverse score of 4.6) for arrays of pixels P, N (..., 3), in dt."""
     P = P.astype(dt)
     N = N.astype(dt)
     eye = np.asarray(eye).astype(dt)
@@ -168,7 +168,7 @@ BOX = CROSS + [(-1, -1), (-1, 1), (1, 1), (1, -1)]
 
 
 def naive_walk(P, N, mask, eye, v, r, c, offsets, cap, dt, inverse):
-    """Plain hill climb (DESIGN 4.2 / 4.4): returns r, c, score, margin, iterations, capped, border."""
+    """Plain hill climb (spec section 4.2 / 4.4): returns r, c, score, margin, iterations, capped, border."""
     h, w = mask.shape
 
     def s(rr, cc):
@@ -317,7 +317,7 @@ def naive_edge_errors(gbuffer, eye, a_world, b_world, pa, pb, oa=None, ob=None):
 
 
 def naive_start_pixel(mask):
-    """DESIGN 4.3's start, over every pixel: the bounding box's centre, else the covered pixel
+    """spec section 4.3's start, over every pixel: the bounding box's centre, else the covered pixel
     nearest to it (Euclidean, ties to the smaller row, then col); None when nothing is covered."""
     pts = [(r, c) for r in range(mask.shape[0]) for c in range(mask.shape[1]) if mask[r, c]]
     if not pts:
@@ -330,7 +330,7 @@ def naive_start_pixel(mask):
 
 
 def naive_virtual_vertices(gbuffer, result, vertices, surface=None, rule="mirror", eye=None):
-    """DESIGN 4.6's virtual vertices in NumPy, relative to the G-buffer's origin, in its
+    """spec section 4.6's virtual vertices in NumPy, relative to the G-buffer's origin, in its
     precision (refsoft.search.virtual_vertices with relative=True): V - 2 (d.N) N for visible
     vertices (``rule="unfold"``: P + normalize(P - O) |V - P|), by mode for hidden ones (plane:
     P + N (2 d.N) - d; search: V; discard: the mirror formula), V for CULLED ones; ``surface``
@@ -431,7 +431,7 @@ def naive_subdivide(vertices, faces, normals, max_edge, scale=(1.0, 1.0, 1.0)):
 
 # ------------------------------------------------------------------------------------ shading
 def naive_shade(normals, object_id, table, light, ambient, diffuse):
-    """DESIGN 5's shading one pixel at a time, in float32 scalars: ``table[id] * (ambient +
+    """spec section 5's shading one pixel at a time, in float32 scalars: ``table[id] * (ambient +
     diffuse * |n . light|)`` with the dot product summed x, then y, then z; ``table[0]`` (the
     background colour) where ``id == 0``. Returns (H, W, 3) float32."""
     f32 = np.float32

@@ -1,4 +1,4 @@
-"""DESIGN section 10: no kernel reads or writes out of bounds for any input that passes
+"""spec section 10: no kernel reads or writes out of bounds for any input that passes
 validation. A subset of the suite (the stress suite, the rasterizer against its naive version,
 the skips tests on their own scene, the search traces) runs again in a child process
 with ``NUMBA_BOUNDSCHECK=1`` and an empty Numba cache, so every kernel is recompiled with

@@ -1,4 +1,4 @@
-"""Stress suite (DESIGN section 10): valid but hostile geometry never crashes, never
+"""Stress suite (spec section 10): valid but hostile geometry never crashes, never
 puts a NaN or inf in an output, every search terminates (the cap only with its flag), and the
 flags say what happened."""
 
