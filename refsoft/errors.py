@@ -23,3 +23,8 @@ class CameraError(RefsoftError):
 
 class LimitError(RefsoftError):
     """A request would need more memory than the configured limits allow."""
+
+
+class InputFileError(RefsoftError):
+    """A file refsoft reads (a frame's ``.npz``, a traces, manifest or run ``.json``) is missing,
+    unreadable or inconsistent with what it should hold (the message names the file)."""

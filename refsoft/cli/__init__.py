@@ -18,7 +18,9 @@ def build_parser() -> argparse.ArgumentParser:
     from .. import __version__
 
     p = argparse.ArgumentParser(prog="refsoft", description="curved-mirror reflections by per-vertex "
-                                "reflection-point search (Estalella et al. 2006): the CPU reference")
+                                "reflection-point search (Estalella et al. 2006): the CPU reference. Exit status: "
+                                "0 done (check: passed), 1 check's verdict failed, 2 bad input (including a "
+                                "missing, unreadable or inconsistent file; one line on stderr), 130 interrupted.")
     p.add_argument("--version", action="version", version=f"refsoft {__version__}")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
     scene, memory, methods = scene_options(), memory_options(), method_options()
@@ -60,7 +62,8 @@ def build_parser() -> argparse.ArgumentParser:
     c = sub.add_parser("compare", help="metrics of a render against its truth, agreement maps, side-by-side pictures")
     c.add_argument("render_dir", help="folder written by refsoft render")
     c.add_argument("truth_dir", help="folder written by refsoft truth")
-    c.add_argument("--out", default=None, metavar="DIR", help="output folder (default: RENDER_DIR/compare)")
+    c.add_argument("--out", default="out/compare", metavar="DIR",
+                   help="report folder, outside both inputs (default: out/compare)")
     c.set_defaults(func=commands.cmd_compare)
     return p
 
@@ -70,6 +73,11 @@ def _port_commands(sub):
     go = sub.add_parser("golden", parents=[out_option("golden")], help="write the golden set for ports")
     go.add_argument("--case", action="append", default=None, metavar="NAME",
                     help="only this case (repeatable; --list shows them)")
+    mode = go.add_mutually_exclusive_group()
+    mode.add_argument("--add", action="store_true",
+                      help="into an existing set: add or regenerate the named cases, keep the others")
+    mode.add_argument("--replace", action="store_true",
+                      help="into an existing set: start it anew (its listed files are removed)")
     go.add_argument("--list", action="store_true", help="list the canonical cases and exit")
     go.set_defaults(func=commands.cmd_golden)
 
@@ -77,7 +85,8 @@ def _port_commands(sub):
     ck.add_argument("golden", help="golden folder (from refsoft golden)")
     ck.add_argument("candidate", help="the port's outputs in the same layout")
     ck.add_argument("--loose", action="store_true", help="images: 4 per channel, 1-pixel window, 0.1%% may fail")
-    ck.add_argument("--out", default=None, metavar="DIR", help="report folder (default: CANDIDATE/check)")
+    ck.add_argument("--out", default="out/check", metavar="DIR",
+                    help="report folder, outside the golden and candidate folders (default: out/check)")
     ck.add_argument("--case", action="append", default=None, metavar="NAME", help="only this case (repeatable)")
     ck.add_argument("--verbose", action="store_true", help="also print the outputs that pass")
     ck.set_defaults(func=commands.cmd_check)

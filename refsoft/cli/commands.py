@@ -162,28 +162,34 @@ def cmd_golden(args) -> int:
             opts = ", ".join(f"{k}={v}" for k, v in c.options.items()) or "defaults"
             print(f"{c.name:<24} {c.scene:<10} frames {list(c.frames)}  {opts}")
         return 0
+    mode = "add" if args.add else "replace" if args.replace else None
     t0 = time.perf_counter()
-    m = write_golden(args.out, args.case, progress=True)
-    print(f"golden set: {len(m['cases'])} cases, {len(m['files'])} files at {GOLDEN_SIZE[0]}x{GOLDEN_SIZE[1]} "
-          f"written to {args.out} in {time.perf_counter() - t0:.1f} s (manifest.json lists their SHA-256)")
+    m = write_golden(args.out, args.case, progress=True, mode=mode)
+    written = len(args.case) if args.case else len(CASES)
+    print(f"golden set: {len(m['cases'])} cases ({written} written), {len(m['files'])} files at "
+          f"{GOLDEN_SIZE[0]}x{GOLDEN_SIZE[1]} in {args.out} in {time.perf_counter() - t0:.1f} s "
+          f"(manifest.json lists their SHA-256)")
     return 0
 
 
 def cmd_check(args) -> int:
-    from ..conformance.check import check
+    from ..conformance.check import MAGNIFY, STATUSES, check
 
-    out = args.out or os.path.join(args.candidate, "check")
-    summary = check(args.golden, args.candidate, loose=args.loose, out=out, cases=args.case, progress=True)
+    summary = check(args.golden, args.candidate, loose=args.loose, out=args.out, cases=args.case, progress=True)
     findings = summary.pop("_findings")
     for f in findings:
         if f.status != "pass" or args.verbose:
             print(f.line())
             for d in f.details[:5]:
                 print(f"           {d}")
-    c = summary["counts"]
+    print(f"{'kind':<16}" + "".join(f"{s:>9}" for s in STATUSES))
+    for kind, n in summary["by_kind"].items():
+        print(f"{kind:<16}" + "".join(f"{n[s]:>9}" for s in STATUSES))
+    c, n_pics = summary["counts"], len(summary["pictures"])
     verdict = "PASSED" if summary["passed"] else "FAILED"
     print(f"{verdict}: {c['pass']} pass, {c['accepted']} accepted (yellow), {c['fail']} fail, {c['missing']} missing; "
-          f"error masks, difference images and summary.json in {out}")
+          f"summary.json and {n_pics} picture{'' if n_pics == 1 else 's'} ({MAGNIFY}x) of what did not pass in "
+          f"{args.out}")
     return 0 if summary["passed"] else 1
 
 
@@ -252,10 +258,12 @@ def _size(text):
 def cmd_compare(args) -> int:
     from ..truth.compare import compare_runs
 
-    print(f"{'frame':>5} {'refl px':>8} {'id disagree':>11} {'interior':>9} {'colour mean':>11} {'colour p99':>10}"
-          f"  per-vertex (reflector: px mean/max, |V'-V'*| mean)")
+    header = [f"{'frame':>5} {'refl px':>8} {'id disagree':>11} {'interior':>9} {'colour mean':>11} {'colour p99':>10}"
+              f"  per-vertex (reflector: px mean/max, |V'-V'*| mean)"]
 
     def row(m):
+        while header:  # printed with the first row: a refused comparison prints only its error
+            print(header.pop())
         verts = "; ".join(f"{k}: {v['pixel_distance_mean']:.3f}/{v['pixel_distance_max']:.3f} px, "
                           f"{v['virtual_distance_mean']:.2e}" for k, v in m.get("vertices", {}).items()
                           if "pixel_distance_mean" in v)
@@ -263,7 +271,7 @@ def cmd_compare(args) -> int:
               f"{100 * m['interior_disagreement']:>8.2f}% {m['color_error']['mean']:>11.4f} "
               f"{m['color_error']['p99']:>10.4f}  {verts}")
 
-    out = args.out or os.path.join(args.render_dir, "compare")
+    out = args.out
     report = compare_runs(args.render_dir, args.truth_dir, out, on_frame=row)
     s = report["summary"]
     extra = ""

@@ -25,7 +25,6 @@ agree, iterations likewise up to 1% of vertices; 8-bit images within 1 per chann
 
 from __future__ import annotations
 
-import json
 import os
 from dataclasses import dataclass, field
 
@@ -34,9 +33,11 @@ import numpy as np
 from .. import constants, keys
 from ..constants import (EDGE_AMBIGUITY_PX, EXTENT_TOL, F32_ULP_TOL, IMAGE_LOOSE_SHARE, IMAGE_TOL, IMAGE_TOL_LOOSE,
                          ITERATION_SHARE_MAX, NORMAL_ANGLE_TOL, TIE_SHARE_MAX)
-from ..errors import RefsoftError
+from ..errors import InputFileError, RefsoftError
 
 STATUSES = ("pass", "accepted", "fail", "missing")
+#: The report's pictures are magnified this many times (nearest neighbour: every pixel a block).
+MAGNIFY = 4
 
 
 @dataclass
@@ -179,6 +180,7 @@ class _Context:
     def __init__(self, case, frame, entry, out):
         self.case, self.frame, self.entry, self.out = case, frame, entry, out
         self.findings = []
+        self.pictures = []  # file names written into out
         self._oracle = None
 
     def oracle(self):
@@ -191,19 +193,28 @@ class _Context:
         self.findings.append(f)
         return f
 
-    def paint(self, key, shape, yellow, red, green=None):
-        """An error mask over a (H, W) grid: green pass, yellow accepted, red fail."""
+    def picture(self, name, img):
+        """Write ``CASE_frame_NNNN_NAME.png`` into the report, magnified :data:`MAGNIFY` times."""
         if self.out is None:
             return
         from ..io import write_png
 
+        img = np.repeat(np.repeat(np.asarray(img, np.uint8), MAGNIFY, axis=0), MAGNIFY, axis=1)
+        file = f"{self.case}_frame_{self.frame:04d}_{name}.png"
+        write_png(os.path.join(self.out, file), img)
+        self.pictures.append(file)
+
+    def paint(self, key, shape, yellow, red, green=None):
+        """An error mask over a (H, W) grid: green pass, yellow accepted, red fail."""
+        if self.out is None:
+            return
         img = np.zeros(tuple(shape[:2]) + (3,), np.uint8)
         if green is not None:
             img[green] = (0, 160, 0)
         for idx, col in ((yellow, (230, 200, 0)), (red, (220, 0, 0))):
             idx = np.asarray(idx, dtype=np.int64).reshape(-1, 2)
             img[idx[:, 0], idx[:, 1]] = col
-        write_png(os.path.join(self.out, f"{self.case}_frame_{self.frame:04d}_{key}.png"), img)
+        self.picture(key, img)
 
 
 def _compare_image(ctx, g, c, loose):
@@ -221,20 +232,14 @@ def _compare_image(ctx, g, c, loose):
                 sh[rs:re_, cs:ce] = g[rs - dr:re_ - dr, cs - dc:ce - dc]
                 best = np.minimum(best, np.abs(sh.astype(np.int16) - c.astype(np.int16)).max(axis=2))
         bad = best > tol
-    if ctx.out is not None:
-        from ..io import write_png
-
-        green = (d == 0)
-        ctx.paint("image", d.shape, np.argwhere((d > 0) & ~bad), np.argwhere(bad), green)
-        write_png(os.path.join(ctx.out, f"{ctx.case}_frame_{ctx.frame:04d}_image_diff.png"),
-                  np.clip(np.abs(g.astype(np.int16) - c.astype(np.int16)) * 16, 0, 255).astype(np.uint8))
     n = d.size
-    worst = ""
-    if d.max() > 0:
-        r, cc = np.unravel_index(int(np.argmax(d)), d.shape)
-        worst = f"at ({r}, {cc}): expected {g[r, cc].tolist()} / observed {c[r, cc].tolist()}"
     if not d.any():
         return [ctx.finding("image", "image", "pass", "identical", 0, n)]
+    r, cc = np.unravel_index(int(np.argmax(d)), d.shape)
+    worst = f"at ({r}, {cc}): expected {g[r, cc].tolist()} / observed {c[r, cc].tolist()}"
+    # the error mask and the difference (16x brighter), for an image that did not pass
+    ctx.paint("image", d.shape, np.argwhere((d > 0) & ~bad), np.argwhere(bad), d == 0)
+    ctx.picture("image_diff", np.clip(np.abs(g.astype(np.int16) - c.astype(np.int16)) * 16, 0, 255))
     nbad = int(bad.sum())
     if nbad and (not loose or nbad > IMAGE_LOOSE_SHARE * n):
         return [ctx.finding("image", "image", "fail", f"channels differ by more than {tol}", nbad, n, worst)]
@@ -243,14 +248,33 @@ def _compare_image(ctx, g, c, loose):
 
 
 def _load_traces(path):
-    if not os.path.isfile(path):
+    """A candidate's ``traces_NNNN.json`` as ``{reflector: {vertex: record}}``, or None when the
+    candidate supplies none. Each record needs an integer ``vertex`` and a ``path`` of pixels
+    (``[row, col]``, or ``[level, row, col]`` for the hierarchy)."""
+    from ..io import read_json
+
+    if not os.path.exists(path):
         return None
-    try:
-        with open(path) as fh:
-            t = json.load(fh)
-        return {int(k): {int(rec["vertex"]): rec for rec in v} for k, v in t["reflectors"].items()}
-    except (OSError, ValueError, KeyError, TypeError) as exc:
-        raise RefsoftError(f"{path}: not a traces file: {exc}") from None
+    t = read_json(path, required=("reflectors",))
+    if not isinstance(t["reflectors"], dict):
+        raise InputFileError(f"{path}: 'reflectors' must map reflector ids to lists of records")
+    out = {}
+    for k, records in t["reflectors"].items():
+        if not k.isdigit() or not isinstance(records, list):
+            raise InputFileError(f"{path}: reflectors[{k!r}] must be a list of records under a reflector id")
+        out[int(k)] = {}
+        for j, rec in enumerate(records):
+            where = f"{path}: reflectors[{k!r}][{j}]"
+            if not isinstance(rec, dict) or "vertex" not in rec:
+                raise InputFileError(f"{where} lacks 'vertex'")
+            if not isinstance(rec["vertex"], int) or isinstance(rec["vertex"], bool):
+                raise InputFileError(f"{where}.vertex must be an integer")
+            p = rec.get("path", [])
+            if not isinstance(p, list) or not all(isinstance(s, list) and len(s) in (2, 3) and all(
+                    isinstance(x, int) and not isinstance(x, bool) for x in s) for s in p):
+                raise InputFileError(f"{where}.path must be a list of [row, col] (or [level, row, col]) integers")
+            out[int(k)][rec["vertex"]] = rec
+    return out
 
 
 def _oracle_trace(ctx, k, i, prev_pixel):
@@ -373,18 +397,17 @@ def _trace_note(ctx, k, i, observed, cand_traces, prev_pixels) -> str:
 
 
 def _paint_pixels(ctx, k, G, live, agree, tie):
-    """The reflection pixels' error mask over the G-buffer: green agree, yellow tie, red fail."""
+    """The reflection pixels' error mask over the G-buffer (green agree, yellow tie, red fail),
+    when some differ."""
     gbm = G.get(keys.GBUFFER_MASK(k))
-    if ctx.out is None or gbm is None:
+    if ctx.out is None or gbm is None or not (live & ~agree).any():
         return
-    from ..io import write_png
-
     gp = G[keys.REFLECTION_PIXEL(k)]
     img = np.where(gbm[..., None], 60, 0).astype(np.uint8) * np.ones(3, np.uint8)
     for sel, col in ((agree, (0, 160, 0)), (tie, (230, 200, 0)), (live & ~agree & ~tie, (220, 0, 0))):
         pix = gp[sel]
         img[pix[:, 0], pix[:, 1]] = col
-    write_png(os.path.join(ctx.out, f"{ctx.case}_frame_{ctx.frame:04d}_{keys.REFLECTION_PIXEL(k)}.png"), img)
+    ctx.picture(keys.REFLECTION_PIXEL(k), img)
 
 
 def _compare_virtual(ctx, k, G, C, agree, tie) -> list:
@@ -484,6 +507,43 @@ def check_frame(ctx, G, C, loose, cand_traces=None, prev_pixels=None):
         _compare_vertices(ctx, k, G, C, cand_traces, prev_pixels.get(k) if prev_pixels else None)
 
 
+def _check_report_folder(out, golden, candidate):
+    from ..io import inside
+
+    for folder, role in ((golden, "golden set"), (candidate, "candidate")):
+        if inside(out, folder):
+            raise RefsoftError(f"report folder {out} is inside the {role} {folder}: give --out a folder outside "
+                               "both (default out/check)")
+
+
+def _clear_old_report(out):
+    """Remove the pictures an earlier report in ``out`` lists in its ``summary.json`` (only
+    those), so that a new report never shows an old failure."""
+    from ..io import read_json
+
+    path = os.path.join(out, "summary.json")
+    if not os.path.isfile(path):
+        return
+    try:
+        old = read_json(path)
+    except InputFileError:
+        return
+    pictures = old.get("pictures", []) if isinstance(old, dict) else []
+    for name in pictures if isinstance(pictures, list) else []:
+        if isinstance(name, str) and name.endswith(".png") and os.path.basename(name) == name:
+            p = os.path.join(out, name)
+            if os.path.isfile(p):
+                os.unlink(p)
+
+
+def by_kind(findings) -> dict:
+    """``{kind: {status: count}}`` over ``findings``, kinds sorted."""
+    out = {}
+    for f in findings:
+        out.setdefault(f.kind, dict.fromkeys(STATUSES, 0))[f.status] += 1
+    return dict(sorted(out.items()))
+
+
 def check(golden, candidate, loose=False, out=None, cases=None, progress=False) -> dict:
     """Compare a candidate folder with a golden set; returns the summary (also written to
     ``out/summary.json`` when ``out`` is given).
@@ -494,17 +554,30 @@ def check(golden, candidate, loose=False, out=None, cases=None, progress=False) 
     loose : bool
         The loose image rule.
     out : str or PathLike, optional
-        Folder for error masks, difference images and ``summary.json``.
+        Report folder, outside the golden and candidate folders: ``summary.json`` (every
+        finding, the counts per kind and status, the pictures written) and, for each output
+        that did not pass, its error mask (and the image's difference), magnified
+        :data:`MAGNIFY` times. Pictures an earlier report there listed are removed first.
     cases : list of str, optional
         Only these cases.
+
+    Raises
+    ------
+    RefsoftError
+        No golden set, no candidate folder, an unknown case, ``out`` inside either folder.
+    InputFileError
+        The manifest, a frame's ``.npz`` or a candidate's traces cannot be read or are malformed.
     """
     from .golden import read_manifest, sha256
-    from ..io import write_json
+    from ..io import read_npz, write_json
 
     golden, candidate = os.fspath(golden), os.fspath(candidate)
     manifest = read_manifest(golden)
     if not os.path.isdir(candidate):
         raise RefsoftError(f"{candidate} is not a folder")
+    if out is not None:
+        out = os.fspath(out)
+        _check_report_folder(out, golden, candidate)
     entries = manifest["cases"]
     if cases is not None:
         names = {e["name"] for e in entries}
@@ -514,7 +587,8 @@ def check(golden, candidate, loose=False, out=None, cases=None, progress=False) 
         entries = [e for e in entries if e["name"] in cases]
     if out is not None:
         os.makedirs(out, exist_ok=True)
-    findings, missing_cases = [], []
+        _clear_old_report(out)
+    findings, missing_cases, pictures = [], [], []
     todo = [(e, f) for e in entries for f in e["frames"]]
     it = todo
     if progress and len(todo) > 1:
@@ -537,22 +611,18 @@ def check(golden, candidate, loose=False, out=None, cases=None, progress=False) 
             missing_cases.append(rel)
             findings += ctx.findings
             continue
-        try:
-            with np.load(gpath) as zg, np.load(cpath) as zc:
-                G = {k: zg[k] for k in zg.files}
-                C = {k: zc[k] for k in zc.files}
-        except (OSError, ValueError) as exc:
-            raise RefsoftError(f"cannot read {cpath}: {exc}") from None
+        G, C = read_npz(gpath), read_npz(cpath)
         traces = _load_traces(os.path.join(candidate, name, f"traces_{f:04d}.json"))
         coherent = entry["options"].get("coherence", True)
         check_frame(ctx, G, C, loose, traces, prev.get(name) if coherent else None)
         prev[name] = {k: G[keys.REFLECTION_PIXEL(k)] for k in keys.reflectors(G)}
         findings += ctx.findings
+        pictures += ctx.pictures
     counts = {s: sum(1 for f in findings if f.status == s) for s in STATUSES}
     summary = {"golden": os.path.abspath(golden), "candidate": os.path.abspath(candidate), "loose": bool(loose),
                "golden_refsoft": manifest.get("refsoft"), "golden_git": manifest.get("git"),
-               "passed": counts["fail"] == 0, "counts": counts, "missing_files": missing_cases,
-               "findings": [f.to_dict() for f in findings]}
+               "passed": counts["fail"] == 0, "counts": counts, "by_kind": by_kind(findings),
+               "missing_files": missing_cases, "pictures": pictures, "findings": [f.to_dict() for f in findings]}
     if out is not None:
         write_json(os.path.join(out, "summary.json"), summary)
     summary["_findings"] = findings

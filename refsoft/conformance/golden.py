@@ -18,14 +18,13 @@ Everything is deterministic: regenerating gives byte-identical files (no time st
 from __future__ import annotations
 
 import hashlib
-import json
 import os
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from .. import keys
-from ..errors import RefsoftError
+from ..errors import InputFileError, RefsoftError
 
 GOLDEN_FORMAT = "refsoft-golden-1"
 TRACE_FORMAT = "refsoft-traces-1"
@@ -128,14 +127,42 @@ def sha256(path) -> str:
 
 
 def _git_hash():
+    """HEAD of the git work tree the package itself was loaded from, or None.
+
+    Only a work tree of refsoft counts: its top level must hold this package as ``refsoft/`` and
+    a ``pyproject.toml`` naming ``refsoft``. An installed package (site-packages inside some other
+    repository, or no repository at all) gives None rather than another project's hash.
+    """
     import subprocess
 
-    here = os.path.dirname(os.path.abspath(__file__))
-    try:
-        r = subprocess.run(["git", "rev-parse", "HEAD"], cwd=here, capture_output=True, text=True, timeout=10)
-    except (OSError, subprocess.SubprocessError):
+    package = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+    def git(*args):
+        try:
+            r = subprocess.run(["git", *args], cwd=package, capture_output=True, text=True, timeout=10)
+        except (OSError, subprocess.SubprocessError):
+            return None
+        return r.stdout.strip() if r.returncode == 0 else None
+
+    top = git("rev-parse", "--show-toplevel")
+    if not top or os.path.realpath(os.path.join(top, "refsoft")) != os.path.realpath(package):
         return None
-    return r.stdout.strip() if r.returncode == 0 else None
+    if _project_name(os.path.join(top, "pyproject.toml")) != "refsoft":
+        return None
+    return git("rev-parse", "HEAD")
+
+
+def _project_name(path):
+    """``[project] name`` of a pyproject.toml, or None when it has none or cannot be read."""
+    try:
+        import tomllib
+    except ImportError:  # Python 3.10
+        import tomli as tomllib
+    try:
+        with open(path, "rb") as fh:
+            return tomllib.load(fh).get("project", {}).get("name")
+    except (OSError, ValueError, AttributeError):
+        return None
 
 
 def trace_record(trace, vertex_index: int) -> dict:
@@ -202,7 +229,7 @@ def render_case(case: Case):
         yield f, frame.arrays, {"format": TRACE_FORMAT, "reflectors": traces}
 
 
-def write_golden(out, cases=None, progress=False) -> dict:
+def write_golden(out, cases=None, progress=False, mode=None) -> dict:
     """Write the golden set into ``out`` and return the manifest.
 
     Parameters
@@ -212,28 +239,40 @@ def write_golden(out, cases=None, progress=False) -> dict:
         Case names (default: all of :data:`CASES`).
     progress : bool
         A tqdm bar over the frames.
+    mode : {None, "add", "replace"}
+        What to do when ``out`` already holds a golden set (a ``manifest.json``): None refuses
+        (so that a set never silently shrinks to the cases named); ``"add"`` writes the named
+        cases (new or regenerated) and keeps every other case with its manifest entry, after
+        checking their files against their SHA-256; ``"replace"`` starts the set anew and, once
+        it is written, removes the files the old manifest lists that it did not rewrite. A new
+        folder is written the same in every mode.
     """
     import numba
 
     from .. import __version__
     from ..io import write_json, write_npz
 
+    if mode not in (None, "add", "replace"):
+        raise RefsoftError(f"mode must be None, 'add' or 'replace', got {mode!r}")
     chosen = list(CASES) if cases is None else [case_by_name(c) for c in cases]
     out = os.fspath(out)
+    versions = {"format": GOLDEN_FORMAT, "refsoft": __version__, "numpy": np.__version__, "numba": numba.__version__,
+                "size": list(GOLDEN_SIZE), "traced_vertices": TRACED_VERTICES}
+    kept_entries, kept_files, old_files = _existing_set(out, mode, {c.name for c in chosen}, versions)
     total = sum(len(c.frames) for c in chosen)
     bar = None
     if progress and total > 1:
         from tqdm import tqdm
 
         bar = tqdm(total=total, desc="golden", unit="frame", disable=None)
-    files = {}
-    entries = []
+    files = dict(kept_files)
+    entries = {e["name"]: e for e in kept_entries}
     for case in chosen:
         from ..options import RenderOptions
 
-        entries.append({"name": case.name, "scene": case.scene, "frames": list(case.frames),
-                        "width": GOLDEN_SIZE[0], "height": GOLDEN_SIZE[1],
-                        "options": RenderOptions(**case.options).as_dict()})
+        entries[case.name] = {"name": case.name, "scene": case.scene, "frames": list(case.frames),
+                              "width": GOLDEN_SIZE[0], "height": GOLDEN_SIZE[1],
+                              "options": RenderOptions(**case.options).as_dict()}
         for f, arrays, traces in render_case(case):
             base = os.path.join(out, case.name)
             npz = os.path.join(base, f"frame_{f:04d}.npz")
@@ -246,23 +285,108 @@ def write_golden(out, cases=None, progress=False) -> dict:
                 bar.update(1)
     if bar is not None:
         bar.close()
+    order = {c.name: i for i, c in enumerate(CASES)}  # canonical order; cases no longer canonical last
+    names = sorted(entries, key=lambda n: (order.get(n, len(order)), list(entries).index(n)))
     manifest = {"format": GOLDEN_FORMAT, "refsoft": __version__, "git": _git_hash(), "numpy": np.__version__,
                 "numba": numba.__version__, "size": list(GOLDEN_SIZE), "traced_vertices": TRACED_VERTICES,
-                "cases": entries, "files": dict(sorted(files.items()))}
+                "cases": [entries[n] for n in names], "files": dict(sorted(files.items()))}
     write_json(os.path.join(out, "manifest.json"), manifest)
+    _remove_listed(out, set(old_files) - set(files))  # --replace: the old set's files not rewritten
     return manifest
 
 
+def _existing_set(out, mode, chosen, versions):
+    """What an existing golden set in ``out`` keeps: ``(case entries, {file: SHA-256}, old
+    files)``: with ``mode="add"`` the entries and files of the cases not in ``chosen``; with
+    ``"replace"`` only the old manifest's file list (removed once the new set is written).
+    Refuses, before anything is written, an existing set without a mode, and ``"add"`` to a set
+    of other versions or with altered files."""
+    path = os.path.join(out, "manifest.json")
+    if not os.path.exists(path):
+        return [], {}, []
+    if mode is None:
+        raise RefsoftError(f"{out} already holds a golden set (manifest.json): give --add to add or regenerate the "
+                           "named cases and keep the others, or --replace to start the set anew")
+    if mode == "replace":
+        try:
+            return [], {}, list(read_manifest(out)["files"])
+        except RefsoftError:
+            return [], {}, []  # an unreadable manifest lists nothing to remove; it is overwritten
+    old = read_manifest(out)
+    for key in ("refsoft", "numpy", "numba", "size", "traced_vertices"):
+        if old.get(key) != versions[key]:
+            raise RefsoftError(f"{path}: made with {key} {old.get(key)!r}, this is {versions[key]!r}: --add would mix "
+                               "them in one set; regenerate it with --replace")
+    entries = [e for e in old["cases"] if e["name"] not in chosen]
+    keep = {e["name"] for e in entries}
+    files = {rel: h for rel, h in old["files"].items() if rel.split("/")[0] in keep}
+    for rel, h in files.items():
+        p = os.path.join(out, *rel.split("/"))
+        if not os.path.isfile(p) or sha256(p) != h:
+            raise RefsoftError(f"{p}: missing or altered since {path} was written (SHA-256): regenerate its case "
+                               f"with --add --case {rel.split('/')[0]}, or the set with --replace")
+    return entries, files, []
+
+
+def _remove_listed(out, files):
+    """Remove the files a manifest lists (only those, inside ``out``) and case folders left empty."""
+    root = os.path.realpath(out)
+    for rel in files:
+        p = os.path.realpath(os.path.join(out, *rel.split("/")))
+        if os.path.commonpath([root, p]) == root and p != root and os.path.isfile(p):
+            os.unlink(p)
+            folder = os.path.dirname(p)
+            if folder != root and not os.listdir(folder):
+                os.rmdir(folder)
+
+
 def read_manifest(golden) -> dict:
-    """The manifest of a golden folder (checked to be one)."""
+    """The manifest of a golden folder, checked to be one: its format, and the fields ``check``
+    reads (each case's name, built-in scene, frames and options; every file's SHA-256).
+
+    Raises
+    ------
+    RefsoftError
+        No ``manifest.json`` in ``golden``.
+    InputFileError
+        The manifest cannot be read or lacks or mangles a field (the message names the field).
+    """
+    from ..io import read_json
+
     path = os.path.join(os.fspath(golden), "manifest.json")
     if not os.path.isfile(path):
         raise RefsoftError(f"{golden} is not a golden set: no manifest.json")
-    try:
-        with open(path) as fh:
-            m = json.load(fh)
-    except (OSError, json.JSONDecodeError) as exc:
-        raise RefsoftError(f"{path}: cannot read: {exc}") from None
-    if m.get("format") != GOLDEN_FORMAT:
-        raise RefsoftError(f"{path}: not a {GOLDEN_FORMAT} manifest (format {m.get('format')!r})")
+    m = read_json(path, format=GOLDEN_FORMAT, required=("cases", "files"))
+    files = m["files"]
+    if not isinstance(files, dict) or not all(isinstance(v, str) for v in files.values()):
+        raise InputFileError(f"{path}: 'files' must map each file to its SHA-256")
+    if not isinstance(m["cases"], list):
+        raise InputFileError(f"{path}: 'cases' must be a list")
+    for i, e in enumerate(m["cases"]):
+        _check_entry(path, i, e)
     return m
+
+
+_JSON_NAMES = {str: "string", list: "list", dict: "object"}
+
+
+def _check_entry(path, i, e):
+    from ..options import RenderOptions
+    from ..scene.builtin import BUILTIN_SCENES
+
+    where = f"{path}: cases[{i}]"
+    if not isinstance(e, dict):
+        raise InputFileError(f"{where} is not an object")
+    for key, kind in (("name", str), ("scene", str), ("frames", list), ("options", dict)):
+        if key not in e:
+            raise InputFileError(f"{where} lacks {key!r}")
+        if not isinstance(e[key], kind):
+            raise InputFileError(f"{where}.{key} must be a JSON {_JSON_NAMES[kind]}")
+    if not e["frames"] or not all(isinstance(f, int) and not isinstance(f, bool) and f >= 0 for f in e["frames"]):
+        raise InputFileError(f"{where}.frames must be a non-empty list of frame indices")
+    if e["scene"] != "pixel_grid" and e["scene"] not in BUILTIN_SCENES:
+        raise InputFileError(f"{where}.scene: unknown scene {e['scene']!r}")
+    try:
+        RenderOptions(**{k: (tuple(v) if isinstance(v, list) else v) for k, v in e["options"].items()})
+    except (RefsoftError, TypeError, ValueError) as exc:
+        raise InputFileError(f"{where}.options: {exc}") from None
