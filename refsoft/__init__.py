@@ -28,7 +28,7 @@ __version__ = "0.1.0"
 #: Public name -> the module that defines it.
 _LAZY = {
     "RefsoftError": "errors", "SceneError": "errors", "MeshError": "errors", "CameraError": "errors",
-    "LimitError": "errors",
+    "LimitError": "errors", "InputFileError": "errors",
     "Animation": "scene", "Camera": "scene", "Mesh": "scene", "Scene": "scene", "SceneObject": "scene",
     "Transform": "scene", "builtin_names": "scene", "load_mesh": "scene", "load_scene": "scene",
     "primitives": "scene",

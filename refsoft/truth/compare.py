@@ -17,8 +17,7 @@ import numpy as np
 
 from .. import keys
 from ..errors import InputFileError, RefsoftError
-
-RUN_FORMAT = "refsoft-run-1"
+from ..frame.outputs import RUN_FORMAT
 _NUMERIC = "biuf"
 
 
