@@ -86,17 +86,23 @@ def cmd_trace(args) -> int:
     return 0
 
 
-def _first_run_notice(what: str, seconds: int) -> bool:
-    """Print one line before a first run compiles the kernels; True when it will."""
-    import sys
+class _FirstRunNotice:
+    """Called just before the first frame (every input checked by then): prints one line when
+    this run will compile the kernels, and remembers whether it did (``compiling``)."""
 
-    from .._numba import kernels_cached
+    def __init__(self, what: str, seconds: int):
+        self.what, self.seconds, self.compiling = what, seconds, False
 
-    if kernels_cached():
-        return False
-    print(f"refsoft: first run: compiling the {what} kernels (about {seconds} s on 2 cores; cached for later runs)",
-          file=sys.stderr, flush=True)
-    return True
+    def __call__(self):
+        import sys
+
+        from .._numba import kernels_cached
+
+        if kernels_cached():
+            return
+        self.compiling = True
+        print(f"refsoft: first run: compiling the {self.what} kernels (about {self.seconds} s on 2 cores; cached "
+              "for later runs)", file=sys.stderr, flush=True)
 
 
 def _timing(frames, compiling: bool) -> str:
@@ -121,15 +127,15 @@ def cmd_render(args) -> int:
         frames = list(range(args.frame + 1)) if not args.no_coherence else [args.frame]
         write = {args.frame}
     out = args.out or os.path.join("out", scene.name)
-    compiling = _first_run_notice("render", 40)
+    notice = _FirstRunNotice("render", 40)
     t0 = time.perf_counter()
     # every frame is written as soon as it is rendered, then dropped (one frame in memory)
     done, stats = render(scene, frames=frames, out=out, progress=True, memory_limit=args.memory_limit,
-                         keep=False, write=write, overwrite=args.overwrite, **render_kwargs(args))
+                         keep=False, write=write, overwrite=args.overwrite, on_start=notice, **render_kwargs(args))
     keep = done if write is None else [f for f in done if f.index in write]
     summ = stats["summary"]
     print(f"{scene.name}: {len(keep)} frame(s), preset {args.preset}, written to {out} in "
-          f"{time.perf_counter() - t0:.1f} s ({_timing(done, compiling)}); search iterations: "
+          f"{time.perf_counter() - t0:.1f} s ({_timing(done, notice.compiling)}); search iterations: "
           f"max frame mean {summ['max_frame_mean_iterations']:.1f}, total mean {summ['total_mean_iterations']:.1f}")
     return 0
 
@@ -144,13 +150,13 @@ def cmd_truth(args) -> int:
         frames = [args.frame]
     frame_indices(scene, frames)  # checks the range before any work
     out = args.out or os.path.join("out", f"{scene.name}-truth")
-    compiling = _first_run_notice("truth", 15)
+    notice = _FirstRunNotice("truth", 15)
     t0 = time.perf_counter()
     done, stats = render_truth(scene, frames=frames, out=out, progress=True, exact=not args.no_exact,
-                               memory_limit=args.memory_limit, overwrite=args.overwrite)
+                               memory_limit=args.memory_limit, overwrite=args.overwrite, on_start=notice)
     rays = sum(f.report["reflector_pixels"] for f in done)
     print(f"{scene.name}: {len(done)} truth frame(s) written to {out} in {time.perf_counter() - t0:.1f} s "
-          f"({_timing(done, compiling)}; {rays} reflected rays)")
+          f"({_timing(done, notice.compiling)}; {rays} reflected rays)")
     return 0
 
 

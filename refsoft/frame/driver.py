@@ -274,7 +274,7 @@ def resolve_scene(scene, width=None, height=None, subdivide=None) -> Scene:
 
 
 def render(scene, frames=None, out=None, progress=False, memory_limit=None, keep=True, write=None,
-           width=None, height=None, subdivide=None, preset="accurate", overwrite=False, **options):
+           width=None, height=None, subdivide=None, preset="accurate", overwrite=False, on_start=None, **options):
     """Render frames of a scene (the Python face of ``refsoft render``).
 
     Parameters
@@ -305,6 +305,9 @@ def render(scene, frames=None, out=None, progress=False, memory_limit=None, keep
         The options not given take this preset's values (:data:`refsoft.options.PRESETS`).
     overwrite : bool
         Replace an earlier run's files in ``out``.
+    on_start : callable, optional
+        Called with no arguments once every input is checked and the folder prepared, just
+        before the first frame (the command line prints its first-run notice there).
     **options
         :class:`RenderOptions` fields (``method``, ``neighbourhood``, ``inverse``, ``widen``, ...),
         each overriding the preset.
@@ -325,13 +328,15 @@ def render(scene, frames=None, out=None, progress=False, memory_limit=None, keep
     indices = frame_indices(scene, frames)
     driver = FrameDriver(scene, opts, memory_limit)
     check_frame_memory(scene, opts, len(indices) if keep else 1, memory_limit)
-    return run_to_folder(driver, indices, out, "render", opts, progress, keep, write, overwrite)
+    return run_to_folder(driver, indices, out, "render", opts, progress, keep, write, overwrite, on_start)
 
 
-def run_to_folder(driver, indices, out, kind, options, progress=False, keep=True, write=None, overwrite=False):
+def run_to_folder(driver, indices, out, kind, options, progress=False, keep=True, write=None, overwrite=False,
+                  on_start=None):
     """Run ``driver`` over ``indices`` into the folder ``out`` (when given): ``run.json`` first,
     each frame as it is done and ``stats.json`` after it (so a run stopped at any moment leaves the
-    statistics of the frames it wrote). Returns (frames, stats)."""
+    statistics of the frames it wrote). ``on_start()`` is called before the first frame. Returns
+    (frames, stats)."""
     import os
 
     from ..io import write_json
@@ -341,6 +346,8 @@ def run_to_folder(driver, indices, out, kind, options, progress=False, keep=True
     if out is not None:
         prepare_run_folder(out, run_manifest(kind, driver.scene, written, options), overwrite)
     done = []
+    if on_start is not None:
+        on_start()
 
     def stats_of(frames):
         return frame_stats(frames if write is None else [f for f in frames if f.index in write], options)

@@ -266,7 +266,7 @@ class TruthRenderer(FrameDriver):
 
 
 def render_truth(scene, frames=None, out=None, progress=False, exact=True, memory_limit=None, width=None,
-                 height=None, subdivide=None, overwrite=False):
+                 height=None, subdivide=None, overwrite=False, on_start=None):
     """Ray-trace frames of a scene (the Python face of ``refsoft truth``).
 
     Parameters
@@ -289,6 +289,8 @@ def render_truth(scene, frames=None, out=None, progress=False, exact=True, memor
         Loader subdivision override, as :func:`refsoft.render`.
     overwrite : bool
         Replace an earlier run's files in ``out``.
+    on_start : callable, optional
+        As :func:`refsoft.render`: called just before the first frame.
 
     Returns
     -------
@@ -298,4 +300,4 @@ def render_truth(scene, frames=None, out=None, progress=False, exact=True, memor
     scene = resolve_scene(scene, width, height, subdivide)
     indices = frame_indices(scene, frames)
     return run_to_folder(TruthRenderer(scene, exact=exact, memory_limit=memory_limit), indices, out, "truth", None,
-                         progress, overwrite=overwrite)
+                         progress, overwrite=overwrite, on_start=on_start)

@@ -58,14 +58,22 @@ def test_progress_shows_in_logs_and_the_closing_line_is_honest(tmp_path):
     assert "median" in r.stdout and "compiling" not in r.stdout
 
 
-def test_a_first_run_says_it_compiles(monkeypatch, capsys):
+def test_a_first_run_says_it_compiles_once_its_inputs_are_checked(monkeypatch, capsys, tmp_path):
     from refsoft import _numba
-    from refsoft.cli import commands
+    from refsoft.cli import main
 
     monkeypatch.setattr(_numba, "kernels_cached", lambda minimum=20: False)
-    assert commands._first_run_notice("render", 40) is True
-    assert capsys.readouterr().err.strip() == ("refsoft: first run: compiling the render kernels (about 40 s on 2 "
-                                               "cores; cached for later runs)")
+    (tmp_path / "taken").mkdir()
+    (tmp_path / "taken" / "frame_0000.npz").write_bytes(b"")
+    assert main(["render", "sphere", "--frames", "1", "--out", str(tmp_path / "taken")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "already holds" in err[0]  # refused before any notice
+    assert main(["render", "sphere", "--frames", "1", "--width", "32", "--height", "24", "--preset", "paper",
+                 "--out", str(tmp_path / "o")]) == 0
+    captured = capsys.readouterr()
+    assert captured.err.strip().splitlines()[0] == ("refsoft: first run: compiling the render kernels (about 40 s "
+                                                    "on 2 cores; cached for later runs)")
+    assert "s for the frame, compiling included" in captured.out
 
 
 @pytest.mark.parametrize("args, message", [
