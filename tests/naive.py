@@ -599,3 +599,53 @@ def naive_sphere_reflection_points(centre, radius, eye, points, samples=64):
                 out[i] = r
                 break
     return out
+
+
+# ------------------------------------------------------------------------------------ face culling
+def naive_signed_areas(clip, faces, width, height):
+    """The doubled signed window-space area (snapped, y up) of every clip triangle, in the order of
+    :func:`setup_triangles` (which keeps only the absolute value)."""
+    gx, gy = 2 * GUARD_BAND_PIXELS / width, 2 * GUARD_BAND_PIXELS / height
+    out = []
+    for face in np.asarray(faces):
+        poly = clip_triangle([np.asarray(clip, dtype=np.float64)[i] for i in face], gx, gy)
+        for j in range(1, len(poly) - 1):
+            xs = [int(np.rint((c[0] / c[3] + 1.0) * (0.5 * width) * 256.0)) for c, _ in (poly[0], poly[j], poly[j + 1])]
+            ys = [int(np.rint((c[1] / c[3] + 1.0) * (0.5 * height) * 256.0)) for c, _ in (poly[0], poly[j], poly[j + 1])]
+            out.append(edge(xs[0], ys[0], xs[1], ys[1], xs[2], ys[2]))
+    return out
+
+
+def naive_rasterize_culled(clip, faces, width, height, peel=None, cull=None):
+    """:func:`naive_rasterize` with face culling: ``"cw"`` keeps the clip triangles whose snapped
+    signed area is < 0, ``"ccw"`` those > 0, None all. Returns depth, face index, clip-triangle
+    index (into the full list), triangles."""
+    tris = setup_triangles(np.asarray(clip, dtype=np.float64), np.asarray(faces), width, height)
+    signed = naive_signed_areas(clip, faces, width, height)
+    depth = np.ones((height, width), dtype=np.float32)
+    face = np.full((height, width), -1, dtype=np.int32)
+    which = np.full((height, width), -1, dtype=np.int32)
+    rows, cols = np.mgrid[0:height, 0:width]
+    px = cols.astype(np.int64) * 256 + 128
+    py = (height - 1 - rows).astype(np.int64) * 256 + 128
+    for t, tri in enumerate(tris):
+        if tri["area"] == 0 or (cull == "cw" and signed[t] >= 0) or (cull == "ccw" and signed[t] <= 0):
+            continue
+        x, y, z = tri["x"], tri["y"], tri["z"]
+        covered = np.ones((height, width), dtype=bool)
+        e = []
+        for i in range(3):
+            a, b = (i + 1) % 3, (i + 2) % 3
+            ei = edge(x[a], y[a], x[b], y[b], px, py)
+            covered &= (ei > 0) | ((ei == 0) & is_inclusive(x[a], y[a], x[b], y[b]))
+            e.append(ei)
+        zz = (e[0].astype(np.float64) * z[0] + e[1].astype(np.float64) * z[1] + e[2].astype(np.float64) * z[2]) \
+            * (1.0 / float(tri["area"]))
+        zz = np.clip(zz, 0.0, 1.0).astype(np.float32)
+        win = covered & (zz < depth)
+        if peel is not None:
+            win &= zz > peel
+        depth[win] = zz[win]
+        face[win] = tri["face"]
+        which[win] = t
+    return depth, face, which, tris
