@@ -649,3 +649,122 @@ def naive_rasterize_culled(clip, faces, width, height, peel=None, cull=None):
         face[win] = tri["face"]
         which[win] = t
     return depth, face, which, tris
+
+
+# ------------------------------------------------------------------------------------ layered depth textures
+#: GL 4.6 table 8.19 (cube map face selection), written out: face -> (sc, tc) of a direction r.
+GL_CUBE_TABLE = {
+    0: lambda r: (-r[2], -r[1]), 1: lambda r: (r[2], -r[1]),
+    2: lambda r: (r[0], r[2]), 3: lambda r: (r[0], -r[2]),
+    4: lambda r: (r[0], -r[1]), 5: lambda r: (-r[0], -r[1]),
+}
+
+
+def naive_gl_cube_lookup(r):
+    """The GL cube-map rule for direction ``r``: the major axis (ties: z over y over x), the face
+    (positive when r_a >= 0), ``s = (sc / |ma| + 1) / 2``, ``t = (tc / |ma| + 1) / 2``."""
+    a = 2 if abs(r[2]) >= max(abs(r[0]), abs(r[1])) else (1 if abs(r[1]) >= abs(r[0]) else 0)
+    f = 2 * a + (0 if r[a] >= 0 else 1)
+    sc, tc = GL_CUBE_TABLE[f](r)
+    ma = abs(r[a])
+    return f, (sc / ma + 1) / 2, (tc / ma + 1) / 2
+
+
+def naive_ldt(vertices, faces, R, closed, edge_eps=0.01):
+    """A layered depth texture by exact ray casts: for every texel of every face, the line through
+    its centre along the face's axis is intersected (float64) with every triangle.
+
+    Closed meshes (winding made outward by the signed volume): the crossings facing the face
+    (``sigma n_a > 0``) in depth order are the layers, the others in order the back depths.
+    Open meshes: the nearest crossing of either winding, one layer, back 1.
+
+    Returns a dict: ``depth``, ``back`` (6, L, R, R) float64 (1 where none), ``triangle``
+    (6, L, R, R) int (-1 none), ``count`` (6, R, R) int, ``ambiguous`` (6, R, R) bool (a texel
+    centre within ``edge_eps`` texels of a triangle edge, or two crossings at one depth), ``centre``,
+    ``half``, ``slope`` (6, L, R, R) / ``back_slope``: the crossing triangle's depth change per
+    texel (|d delta / dx| + |d delta / dy|).
+    """
+    v = np.asarray(vertices, dtype=np.float64)
+    f = np.asarray(faces, dtype=np.int64)
+    lo, hi = v.min(axis=0), v.max(axis=0)
+    centre = (lo + hi) / 2
+    half = max(hi - lo) / 2 * R / (R - 2)
+    q = (v - centre) / half
+    if closed:
+        vol = np.sum([np.dot(q[a], np.cross(q[b], q[c])) for a, b, c in f])
+        if vol < 0:
+            f = f[:, [0, 2, 1]]
+    grid = (np.arange(R) + 0.5) / R * 2 - 1  # texel centres in sc / tc
+    out = {k: [] for k in ("depth", "back", "triangle", "count", "ambiguous", "slope", "back_slope")}
+    for face in range(6):
+        a, sigma = face // 2, (1.0 if face % 2 == 0 else -1.0)
+        # sc, tc of every vertex, by the GL table; window x ~ sc, y ~ tc
+        sc = np.array([GL_CUBE_TABLE[face](p)[0] for p in q])
+        tc = np.array([GL_CUBE_TABLE[face](p)[1] for p in q])
+        delta = 0.5 * (1 - sigma * q[:, a])
+        rows, cols = np.mgrid[0:R, 0:R]
+        px = grid[cols]
+        py = grid[R - 1 - rows]
+        hits = []  # (depth grid, mask, front?, triangle, slope)
+        ambiguous = np.zeros((R, R), dtype=bool)
+        for t, (i, j, k) in enumerate(f):
+            x = sc[[i, j, k]]
+            y = tc[[i, j, k]]
+            area = (x[1] - x[0]) * (y[2] - y[0]) - (y[1] - y[0]) * (x[2] - x[0])
+            if area == 0:
+                continue
+            e = [(x[(m + 2) % 3] - x[(m + 1) % 3]) * (py - y[(m + 1) % 3])
+                 - (y[(m + 2) % 3] - y[(m + 1) % 3]) * (px - x[(m + 1) % 3]) for m in range(3)]
+            lam = [em / area for em in e]
+            inside = (lam[0] >= 0) & (lam[1] >= 0) & (lam[2] >= 0)
+            # distance of the centre to each edge line, in texels (a sc unit is R / 2 texels)
+            for m in range(3):
+                ex, ey = x[(m + 2) % 3] - x[(m + 1) % 3], y[(m + 2) % 3] - y[(m + 1) % 3]
+                dist = np.abs(e[m]) / np.hypot(ex, ey) * R / 2
+                ambiguous |= (dist < edge_eps) & (lam[0] >= -0.5) & (lam[1] >= -0.5) & (lam[2] >= -0.5)
+            if not inside.any():
+                continue
+            z = lam[0] * delta[i] + lam[1] * delta[j] + lam[2] * delta[k]
+            # the depth plane's gradient per texel
+            dzx = ((delta[j] - delta[i]) * (y[2] - y[0]) - (y[1] - y[0]) * (delta[k] - delta[i])) / area
+            dzy = ((x[1] - x[0]) * (delta[k] - delta[i]) - (delta[j] - delta[i]) * (x[2] - x[0])) / area
+            slope = (abs(dzx) + abs(dzy)) * 2 / R
+            # facing the face's camera (at q_a = sigma, looking towards -sigma): sigma n_a > 0
+            n = np.cross(q[j] - q[i], q[k] - q[i])
+            hits.append((z, inside, sigma * n[a] > 0, t, slope))
+        L = 0
+        layer_lists = [[[] for _ in range(R)] for _ in range(R)]
+        for z, inside, front, t, slope in hits:
+            for r, c in zip(*np.nonzero(inside)):
+                layer_lists[r][c].append((z[r, c], front, t, slope))
+        per = {}
+        for r in range(R):
+            for c in range(R):
+                cr = sorted(layer_lists[r][c])
+                zs = [h[0] for h in cr]
+                if any(abs(zs[m + 1] - zs[m]) < 1e-9 for m in range(len(zs) - 1)):
+                    ambiguous[r, c] = True
+                if closed:
+                    fr = [h for h in cr if h[1]]
+                    bk = [h for h in cr if not h[1]]
+                else:
+                    fr, bk = cr[:1], []
+                per[r, c] = (fr, bk)
+                L = max(L, len(fr))
+        out["ambiguous"].append(ambiguous)
+        out["count"].append(np.array([[len(per[r, c][0]) for c in range(R)] for r in range(R)]))
+        out["_per"] = out.get("_per", []) + [per]
+    L = max(1, max(int(c.max()) for c in out["count"]))
+    depth = np.ones((6, L, R, R))
+    back = np.ones((6, L, R, R))
+    tri = np.full((6, L, R, R), -1)
+    slope = np.zeros((6, L, R, R))
+    back_slope = np.zeros((6, L, R, R))
+    for face, per in enumerate(out.pop("_per")):
+        for (r, c), (fr, bk) in per.items():
+            for j, h in enumerate(fr):
+                depth[face, j, r, c], tri[face, j, r, c], slope[face, j, r, c] = h[0], h[2], h[3]
+            for j, h in enumerate(bk[:L]):
+                back[face, j, r, c], back_slope[face, j, r, c] = h[0], h[3]
+    return dict(depth=depth, back=back, triangle=tri, count=np.array(out["count"]),
+                ambiguous=np.array(out["ambiguous"]), centre=centre, half=half, slope=slope, back_slope=back_slope)
