@@ -768,3 +768,45 @@ def naive_ldt(vertices, faces, R, closed, edge_eps=0.01):
                 back[face, j, r, c], back_slope[face, j, r, c] = h[0], h[3]
     return dict(depth=depth, back=back, triangle=tri, count=np.array(out["count"]),
                 ambiguous=np.array(out["ambiguous"]), centre=centre, half=half, slope=slope, back_slope=back_slope)
+
+
+def naive_cone_cases(p1, p2, p3, eye, centre, rho):
+    """The cone test of one triangle and one sphere written out (docs/ldt.md): returns the four
+    cases (corner inside, edge meets the cone, axis hits the triangle, trivial pass)."""
+    p1, p2, p3, C, O = (np.asarray(x, dtype=np.float64) for x in (p1, p2, p3, eye, centre))
+    n = np.cross(p1 - p2, p3 - p2)
+    if np.linalg.norm(n) == 0:
+        return False, False, False, True
+    n = n / np.linalg.norm(n)
+    e = -np.dot(n, p1)
+    Ov = O - 2 * (np.dot(n, O) + e) * n
+    dist = np.linalg.norm(Ov - C)
+    if dist <= rho:
+        return False, False, False, True
+    g = (Ov - C) / dist
+    cos2 = 1 - rho ** 2 / dist ** 2
+
+    def inside(x):
+        v = x - C
+        return np.dot(g, v) > 0 and np.dot(g, v) ** 2 >= cos2 * np.dot(v, v)
+
+    corner = any(inside(p) for p in (p1, p2, p3))
+    edge = False
+    for a, b in ((p1, p2), (p2, p3), (p3, p1)):
+        v0, d = a - C, b - a
+        A = np.dot(g, d) ** 2 - cos2 * np.dot(d, d)
+        B = 2 * (np.dot(g, v0) * np.dot(g, d) - cos2 * np.dot(v0, d))
+        Cq = np.dot(g, v0) ** 2 - cos2 * np.dot(v0, v0)
+        if A == 0:
+            roots = [-Cq / B] if B != 0 else []
+        else:
+            disc = B * B - 4 * A * Cq
+            roots = [] if disc < 0 else [(-B - np.sqrt(disc)) / (2 * A), (-B + np.sqrt(disc)) / (2 * A)]
+        edge |= any(0 <= w <= 1 and np.dot(g, v0 + w * d) >= 0 for w in roots)
+    # the axis ray against the triangle: solve C + s g = p1 + u (p2 - p1) + v (p3 - p1)
+    M = np.column_stack([g, p1 - p2, p1 - p3])
+    axis = False
+    if abs(np.linalg.det(M)) > 0:
+        s, u, v = np.linalg.solve(M, p1 - C)
+        axis = s >= 0 and u >= 0 and v >= 0 and u + v <= 1
+    return corner, edge, bool(axis), False
