@@ -810,3 +810,153 @@ def naive_cone_cases(p1, p2, p3, eye, centre, rho):
         s, u, v = np.linalg.solve(M, p1 - C)
         axis = s >= 0 and u >= 0 and v >= 0 and u + v <= 1
     return corner, edge, bool(axis), False
+
+
+LDT_TABLE = [(2, -1, 1, -1), (2, 1, 1, -1), (0, 1, 2, 1), (0, 1, 2, -1), (0, 1, 1, -1), (0, -1, 1, -1)]
+
+
+def naive_ldt_pixel(P, N, eye, tri, region, use_regions, W, depth, back, count, mismatch, is_open, R, n_lin, tau,
+                    max_faces, dt, view_dir=None):
+    """The LDT search of one pixel, written out from docs/ldt.md in plain Python on ``dt`` scalars
+    (every operation rounded in ``dt``, in the contract's order). Arrays as the kernel's
+    (``depth`` (K, 6, L, R, R) float32, ``back`` in ``dt``, ``W`` (K, 4, 4) in ``dt``).
+    Returns a dict of the pixel's outputs (see refsoft.ldt.search.PixelSearch)."""
+    one, zero, half, two = dt(1), dt(0), dt(0.5), dt(2)
+    Rf = dt(R)
+    P = [dt(x) for x in P]
+    N = [dt(x) for x in N]
+    if view_dir is not None:
+        I = [dt(x) for x in view_dir]
+    else:
+        d = [P[i] - dt(eye[i]) for i in range(3)]
+        length = np.sqrt((d[0] * d[0] + d[1] * d[1]) + d[2] * d[2])
+        I = [x / length for x in d]
+    k2 = two * ((N[0] * I[0] + N[1] * I[1]) + N[2] * I[2])
+    r = [I[i] - k2 * N[i] for i in range(3)]
+
+    def int_margin(x):
+        k = np.floor(x + half)
+        return abs(x - k) if zero < k < Rf else one
+
+    def texel(q0, u, s, f):
+        q = [q0[i] + s * u[i] for i in range(3)]
+        sa, ss, ta, ts = LDT_TABLE[f]
+        sc = q[sa] if ss > 0 else -q[sa]
+        tc = q[ta] if ts > 0 else -q[ta]
+        x = ((sc + one) * half) * Rf
+        y = ((tc + one) * half) * Rf
+        col = min(max(int(np.floor(x)), 0), R - 1)
+        row = R - 1 - min(max(int(np.floor(y)), 0), R - 1)
+        h = half * (one - q[f // 2]) if f % 2 == 0 else half * (one + q[f // 2])
+        return row, col, h, min(int_margin(x), int_margin(y))
+
+    def face_search(q0, u, s_in, s_out, umax, f, k):
+        n = n_lin if n_lin > 0 else min(max(int(np.ceil(((umax * (s_out - s_in)) * Rf) * half)), 1), 4 * R)
+        D = (s_out - s_in) / dt(n)
+        margin = one
+        found = None
+        for m in range(n + 1):
+            row, col, h, mt = texel(q0, u, s_in + dt(m) * D, f)
+            margin = min(margin, mt)
+            for j in range(int(count[k, f, row, col])):
+                z = dt(depth[k, f, j, row, col])
+                margin = min(margin, abs(h - z))
+                if h < z:
+                    break
+                dd = back[k, f, j, row, col]
+                margin = min(margin, abs(h - dd))
+                if h <= dd:
+                    found = j
+                    break
+            if found is not None:
+                break
+        samples = m + 1
+        if found is None:
+            return None, samples, 0, margin
+        j = found
+        if m == 0:
+            return (s_in, j, row, col, (h - dt(depth[k, f, j, row, col])) * Rf, True), samples, 0, margin
+        lo, hi = s_in + dt(m - 1) * D, s_in + dt(m) * D
+        length, steps = ((D * umax) * Rf) * half, 0
+        while length > dt(0.125) and steps < 16:
+            length, steps = length * half, steps + 1
+        best = (row, col, h)
+        for _ in range(steps):
+            mid = half * (lo + hi)
+            rr, cc, hm, mt = texel(q0, u, mid, f)
+            margin = min(margin, mt)
+            inside = False
+            if j < int(count[k, f, rr, cc]):
+                z, dd = dt(depth[k, f, j, rr, cc]), back[k, f, j, rr, cc]
+                margin = min(margin, abs(hm - z), abs(hm - dd))
+                inside = z <= hm <= dd
+            if inside:
+                hi, best = mid, (rr, cc, hm)
+            else:
+                lo = mid
+        e = (best[2] - dt(depth[k, f, j, best[0], best[1]])) * Rf
+        return (hi, j, best[0], best[1], e, False), samples, steps, margin
+
+    K = len(W)
+    out = dict(ray=r, flags=0, samples=0, steps=0, faces=0, objects=0, object_distance=[-one] * K)
+    best = None
+    any_margin = one
+    for k in range(K):
+        q0 = [((W[k][i][0] * P[0] + W[k][i][1] * P[1]) + W[k][i][2] * P[2]) + W[k][i][3] for i in range(3)]
+        u = [(W[k][i][0] * r[0] + W[k][i][1] * r[1]) + W[k][i][2] * r[2] for i in range(3)]
+        nears, fars, miss = {}, [], False
+        for i in range(3):
+            if u[i] == zero:
+                miss |= abs(q0[i]) > one
+                continue
+            a, b = sorted([(-one - q0[i]) / u[i], (one - q0[i]) / u[i]])
+            nears[i] = a
+            fars.append(b)
+        if miss or not nears:
+            continue
+        near = max(nears.values())
+        s_in, s_out = max(zero, near), min(fars)
+        if not s_in < s_out:
+            continue
+        if use_regions and not region[tri][k]:
+            out["flags"] |= 8
+            continue
+        out["objects"] += 1
+        entry = min(i for i in nears if nears[i] == near) if near > zero else None
+        if entry is None:
+            out["flags"] |= 32
+        rest = sorted((i for i in nears if i != entry), key=lambda i: (-abs(u[i]), i))
+        order = ([entry] if entry is not None else []) + rest
+        umax = max(abs(u[0]), abs(u[1]), abs(u[2]))
+        chosen, accepted = None, False
+        for a in order[:max_faces]:
+            f = 2 * a + (1 if u[a] > zero else 0)
+            res, samples, steps, margin = face_search(q0, u, s_in, s_out, umax, f, k)
+            out["faces"] += 1
+            out["samples"] += samples
+            out["steps"] += steps
+            any_margin = min(any_margin, margin)
+            if res is None:
+                continue
+            if res[4] <= dt(tau):
+                chosen, accepted = (res, f, margin), True
+                break
+            if chosen is None or res[4] < chosen[0][4]:
+                chosen = (res, f, margin)
+        if chosen is None:
+            continue
+        (s_hit, j, row, col, e, start), f, margin = chosen
+        out["object_distance"][k] = s_hit
+        if best is None or s_hit < best["distance"]:
+            best = dict(distance=s_hit, object=k, face=f, layer=j, texel=(row, col), residual=e, margin=margin,
+                        hit_flags=(1 if start else 0) | (0 if accepted else 2))
+    if best is None:
+        out.update(distance=-one, object=-1, face=-1, layer=-1, texel=(-1, -1), residual=zero, margin=any_margin,
+                   hit=[zero] * 3)
+        return out
+    k, f, (row, col) = best["object"], best["face"], best["texel"]
+    flags = best.pop("hit_flags") | (4 if mismatch[k, f, row, col] else 0) | (16 if is_open[k] else 0)
+    out.update(best)
+    out["flags"] |= flags
+    out["hit"] = [P[i] + best["distance"] * r[i] for i in range(3)]
+    return out
