@@ -105,7 +105,8 @@ class LayeredDepthTextures:
     tau : float
         Residual (texels) under which a face's hit is accepted.
     regions : {"cone", "none"}
-        The cone test per reflector triangle, or every triangle searched.
+        The cone test per reflector triangle, or every triangle searched. The cone's apex is the
+        eye: an orthographic view has none, and passes every visible triangle.
     precision : {"float32", "float64"}
         Working precision of the search (the LDT depths stay float32).
     """
@@ -168,10 +169,10 @@ class LayeredDepthTextures:
         K = len(self.targets)
         t = time.perf_counter()
         visible = visible_triangles(view.view.triangle, stencil) if stencil.any() else np.zeros(0, np.int64)
-        if self.regions == "cone":
+        if self.regions == "cone" and view.camera.projection == "perspective":
             centres, radii = self.spheres(view)
             table = region_table(mesh, visible, view.camera.eye, centres, radii)
-        else:
+        else:  # no test, or an orthographic view: the cone's apex is the eye, which it has not
             table = np.zeros((mesh.n_faces, K), dtype=bool)
             table[visible] = True
         times["regions"] = 1000 * (time.perf_counter() - t)
