@@ -12,7 +12,6 @@ from refsoft.ldt.build import build_ldt
 from refsoft.ldt.method import LayeredDepthTextures
 from refsoft.ldt.search import Stack, cube_matrices, search
 from refsoft.scene import primitives as P
-from refsoft.scene.mesh import Mesh
 
 
 def small_scene(width=48, height=36):
