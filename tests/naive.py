@@ -599,3 +599,364 @@ def naive_sphere_reflection_points(centre, radius, eye, points, samples=64):
                 out[i] = r
                 break
     return out
+
+
+# ------------------------------------------------------------------------------------ face culling
+def naive_signed_areas(clip, faces, width, height):
+    """The doubled signed window-space area (snapped, y up) of every clip triangle, in the order of
+    :func:`setup_triangles` (which keeps only the absolute value)."""
+    gx, gy = 2 * GUARD_BAND_PIXELS / width, 2 * GUARD_BAND_PIXELS / height
+    out = []
+    for face in np.asarray(faces):
+        poly = clip_triangle([np.asarray(clip, dtype=np.float64)[i] for i in face], gx, gy)
+        for j in range(1, len(poly) - 1):
+            xs = [int(np.rint((c[0] / c[3] + 1.0) * (0.5 * width) * 256.0)) for c, _ in (poly[0], poly[j], poly[j + 1])]
+            ys = [int(np.rint((c[1] / c[3] + 1.0) * (0.5 * height) * 256.0)) for c, _ in (poly[0], poly[j], poly[j + 1])]
+            out.append(edge(xs[0], ys[0], xs[1], ys[1], xs[2], ys[2]))
+    return out
+
+
+def naive_rasterize_culled(clip, faces, width, height, peel=None, cull=None):
+    """:func:`naive_rasterize` with face culling: ``"cw"`` keeps the clip triangles whose snapped
+    signed area is < 0, ``"ccw"`` those > 0, None all. Returns depth, face index, clip-triangle
+    index (into the full list), triangles."""
+    tris = setup_triangles(np.asarray(clip, dtype=np.float64), np.asarray(faces), width, height)
+    signed = naive_signed_areas(clip, faces, width, height)
+    depth = np.ones((height, width), dtype=np.float32)
+    face = np.full((height, width), -1, dtype=np.int32)
+    which = np.full((height, width), -1, dtype=np.int32)
+    rows, cols = np.mgrid[0:height, 0:width]
+    px = cols.astype(np.int64) * 256 + 128
+    py = (height - 1 - rows).astype(np.int64) * 256 + 128
+    for t, tri in enumerate(tris):
+        if tri["area"] == 0 or (cull == "cw" and signed[t] >= 0) or (cull == "ccw" and signed[t] <= 0):
+            continue
+        x, y, z = tri["x"], tri["y"], tri["z"]
+        covered = np.ones((height, width), dtype=bool)
+        e = []
+        for i in range(3):
+            a, b = (i + 1) % 3, (i + 2) % 3
+            ei = edge(x[a], y[a], x[b], y[b], px, py)
+            covered &= (ei > 0) | ((ei == 0) & is_inclusive(x[a], y[a], x[b], y[b]))
+            e.append(ei)
+        zz = (e[0].astype(np.float64) * z[0] + e[1].astype(np.float64) * z[1] + e[2].astype(np.float64) * z[2]) \
+            * (1.0 / float(tri["area"]))
+        zz = np.clip(zz, 0.0, 1.0).astype(np.float32)
+        win = covered & (zz < depth)
+        if peel is not None:
+            win &= zz > peel
+        depth[win] = zz[win]
+        face[win] = tri["face"]
+        which[win] = t
+    return depth, face, which, tris
+
+
+# ------------------------------------------------------------------------------------ layered depth textures
+#: GL 4.6 table 8.19 (cube map face selection), written out: face -> (sc, tc) of a direction r.
+GL_CUBE_TABLE = {
+    0: lambda r: (-r[2], -r[1]), 1: lambda r: (r[2], -r[1]),
+    2: lambda r: (r[0], r[2]), 3: lambda r: (r[0], -r[2]),
+    4: lambda r: (r[0], -r[1]), 5: lambda r: (-r[0], -r[1]),
+}
+
+
+def naive_gl_cube_lookup(r):
+    """The GL cube-map rule for direction ``r``: the major axis (ties: z over y over x), the face
+    (positive when r_a >= 0), ``s = (sc / |ma| + 1) / 2``, ``t = (tc / |ma| + 1) / 2``."""
+    a = 2 if abs(r[2]) >= max(abs(r[0]), abs(r[1])) else (1 if abs(r[1]) >= abs(r[0]) else 0)
+    f = 2 * a + (0 if r[a] >= 0 else 1)
+    sc, tc = GL_CUBE_TABLE[f](r)
+    ma = abs(r[a])
+    return f, (sc / ma + 1) / 2, (tc / ma + 1) / 2
+
+
+def naive_ldt(vertices, faces, R, closed, edge_eps=0.01):
+    """A layered depth texture by exact ray casts: for every texel of every face, the line through
+    its centre along the face's axis is intersected (float64) with every triangle.
+
+    Closed meshes (winding made outward by the signed volume): the crossings facing the face
+    (``sigma n_a > 0``) in depth order are the layers, the others in order the back depths.
+    Open meshes: the nearest crossing of either winding, one layer, back 1.
+
+    Returns a dict: ``depth``, ``back`` (6, L, R, R) float64 (1 where none), ``triangle``
+    (6, L, R, R) int (-1 none), ``count`` (6, R, R) int, ``ambiguous`` (6, R, R) bool (a texel
+    centre within ``edge_eps`` texels of a triangle edge, or two crossings at one depth), ``centre``,
+    ``half``, ``slope`` (6, L, R, R) / ``back_slope``: the crossing triangle's depth change per
+    texel (|d delta / dx| + |d delta / dy|).
+    """
+    v = np.asarray(vertices, dtype=np.float64)
+    f = np.asarray(faces, dtype=np.int64)
+    lo, hi = v.min(axis=0), v.max(axis=0)
+    centre = (lo + hi) / 2
+    half = max(hi - lo) / 2 * R / (R - 2)
+    q = (v - centre) / half
+    if closed:
+        vol = np.sum([np.dot(q[a], np.cross(q[b], q[c])) for a, b, c in f])
+        if vol < 0:
+            f = f[:, [0, 2, 1]]
+    grid = (np.arange(R) + 0.5) / R * 2 - 1  # texel centres in sc / tc
+    out = {k: [] for k in ("depth", "back", "triangle", "count", "ambiguous", "slope", "back_slope")}
+    for face in range(6):
+        a, sigma = face // 2, (1.0 if face % 2 == 0 else -1.0)
+        # sc, tc of every vertex, by the GL table; window x ~ sc, y ~ tc
+        sc = np.array([GL_CUBE_TABLE[face](p)[0] for p in q])
+        tc = np.array([GL_CUBE_TABLE[face](p)[1] for p in q])
+        delta = 0.5 * (1 - sigma * q[:, a])
+        rows, cols = np.mgrid[0:R, 0:R]
+        px = grid[cols]
+        py = grid[R - 1 - rows]
+        hits = []  # (depth grid, mask, front?, triangle, slope)
+        ambiguous = np.zeros((R, R), dtype=bool)
+        for t, (i, j, k) in enumerate(f):
+            x = sc[[i, j, k]]
+            y = tc[[i, j, k]]
+            area = (x[1] - x[0]) * (y[2] - y[0]) - (y[1] - y[0]) * (x[2] - x[0])
+            if area == 0:
+                continue
+            e = [(x[(m + 2) % 3] - x[(m + 1) % 3]) * (py - y[(m + 1) % 3])
+                 - (y[(m + 2) % 3] - y[(m + 1) % 3]) * (px - x[(m + 1) % 3]) for m in range(3)]
+            lam = [em / area for em in e]
+            inside = (lam[0] >= 0) & (lam[1] >= 0) & (lam[2] >= 0)
+            # distance of the centre to each edge line, in texels (a sc unit is R / 2 texels)
+            for m in range(3):
+                ex, ey = x[(m + 2) % 3] - x[(m + 1) % 3], y[(m + 2) % 3] - y[(m + 1) % 3]
+                dist = np.abs(e[m]) / np.hypot(ex, ey) * R / 2
+                ambiguous |= (dist < edge_eps) & (lam[0] >= -0.5) & (lam[1] >= -0.5) & (lam[2] >= -0.5)
+            if not inside.any():
+                continue
+            z = lam[0] * delta[i] + lam[1] * delta[j] + lam[2] * delta[k]
+            # the depth plane's gradient per texel
+            dzx = ((delta[j] - delta[i]) * (y[2] - y[0]) - (y[1] - y[0]) * (delta[k] - delta[i])) / area
+            dzy = ((x[1] - x[0]) * (delta[k] - delta[i]) - (delta[j] - delta[i]) * (x[2] - x[0])) / area
+            slope = (abs(dzx) + abs(dzy)) * 2 / R
+            # facing the face's camera (at q_a = sigma, looking towards -sigma): sigma n_a > 0
+            n = np.cross(q[j] - q[i], q[k] - q[i])
+            hits.append((z, inside, sigma * n[a] > 0, t, slope))
+        L = 0
+        layer_lists = [[[] for _ in range(R)] for _ in range(R)]
+        for z, inside, front, t, slope in hits:
+            for r, c in zip(*np.nonzero(inside)):
+                layer_lists[r][c].append((z[r, c], front, t, slope))
+        per = {}
+        for r in range(R):
+            for c in range(R):
+                cr = sorted(layer_lists[r][c])
+                zs = [h[0] for h in cr]
+                if any(abs(zs[m + 1] - zs[m]) < 1e-9 for m in range(len(zs) - 1)):
+                    ambiguous[r, c] = True
+                if closed:
+                    fr = [h for h in cr if h[1]]
+                    bk = [h for h in cr if not h[1]]
+                else:
+                    fr, bk = cr[:1], []
+                per[r, c] = (fr, bk)
+                L = max(L, len(fr))
+        out["ambiguous"].append(ambiguous)
+        out["count"].append(np.array([[len(per[r, c][0]) for c in range(R)] for r in range(R)]))
+        out["_per"] = out.get("_per", []) + [per]
+    L = max(1, max(int(c.max()) for c in out["count"]))
+    depth = np.ones((6, L, R, R))
+    back = np.ones((6, L, R, R))
+    tri = np.full((6, L, R, R), -1)
+    slope = np.zeros((6, L, R, R))
+    back_slope = np.zeros((6, L, R, R))
+    for face, per in enumerate(out.pop("_per")):
+        for (r, c), (fr, bk) in per.items():
+            for j, h in enumerate(fr):
+                depth[face, j, r, c], tri[face, j, r, c], slope[face, j, r, c] = h[0], h[2], h[3]
+            for j, h in enumerate(bk[:L]):
+                back[face, j, r, c], back_slope[face, j, r, c] = h[0], h[3]
+    return dict(depth=depth, back=back, triangle=tri, count=np.array(out["count"]),
+                ambiguous=np.array(out["ambiguous"]), centre=centre, half=half, slope=slope, back_slope=back_slope)
+
+
+def naive_cone_cases(p1, p2, p3, eye, centre, rho):
+    """The cone test of one triangle and one sphere written out (docs/ldt.md): returns the four
+    cases (corner inside, edge meets the cone, axis hits the triangle, trivial pass)."""
+    p1, p2, p3, C, O = (np.asarray(x, dtype=np.float64) for x in (p1, p2, p3, eye, centre))
+    n = np.cross(p1 - p2, p3 - p2)
+    if np.linalg.norm(n) == 0:
+        return False, False, False, True
+    n = n / np.linalg.norm(n)
+    e = -np.dot(n, p1)
+    Ov = O - 2 * (np.dot(n, O) + e) * n
+    dist = np.linalg.norm(Ov - C)
+    if dist <= rho:
+        return False, False, False, True
+    g = (Ov - C) / dist
+    cos2 = 1 - rho ** 2 / dist ** 2
+
+    def inside(x):
+        v = x - C
+        return np.dot(g, v) > 0 and np.dot(g, v) ** 2 >= cos2 * np.dot(v, v)
+
+    corner = any(inside(p) for p in (p1, p2, p3))
+    edge = False
+    for a, b in ((p1, p2), (p2, p3), (p3, p1)):
+        v0, d = a - C, b - a
+        A = np.dot(g, d) ** 2 - cos2 * np.dot(d, d)
+        B = 2 * (np.dot(g, v0) * np.dot(g, d) - cos2 * np.dot(v0, d))
+        Cq = np.dot(g, v0) ** 2 - cos2 * np.dot(v0, v0)
+        if A == 0:
+            roots = [-Cq / B] if B != 0 else []
+        else:
+            disc = B * B - 4 * A * Cq
+            roots = [] if disc < 0 else [(-B - np.sqrt(disc)) / (2 * A), (-B + np.sqrt(disc)) / (2 * A)]
+        edge |= any(0 <= w <= 1 and np.dot(g, v0 + w * d) >= 0 for w in roots)
+    # the axis ray against the triangle: solve C + s g = p1 + u (p2 - p1) + v (p3 - p1)
+    M = np.column_stack([g, p1 - p2, p1 - p3])
+    axis = False
+    if abs(np.linalg.det(M)) > 0:
+        s, u, v = np.linalg.solve(M, p1 - C)
+        axis = s >= 0 and u >= 0 and v >= 0 and u + v <= 1
+    return corner, edge, bool(axis), False
+
+
+LDT_TABLE = [(2, -1, 1, -1), (2, 1, 1, -1), (0, 1, 2, 1), (0, 1, 2, -1), (0, 1, 1, -1), (0, -1, 1, -1)]
+
+
+def naive_ldt_pixel(P, N, eye, tri, region, use_regions, W, depth, back, count, mismatch, is_open, R, n_lin, tau,
+                    max_faces, dt, view_dir=None):
+    """The LDT search of one pixel, written out from docs/ldt.md in plain Python on ``dt`` scalars
+    (every operation rounded in ``dt``, in the contract's order). Arrays as the kernel's
+    (``depth`` (K, 6, L, R, R) float32, ``back`` in ``dt``, ``W`` (K, 4, 4) in ``dt``).
+    Returns a dict of the pixel's outputs (see refsoft.ldt.search.PixelSearch)."""
+    one, zero, half, two = dt(1), dt(0), dt(0.5), dt(2)
+    Rf = dt(R)
+    P = [dt(x) for x in P]
+    N = [dt(x) for x in N]
+    if view_dir is not None:
+        I = [dt(x) for x in view_dir]
+    else:
+        d = [P[i] - dt(eye[i]) for i in range(3)]
+        length = np.sqrt((d[0] * d[0] + d[1] * d[1]) + d[2] * d[2])
+        I = [x / length for x in d]
+    k2 = two * ((N[0] * I[0] + N[1] * I[1]) + N[2] * I[2])
+    r = [I[i] - k2 * N[i] for i in range(3)]
+
+    def int_margin(x):
+        k = np.floor(x + half)
+        return abs(x - k) if zero < k < Rf else one
+
+    def texel(q0, u, s, f):
+        q = [q0[i] + s * u[i] for i in range(3)]
+        sa, ss, ta, ts = LDT_TABLE[f]
+        sc = q[sa] if ss > 0 else -q[sa]
+        tc = q[ta] if ts > 0 else -q[ta]
+        x = ((sc + one) * half) * Rf
+        y = ((tc + one) * half) * Rf
+        col = min(max(int(np.floor(x)), 0), R - 1)
+        row = R - 1 - min(max(int(np.floor(y)), 0), R - 1)
+        h = half * (one - q[f // 2]) if f % 2 == 0 else half * (one + q[f // 2])
+        return row, col, h, min(int_margin(x), int_margin(y))
+
+    def face_search(q0, u, s_in, s_out, umax, f, k):
+        n = n_lin if n_lin > 0 else min(max(int(np.ceil(((umax * (s_out - s_in)) * Rf) * half)), 1), 4 * R)
+        D = (s_out - s_in) / dt(n)
+        margin = one
+        found = None
+        for m in range(n + 1):
+            row, col, h, mt = texel(q0, u, s_in + dt(m) * D, f)
+            margin = min(margin, mt)
+            for j in range(int(count[k, f, row, col])):
+                z = dt(depth[k, f, j, row, col])
+                margin = min(margin, abs(h - z))
+                if h < z:
+                    break
+                dd = back[k, f, j, row, col]
+                margin = min(margin, abs(h - dd))
+                if h <= dd:
+                    found = j
+                    break
+            if found is not None:
+                break
+        samples = m + 1
+        if found is None:
+            return None, samples, 0, margin
+        j = found
+        if m == 0:
+            return (s_in, j, row, col, (h - dt(depth[k, f, j, row, col])) * Rf, True), samples, 0, margin
+        lo, hi = s_in + dt(m - 1) * D, s_in + dt(m) * D
+        length, steps = ((D * umax) * Rf) * half, 0
+        while length > dt(0.125) and steps < 16:
+            length, steps = length * half, steps + 1
+        best = (row, col, h)
+        for _ in range(steps):
+            mid = half * (lo + hi)
+            rr, cc, hm, mt = texel(q0, u, mid, f)
+            margin = min(margin, mt)
+            inside = False
+            if j < int(count[k, f, rr, cc]):
+                z, dd = dt(depth[k, f, j, rr, cc]), back[k, f, j, rr, cc]
+                margin = min(margin, abs(hm - z), abs(hm - dd))
+                inside = z <= hm <= dd
+            if inside:
+                hi, best = mid, (rr, cc, hm)
+            else:
+                lo = mid
+        e = (best[2] - dt(depth[k, f, j, best[0], best[1]])) * Rf
+        return (hi, j, best[0], best[1], e, False), samples, steps, margin
+
+    K = len(W)
+    out = dict(ray=r, flags=0, samples=0, steps=0, faces=0, objects=0, object_distance=[-one] * K)
+    best = None
+    any_margin = one
+    for k in range(K):
+        q0 = [((W[k][i][0] * P[0] + W[k][i][1] * P[1]) + W[k][i][2] * P[2]) + W[k][i][3] for i in range(3)]
+        u = [(W[k][i][0] * r[0] + W[k][i][1] * r[1]) + W[k][i][2] * r[2] for i in range(3)]
+        nears, fars, miss = {}, [], False
+        for i in range(3):
+            if u[i] == zero:
+                miss |= abs(q0[i]) > one
+                continue
+            a, b = sorted([(-one - q0[i]) / u[i], (one - q0[i]) / u[i]])
+            nears[i] = a
+            fars.append(b)
+        if miss or not nears:
+            continue
+        near = max(nears.values())
+        s_in, s_out = max(zero, near), min(fars)
+        if not s_in < s_out:
+            continue
+        if use_regions and not region[tri][k]:
+            out["flags"] |= 8
+            continue
+        out["objects"] += 1
+        entry = min(i for i in nears if nears[i] == near) if near > zero else None
+        if entry is None:
+            out["flags"] |= 32
+        rest = sorted((i for i in nears if i != entry), key=lambda i: (-abs(u[i]), i))
+        order = ([entry] if entry is not None else []) + rest
+        umax = max(abs(u[0]), abs(u[1]), abs(u[2]))
+        chosen, accepted = None, False
+        for a in order[:max_faces]:
+            f = 2 * a + (1 if u[a] > zero else 0)
+            res, samples, steps, margin = face_search(q0, u, s_in, s_out, umax, f, k)
+            out["faces"] += 1
+            out["samples"] += samples
+            out["steps"] += steps
+            any_margin = min(any_margin, margin)
+            if res is None:
+                continue
+            if res[4] <= dt(tau):
+                chosen, accepted = (res, f, margin), True
+                break
+            if chosen is None or res[4] < chosen[0][4]:
+                chosen = (res, f, margin)
+        if chosen is None:
+            continue
+        (s_hit, j, row, col, e, start), f, margin = chosen
+        out["object_distance"][k] = s_hit
+        if best is None or s_hit < best["distance"]:
+            best = dict(distance=s_hit, object=k, face=f, layer=j, texel=(row, col), residual=e, margin=margin,
+                        hit_flags=(1 if start else 0) | (0 if accepted else 2))
+    if best is None:
+        out.update(distance=-one, object=-1, face=-1, layer=-1, texel=(-1, -1), residual=zero, margin=any_margin,
+                   hit=[zero] * 3)
+        return out
+    k, f, (row, col) = best["object"], best["face"], best["texel"]
+    flags = best.pop("hit_flags") | (4 if mismatch[k, f, row, col] else 0) | (16 if is_open[k] else 0)
+    out.update(best)
+    out["flags"] |= flags
+    out["hit"] = [P[i] + best["distance"] * r[i] for i in range(3)]
+    return out

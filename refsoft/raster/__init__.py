@@ -87,7 +87,11 @@ def _check_faces(faces, n_vertices: int) -> np.ndarray:
     return np.ascontiguousarray(f, dtype=np.int32)
 
 
-def rasterize(clip, faces, width: int, height: int, peel_depth=None, region=None) -> Fragments:
+#: ``rasterize``'s cull choices -> the kernels' code.
+CULL_MODES = {None: 0, "cw": 1, "ccw": 2}
+
+
+def rasterize(clip, faces, width: int, height: int, peel_depth=None, region=None, cull=None) -> Fragments:
     """Rasterize clip-space triangles with OpenGL's rules (spec section 2).
 
     Parameters
@@ -95,7 +99,7 @@ def rasterize(clip, faces, width: int, height: int, peel_depth=None, region=None
     clip : array_like, shape (V, 4), float64
         Clip coordinates of the vertices (``view_proj @ [p, 1]``).
     faces : array_like, shape (F, 3), integer
-        Triangles, drawn in index order; both windings are drawn.
+        Triangles, drawn in index order; both windings are drawn unless ``cull`` says otherwise.
     width, height : int
         Viewport size in pixels.
     peel_depth : array_like, shape (H, W), float32, optional
@@ -105,12 +109,19 @@ def rasterize(clip, faces, width: int, height: int, peel_depth=None, region=None
         ``(row0, row1, col0, col1)``: rasterize only these rows and columns of the viewport
         (half-open). The result equals the whole viewport's, cropped; it is faster when the
         region is small (e.g. a reflector's stencil).
+    cull : {None, "cw", "ccw"}
+        Face culling on the snapped window coordinates (exact integer arithmetic, y up): ``"cw"``
+        draws only triangles whose signed area is < 0 (clockwise; GL ``glFrontFace(GL_CW);
+        glCullFace(GL_BACK)``), ``"ccw"`` only those > 0; None draws both windings. A clipped
+        triangle is judged piece by piece, as GL judges the clipped polygon.
 
     Returns
     -------
     Fragments
     """
     width, height = check_image_size(width, height, "viewport")
+    if cull not in CULL_MODES:
+        raise RefsoftError(f"cull must be None, 'cw' or 'ccw', got {cull!r}")
     clip = np.asarray(clip, dtype=np.float64)
     if clip.ndim != 2 or clip.shape[1] != 4:
         raise RefsoftError(f"clip coordinates must have shape (V, 4), got {clip.shape}")
@@ -149,7 +160,7 @@ def rasterize(clip, faces, width: int, height: int, peel_depth=None, region=None
     win_xy, win_zw = _setup.vertex_window(clip, codes, width, height)
     X, Y, Z, IW, slot, B, tri, valid, bbox, area, bias = _setup.emit_clip_triangles(
         clip, faces, codes, win_xy, win_zw, offsets, clip_offsets, gx, gy, width, height,
-        np.array([r0, r1 - 1, c0, c1 - 1], dtype=np.int64))
+        np.array([r0, r1 - 1, c0, c1 - 1], dtype=np.int64), CULL_MODES[cull])
     tile = constants.TILE_SIZE
     tiles_x, tiles_y = -(-rw // tile), -(-rh // tile)
     starts, items = _kernels.bin_triangles(valid, bbox, tile, tiles_x, tiles_y, r0, c0)

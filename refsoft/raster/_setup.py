@@ -172,11 +172,15 @@ def vertex_window(clip, codes, width, height):
 
 
 @kernel
-def _emit(t, f, x0, y0, z0, w0, x1, y1, z1, w1, x2, y2, z2, w2, width, height, region,
+def _emit(t, f, x0, y0, z0, w0, x1, y1, z1, w1, x2, y2, z2, w2, width, height, region, cull,
           X, Y, Z, IW, tri, valid, bbox, area, bias):
     """Store clip triangle ``t`` of input triangle ``f`` counter-clockwise on screen, with its
-    doubled area, edge biases and pixel box. Returns True when vertices 1 and 2 were swapped."""
+    doubled area, edge biases and pixel box. Returns True when vertices 1 and 2 were swapped.
+
+    ``cull``: 0 keeps both windings; 1 keeps only clockwise triangles (snapped signed area < 0,
+    y up), 2 only counter-clockwise ones (> 0); a culled triangle is stored but not valid."""
     a2 = (x1 - x0) * (y2 - y0) - (y1 - y0) * (x2 - x0)
+    kept = cull == 0 or (cull == 1 and a2 < 0) or (cull == 2 and a2 > 0)
     swapped = a2 < 0
     if swapped:  # clockwise on screen: swap vertices 1 and 2 (both windings are drawn)
         a2 = -a2
@@ -219,13 +223,17 @@ def _emit(t, f, x0, y0, z0, w0, x1, y1, z1, w1, x2, y2, z2, w2, width, height, r
     bbox[t, 1] = k1
     bbox[t, 2] = top
     bbox[t, 3] = bottom
-    valid[t] = a2 != 0 and k0 <= k1 and top <= bottom
+    valid[t] = kept and a2 != 0 and k0 <= k1 and top <= bottom
     return swapped
 
 
 @kernel(parallel=True)
-def emit_clip_triangles(clip, faces, codes, win_xy, win_zw, offsets, clip_offsets, gx, gy, width, height, region):
+def emit_clip_triangles(clip, faces, codes, win_xy, win_zw, offsets, clip_offsets, gx, gy, width, height, region,
+                        cull):
     """Clip, snap and set up every triangle.
+
+    ``cull`` (0 none, 1 keep clockwise, 2 keep counter-clockwise) is decided per clip triangle
+    on its snapped window coordinates (:func:`_emit`): exact integer arithmetic, as GL culls.
 
     ``offsets[f]`` is the first output slot of face f; ``clip_offsets[f]`` the first row of the
     barycentric table ``B`` for the clip triangles of a face that was clipped. Returns the clip
@@ -261,7 +269,7 @@ def emit_clip_triangles(clip, faces, codes, win_xy, win_zw, offsets, clip_offset
                             np.int64(win_xy[v0, 0]), np.int64(win_xy[v0, 1]), win_zw[v0, 0], win_zw[v0, 1],
                             np.int64(win_xy[v1, 0]), np.int64(win_xy[v1, 1]), win_zw[v1, 0], win_zw[v1, 1],
                             np.int64(win_xy[v2, 0]), np.int64(win_xy[v2, 1]), win_zw[v2, 0], win_zw[v2, 1],
-                            width, height, region, X, Y, Z, IW, tri, valid, bbox, area, bias)
+                            width, height, region, cull, X, Y, Z, IW, tri, valid, bbox, area, bias)
             slot[start] = -2 if swapped else -1
             continue
         poly_c = np.empty((MAX_POLY, 4))
@@ -273,7 +281,7 @@ def emit_clip_triangles(clip, faces, codes, win_xy, win_zw, offsets, clip_offset
             x0, y0, z0, w0 = _window(poly_c[0], width, height)
             x1, y1, z1, w1 = _window(poly_c[j + 1], width, height)
             x2, y2, z2, w2 = _window(poly_c[j + 2], width, height)
-            swapped = _emit(t, f, x0, y0, z0, w0, x1, y1, z1, w1, x2, y2, z2, w2, width, height, region,
+            swapped = _emit(t, f, x0, y0, z0, w0, x1, y1, z1, w1, x2, y2, z2, w2, width, height, region, cull,
                             X, Y, Z, IW, tri, valid, bbox, area, bias)
             i1, i2 = (j + 2, j + 1) if swapped else (j + 1, j + 2)
             for k in range(3):
