@@ -45,9 +45,31 @@ BACKGROUND_COLOR = np.array([0.08, 0.09, 0.12])
 # --- Option vocabularies (the choices the API and the CLI accept) ---------------------------
 #: Presets of :class:`refsoft.RenderOptions` (refsoft.options.PRESETS lists what each sets).
 PRESET_NAMES = ("paper", "accurate")
-#: Reflection methods: the vertex search's linear walk from a start pixel (Estalella, the
-#: papers' method) and Szabo's ray-cone hierarchy.
-METHODS = ("walk", "hierarchy")
+#: The vertex search's methods: the linear walk from a start pixel (Estalella, the papers'
+#: method) and Szabo's ray-cone hierarchy.
+SEARCH_METHODS = ("walk", "hierarchy")
+#: Reflection methods: the vertex search's two, and the per-pixel comparison method, Zhang,
+#: Hsieh and Shen's layered depth textures (:mod:`refsoft.ldt`).
+METHODS = SEARCH_METHODS + ("ldt",)
+
+# --- The layered depth textures' options (defaults where the paper gives no number) ----------
+#: Texels per cube face edge (the paper's only figure, "256 x 256 x 6").
+LDT_RESOLUTION = 256
+#: Smallest face resolution accepted (the cube keeps one empty texel on each side: R - 2 > 0).
+LDT_MIN_RESOLUTION = 4
+#: Largest face resolution accepted (R = 4096 with 8 layers is 3 GB per object).
+LDT_MAX_RESOLUTION = 4096
+#: Layers built: every layer up to refsoft.ldt.constants.MAX_LAYERS, or the first only (the
+#: convex assumption).
+LDT_LAYER_MODES = ("all", 1)
+#: Faces searched per object: up to three (the paper, its Fig. 5) or the entry face only.
+LDT_FACE_MODES = ("three", "entry")
+#: Linear search steps per face (N + 1 samples, both ends included), or "texel".
+LDT_LINEAR_STEPS = 32
+#: Residual, in texels, under which a face's hit is accepted.
+LDT_TAU = 2.0
+#: Reflection regions: the paper's cone test per reflector triangle, or none.
+LDT_REGION_MODES = ("cone", "none")
 #: The walk's neighbourhoods -> candidates per iteration (current pixel included).
 NEIGHBOURHOODS = {"cross": 5, "box": 9}
 #: Hidden-vertex modes (spec section 4.6).

@@ -45,11 +45,28 @@ MARGIN = PerReflector("margin")
 EXACT_REFLECTION_POINT = PerReflector("exact_reflection_point")
 EXACT_VIRTUAL_VERTEX = PerReflector("exact_virtual_vertex")
 
+# --- the layered depth textures (method "ldt"; refsoft.ldt) ----------------------------------
+#: (T_k, K) bool per reflector: the cone test per reflector triangle and reflected object.
+LDT_REGION = PerReflector("ldt_region")
+#: (K,) int32: the reflected objects' ids, the order of ``ldt_object_distance``.
+LDT_OBJECT_IDS = "ldt_object_ids"
+#: Frame-wide per-pixel arrays (zero, or -1 for ids, indices and distances, off the reflectors
+#: and where nothing is hit).
+LDT_PIXEL_ARRAYS = ("ldt_ray_origin", "ldt_ray_dir", "ldt_hit_position", "ldt_hit_distance", "ldt_face", "ldt_layer",
+                    "ldt_texel", "ldt_residual", "ldt_linear_samples", "ldt_binary_steps", "ldt_faces_searched",
+                    "ldt_objects_tested", "ldt_flags", "ldt_object_distance", "ldt_margin")
+
+
+def ldt_file(j: int) -> str:
+    """The name (without ``.npz``) of object ``j``'s layered depth texture, written once per run."""
+    return f"ldt_{int(j)}"
+
+
 #: Every per-reflector name, longest first (so that :func:`parse` matches ``gbuffer_view_proj``
 #: before a shorter name could).
 PER_REFLECTOR = tuple(sorted((GBUFFER_POSITION, GBUFFER_NORMAL, GBUFFER_MASK, GBUFFER_VIEW_PROJ, REFLECTION_PIXEL,
                               VIRTUAL_VERTEX, ITERATIONS, FLAGS, VERTEX_OBJECT, SCORE, MARGIN,
-                              EXACT_REFLECTION_POINT, EXACT_VIRTUAL_VERTEX), key=len, reverse=True))
+                              EXACT_REFLECTION_POINT, EXACT_VIRTUAL_VERTEX, LDT_REGION), key=len, reverse=True))
 #: The per-vertex arrays of the vertex search, judged together by ``refsoft check``.
 VERTEX_ARRAYS = (REFLECTION_PIXEL, VIRTUAL_VERTEX, FLAGS, ITERATIONS, SCORE, VERTEX_OBJECT, MARGIN)
 

@@ -57,6 +57,18 @@ REFINED_GROWTH = 4
 #: ...each holding its faces, object id, parent, edge keys and the split's temporaries.
 REFINED_TRIANGLE_BYTES = 128
 
+#: The layered depth textures, per reflected object, texel and layer: depth, back depth, normal
+#: (float32 x 3) and triangle id; per texel: the raw and paired layer counts and the mismatch
+#: mask. Layers are counted at the most the build peels (8), or 1 with ``ldt_layers=1``.
+LDT_TEXEL_LAYER_BYTES = 4 + 4 + 12 + 4
+LDT_TEXEL_BYTES = 3
+LDT_MAX_LAYERS = 8
+#: The LDT's per-pixel outputs per frame pixel: ray origin, direction and hit (float32 x 3),
+#: distance, residual, margin, sample and step counts (4 bytes), face, layer, faces and objects
+#: counts, flags (1 byte), texel (2 int16); and each object's distance (float32).
+LDT_PIXEL_BYTES = 3 * 12 + 5 * 4 + 5 + 4
+LDT_OBJECT_PIXEL_BYTES = 4
+
 _UNITS = {"": 1, "b": 1, "k": 1 << 10, "kb": 1 << 10, "kib": 1 << 10, "m": 1 << 20, "mb": 1 << 20, "mib": 1 << 20,
           "g": 1 << 30, "gb": 1 << 30, "gib": 1 << 30, "t": 1 << 40, "tb": 1 << 40, "tib": 1 << 40}
 
@@ -118,6 +130,8 @@ def frame_bytes(scene, options, frames_kept: int = 1) -> dict:
 
     cam = scene.camera
     view_px = cam.width * cam.height
+    if options.method == "ldt":
+        return _ldt_bytes(scene, options, view_px, frames_kept)
     if options.gbuffer_size is not None:
         g_px = int(options.gbuffer_size[0]) * int(options.gbuffer_size[1])
     else:
@@ -146,12 +160,33 @@ def frame_bytes(scene, options, frames_kept: int = 1) -> dict:
             "total": kept + cache + work}
 
 
+def _ldt_bytes(scene, options, view_px, frames_kept):
+    n_targets = sum(1 for o in scene.objects if not o.reflector)
+    n_tris = sum(o.mesh.n_faces for o in scene.objects)
+    layers = 1 if options.ldt_layers == 1 else LDT_MAX_LAYERS
+    texels = 6 * options.ldt_resolution ** 2
+    textures = n_targets * texels * (layers * LDT_TEXEL_LAYER_BYTES + LDT_TEXEL_BYTES)
+    kept_view = view_px * VIEW_BYTES_PER_PIXEL
+    kept_px = view_px * (LDT_PIXEL_BYTES + n_targets * LDT_OBJECT_PIXEL_BYTES)
+    # the build's peel: a face's fragments per layer (depth, triangle, normals), float64 work
+    work = texels // 6 * 64 + n_tris * TRIANGLE_WORK_BYTES + view_px * (16 + LDT_PIXEL_BYTES)
+    kept = (kept_view + kept_px) * max(int(frames_kept), 1)
+    return {"view": kept_view, "gbuffers": 0, "vertices": 0, "pixels": kept_px, "textures": textures, "cache": 0,
+            "work": work, "total": kept + textures + work}
+
+
 def check_frame_memory(scene, options, frames_kept: int = 1, limit=None) -> dict:
     """Raise :class:`LimitError` when :func:`frame_bytes` exceeds the limit; return the estimate."""
     est = frame_bytes(scene, options, frames_kept)
     lim = memory_limit(limit)
     if est["total"] > lim:
         kept = f" x {frames_kept} frames kept" if frames_kept > 1 else ""
+        if "textures" in est:
+            raise LimitError(
+                f"this render needs about {human(est['total'])} (layered depth textures {human(est['textures'])}, "
+                f"view and per-pixel outputs {human(est['view'] + est['pixels'])}{kept}, working set "
+                f"{human(est['work'])}), above the memory limit of {human(lim)}: lower --ldt-resolution or "
+                f"--width/--height, or raise --memory-limit (or REFSOFT_MEMORY_LIMIT)")
         raise LimitError(
             f"this render needs about {human(est['total'])} (view {human(est['view'])}, G-buffers "
             f"{human(est['gbuffers'])}, vertices {human(est['vertices'])}{kept}, reuse cache {human(est['cache'])}, "

@@ -18,6 +18,7 @@ from dataclasses import dataclass, fields, replace
 from .constants import PRESET_NAMES
 
 from . import validate
+from . import constants
 from .constants import (INVERSE_MODES, MAX_TESSELLATION_LEVEL, METHODS, NEIGHBOURHOODS, PRECISIONS, SKIPS,
                         SILHOUETTE_RULES, VIRTUAL_RULES)
 from .errors import RefsoftError
@@ -40,6 +41,10 @@ PRESETS = {
     "accurate": dict(method="walk", neighbourhood="box", inverse="discard", refine=True, tessellate=1e-4,
                      tessellate_span=1, virtual="unfold", silhouette="clip"),
 }
+
+#: The layered depth textures' options (``method="ldt"`` only) and their defaults.
+LDT_DEFAULTS = dict(ldt_resolution=constants.LDT_RESOLUTION, ldt_layers="all", ldt_faces="three",
+                    ldt_linear=constants.LDT_LINEAR_STEPS, ldt_tau=constants.LDT_TAU, ldt_regions="cone")
 
 
 @dataclass(frozen=True)
@@ -95,6 +100,12 @@ class RenderOptions:
         Triangles with visible and hidden vertices: handled by ``inverse`` (the papers), or cut
         where their reflection reaches the reflector's silhouette and their visible part drawn
         (:mod:`refsoft.search.silhouette`, beyond the papers).
+    ldt_resolution, ldt_layers, ldt_faces, ldt_linear, ldt_tau, ldt_regions : optional
+        ``method="ldt"`` only (default :data:`LDT_DEFAULTS`): texels per cube face edge (4 ..
+        4096, a power of two keeps mirrored texels bit-exact); layers built ("all" or 1, the
+        convex assumption); faces searched per object ("three" or "entry"); linear steps per
+        face (a count or "texel"); the residual in texels a face's hit is accepted under; the
+        cone test per reflector triangle ("cone") or none (:class:`refsoft.ldt.LayeredDepthTextures`).
     """
 
     preset: str = "accurate"
@@ -117,6 +128,12 @@ class RenderOptions:
     refine: bool = FROM_PRESET
     virtual: str = FROM_PRESET
     silhouette: str = FROM_PRESET
+    ldt_resolution: int | None = None
+    ldt_layers: object = None
+    ldt_faces: str | None = None
+    ldt_linear: object = None
+    ldt_tau: float | None = None
+    ldt_regions: str | None = None
 
     def __post_init__(self):
         validate.choice(self.preset, PRESET_NAMES, "preset")
@@ -141,6 +158,28 @@ class RenderOptions:
             validate.integer(self.cap, "cap", 1)
         for name in SKIPS + ("adaptive_widen", "coherence", "refine"):
             validate.flag(getattr(self, name), name)
+        self._check_ldt()
+
+    def _check_ldt(self):
+        given = [name for name in LDT_DEFAULTS if getattr(self, name) is not None]
+        if self.method != "ldt":
+            if given:
+                raise RefsoftError(f"{given[0]} applies to method='ldt' only (method is {self.method!r})")
+            return
+        for name, value in LDT_DEFAULTS.items():
+            if getattr(self, name) is None:
+                object.__setattr__(self, name, value)
+        validate.integer(self.ldt_resolution, "ldt_resolution", constants.LDT_MIN_RESOLUTION,
+                         constants.LDT_MAX_RESOLUTION)
+        if self.ldt_layers == "1":
+            object.__setattr__(self, "ldt_layers", 1)
+        if self.ldt_layers not in constants.LDT_LAYER_MODES or isinstance(self.ldt_layers, bool):
+            raise RefsoftError(f"ldt_layers must be 'all' or 1, got {self.ldt_layers!r}")
+        validate.choice(self.ldt_faces, constants.LDT_FACE_MODES, "ldt_faces")
+        if self.ldt_linear != "texel":
+            validate.integer(self.ldt_linear, "ldt_linear", 1, 1 << 16)
+        validate.number(self.ldt_tau, "ldt_tau", minimum=0.0)
+        validate.choice(self.ldt_regions, constants.LDT_REGION_MODES, "ldt_regions")
 
     def without_skips(self) -> "RenderOptions":
         """The same options with every exact skip off (the reference the skips are tested
@@ -153,7 +192,12 @@ class RenderOptions:
         return cls(preset=preset, **options)
 
     def as_dict(self) -> dict:
-        """The preset and every option by name (tuples as lists), as ``stats.json`` and golden
-        manifests record them."""
-        return {f.name: (list(v) if isinstance(v, tuple) else v) for f in fields(self)
-                for v in [getattr(self, f.name)]}
+        """The options the method reads, by name (tuples as lists), as ``stats.json`` and golden
+        manifests record them: for the vertex search the preset and every option but the LDT's;
+        for ``method="ldt"`` the method, the precision and the LDT's options.
+        ``RenderOptions(**as_dict())`` gives these options back."""
+        if self.method == "ldt":
+            names = ("method", "precision") + tuple(LDT_DEFAULTS)
+        else:
+            names = tuple(f.name for f in fields(self) if f.name not in LDT_DEFAULTS)
+        return {name: (list(v) if isinstance(v, tuple) else v) for name in names for v in [getattr(self, name)]}

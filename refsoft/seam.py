@@ -9,16 +9,23 @@ for every method. A method is any object with
     Its name in ``stats.json``.
 ``stages`` : tuple of str
     The timing keys it reports (``stats.json`` lists them before ``main`` and ``composite``).
-``pixel_arrays`` : dict of str -> (trailing shape, dtype)
-    Frame-wide per-pixel arrays it fills at the pixels it covers (zero elsewhere), e.g. the
-    truth's ``reflected_hit``.
+``pixel_arrays`` : dict of str -> (trailing shape, dtype) or (trailing shape, dtype, fill)
+    Frame-wide per-pixel arrays it fills at the pixels it covers (``fill``, default zero,
+    elsewhere), e.g. the truth's ``reflected_hit``.
 ``reflect(view, k, stencil) -> ReflectorResult``
     Called for every reflector, also when its stencil is empty (a method may keep per-reflector
     state from frame to frame: the vertex search's coherence).
 ``frame_report(results) -> dict``
     What ``stats.json`` records of the frame beside the timings, from the reflectors' results.
+``leading_axis_arrays`` : tuple of str (optional)
+    Pixel arrays with one trailing axis that the frame stores with that axis first, (K, H, W):
+    the layered depth textures' ``ldt_object_distance``.
+``run_files() -> dict of str -> dict of arrays`` (optional)
+    Files written once per run beside the frames, after the first (``NAME.npz``): the layered
+    depth textures' ``ldt_J``.
 
-Methods: :class:`refsoft.search.method.VertexSearch` (the vertex search, the main method) and
+Methods: :class:`refsoft.search.method.VertexSearch` (the vertex search, the main method),
+:class:`refsoft.ldt.LayeredDepthTextures` (the per-pixel comparison method) and
 :class:`refsoft.truth.raytrace.RayTracedTruth` (the ray-traced truth).
 """
 
@@ -95,6 +102,9 @@ class ReflectorResult:
         This reflector's spec section 7 arrays, by key (:mod:`refsoft.keys`), in output order.
     pixels : dict
         Per-pixel arrays over ``box`` named in the method's ``pixel_arrays``.
+    pixel_mask : ndarray (h, w) bool, optional
+        Where over ``box`` the driver copies ``pixels`` into the frame (default ``covered``; the
+        LDT gives its whole stencil, so that pixels without a hit keep their counts and flags).
     time_ms : dict
         Milliseconds per stage.
     report : dict
@@ -112,6 +122,7 @@ class ReflectorResult:
     covered: np.ndarray | None = None
     arrays: dict = field(default_factory=dict)
     pixels: dict = field(default_factory=dict)
+    pixel_mask: np.ndarray | None = None
     time_ms: dict = field(default_factory=dict)
     report: dict = field(default_factory=dict)
     state: object = None

@@ -10,7 +10,7 @@ import argparse
 import sys
 
 from . import commands
-from .options import (frame_range_options, memory_options, method_options, one_frame_options, out_option,
+from .options import (frame_range_options, ldt_options, memory_options, method_options, one_frame_options, out_option,
                       render_options, run_folder_options, scene_options)
 
 
@@ -46,7 +46,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="object id of the reflector (default: the first)")
     t.set_defaults(func=commands.cmd_trace)
 
-    r = sub.add_parser("render", parents=[scene, frame_range_options(), methods, render_options(), memory,
+    r = sub.add_parser("render", parents=[scene, frame_range_options(), methods, render_options(), ldt_options(), memory,
                                           run_folder_options("out/SCENE")],
                        help="render frames with curved reflections (frame_NNNN.npz/.png, stats.json)")
     r.set_defaults(func=commands.cmd_render)

@@ -134,9 +134,15 @@ def cmd_render(args) -> int:
                          keep=False, write=write, overwrite=args.overwrite, on_start=notice, **render_kwargs(args))
     keep = done if write is None else [f for f in done if f.index in write]
     summ = stats["summary"]
-    print(f"{scene.name}: {len(keep)} frame(s), preset {args.preset}, written to {out} in "
-          f"{time.perf_counter() - t0:.1f} s ({_timing(done, notice.compiling)}); search iterations: "
-          f"max frame mean {summ['max_frame_mean_iterations']:.1f}, total mean {summ['total_mean_iterations']:.1f}")
+    if "ldt_linear_samples" in summ:
+        what = (f"method ldt, written to {out} in {time.perf_counter() - t0:.1f} s ({_timing(done, notice.compiling)}"
+                f"); linear samples per reflector pixel: mean {summ['ldt_linear_samples']['mean']:.1f}, max "
+                f"{summ['ldt_linear_samples']['max']}")
+    else:
+        what = (f"preset {args.preset}, written to {out} in {time.perf_counter() - t0:.1f} s "
+                f"({_timing(done, notice.compiling)}); search iterations: max frame mean "
+                f"{summ['max_frame_mean_iterations']:.1f}, total mean {summ['total_mean_iterations']:.1f}")
+    print(f"{scene.name}: {len(keep)} frame(s), {what}")
     return 0
 
 

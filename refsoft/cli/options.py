@@ -7,6 +7,7 @@ import argparse
 import sys
 
 from .. import constants
+from ..errors import RefsoftError
 
 
 def _parser():
@@ -50,8 +51,9 @@ def method_options() -> argparse.ArgumentParser:
                         "truth, docs/accuracy.md) or 'paper' (the papers' method verbatim); options given one by "
                         "one override it")
     p.add_argument("--method", choices=constants.METHODS, default=None,
-                   help="the vertex search: the linear walk from a start pixel (the papers) or Szabo's ray-cone "
-                        "hierarchy (both presets: walk)")
+                   help="the reflection method: the vertex search's linear walk from a start pixel (the papers; "
+                        "both presets) or Szabo's ray-cone hierarchy, or Zhang, Hsieh and Shen's layered depth "
+                        "textures searched per pixel (ldt, the --ldt-* options)")
     p.add_argument("--neighbourhood", choices=tuple(constants.NEIGHBOURHOODS), default=None,
                    help="the walk's candidates per step: the crosshair or the 3x3 box (paper: cross, accurate: box)")
     p.add_argument("--search", choices=("cross", "box", "hierarchy"), default=None, help=argparse.SUPPRESS)
@@ -97,6 +99,48 @@ def render_options() -> argparse.ArgumentParser:
                         + "; outputs are identical either way, only the time changes")
     p.add_argument("--no-skips", action="store_true", help="turn every exact skip off")
     return p
+
+
+def ldt_options() -> argparse.ArgumentParser:
+    """The layered depth textures' options (``--method ldt`` only)."""
+    p = _parser()
+    p.add_argument("--ldt-resolution", type=int, default=None, metavar="R",
+                   help=f"ldt: texels per cube face edge (default {constants.LDT_RESOLUTION}; a power of two)")
+    p.add_argument("--ldt-layers", choices=("all", "1"), default=None,
+                   help="ldt: depth layers built: all (up to 8) or 1, the convex assumption (default all)")
+    p.add_argument("--ldt-faces", choices=constants.LDT_FACE_MODES, default=None,
+                   help="ldt: faces searched per object: up to three, or the entry face only (default three)")
+    p.add_argument("--ldt-linear", default=None, metavar="N",
+                   help=f"ldt: linear search steps per face, or 'texel' (one per texel; default "
+                        f"{constants.LDT_LINEAR_STEPS})")
+    p.add_argument("--ldt-tau", type=float, default=None, metavar="TEXELS",
+                   help=f"ldt: residual under which a face's hit is accepted (default {constants.LDT_TAU:g})")
+    p.add_argument("--ldt-regions", choices=constants.LDT_REGION_MODES, default=None,
+                   help="ldt: the cone test per reflector triangle, or none (default cone)")
+    return p
+
+
+def ldt_kwargs(args) -> dict:
+    """The ``--ldt-*`` options given, as :class:`refsoft.RenderOptions` fields."""
+    out = {}
+    for name in ("resolution", "layers", "faces", "linear", "tau", "regions"):
+        value = getattr(args, "ldt_" + name, None)
+        if value is None:
+            continue
+        if name == "layers" and value == "1":
+            value = 1
+        if name == "linear" and value != "texel":
+            try:
+                value = int(value)
+            except ValueError:
+                raise RefsoftError(f"--ldt-linear must be a step count or 'texel', got {value!r}") from None
+        out["ldt_" + name] = value
+    return out
+
+
+#: The render options that only the vertex search reads (refused with ``--method ldt``).
+_VERTEX_SEARCH_FLAGS = ("neighbourhood", "inverse", "widen", "tessellate", "max_level", "tessellate_span", "refine",
+                        "virtual", "silhouette")
 
 
 def _threshold(text):
@@ -158,4 +202,13 @@ def render_kwargs(args) -> dict:
         out["adaptive_widen"] = True
     off = set(constants.SKIPS) if args.no_skips else {n.replace("-", "_") for n in args.no_skip or ()}
     out.update({name: False for name in off})
+    out.update(ldt_kwargs(args))
+    if out.get("method") == "ldt":
+        vertex_only = [k for k in _VERTEX_SEARCH_FLAGS if getattr(args, k, None) is not None]
+        vertex_only += ["no_coherence"] * bool(args.no_coherence) + ["adaptive_widen"] * bool(args.adaptive_widen)
+        vertex_only += ["no_skip"] * bool(args.no_skips or args.no_skip)
+        if vertex_only:
+            raise RefsoftError(f"--{vertex_only[0].replace('_', '-')} is an option of the vertex search; --method "
+                               "ldt takes the --ldt-* options and --precision")
+        out = {k: v for k, v in out.items() if k in ("method", "precision") or k.startswith("ldt_")}
     return out

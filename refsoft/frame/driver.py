@@ -68,6 +68,12 @@ class Frame:
 
 def make_method(scene, options: RenderOptions):
     """The reflection method the options name, for ``scene``."""
+    if options.method == "ldt":
+        from ..ldt import LayeredDepthTextures
+
+        return LayeredDepthTextures(scene, resolution=options.ldt_resolution, layers=options.ldt_layers,
+                                    faces=options.ldt_faces, linear=options.ldt_linear, tau=options.ldt_tau,
+                                    regions=options.ldt_regions, precision=options.precision)
     from ..search.method import VertexSearch
 
     return VertexSearch(scene, options)
@@ -136,8 +142,8 @@ class FrameDriver:
                        {j: scene.transform_at(j, frame) for j in range(1, len(scene.objects) + 1)})
         colour = view.color.copy()
         reflected = np.full(view.object_id.shape, -1, dtype=np.int32)
-        pixels = {name: np.zeros(view.object_id.shape + tuple(shape), dtype=dt)
-                  for name, (shape, dt) in method.pixel_arrays.items()}
+        pixels = {name: np.full(view.object_id.shape + tuple(spec[0]), spec[2] if len(spec) > 2 else 0, dtype=spec[1])
+                  for name, spec in method.pixel_arrays.items()}
         arrays, results = {}, {}
         for k in scene.reflector_ids:
             stencil = view.object_id == k
@@ -151,14 +157,17 @@ class FrameDriver:
                 composite(colour, reflected, view.color, res.colour, res.reflected_id, res.covered, res.box,
                           scene.object_by_id(k).reflectivity)
                 r0, r1, c0, c1 = res.box
+                where = res.covered if res.pixel_mask is None else res.pixel_mask
                 for name, a in res.pixels.items():
-                    pixels[name][r0:r1, c0:c1][res.covered] = a[res.covered]
+                    pixels[name][r0:r1, c0:c1][where] = a[where]
                 times["composite"] += 1000 * (time.perf_counter() - t)
             arrays.update(res.arrays)
         t = time.perf_counter()
         image = to_uint8(colour)
         times["composite"] += 1000 * (time.perf_counter() - t)
         times["total"] = 1000 * (time.perf_counter() - t0)
+        for name in getattr(method, "leading_axis_arrays", ()):  # (H, W, K) stored as (K, H, W)
+            pixels[name] = np.ascontiguousarray(np.moveaxis(pixels[name], -1, 0))
         arrays.update({keys.IMAGE: image, keys.OBJECT_ID: np.asarray(view.object_id, dtype=np.int32),
                        keys.REFLECTED_ID: reflected}, **pixels)
         return Frame(frame, arrays, times, method.frame_report(results), results)
@@ -352,8 +361,17 @@ def run_to_folder(driver, indices, out, kind, options, progress=False, keep=True
     def stats_of(frames):
         return frame_stats(frames if write is None else [f for f in frames if f.index in write], options)
 
+    run_files = getattr(getattr(driver, "method", None), "run_files", None)
+    written_once = []
+
     def save(frames):
         write_json(os.path.join(out, "stats.json"), stats_of(frames))
+        if run_files is not None and frames and not written_once:  # once, after the first frame
+            from ..io import write_npz
+
+            for name, arrays in run_files().items():
+                write_npz(os.path.join(out, name + ".npz"), **arrays)
+            written_once.append(True)
 
     try:
         run_frames(driver, indices, out, progress, f"{kind} {driver.scene.name}", keep, write, done,

@@ -38,6 +38,13 @@ def frame_stats(frames, options=None) -> dict:
     if any("iterations" in f.report for f in frames):
         summary["max_frame_mean_iterations"] = float(max(means)) if means else 0.0
         summary["total_mean_iterations"] = float(np.mean(means)) if means else 0.0
+    ldt = [f.report["ldt"] for f in frames if "ldt" in f.report]
+    if ldt:  # the layered depth textures: samples and bisection steps per reflector pixel
+        pixels = sum(r["reflector_pixels"] for r in ldt)
+        for name in ("linear_samples", "binary_steps"):
+            total = sum(r[name]["mean"] * r["reflector_pixels"] for r in ldt)
+            summary["ldt_" + name] = {"mean": total / pixels if pixels else 0.0,
+                                      "max": max(r[name]["max"] for r in ldt)}
     summary["frames"] = len(frames)
     summary["median_total_ms"] = float(np.median([f.time_ms["total"] for f in frames])) if frames else 0.0
     out["summary"] = summary
@@ -89,7 +96,7 @@ def write_gbuffers(scene, out, frame: int = 0, reflectors=None, widen: float = 1
 #: Format tag of ``run.json``.
 RUN_FORMAT = "refsoft-run-1"
 #: The files a run writes into its folder (and ``overwrite`` removes).
-RUN_FILES = ("frame_[0-9]*.npz", "frame_[0-9]*.png", "stats.json", "run.json")
+RUN_FILES = ("frame_[0-9]*.npz", "frame_[0-9]*.png", "stats.json", "run.json", "ldt_[0-9]*.npz")
 
 
 def run_manifest(kind: str, scene, frames, options=None) -> dict:

@@ -99,14 +99,20 @@ class LDT:
             return self.back
         return pair_back_depths(self.depth, self.count_raw, self.open, dtype)[0]
 
+    def arrays(self) -> dict:
+        """The arrays of ``ldt_J.npz``: ``depth``, ``back``, ``normal``, ``triangle``,
+        ``count_raw``, ``count``, ``mismatch``, ``cube_center``, ``cube_half``, ``open``,
+        ``layers_capped``."""
+        return dict(depth=self.depth, back=self.back, normal=self.normal, triangle=self.triangle,
+                    count_raw=self.count_raw, count=self.count, mismatch=self.mismatch,
+                    cube_center=np.asarray(self.cube_center, np.float64), cube_half=np.float64(self.cube_half),
+                    open=np.bool_(self.open), layers_capped=np.bool_(self.layers_capped))
+
     def save(self, path) -> None:
-        """Write the arrays to ``path`` (``ldt_J.npz``): ``depth``, ``back``, ``normal``,
-        ``triangle``, ``count_raw``, ``count``, ``mismatch``, ``cube_center``, ``cube_half``,
-        ``open``, ``layers_capped``."""
-        np.savez(os.fspath(path), depth=self.depth, back=self.back, normal=self.normal, triangle=self.triangle,
-                 count_raw=self.count_raw, count=self.count, mismatch=self.mismatch,
-                 cube_center=np.asarray(self.cube_center, np.float64), cube_half=np.float64(self.cube_half),
-                 open=np.bool_(self.open), layers_capped=np.bool_(self.layers_capped))
+        """Write :meth:`arrays` to ``path`` (``ldt_J.npz``; a temporary name, then renamed)."""
+        from ..io import write_npz
+
+        write_npz(os.fspath(path), **self.arrays())
 
     @classmethod
     def load(cls, path) -> "LDT":

@@ -3,13 +3,14 @@ no number, the caps, the face table and the per-pixel flag bits, in one place.""
 
 import numpy as np
 
+from .. import constants as _options
+
 # --- build ------------------------------------------------------------------------------------
-#: Texels per face edge (the paper's only figure, "256 x 256 x 6").
-RESOLUTION = 256
-#: Smallest face resolution accepted (the cube keeps one empty texel on each side: R - 2 > 0).
-MIN_RESOLUTION = 4
-#: Largest face resolution accepted (R = 4096 with 8 layers is 3 GB per object).
-MAX_RESOLUTION = 4096
+#: Texels per face edge (the option's default, refsoft.constants.LDT_RESOLUTION).
+RESOLUTION = _options.LDT_RESOLUTION
+#: Smallest and largest face resolutions accepted (refsoft.constants).
+MIN_RESOLUTION = _options.LDT_MIN_RESOLUTION
+MAX_RESOLUTION = _options.LDT_MAX_RESOLUTION
 #: Depth-peeling layers at most (the paper's models use 1-5).
 MAX_LAYERS = 8
 
@@ -25,10 +26,10 @@ FACE_TABLE = np.array([[2, -1, 1, -1],   # +X: (-qz, -qy)
                       dtype=np.int64)
 
 # --- search -----------------------------------------------------------------------------------
-#: Linear search steps per face (N + 1 samples, both ends included).
-LINEAR_STEPS = 32
-#: Residual, in texels, under which a face's hit is accepted.
-TAU = 2.0
+#: Linear search steps per face (N + 1 samples, both ends included; the option's default).
+LINEAR_STEPS = _options.LDT_LINEAR_STEPS
+#: Residual, in texels, under which a face's hit is accepted (the option's default).
+TAU = _options.LDT_TAU
 #: The bisection halves the step until it is at most this many texels long...
 BISECTION_TEXELS = 0.125
 #: ...or this many times.
@@ -36,12 +37,10 @@ BISECTION_MAX = 16
 #: ``linear="texel"``: at most this many steps per face, times R.
 TEXEL_STEPS_PER_R = 4
 
-#: Faces searched per object: "three" (the paper, Fig. 5) or "entry" (one face).
-FACE_MODES = ("three", "entry")
-#: Layers built: every layer up to MAX_LAYERS, or the first only (the convex assumption).
-LAYER_MODES = ("all", 1)
-#: Reflection regions: the paper's cone test per reflector triangle, or none.
-REGION_MODES = ("cone", "none")
+#: Faces searched per object, layers built, reflection regions: the options' vocabularies.
+FACE_MODES = _options.LDT_FACE_MODES
+LAYER_MODES = _options.LDT_LAYER_MODES
+REGION_MODES = _options.LDT_REGION_MODES
 #: The cone test's sphere radius is the farthest vertex times this.
 SPHERE_GROWTH = 1.0 + 1e-6
 

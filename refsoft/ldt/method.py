@@ -23,7 +23,7 @@ import numpy as np
 
 from .. import validate
 from ..errors import RefsoftError
-from ..keys import PerReflector
+from .. import keys
 from ..raster import PRECISIONS, _setup, interpolate, rasterize, shade
 from ..seam import ReflectorResult, stencil_box
 from . import constants as C
@@ -32,9 +32,9 @@ from .regions import bounding_sphere, regions as region_table, visible_triangles
 from .search import Stack, check_linear, cube_matrices, hit_normals, search
 
 #: (T_k, K) bool per reflector: the cone test per triangle and object (False: not visible).
-LDT_REGION = PerReflector("ldt_region")
+LDT_REGION = keys.LDT_REGION
 #: (K,) int32: the reflected objects' ids, the order of ``ldt_object_distance``.
-LDT_OBJECT_IDS = "ldt_object_ids"
+LDT_OBJECT_IDS = keys.LDT_OBJECT_IDS
 
 #: Flag bit -> name in ``stats.json``.
 FLAG_NAMES = {C.START_INSIDE: "start_inside", C.NO_FACE_WITHIN_TAU: "no_face_within_tau",
@@ -42,19 +42,21 @@ FLAG_NAMES = {C.START_INSIDE: "start_inside", C.NO_FACE_WITHIN_TAU: "no_face_wit
               C.ORIGIN_IN_CUBE: "origin_in_cube"}
 
 
+#: Fill value of each per-pixel array where no object is hit (or off the stencil): -1 for ids,
+#: indices and distances, 0 for the rest.
+NO_HIT = {"ldt_hit_distance": -1, "ldt_face": -1, "ldt_layer": -1, "ldt_texel": -1, "ldt_object_distance": -1}
+
+
 def pixel_arrays(n_objects: int) -> dict:
-    """The method's per-pixel arrays: name -> (trailing shape, dtype)."""
+    """The method's per-pixel arrays (:data:`refsoft.keys.LDT_PIXEL_ARRAYS`): name -> (trailing
+    shape, dtype, fill value off the reflectors and where nothing is hit)."""
     f32, i8 = np.float32, np.int8
-    return {"ldt_ray_origin": ((3,), f32), "ldt_ray_dir": ((3,), f32), "ldt_hit_position": ((3,), f32),
+    spec = {"ldt_ray_origin": ((3,), f32), "ldt_ray_dir": ((3,), f32), "ldt_hit_position": ((3,), f32),
             "ldt_hit_distance": ((), f32), "ldt_face": ((), i8), "ldt_layer": ((), i8),
             "ldt_texel": ((2,), np.int16), "ldt_residual": ((), f32), "ldt_linear_samples": ((), np.int32),
             "ldt_binary_steps": ((), np.int32), "ldt_faces_searched": ((), i8), "ldt_objects_tested": ((), i8),
             "ldt_flags": ((), np.uint8), "ldt_object_distance": ((n_objects,), f32), "ldt_margin": ((), f32)}
-
-
-#: Fill value of each per-pixel array where no object is hit (or off the stencil): -1 for ids,
-#: indices and distances, 0 for the rest.
-NO_HIT = {"ldt_hit_distance": -1, "ldt_face": -1, "ldt_layer": -1, "ldt_texel": -1, "ldt_object_distance": -1}
+    return {name: spec[name] + (NO_HIT.get(name, 0),) for name in keys.LDT_PIXEL_ARRAYS}
 
 
 @dataclass(eq=False)
@@ -137,6 +139,7 @@ class LayeredDepthTextures:
         self.precision = precision
         self.targets = [k for k in range(1, len(scene.objects) + 1) if not scene.object_by_id(k).reflector]
         self.pixel_arrays = pixel_arrays(len(self.targets))
+        self.leading_axis_arrays = ("ldt_object_distance",)
         self.ldts = None      # object id -> LDT, built on the first frame
         self.build_ms = {}    # object id -> milliseconds
         self.stack = None     # the LDTs as one Stack (refsoft.ldt.search), made with them
@@ -213,11 +216,12 @@ class LayeredDepthTextures:
                   "ldt_objects_tested": res.objects_tested, "ldt_flags": res.flags,
                   "ldt_object_distance": res.object_distance, "ldt_margin": res.margin}
         pixels = {}
-        for name, (shape, dt) in self.pixel_arrays.items():
-            a = np.full((h, w) + shape, NO_HIT.get(name, 0), dtype=dt)
+        for name, (shape, dt, fill) in self.pixel_arrays.items():
+            a = np.full((h, w) + shape, fill, dtype=dt)
             a[rr, cc] = values[name]
             pixels[name] = a
         out.pixels = pixels
+        out.pixel_mask = stencil[r0:r1, c0:c1]
         out.state = LDTState(rows, cols, P, N, tri, table, W, view_dir, res)
         out.report.update(self._pixel_report(res))
         times["ldt_search"] = 1000 * (time.perf_counter() - t)
@@ -245,6 +249,11 @@ class LayeredDepthTextures:
                         "flags": flags,
                         "region_triangles": {str(k): r.report["region_triangles"] for k, r in results.items()},
                         "resolution": self.resolution, "objects": objects}}
+
+    def run_files(self) -> dict:
+        """``{"ldt_J": arrays}`` for every reflected object J (:meth:`refsoft.ldt.LDT.arrays`),
+        written once per run beside the frames; empty before the first frame built them."""
+        return {keys.ldt_file(j): ldt.arrays() for j, ldt in (self.ldts or {}).items()}
 
     # --- the pieces ---------------------------------------------------------------------------
     def spheres(self, view):

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import validate
-from ..constants import INVERSE_MODES, METHODS, NEIGHBOURHOODS, VIRTUAL_RULES
+from ..constants import INVERSE_MODES, NEIGHBOURHOODS, SEARCH_METHODS, VIRTUAL_RULES
 from ..errors import RefsoftError
 from ..raster import GBuffer
 from . import _kernels, _lanes
@@ -23,8 +23,6 @@ __all__ = ["search", "virtual_vertices", "start_pixel", "SearchResult", "trace_s
            "HIDDEN", "BORDER", "CAPPED", "RESTARTED", "CULLED", "NEIGHBOURHOODS", "INVERSE_MODES",
            "flag_names", "default_cap", "SEARCH_METHODS", "trace_hierarchy", "HierarchyTrace"]
 
-#: Search methods (``constants.METHODS``): the linear walk and Szabo's ray-cone hierarchy.
-SEARCH_METHODS = METHODS
 _FLAG_NAMES = ((HIDDEN, "HIDDEN"), (BORDER, "BORDER"), (CAPPED, "CAPPED"), (RESTARTED, "RESTARTED"),
                (CULLED, "CULLED"))
 

@@ -150,3 +150,24 @@ def test_full_size_gbuffer_from_lazy_maps_equals_the_uncropped_one():
     b = raster.gbuffer(mesh, cam, origin=cam.eye, crop=False)
     for field in ("position", "normal", "mask", "depth", "triangle"):
         np.testing.assert_array_equal(getattr(a, field), getattr(b, field), err_msg=field)
+
+
+def test_ldt_estimate_counts_the_textures_and_bounds_the_traced_peak():
+    """The layered depth textures are counted at the most layers the build peels (8): above the
+    traced peak of a first frame, which builds them, and growing as R^2."""
+    scene = refsoft.load_scene("sphere", width=160, height=120)
+    opts = RenderOptions(method="ldt", ldt_resolution=64)
+    FrameDriver(scene, opts).render_frame(0)  # compiled
+    tracemalloc.start()
+    try:
+        FrameDriver(scene, opts).render_frame(0)
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    est = frame_bytes(scene, opts)
+    assert peak < est["total"], (peak, est)
+    big = frame_bytes(scene, RenderOptions(method="ldt", ldt_resolution=128))
+    assert big["textures"] == 4 * est["textures"]
+    assert frame_bytes(scene, RenderOptions(method="ldt", ldt_resolution=64, ldt_layers=1))["textures"] < est["textures"]
+    with pytest.raises(LimitError, match="layered depth textures .* --ldt-resolution"):
+        check_frame_memory(scene, RenderOptions(method="ldt", ldt_resolution=4096), limit="1G")

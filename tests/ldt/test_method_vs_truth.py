@@ -76,8 +76,14 @@ def test_the_main_views_triangles_are_the_ones_interpolated(frames):
 def test_seam_outputs(frames):
     scene, method, first, second, _ = frames
     assert method.name == "ldt" and method.stages == ("ldt_build", "regions", "ldt_search")
-    for name, (shape, dt) in pixel_arrays(2).items():
-        assert first.arrays[name].shape == (96, 128) + shape and first.arrays[name].dtype == dt
+    off = first.arrays["object_id"] != 1  # off the reflector every per-pixel array holds its fill
+    for name, (shape, dt, fill) in pixel_arrays(2).items():
+        a = first.arrays[name]
+        if name in method.leading_axis_arrays:  # stored (K, H, W)
+            assert a.shape == shape + (96, 128)
+            a = np.moveaxis(a, 0, -1)
+        assert a.shape == (96, 128) + shape and a.dtype == dt
+        assert np.all(a[off] == fill), name
     assert first.arrays[LDT_REGION(1)].shape == (scene.objects[0].mesh.n_faces, 2)
     assert first.arrays[LDT_REGION(1)].any()
     np.testing.assert_array_equal(first.arrays[LDT_OBJECT_IDS], [2, 3])
@@ -93,8 +99,8 @@ def test_seam_outputs(frames):
     # the per-pixel arrays at hits
     hit = first.arrays["reflected_id"] > 0
     assert np.all(first.arrays["ldt_face"][hit] >= 0) and np.all(first.arrays["ldt_residual"][hit] <= 2.0)
-    d = first.arrays["ldt_object_distance"][hit]
-    np.testing.assert_array_equal(first.arrays["ldt_hit_distance"][hit], np.where(d >= 0, d, np.inf).min(axis=1))
+    d = first.arrays["ldt_object_distance"][:, hit]
+    np.testing.assert_array_equal(first.arrays["ldt_hit_distance"][hit], np.where(d >= 0, d, np.inf).min(axis=0))
 
 
 def test_orthographic_view_agrees_with_the_truth():
