@@ -960,3 +960,36 @@ def naive_ldt_pixel(P, N, eye, tri, region, use_regions, W, depth, back, count, 
     out["flags"] |= flags
     out["hit"] = [P[i] + best["distance"] * r[i] for i in range(3)]
     return out
+
+# ----------------------------------------------------------------------- environment map
+def naive_cube_lookup(r, resolution):
+    """One direction at a time, GL's cube-map selection table written out (GL spec section
+    8.13), ties z over y over x, the positive face when the sign bit is clear, nearest texel
+    (row 0 at the top); arithmetic in r's dtype. Returns (face, row, col) lists."""
+    dt = np.asarray(r).dtype.type
+    faces, rows, cols = [], [], []
+    for rx, ry, rz in np.asarray(r):
+        ax, ay, az = abs(rx), abs(ry), abs(rz)
+        if az >= ax and az >= ay:
+            if not np.signbit(rz):
+                face, sc, tc, ma = 4, rx, -ry, az
+            else:
+                face, sc, tc, ma = 5, -rx, -ry, az
+        elif ay >= ax:
+            if not np.signbit(ry):
+                face, sc, tc, ma = 2, rx, rz, ay
+            else:
+                face, sc, tc, ma = 3, rx, -rz, ay
+        else:
+            if not np.signbit(rx):
+                face, sc, tc, ma = 0, -rz, -ry, ax
+            else:
+                face, sc, tc, ma = 1, rz, -ry, ax
+        s = (dt(sc) / dt(ma) + dt(1)) * dt(0.5)
+        t = (dt(tc) / dt(ma) + dt(1)) * dt(0.5)
+        i = min(max(int(np.floor(s * dt(resolution))), 0), resolution - 1)
+        j = min(max(int(np.floor(t * dt(resolution))), 0), resolution - 1)
+        faces.append(face)
+        rows.append(resolution - 1 - j)
+        cols.append(i)
+    return faces, rows, cols

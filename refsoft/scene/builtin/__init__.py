@@ -7,6 +7,7 @@ import os
 from ...errors import SceneError
 from ..model import Scene
 from .basic import concave_scene, ellipsoid_scene, planar_scene, quad_scene, sphere_scene, torus_scene
+from .ldt import balls_scene, cup_scene, cylinder_scene, genus3_scene, hollow_box_scene, touching_scene
 from .papers import ants_scene, kitchen_scene, ufo_scene
 
 #: name -> (builder, one-line description)
@@ -20,6 +21,12 @@ BUILTIN_SCENES = {
     "concave": (concave_scene, "the inside of a mirror bowl seen from above"),
     "torus": (torus_scene, "half a mirror torus: mixed curvature"),
     "quad": (quad_scene, "a two-triangle quad reflected in a mirror ball"),
+    "balls": (balls_scene, "two balls (1 depth layer) moving in front of a mirror ball"),
+    "hollow_box": (hollow_box_scene, "an open-top hollow box (2 depth layers) beside a mirror ball (static)"),
+    "genus3": (genus3_scene, "a genus-3 solid (3 fused tori, 3+ depth layers) turning under a mirror ball"),
+    "cup": (cup_scene, "a cup with a handle (one closed mesh, 3+ depth layers) beside a mirror ball (static)"),
+    "touching": (touching_scene, "a hollow box resting on top of a mirror ball (static; LDT paper Fig. 7)"),
+    "cylinder": (cylinder_scene, "an upright cylinder beside a mirror ball, seen from the side (static; Fig. 5)"),
 }
 
 
