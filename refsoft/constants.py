@@ -48,9 +48,12 @@ PRESET_NAMES = ("paper", "accurate")
 #: The vertex search's methods: the linear walk from a start pixel (Estalella, the papers'
 #: method) and Szabo's ray-cone hierarchy.
 SEARCH_METHODS = ("walk", "hierarchy")
-#: Reflection methods: the vertex search's two, and the per-pixel comparison method, Zhang,
-#: Hsieh and Shen's layered depth textures (:mod:`refsoft.ldt`).
-METHODS = SEARCH_METHODS + ("ldt",)
+#: Reflection methods: the vertex search's two, and the per-pixel comparison methods: Zhang,
+#: Hsieh and Shen's layered depth textures (:mod:`refsoft.ldt`) and the environment map
+#: (:mod:`refsoft.envmap`).
+METHODS = SEARCH_METHODS + ("ldt", "envmap")
+#: The environment map's texels per cube face edge.
+ENVMAP_RESOLUTION = 256
 
 # --- The layered depth textures' options (defaults where the paper gives no number) ----------
 #: Texels per cube face edge (the paper's only figure, "256 x 256 x 6").

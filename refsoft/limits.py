@@ -68,6 +68,8 @@ LDT_MAX_LAYERS = 8
 #: counts, flags (1 byte), texel (2 int16); and each object's distance (float32).
 LDT_PIXEL_BYTES = 3 * 12 + 5 * 4 + 5 + 4
 LDT_OBJECT_PIXEL_BYTES = 4
+#: The environment map per reflector and texel: colour (float32 x 3) and object id.
+ENVMAP_TEXEL_BYTES = 12 + 4
 
 _UNITS = {"": 1, "b": 1, "k": 1 << 10, "kb": 1 << 10, "kib": 1 << 10, "m": 1 << 20, "mb": 1 << 20, "mib": 1 << 20,
           "g": 1 << 30, "gb": 1 << 30, "gib": 1 << 30, "t": 1 << 40, "tb": 1 << 40, "tib": 1 << 40}
@@ -132,6 +134,8 @@ def frame_bytes(scene, options, frames_kept: int = 1) -> dict:
     view_px = cam.width * cam.height
     if options.method == "ldt":
         return _ldt_bytes(scene, options, view_px, frames_kept)
+    if options.method == "envmap":
+        return _envmap_bytes(scene, options, view_px, frames_kept)
     if options.gbuffer_size is not None:
         g_px = int(options.gbuffer_size[0]) * int(options.gbuffer_size[1])
     else:
@@ -175,6 +179,25 @@ def _ldt_bytes(scene, options, view_px, frames_kept):
             "work": work, "total": kept + textures + work}
 
 
+def _envmap_bytes(scene, options, view_px, frames_kept):
+    n_refl = len(scene.reflector_ids)
+    n_tris = sum(o.mesh.n_faces for o in scene.objects)
+    texels = 6 * options.envmap_resolution ** 2
+    # each reflector's cube map is kept in its frame's outputs (colour, id) and, for reuse, by the
+    # method; a face's raster works at float64 over R^2 texels
+    kept_px = view_px * (1 + 4) + n_refl * texels * ENVMAP_TEXEL_BYTES
+    textures = n_refl * texels * ENVMAP_TEXEL_BYTES
+    kept_view = view_px * VIEW_BYTES_PER_PIXEL
+    work = texels // 6 * 64 + n_tris * TRIANGLE_WORK_BYTES + view_px * (16 + 3 * 3 * 8)
+    kept = (kept_view + kept_px) * max(int(frames_kept), 1)
+    return {"view": kept_view, "gbuffers": 0, "vertices": 0, "pixels": kept_px, "textures": textures, "cache": 0,
+            "work": work, "total": kept + textures + work}
+
+
+def textures_of(options) -> str:
+    return "layered depth textures" if options.method == "ldt" else "cube maps"
+
+
 def check_frame_memory(scene, options, frames_kept: int = 1, limit=None) -> dict:
     """Raise :class:`LimitError` when :func:`frame_bytes` exceeds the limit; return the estimate."""
     est = frame_bytes(scene, options, frames_kept)
@@ -183,10 +206,10 @@ def check_frame_memory(scene, options, frames_kept: int = 1, limit=None) -> dict
         kept = f" x {frames_kept} frames kept" if frames_kept > 1 else ""
         if "textures" in est:
             raise LimitError(
-                f"this render needs about {human(est['total'])} (layered depth textures {human(est['textures'])}, "
+                f"this render needs about {human(est['total'])} ({textures_of(options)} {human(est['textures'])}, "
                 f"view and per-pixel outputs {human(est['view'] + est['pixels'])}{kept}, working set "
-                f"{human(est['work'])}), above the memory limit of {human(lim)}: lower --ldt-resolution or "
-                f"--width/--height, or raise --memory-limit (or REFSOFT_MEMORY_LIMIT)")
+                f"{human(est['work'])}), above the memory limit of {human(lim)}: lower --{options.method}-resolution "
+                f"or --width/--height, or raise --memory-limit (or REFSOFT_MEMORY_LIMIT)")
         raise LimitError(
             f"this render needs about {human(est['total'])} (view {human(est['view'])}, G-buffers "
             f"{human(est['gbuffers'])}, vertices {human(est['vertices'])}{kept}, reuse cache {human(est['cache'])}, "

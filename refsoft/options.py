@@ -45,6 +45,11 @@ PRESETS = {
 #: The layered depth textures' options (``method="ldt"`` only) and their defaults.
 LDT_DEFAULTS = dict(ldt_resolution=constants.LDT_RESOLUTION, ldt_layers="all", ldt_faces="three",
                     ldt_linear=constants.LDT_LINEAR_STEPS, ldt_tau=constants.LDT_TAU, ldt_regions="cone")
+#: The environment map's options (``method="envmap"`` only) and their defaults.
+ENVMAP_DEFAULTS = dict(envmap_resolution=constants.ENVMAP_RESOLUTION)
+#: The per-pixel methods' own options: what each reads beside ``method`` and ``precision``.
+METHOD_DEFAULTS = {"ldt": LDT_DEFAULTS, "envmap": ENVMAP_DEFAULTS}
+_OWN_OPTIONS = {name for d in METHOD_DEFAULTS.values() for name in d}
 
 
 @dataclass(frozen=True)
@@ -106,6 +111,9 @@ class RenderOptions:
         convex assumption); faces searched per object ("three" or "entry"); linear steps per
         face (a count or "texel"); the residual in texels a face's hit is accepted under; the
         cone test per reflector triangle ("cone") or none (:class:`refsoft.ldt.LayeredDepthTextures`).
+    envmap_resolution : int, optional
+        ``method="envmap"`` only (default 256): texels per cube face edge
+        (:class:`refsoft.envmap.EnvironmentMap`).
     """
 
     preset: str = "accurate"
@@ -134,6 +142,7 @@ class RenderOptions:
     ldt_linear: object = None
     ldt_tau: float | None = None
     ldt_regions: str | None = None
+    envmap_resolution: int | None = None
 
     def __post_init__(self):
         validate.choice(self.preset, PRESET_NAMES, "preset")
@@ -158,17 +167,23 @@ class RenderOptions:
             validate.integer(self.cap, "cap", 1)
         for name in SKIPS + ("adaptive_widen", "coherence", "refine"):
             validate.flag(getattr(self, name), name)
-        self._check_ldt()
+        self._check_own_options()
 
-    def _check_ldt(self):
-        given = [name for name in LDT_DEFAULTS if getattr(self, name) is not None]
-        if self.method != "ldt":
-            if given:
-                raise RefsoftError(f"{given[0]} applies to method='ldt' only (method is {self.method!r})")
-            return
-        for name, value in LDT_DEFAULTS.items():
+    def _check_own_options(self):
+        own = METHOD_DEFAULTS.get(self.method, {})
+        for name in sorted(_OWN_OPTIONS - set(own)):
+            if getattr(self, name) is not None:
+                method = name.split("_")[0]
+                raise RefsoftError(f"{name} applies to method={method!r} only (method is {self.method!r})")
+        for name, value in own.items():
             if getattr(self, name) is None:
                 object.__setattr__(self, name, value)
+        if self.method == "ldt":
+            self._check_ldt()
+        elif self.method == "envmap":
+            validate.integer(self.envmap_resolution, "envmap_resolution", 1, constants.LDT_MAX_RESOLUTION)
+
+    def _check_ldt(self):
         validate.integer(self.ldt_resolution, "ldt_resolution", constants.LDT_MIN_RESOLUTION,
                          constants.LDT_MAX_RESOLUTION)
         if self.ldt_layers == "1":
@@ -196,8 +211,8 @@ class RenderOptions:
         manifests record them: for the vertex search the preset and every option but the LDT's;
         for ``method="ldt"`` the method, the precision and the LDT's options.
         ``RenderOptions(**as_dict())`` gives these options back."""
-        if self.method == "ldt":
-            names = ("method", "precision") + tuple(LDT_DEFAULTS)
+        if self.method in METHOD_DEFAULTS:
+            names = ("method", "precision") + tuple(METHOD_DEFAULTS[self.method])
         else:
-            names = tuple(f.name for f in fields(self) if f.name not in LDT_DEFAULTS)
+            names = tuple(f.name for f in fields(self) if f.name not in _OWN_OPTIONS)
         return {name: (list(v) if isinstance(v, tuple) else v) for name in names for v in [getattr(self, name)]}

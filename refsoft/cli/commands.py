@@ -138,6 +138,9 @@ def cmd_render(args) -> int:
         what = (f"method ldt, written to {out} in {time.perf_counter() - t0:.1f} s ({_timing(done, notice.compiling)}"
                 f"); linear samples per reflector pixel: mean {summ['ldt_linear_samples']['mean']:.1f}, max "
                 f"{summ['ldt_linear_samples']['max']}")
+    elif "envmap_hits" in summ:
+        what = (f"method envmap, written to {out} in {time.perf_counter() - t0:.1f} s "
+                f"({_timing(done, notice.compiling)}); reflector pixels showing an object: {summ['envmap_hits']}")
     else:
         what = (f"preset {args.preset}, written to {out} in {time.perf_counter() - t0:.1f} s "
                 f"({_timing(done, notice.compiling)}); search iterations: max frame mean "
@@ -271,7 +274,7 @@ def cmd_compare(args) -> int:
     from ..truth.compare import compare_runs
 
     header = [f"{'frame':>5} {'refl px':>8} {'id disagree':>11} {'interior':>9} {'colour mean':>11} {'colour p99':>10}"
-              f"  per-vertex (reflector: px mean/max, |V'-V'*| mean)"]
+              f"  per-vertex (reflector: px mean/max, |V'-V'*| mean) or per-pixel hit |X-X*| median/max"]
 
     def row(m):
         while header:  # printed with the first row: a refused comparison prints only its error
@@ -279,6 +282,8 @@ def cmd_compare(args) -> int:
         verts = "; ".join(f"{k}: {v['pixel_distance_mean']:.3f}/{v['pixel_distance_max']:.3f} px, "
                           f"{v['virtual_distance_mean']:.2e}" for k, v in m.get("vertices", {}).items()
                           if "pixel_distance_mean" in v)
+        if "hit_distance" in m:
+            verts = f"hit {m['hit_distance']['median']:.2e}/{m['hit_distance']['max']:.2e}"
         print(f"{m['frame']:>5} {m['reflector_pixels']:>8} {100 * m['reflected_id_disagreement']:>10.2f}% "
               f"{100 * m['interior_disagreement']:>8.2f}% {m['color_error']['mean']:>11.4f} "
               f"{m['color_error']['p99']:>10.4f}  {verts}")

@@ -53,7 +53,8 @@ def method_options() -> argparse.ArgumentParser:
     p.add_argument("--method", choices=constants.METHODS, default=None,
                    help="the reflection method: the vertex search's linear walk from a start pixel (the papers; "
                         "both presets) or Szabo's ray-cone hierarchy, or Zhang, Hsieh and Shen's layered depth "
-                        "textures searched per pixel (ldt, the --ldt-* options)")
+                        "textures searched per pixel (ldt, the --ldt-* options), or the environment-map baseline "
+                        "(envmap: a cube map per reflector looked up by direction alone)")
     p.add_argument("--neighbourhood", choices=tuple(constants.NEIGHBOURHOODS), default=None,
                    help="the walk's candidates per step: the crosshair or the 3x3 box (paper: cross, accurate: box)")
     p.add_argument("--search", choices=("cross", "box", "hierarchy"), default=None, help=argparse.SUPPRESS)
@@ -102,7 +103,8 @@ def render_options() -> argparse.ArgumentParser:
 
 
 def ldt_options() -> argparse.ArgumentParser:
-    """The layered depth textures' options (``--method ldt`` only)."""
+    """The per-pixel methods' options: the layered depth textures' (``--method ldt`` only) and
+    the environment map's (``--method envmap`` only)."""
     p = _parser()
     p.add_argument("--ldt-resolution", type=int, default=None, metavar="R",
                    help=f"ldt: texels per cube face edge (default {constants.LDT_RESOLUTION}; a power of two)")
@@ -117,6 +119,8 @@ def ldt_options() -> argparse.ArgumentParser:
                    help=f"ldt: residual under which a face's hit is accepted (default {constants.LDT_TAU:g})")
     p.add_argument("--ldt-regions", choices=constants.LDT_REGION_MODES, default=None,
                    help="ldt: the cone test per reflector triangle, or none (default cone)")
+    p.add_argument("--envmap-resolution", type=int, default=None, metavar="R",
+                   help=f"envmap: texels per cube face edge (default {constants.ENVMAP_RESOLUTION})")
     return p
 
 
@@ -135,6 +139,8 @@ def ldt_kwargs(args) -> dict:
             except ValueError:
                 raise RefsoftError(f"--ldt-linear must be a step count or 'texel', got {value!r}") from None
         out["ldt_" + name] = value
+    if getattr(args, "envmap_resolution", None) is not None:
+        out["envmap_resolution"] = args.envmap_resolution
     return out
 
 
@@ -203,12 +209,13 @@ def render_kwargs(args) -> dict:
     off = set(constants.SKIPS) if args.no_skips else {n.replace("-", "_") for n in args.no_skip or ()}
     out.update({name: False for name in off})
     out.update(ldt_kwargs(args))
-    if out.get("method") == "ldt":
+    method = out.get("method")
+    if method in ("ldt", "envmap"):
         vertex_only = [k for k in _VERTEX_SEARCH_FLAGS if getattr(args, k, None) is not None]
         vertex_only += ["no_coherence"] * bool(args.no_coherence) + ["adaptive_widen"] * bool(args.adaptive_widen)
         vertex_only += ["no_skip"] * bool(args.no_skips or args.no_skip)
         if vertex_only:
             raise RefsoftError(f"--{vertex_only[0].replace('_', '-')} is an option of the vertex search; --method "
-                               "ldt takes the --ldt-* options and --precision")
-        out = {k: v for k, v in out.items() if k in ("method", "precision") or k.startswith("ldt_")}
+                               f"{method} takes the --{method}-* options and --precision")
+        out = {k: v for k, v in out.items() if k in ("method", "precision") or k.startswith(("ldt_", "envmap_"))}
     return out

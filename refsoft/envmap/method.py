@@ -157,7 +157,7 @@ class EnvironmentMap:
 
     name = "envmap"
     stages = ("envmap_build", "envmap_lookup")
-    pixel_arrays = {ENVMAP_FACE: ((), np.int8), ENVMAP_TEXEL: ((2,), np.int16)}
+    pixel_arrays = {ENVMAP_FACE: ((), np.int8, -1), ENVMAP_TEXEL: ((2,), np.int16, -1)}
 
     def __init__(self, scene, *, resolution: int = 256, precision: str = "float32"):
         if not isinstance(scene, Scene):
@@ -213,6 +213,7 @@ class EnvironmentMap:
         face_map[rr, cc] = face
         texel[rr, cc, 0], texel[rr, cc, 1] = row, col
         out.pixels = {ENVMAP_FACE: face_map, ENVMAP_TEXEL: texel}
+        out.pixel_mask = stencil[r0:r1, c0:c1]  # every reflector pixel has a texel, id 0 or not
         out.state = EnvmapState(cube, rays, face, row, col)
         report.update(reflector_pixels=int(len(rr)), hits=int(np.sum(ids > 0)))
         times["envmap_lookup"] = 1000 * (time.perf_counter() - t)

@@ -74,6 +74,10 @@ def make_method(scene, options: RenderOptions):
         return LayeredDepthTextures(scene, resolution=options.ldt_resolution, layers=options.ldt_layers,
                                     faces=options.ldt_faces, linear=options.ldt_linear, tau=options.ldt_tau,
                                     regions=options.ldt_regions, precision=options.precision)
+    if options.method == "envmap":
+        from ..envmap import EnvironmentMap
+
+        return EnvironmentMap(scene, resolution=options.envmap_resolution, precision=options.precision)
     from ..search.method import VertexSearch
 
     return VertexSearch(scene, options)

@@ -45,6 +45,8 @@ def frame_stats(frames, options=None) -> dict:
             total = sum(r[name]["mean"] * r["reflector_pixels"] for r in ldt)
             summary["ldt_" + name] = {"mean": total / pixels if pixels else 0.0,
                                       "max": max(r[name]["max"] for r in ldt)}
+    if options is not None and options.method == "envmap":  # reflector pixels that show an object
+        summary["envmap_hits"] = int(sum(f.report["hits"] for f in frames))
     summary["frames"] = len(frames)
     summary["median_total_ms"] = float(np.median([f.time_ms["total"] for f in frames])) if frames else 0.0
     out["summary"] = summary

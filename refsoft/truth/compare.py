@@ -2,7 +2,8 @@
 :mod:`refsoft.truth.metrics` per frame, agreement maps and render | truth | difference pictures.
 
 Before anything is written the two sides are checked to be what they are given as and to show
-the same scene: the render side's frames hold ``reflection_pixel_K`` and no ``reflected_hit``,
+the same scene: the render side's frames hold ``reflection_pixel_K`` (the vertex search) or
+``ldt_face`` / ``envmap_face`` (the per-pixel methods) and no ``reflected_hit``,
 the truth side's hold ``reflected_hit``; both are the same size, the truth's reflectors are the
 render's with as many vertices each (``vertex_object_K``), and where a folder has a ``run.json``
 (format ``refsoft-run-1``) its kind, scene and size agree.
@@ -102,11 +103,16 @@ _RENDER_OPTIONAL = {keys.ITERATIONS: (), keys.SCORE: (), keys.MARGIN: ()}
 _TRUTH_ROWS = {keys.EXACT_REFLECTION_POINT: (3,), keys.EXACT_VIRTUAL_VERTEX: (3,)}
 
 
+#: The per-pixel arrays by which a frame of a per-pixel method (``ldt``, ``envmap``) is known.
+PIXEL_METHOD_KEYS = ("ldt_face", "envmap_face")
+
+
 def check_sides(render_path, ra, truth_path, ta):
     """Refuse a frame pair that is not a render and its truth of the same scene (the message
     names each side's file); also each file's own consistency."""
     r_truth, t_truth = keys.REFLECTED_HIT in ra, keys.REFLECTED_HIT in ta
-    r_render, t_render = bool(keys.reflectors(ra)), bool(keys.reflectors(ta))
+    per_pixel = any(name in ra for name in PIXEL_METHOD_KEYS)
+    r_render, t_render = bool(keys.reflectors(ra)) or per_pixel, bool(keys.reflectors(ta))
     if r_truth and t_render and not t_truth:
         raise RefsoftError(f"the folders are swapped: the render side {render_path} is a truth frame (reflected_hit) "
                            f"and the truth side {truth_path} a render frame (reflection_pixel_K): give the render "
@@ -124,6 +130,8 @@ def check_sides(render_path, ra, truth_path, ta):
     if (rh, rw) != (th, tw):
         raise RefsoftError(f"the render side {render_path} is {rw}x{rh} pixels, the truth side {truth_path} {tw}x{th}: "
                            "render both at the same --width/--height")
+    if per_pixel:  # no per-vertex outputs to match
+        return
     rk = keys.reflectors(ra)
     tk = sorted(set(keys.reflectors(ta, keys.VERTEX_OBJECT)) | set(keys.reflectors(ta, keys.EXACT_REFLECTION_POINT)))
     if not set(tk) <= set(rk):

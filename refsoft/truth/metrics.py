@@ -143,6 +143,16 @@ def flip_mean(render_image, truth_image):
     return float(mean)
 
 
+def hit_distance(hit, truth_hit, render_id, truth_id) -> dict:
+    """World distance between a per-pixel method's hit and the truth's where both show the
+    same object: ``{"pixels", "mean", "median", "max"}`` (zeros where there is none)."""
+    same = (np.asarray(render_id) == np.asarray(truth_id)) & (np.asarray(truth_id) > 0)
+    d = np.linalg.norm(np.asarray(hit, np.float64)[same] - np.asarray(truth_hit, np.float64)[same], axis=1)
+    if not len(d):
+        return {"pixels": 0, "mean": 0.0, "median": 0.0, "max": 0.0}
+    return {"pixels": int(len(d)), "mean": float(d.mean()), "median": float(np.median(d)), "max": float(d.max())}
+
+
 def frame_metrics(render_arrays, truth_arrays) -> dict:
     """Every metric of one frame from the spec section 7 arrays of a render and its truth.
 
@@ -166,6 +176,8 @@ def frame_metrics(render_arrays, truth_arrays) -> dict:
     flip = flip_mean(render_arrays["image"], truth_arrays["image"])
     if flip is not None:
         out["flip_mean"] = flip
+    if "ldt_hit_position" in render_arrays and keys.REFLECTED_HIT in truth_arrays:
+        out["hit_distance"] = hit_distance(render_arrays["ldt_hit_position"], truth_arrays[keys.REFLECTED_HIT], rid, tid)
     vertices = {}
     for k in keys.reflectors(truth_arrays, keys.EXACT_REFLECTION_POINT):
         key = keys.EXACT_REFLECTION_POINT(k)

@@ -171,3 +171,20 @@ def test_ldt_estimate_counts_the_textures_and_bounds_the_traced_peak():
     assert frame_bytes(scene, RenderOptions(method="ldt", ldt_resolution=64, ldt_layers=1))["textures"] < est["textures"]
     with pytest.raises(LimitError, match="layered depth textures .* --ldt-resolution"):
         check_frame_memory(scene, RenderOptions(method="ldt", ldt_resolution=4096), limit="1G")
+
+
+def test_envmap_estimate_counts_the_cube_maps_and_bounds_the_traced_peak():
+    scene = refsoft.load_scene("sphere", width=160, height=120)
+    opts = RenderOptions(method="envmap", envmap_resolution=64)
+    FrameDriver(scene, opts).render_frame(0)  # compiled
+    tracemalloc.start()
+    try:
+        FrameDriver(scene, opts).render_frame(0)
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    est = frame_bytes(scene, opts)
+    assert peak < est["total"], (peak, est)
+    assert frame_bytes(scene, RenderOptions(method="envmap", envmap_resolution=128))["textures"] == 4 * est["textures"]
+    with pytest.raises(LimitError, match="cube maps .* --envmap-resolution"):
+        check_frame_memory(scene, RenderOptions(method="envmap", envmap_resolution=4096), limit="1G")

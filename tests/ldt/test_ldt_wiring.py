@@ -58,10 +58,10 @@ def test_cli_refuses_options_of_the_other_method(tmp_path, capsys, argv, match):
 
 def test_cli_render_writes_frames_stats_and_one_texture_file_per_reflected_object(tmp_path, capsys):
     out = tmp_path / "o"
-    assert cli.main(["render", "two_balls", "--method", "ldt", "--ldt-resolution", "32", "--ldt-linear", "texel",
+    assert cli.main(["render", "balls", "--method", "ldt", "--ldt-resolution", "32", "--ldt-linear", "texel",
                      "--frames", "2", "--width", "64", "--height", "48", "--out", str(out)]) == 0
     assert "method ldt" in capsys.readouterr().out
-    scene = refsoft.load_scene("two_balls", width=64, height=48)
+    scene = refsoft.load_scene("balls", width=64, height=48)
     targets = [k for k in range(1, len(scene.objects) + 1) if not scene.object_by_id(k).reflector]
     assert sorted(p.name for p in out.glob("ldt_*.npz")) == sorted(f"ldt_{j}.npz" for j in targets)
     for j in targets:  # the texture as built from the object's model mesh, bit for bit
@@ -80,3 +80,13 @@ def test_cli_render_writes_frames_stats_and_one_texture_file_per_reflected_objec
         assert z["ldt_object_distance"].shape == (len(targets), 48, 64)
         off = z["object_id"] != scene.reflector_ids[0]
         assert np.all(z["ldt_face"][off] == -1) and np.all(z["ldt_hit_distance"][off] == -1)
+    # compare takes the run against its truth and gives the per-pixel hit error
+    truth = tmp_path / "t"
+    assert cli.main(["truth", "balls", "--frames", "2", "--width", "64", "--height", "48", "--out", str(truth)]) == 0
+    capsys.readouterr()
+    assert cli.main(["compare", str(out), str(truth), "--out", str(tmp_path / "c")]) == 0
+    report = json.loads((tmp_path / "c" / "metrics.json").read_text())
+    for m in report["frames"]:
+        assert m["reflected_id_disagreement"] < 0.02
+        assert m["hit_distance"]["pixels"] > 0 and m["hit_distance"]["median"] < 0.05
+    assert "hit " in capsys.readouterr().out
