@@ -114,6 +114,26 @@ def truth_figure():
     write_png(os.path.join(FIG, "truth_compare.png"), np.concatenate(rows, axis=0))
 
 
+def methods_figure():
+    """The four ways to a reflection on two of the LDT paper's scenes (320x240, frame 0): the
+    truth, the vertex search (accurate preset), the layered depth textures and the environment
+    map, pictures above their agreement maps (the truth's column: its own image)."""
+    from refsoft.frame import FrameDriver, RenderOptions
+    from refsoft.truth.raytrace import TruthRenderer
+    from refsoft.visualize import agreement_map
+
+    rows = []
+    for name in ("touching", "hollow_box"):
+        scene = refsoft.load_scene(name, width=320, height=240)
+        t = TruthRenderer(scene, exact=False).render_frame(0).arrays
+        runs = [FrameDriver(scene, RenderOptions(**o)).render_frame(0).arrays
+                for o in (dict(), dict(method="ldt"), dict(method="envmap"))]
+        rows.append(side_by_side(t["image"], *[r["image"] for r in runs]))
+        rows.append(side_by_side(t["image"], *[agreement_map(r["reflected_id"], t["reflected_id"], t["image"])
+                                               for r in runs]))
+    write_png(os.path.join(FIG, "methods_compare.png"), np.concatenate(rows, axis=0))
+
+
 def accuracy_figure():
     """Agreement maps (green agrees with the truth, red not) of the six convex scenes at 640x480,
     a middle frame, cropped to the reflectors: the paper preset (left of each pair) and the
@@ -200,6 +220,7 @@ if __name__ == "__main__":
     trace_figure()
     frame_figure()
     truth_figure()
+    methods_figure()
     accuracy_figure()
     refine_figure()
     check_figure()

@@ -158,3 +158,8 @@ LONE_MARGIN = 2.0
 NOT_A_CANDIDATE = 3
 #: Half a pixel in snapped units: pixel centres lie at ``SUBPIXEL_ONE * k + SUBPIXEL_HALF``.
 SUBPIXEL_HALF = SUBPIXEL_ONE >> 1
+
+# --- The ray-traced truth ----------------------------------------------------------------------
+#: Embree traces the reflected rays split over the threads in parts of at least this many rays
+#: (fewer rays: one call; the split does not change any ray's answer).
+TRUTH_RAYS_PER_THREAD = 20000

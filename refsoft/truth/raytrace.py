@@ -24,7 +24,7 @@ import time
 
 import numpy as np
 
-from .. import keys
+from .. import constants, keys
 from ..errors import RefsoftError
 from ..frame.driver import FrameDriver, frame_indices, resolve_scene, run_to_folder
 from ..options import RenderOptions
@@ -110,6 +110,28 @@ class _Targets:
         mesh = trimesh.Trimesh(self.vertices, self.faces, process=False, validate=False)
         self.intersector = RayMeshIntersector(mesh)
 
+    def _trace(self, origins, directions):
+        """Embree's first hit per ray, the rays split over Numba's thread count (embreex releases
+        the GIL; each ray's answer is independent of the split, so the result is too)."""
+        import numba
+        from concurrent.futures import ThreadPoolExecutor
+
+        from trimesh import util
+        from trimesh.ray.ray_pyembree import _embree_dtype
+
+        # the arrays exactly as trimesh's intersects_first prepares them
+        o = np.array(origins, dtype=_embree_dtype)
+        d = np.ascontiguousarray(util.unitize(np.array(directions, dtype=_embree_dtype)))
+        n = len(o)
+        parts = max(1, min(numba.get_num_threads(), n // constants.TRUTH_RAYS_PER_THREAD))
+        if parts == 1:
+            return self.intersector._scene.run(o, d)
+        bounds = np.linspace(0, n, parts + 1).astype(np.int64)
+        with ThreadPoolExecutor(parts) as pool:
+            got = pool.map(lambda i: self.intersector._scene.run(o[bounds[i]:bounds[i + 1]], d[bounds[i]:bounds[i + 1]]),
+                           range(parts))
+            return np.concatenate(list(got))
+
     def first_hits(self, origins, directions):
         """Index of the first triangle hit by each ray (-1: none), hit points and object ids."""
         n = len(origins)
@@ -119,7 +141,7 @@ class _Targets:
         normal = np.zeros((n, 3))
         if self.empty or n == 0:
             return tri, hit, obj, normal
-        tri[:] = self.intersector.intersects_first(origins, directions)
+        tri[:] = self._trace(origins, directions)
         ok = np.flatnonzero(tri >= 0)
         f = self.faces[tri[ok]]
         t, bary = ray_triangle(origins[ok], directions[ok], self.vertices[f[:, 0]], self.vertices[f[:, 1]],

@@ -281,3 +281,27 @@ def test_primary_ray_kernel_equals_the_numpy_rays_and_hits():
         np.testing.assert_allclose(hit, o + t[:, None] * d, rtol=0, atol=1e-12)
         n = _interpolated_normals(ball.normals, ball.faces.astype(np.int64), tri, bary)
         np.testing.assert_allclose(ray, d - 2 * np.sum(d * n, axis=1, keepdims=True) * n, rtol=0, atol=1e-12)
+
+
+def test_reflected_rays_split_over_threads_hit_what_one_embree_call_hits():
+    """The rays are traced in parts, one per thread: the triangles hit are trimesh's
+    ``intersects_first`` of all the rays at once, for 1 and 2 threads."""
+    import numba
+
+    from refsoft.truth.raytrace import _Targets
+
+    scene = load_scene("sphere")
+    targets = _Targets(scene, [scene.world_mesh(k) for k in range(1, len(scene.objects) + 1)])
+    rng = np.random.default_rng(5)
+    n = 50_000
+    origins = rng.normal(0.0, 0.5, (n, 3))
+    directions = rng.normal(0.0, 1.0, (n, 3))
+    want = targets.intersector.intersects_first(origins, directions)
+    assert (want >= 0).sum() > n // 10  # many rays hit something
+    before = numba.get_num_threads()
+    try:
+        for threads in (1, 2):
+            numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+            np.testing.assert_array_equal(targets._trace(origins, directions), want)
+    finally:
+        numba.set_num_threads(before)
