@@ -8,6 +8,7 @@
   :mod:`refsoft.ldt._search`);
 - :mod:`refsoft.ldt.method`: :class:`LayeredDepthTextures`, the method behind the seam
   (:mod:`refsoft.seam`);
+- :mod:`refsoft.ldt.trace`: the replay of one pixel's search, step by step (:func:`trace_pixel`);
 - :mod:`refsoft.ldt.constants`: defaults, caps, the face table and the flag bits.
 """
 
@@ -15,5 +16,7 @@ from .build import LDT, build_ldt
 from .method import LayeredDepthTextures
 from .regions import cone_test
 from .search import Stack, search
+from .trace import PixelTrace, trace_pixel, write_pixel_trace
 
-__all__ = ["LDT", "build_ldt", "LayeredDepthTextures", "cone_test", "Stack", "search"]
+__all__ = ["LDT", "build_ldt", "LayeredDepthTextures", "cone_test", "Stack", "search", "PixelTrace", "trace_pixel",
+           "write_pixel_trace"]
