@@ -114,6 +114,20 @@ def truth_figure():
     write_png(os.path.join(FIG, "truth_compare.png"), np.concatenate(rows, axis=0))
 
 
+def ldt_trace_figure():
+    """The march of one pixel's LDT search (``refsoft trace balls --method ldt --pixel 240 236``)."""
+    import shutil
+    import tempfile
+
+    from refsoft.frame import RenderOptions
+    from refsoft.ldt.trace import trace_pixel, write_pixel_trace
+
+    tr = trace_pixel(refsoft.load_scene("balls"), 240, 236, options=RenderOptions(method="ldt"))
+    with tempfile.TemporaryDirectory() as tmp:
+        write_pixel_trace(tmp, tr)
+        shutil.copy(os.path.join(tmp, "trace.png"), os.path.join(FIG, "trace_ldt.png"))
+
+
 def methods_figure():
     """The four ways to a reflection on two of the LDT paper's scenes (320x240, frame 0): the
     truth, the vertex search (accurate preset), the layered depth textures and the environment
@@ -226,6 +240,7 @@ if __name__ == "__main__":
     check_figure()
     try:
         fill_rule_figure()
+        ldt_trace_figure()
     except ImportError:
         print("matplotlib missing: fill_rule.png not made (pip install '.[plot]')", file=sys.stderr)
     print(f"figures written to {FIG}")

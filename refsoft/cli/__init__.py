@@ -38,10 +38,15 @@ def build_parser() -> argparse.ArgumentParser:
     g.add_argument("--precision", choices=("float32", "float64"), default="float32", help="G-buffer precision")
     g.set_defaults(func=commands.cmd_gbuffer)
 
-    t = sub.add_parser("trace", parents=[scene, one_frame_options(), methods, out_option("out/trace")],
-                       help="replay one vertex's reflection-point search step by step")
-    t.add_argument("--vertex", type=int, required=True, metavar="I",
-                   help="index into the vertices of the non-reflector objects, in scene order")
+    t = sub.add_parser("trace", parents=[scene, one_frame_options(), methods, ldt_options(), out_option("out/trace")],
+                       help="replay one vertex's reflection-point search (or, --method ldt, one pixel's LDT "
+                            "search) step by step")
+    t.add_argument("--vertex", type=int, default=None, metavar="I",
+                   help="the vertex search: index into the vertices of the non-reflector objects, in scene order")
+    t.add_argument("--pixel", type=int, nargs=2, default=None, metavar=("ROW", "COL"),
+                   help="--method ldt: the reflector pixel whose search is replayed (row 0 at the top)")
+    t.add_argument("--bisection", action="store_true",
+                   help="--method ldt: list the bisection steps too")
     t.add_argument("--reflector", type=int, default=None, metavar="ID",
                    help="object id of the reflector (default: the first)")
     t.set_defaults(func=commands.cmd_trace)

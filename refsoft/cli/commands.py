@@ -8,7 +8,7 @@ import time
 import numpy as np
 
 from ..errors import RefsoftError
-from .options import render_kwargs, search_kwargs
+from .options import ldt_kwargs, render_kwargs, search_kwargs
 
 
 def _scene(args):
@@ -52,12 +52,46 @@ def cmd_gbuffer(args) -> int:
     return 0
 
 
+def _trace_ldt_pixel(args, scene) -> int:
+    from ..ldt.trace import trace_pixel, write_pixel_trace
+    from ..options import RenderOptions
+
+    given = [flag for flag, v in (("--vertex", args.vertex), ("--reflector", args.reflector),
+                                  ("--neighbourhood", args.neighbourhood), ("--inverse", args.inverse),
+                                  ("--widen", args.widen), ("--no-coherence", args.no_coherence or None))
+             if v is not None]
+    if given:
+        raise RefsoftError(f"{given[0]} is an option of the vertex search's trace; --method ldt traces --pixel ROW COL")
+    if args.pixel is None:
+        raise RefsoftError("--method ldt traces one reflector pixel: give --pixel ROW COL")
+    kwargs = {"method": "ldt", **ldt_kwargs(args)}
+    if args.precision is not None:
+        kwargs["precision"] = args.precision
+    tr = trace_pixel(scene, args.pixel[0], args.pixel[1], args.frame, options=RenderOptions(**kwargs))
+    print(tr.describe())
+    print(tr.table(bisection=args.bisection))
+    written = write_pixel_trace(args.out, tr)
+    print(f"wrote {args.out}/" + " and ".join(written)
+          + ("" if "trace.png" in written else " (no picture: pip install '.[plot]' for matplotlib)"))
+    return 0
+
+
 def cmd_trace(args) -> int:
     from ..search.pictures import write_trace
     from ..search.trace import trace_vertex
 
     scene = _scene(args)
     from ..options import RenderOptions
+
+    if args.method == "ldt":
+        return _trace_ldt_pixel(args, scene)
+    if args.method == "envmap":
+        raise RefsoftError("the environment map has no search to trace (a texel per direction): trace the vertex "
+                           "search (--vertex I) or the LDT (--method ldt --pixel ROW COL)")
+    if args.pixel is not None or args.bisection or ldt_kwargs(args):
+        raise RefsoftError("--pixel, --bisection and the --ldt-* options trace the LDT search: add --method ldt")
+    if args.vertex is None:
+        raise RefsoftError("give --vertex I (the vertex search) or --method ldt --pixel ROW COL")
 
     opts = search_kwargs(args)
     coherence = opts.pop("coherence", True)

@@ -90,3 +90,28 @@ def test_cli_render_writes_frames_stats_and_one_texture_file_per_reflected_objec
         assert m["reflected_id_disagreement"] < 0.02
         assert m["hit_distance"]["pixels"] > 0 and m["hit_distance"]["median"] < 0.05
     assert "hit " in capsys.readouterr().out
+
+
+def test_cli_trace_replays_one_pixel(tmp_path, capsys):
+    from refsoft.frame import FrameDriver
+
+    scene = refsoft.load_scene("balls", width=64, height=48)
+    frame = FrameDriver(scene, RenderOptions(method="ldt", ldt_resolution=32)).render_frame(0)
+    rows, cols = np.nonzero(frame.arrays["reflected_id"] > 0)
+    row, col = int(rows[len(rows) // 2]), int(cols[len(cols) // 2])
+    base = ["trace", "balls", "--width", "64", "--height", "48", "--out", str(tmp_path / "t")]
+    assert cli.main(base + ["--method", "ldt", "--ldt-resolution", "32", "--pixel", str(row), str(col),
+                            "--bisection"]) == 0
+    out = capsys.readouterr().out
+    assert f"pixel ({row}, {col})" in out and "result: object" in out and "b1" in out
+    got = json.loads((tmp_path / "t" / "trace.json").read_text())
+    assert got["result"]["face"] == int(frame.arrays["ldt_face"][row, col])
+    for argv, match in ((["--method", "ldt"], "give --pixel ROW COL"),
+                        (["--method", "ldt", "--pixel", "0", "0"], "not a reflector"),
+                        (["--method", "ldt", "--pixel", "1", "1", "--vertex", "3"], "--vertex is an option"),
+                        (["--pixel", "1", "1"], "add --method ldt"),
+                        (["--method", "envmap", "--pixel", "1", "1"], "no search to trace"),
+                        ([], "give --vertex I")):
+        assert cli.main(base + argv) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and match in err[0], (argv, err)
