@@ -46,17 +46,68 @@ def _drop_degenerate(v, faces):
     return faces[area > 1e-9 * area.max()]
 
 
-def icosphere(subdivisions: int = 3, radius: float = 1.0) -> Mesh:
-    """Subdivided icosahedron (trimesh), normals ``p / |p|``."""
-    import trimesh
+def _icosahedron():
+    """The regular icosahedron on the unit sphere: the rectangles (+-1, +-t, 0) of the golden
+    ratio t in the three coordinate planes, scaled by 1 / sqrt(1 + t^2), and its 20 faces
+    wound outwards (the usual table, the one trimesh's ``icosahedron`` has)."""
+    t = (1.0 + 5.0 ** 0.5) / 2.0
+    n = np.sqrt(1.0 + t * t)
+    a, b = 1.0 / n, t / n
+    v = np.array([[-a, b, 0], [a, b, 0], [-a, -b, 0], [a, -b, 0], [0, -a, b], [0, a, b], [0, -a, -b], [0, a, -b],
+                  [b, 0, -a], [b, 0, a], [-b, 0, -a], [-b, 0, a]], dtype=np.float64)
+    f = np.array([[0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9], [5, 11, 4], [11, 10, 2],
+                  [10, 7, 6], [7, 1, 8], [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8], [3, 8, 9], [4, 9, 5],
+                  [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1]], dtype=np.int64)
+    return v, f
 
+
+def split_in_four(vertices, faces, attributes=None):
+    """Every triangle split 1-to-4 at its edges' midpoints (one midpoint per edge, shared).
+
+    The vertices keep their indices; the midpoints follow, one per edge ``(a, b)``, ``a < b``,
+    in increasing ``(b, a)``; each face ``(i, j, k)`` becomes ``(i, m_ij, m_ki)``, ``(m_ij, j,
+    m_jk)``, ``(m_ki, m_jk, k)``, ``(m_ij, m_jk, m_ki)``, in face order. This is trimesh's
+    ``remesh.subdivide`` order, so meshes made with it before are the same, bit for bit
+    (``tests/scene/test_primitives.py``), without importing trimesh (a second at start-up).
+
+    Parameters
+    ----------
+    vertices : ndarray (V, 3) float64
+    faces : ndarray (F, 3) int
+    attributes : dict of str -> ndarray (V, d), optional
+        Per-vertex values averaged onto the midpoints like the positions.
+
+    Returns
+    -------
+    vertices (V + E, 3), faces (4F, 3) int64, and with ``attributes`` the dict of (V + E, d).
+    """
+    faces = np.asarray(faces, dtype=np.int64)
+    edges = np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    key = edges[:, 1] * (int(edges.max(initial=0)) + 1) + edges[:, 0]  # orders by (b, a)
+    _, unique, inverse = np.unique(key, return_index=True, return_inverse=True)
+    mid = inverse.reshape(-1, 3) + len(vertices)
+    new_faces = np.column_stack([faces[:, 0], mid[:, 0], mid[:, 2], mid[:, 0], faces[:, 1], mid[:, 1],
+                                 mid[:, 2], mid[:, 1], faces[:, 2], mid[:, 0], mid[:, 1], mid[:, 2]]).reshape(-1, 3)
+    new_vertices = np.vstack((vertices, vertices[edges[unique]].mean(axis=1)))
+    if attributes is None:
+        return new_vertices, new_faces
+    return new_vertices, new_faces, {k: np.vstack((a, a[edges[unique]].mean(axis=1))) for k, a in attributes.items()}
+
+
+def icosphere(subdivisions: int = 3, radius: float = 1.0) -> Mesh:
+    """Subdivided icosahedron, its vertices pushed onto the sphere after each split (the vertex
+    order of trimesh's ``creation.icosphere``), normals ``p / |p|``."""
     subdivisions = int(_positive(subdivisions + 1, "subdivisions", int)) - 1
     radius = _positive(radius, "radius")
     if subdivisions > 9:
         raise SceneError(f"icosphere subdivisions must be at most 9, got {subdivisions}")
-    m = trimesh.creation.icosphere(subdivisions=subdivisions, radius=radius)
-    v = np.asarray(m.vertices, dtype=np.float64)
-    return Mesh(v, m.faces, normalize_rows(v), name="icosphere")
+    v, f = _icosahedron()
+    for _ in range(max(subdivisions, 1)):
+        if subdivisions > 0:
+            v, f = split_in_four(v, f)
+        scalar = np.sqrt(np.dot(v ** 2, [1, 1, 1]))
+        v = v + (v / scalar.reshape((-1, 1))) * (radius - scalar).reshape((-1, 1))
+    return Mesh(v, f, normalize_rows(v), name="icosphere")
 
 
 def uv_sphere(rings: int = 32, segments: int = 64, radius: float = 1.0) -> Mesh:

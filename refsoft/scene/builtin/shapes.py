@@ -48,14 +48,14 @@ def quad(size=(2.0, 2.0)) -> Mesh:
 def subdivide_long_edges(mesh: Mesh, max_edge: float, max_rounds: int = 8) -> Mesh:
     """Split triangles 1-to-4 until no edge is longer than ``max_edge`` (for cans whose long
     thin triangles would otherwise reflect badly). Normals are interpolated and renormalised."""
-    import trimesh.remesh
+    from ..primitives import split_in_four
 
     v, f, n = mesh.vertices, mesh.faces.astype(np.int64), mesh.normals
     for _ in range(max_rounds):
         e = np.linalg.norm(v[f[:, [1, 2, 0]]] - v[f], axis=2).max()
         if e <= max_edge:
             break
-        v2, f2, attr = trimesh.remesh.subdivide(v, f, vertex_attributes={"n": n})
+        v2, f2, attr = split_in_four(v, f, {"n": n})
         v, f, n = v2, f2, attr["n"]
     return Mesh(v, f, normalize_rows(n), name=mesh.name)
 
