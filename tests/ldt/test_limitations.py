@@ -22,6 +22,7 @@ from refsoft import Camera, FrameDriver, RenderOptions, Scene, SceneObject, Tran
 from refsoft.errors import RefsoftError
 from refsoft.ldt import constants as C
 from refsoft.ldt.build import build_ldt, cube_of
+from refsoft.ldt.search import Stack, cube_matrices, search
 from refsoft.scene import primitives as P
 from refsoft.scene.builtin.ldt import closed_cylinder
 from refsoft.scene.mesh import Mesh
@@ -560,6 +561,20 @@ def test_degenerate_and_non_watertight_objects_do_not_break_the_search():
                     + (SceneObject("point", point, (1, 1, 1), Transform((1, 0, 1))),))
     with pytest.raises(RefsoftError, match="point"):
         ldt(scene, ldt_resolution=64)
+
+
+def test_counts_saturate_with_many_objects_on_one_ray():
+    """A ray through the cubes of 130 coinciding objects, missing every one: the int8 counts of
+    faces and objects stop at 127 instead of wrapping around; with 60 they are exact."""
+    ball = build_ldt(P.icosphere(2, 0.5), 16)
+    ray = dict(P=np.array([[0.45, 0.45, 0.0]]), N=np.array([[0.0, 0.0, 1.0]]))  # past the ball, in its cube
+    for k, want in ((60, 60), (130, 127)):
+        stack = Stack.of({j: ball for j in range(1, k + 1)})
+        W = cube_matrices(stack, {j: Transform((0.0, 0.0, 2.0)) for j in range(1, k + 1)})
+        res = search(ray["P"], ray["N"], np.zeros(3), [0], np.ones((1, k), bool), W, stack,
+                     view_dir=np.array([0.0, 0.0, -1.0]), regions="none")
+        assert res.object[0] == -1 and res.linear_samples[0] == 33 * k  # one face (+z) per object
+        assert res.objects_tested[0] == want and res.faces_searched[0] == want
 
 
 if __name__ == "__main__":  # print every figure the tests assert on
