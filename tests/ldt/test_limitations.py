@@ -577,6 +577,21 @@ def test_counts_saturate_with_many_objects_on_one_ray():
         assert res.objects_tested[0] == want and res.faces_searched[0] == want
 
 
+def test_a_scene_with_nothing_to_reflect():
+    """Only a mirror: no LDT is built, every reflector pixel shows the mirror's own colour, as
+    in the truth and the environment map."""
+    scene = Scene((mirror(2),), Camera(eye=(0, 0, 4), target=(0, 0, 0), width=32, height=24), name="lonely")
+    arrays, method = ldt(scene, ldt_resolution=16)
+    t = truth(scene)
+    refl = t["reflected_id"] >= 0
+    assert refl.sum() > 100 and method.ldts == {}
+    np.testing.assert_array_equal(arrays["reflected_id"], t["reflected_id"])
+    np.testing.assert_array_equal(arrays["image"], t["image"])
+    assert arrays["ldt_object_distance"].shape == (0, 24, 32) and arrays["ldt_object_ids"].shape == (0,)
+    assert np.all(arrays["ldt_hit_distance"] == -1) and np.all(arrays["ldt_objects_tested"] == 0)
+    np.testing.assert_array_equal(envmap(scene, 16)["reflected_id"], t["reflected_id"])
+
+
 if __name__ == "__main__":  # print every figure the tests assert on
     import pprint
 
