@@ -1,4 +1,4 @@
-"""The environment-map baseline (DESIGN-ldt section 5): per reflector and frame a cube map of the
+"""The environment-map baseline (docs/envmap.md): per reflector and frame a cube map of the
 reflected objects around the reflector's centre, looked up by the reflected direction alone.
 
 - :mod:`refsoft.envmap.cube`: GL's face table, the face projections, the build

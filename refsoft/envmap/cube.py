@@ -1,4 +1,4 @@
-"""The cube map of the environment-map baseline (DESIGN-ldt sections 2.2 and 5): GL's face table,
+"""The cube map of the environment-map baseline (docs/envmap.md; the face table of docs/ldt.md): GL's face table,
 the six 90-degree face projections, the build by the rasterizer and the nearest-texel lookup.
 
 Faces are numbered in OpenGL order, 0 +X, 1 -X, 2 +Y, 3 -Y, 4 +Z, 5 -Z (axis ``f // 2``, sign +1
@@ -11,7 +11,7 @@ for even ``f``). For a direction ``d`` on face ``f`` the table of the GL specifi
 
 with ``ma = sigma_f d_{a_f}`` (``|d_a|`` on the face's own side), ``s = (sc / ma + 1) / 2``,
 ``t = (tc / ma + 1) / 2``, texel column ``clamp(floor(s R), 0, R - 1)`` and row
-``R - 1 - clamp(floor(t R), 0, R - 1)`` (row 0 at the top, DESIGN section 2). Face ``f`` is
+``R - 1 - clamp(floor(t R), 0, R - 1)`` (row 0 at the top, docs/conventions.md). Face ``f`` is
 rendered with clip coordinates ``(sc, tc, A ma - B', ma)``, so the rasterizer's pixel (row, col)
 is exactly the texel (row, col) of the lookup.
 """
@@ -29,7 +29,7 @@ from ..scene.mesh import concatenate
 
 #: Face names in OpenGL order.
 FACE_NAMES = ("+X", "-X", "+Y", "-Y", "+Z", "-Z")
-#: ``far = FAR_MARGIN * max |X - c|`` over the reflected vertices (DESIGN-ldt section 5).
+#: ``far = FAR_MARGIN * max |X - c|`` over the reflected vertices (docs/envmap.md).
 FAR_MARGIN = 1.01
 #: ``near = NEAR_RATIO * far``.
 NEAR_RATIO = 1e-4
@@ -76,7 +76,7 @@ def select_face(r) -> np.ndarray:
 
 
 def lookup(r, resolution: int = 256):
-    """Nearest-texel cube-map lookup of directions (DESIGN-ldt section 5), in ``r``'s dtype.
+    """Nearest-texel cube-map lookup of directions (docs/envmap.md), in ``r``'s dtype.
 
     Parameters
     ----------
@@ -171,7 +171,7 @@ class CubeMap:
 
 
 def build_cube_map(meshes, ids, colors, center, resolution: int = 256) -> CubeMap:
-    """Render the six faces of a cube map around ``center`` (DESIGN-ldt section 5): every mesh,
+    """Render the six faces of a cube map around ``center`` (docs/envmap.md): every mesh,
     both windings, by the rasterizer (LESS, the first drawn wins ties, so lower ids win), each
     texel storing :func:`refsoft.raster.shade` of the interpolated normal and the object id.
 

@@ -1,4 +1,4 @@
-"""The environment map as a reflection method (:mod:`refsoft.seam`; DESIGN-ldt section 5).
+"""The environment map as a reflection method (:mod:`refsoft.seam`; docs/envmap.md).
 
 Per reflector and frame: a cube map around the centre of the reflector's world AABB
 (:func:`refsoft.envmap.cube.build_cube_map`, stage ``envmap_build``), then at each stencil pixel
@@ -35,7 +35,7 @@ ENVMAP_CENTER = keys.PerReflector("envmap_center")
 
 @dataclass(eq=False)
 class Rays:
-    """The reflected rays of a reflector's stencil pixels (DESIGN-ldt section 2.6).
+    """The reflected rays of a reflector's stencil pixels (the LDT's rays, docs/ldt.md).
 
     Attributes
     ----------
@@ -141,7 +141,7 @@ class EnvmapState:
 
 class EnvironmentMap:
     """The environment-map baseline for every reflector of a scene (the :mod:`refsoft.seam`
-    interface; DESIGN-ldt section 5).
+    interface; docs/envmap.md).
 
     Keeps each reflector's last cube map and reuses it while no object moves (the cube map
     depends on the objects' transforms only: the outputs are the same bit for bit).

@@ -263,8 +263,9 @@ def search_pixels(P, N, eye, ortho, view_dir, tri, region, use_regions, W, depth
                 best_flags = (START_INSIDE if cand[9] else 0) | (0 if accepted else NO_FACE_WITHIN_TAU)
         samples_out[i] = samples
         steps_out[i] = steps
-        faces_out[i] = faces
-        objects_out[i] = objects
+        # int8 outputs: saturate (more than 42 objects searched on three faces would wrap around)
+        faces_out[i] = min(faces, 127)
+        objects_out[i] = min(objects, 127)
         if best_k < 0:
             t_out[i] = -one
             obj_out[i] = -1

@@ -198,7 +198,8 @@ class LayeredDepthTextures:
         res = search(P, N, cam.eye, tri, table, W, self.stack, view_dir, self.linear, self.tau, self.faces,
                      self.regions, self.precision)
         got = res.object >= 0
-        ids = np.where(got, self.stack.ids[np.maximum(res.object, 0)], 0).astype(np.int32)
+        ids = np.zeros(len(got), np.int32)  # (a scene may have no reflected object: ids is then empty)
+        ids[got] = self.stack.ids[res.object[got]]
         colour = self.colours(view, res, ids)
         h, w = r1 - r0, c1 - c0
         rr, cc = rows - r0, cols - c0

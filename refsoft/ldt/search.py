@@ -104,7 +104,8 @@ class PixelSearch:
     linear_samples, binary_steps : (n,) int32
         Totals over every object and face searched.
     faces_searched, objects_tested : (n,) int8
-        Faces searched; objects whose cube the ray meets and that the regions did not skip.
+        Faces searched; objects whose cube the ray meets and that the regions did not skip (both
+        saturating at 127).
     flags : (n,) uint8
         :mod:`refsoft.ldt.constants` bits.
     object_distance : (n, K) fp

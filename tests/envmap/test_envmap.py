@@ -1,4 +1,4 @@
-"""The environment-map baseline (DESIGN-ldt section 5): GL's face table, ties, the texel round
+"""The environment-map baseline (docs/envmap.md): GL's face table, ties, the texel round
 trip, the build against ray casts from the cube's centre, the reflected rays against the truth's,
 parallax against the ray-traced truth, exact reuse and determinism."""
 
