@@ -64,6 +64,9 @@ SILHOUETTE_RULES = ("texel", "clip")
 SKIPS = ("cull_reflectors", "reuse", "cull_virtual", "crop_virtual")
 #: Adaptive tessellation levels accepted.
 MAX_TESSELLATION_LEVEL = 8
+#: The kinds of output ``refsoft check --kinds`` selects (refsoft.conformance.check.output_kind).
+CHECK_KINDS = ("coverage", "gbuffer", "pixel", "virtual", "flags", "vertex_object", "iterations", "score", "margin",
+               "image", "ids", "trace")
 
 # --- Camera validation ---------------------------------------------------------------------
 #: |cross(forward, up)| below this means up is parallel to the view direction.

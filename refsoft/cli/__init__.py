@@ -10,6 +10,7 @@ import argparse
 import sys
 
 from . import commands
+from .. import constants
 from .options import (frame_range_options, memory_options, method_options, one_frame_options, out_option,
                       render_options, run_folder_options, scene_options)
 
@@ -89,6 +90,10 @@ def _port_commands(sub):
     ck.add_argument("--out", default="out/check", metavar="DIR",
                     help="report folder, outside the golden and candidate folders (default: out/check)")
     ck.add_argument("--case", action="append", default=None, metavar="NAME", help="only this case (repeatable)")
+    ck.add_argument("--kinds", action="append", default=None, metavar="KIND[,KIND...]",
+                    help="only these kinds of output, the others neither judged nor required (repeatable or "
+                         "comma-separated): " + ", ".join(constants.CHECK_KINDS) + "; default all: a case or an "
+                         "output the candidate lacks fails")
     ck.add_argument("--verbose", action="store_true", help="also print the outputs that pass")
     ck.set_defaults(func=commands.cmd_check)
 

@@ -181,7 +181,8 @@ def cmd_golden(args) -> int:
 def cmd_check(args) -> int:
     from ..conformance.check import MAGNIFY, STATUSES, check
 
-    summary = check(args.golden, args.candidate, loose=args.loose, out=args.out, cases=args.case, progress=True)
+    summary = check(args.golden, args.candidate, loose=args.loose, out=args.out, cases=args.case, progress=True,
+                    kinds=args.kinds)
     findings = summary.pop("_findings")
     for f in findings:
         if f.status != "pass" or args.verbose:
@@ -193,6 +194,8 @@ def cmd_check(args) -> int:
         print(f"{kind:<16}" + "".join(f"{n[s]:>9}" for s in STATUSES))
     c, n_pics = summary["counts"], len(summary["pictures"])
     verdict = "PASSED" if summary["passed"] else "FAILED"
+    if c["missing"]:
+        print(f"{c['missing']} output(s) missing: a port providing a subset says so with --case and --kinds")
     print(f"{verdict}: {c['pass']} pass, {c['accepted']} accepted (yellow), {c['fail']} fail, {c['missing']} missing; "
           f"summary.json and {n_pics} picture{'' if n_pics == 1 else 's'} ({MAGNIFY}x) of what did not pass in "
           f"{args.out}")

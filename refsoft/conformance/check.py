@@ -6,7 +6,9 @@ Each output is compared by the rule of its kind and gets a status:
 - ``accepted``: different within the rule's tolerance (ULP, ties, ambiguous edge pixels); shown
   yellow and counted, never a failure;
 - ``fail``: beyond the tolerance; ``refsoft check`` then exits with status 1;
-- ``missing``: the candidate lacks it (listed, never silently passed); a missing or altered
+- ``missing``: the candidate lacks it (a whole case frame, or one output): a failure like
+  ``fail``, unless the candidate said it provides a subset (``cases``, ``kinds``: the outputs of
+  other cases and kinds are then neither judged nor required); a missing or altered
   *reference* file is a failure.
 
 Rules (tolerances in :mod:`refsoft.constants`, the kinds in the table of ``docs/ports.md``):
@@ -40,9 +42,50 @@ STATUSES = ("pass", "accepted", "fail", "missing")
 MAGNIFY = 4
 
 
+#: The kinds of output ``--kinds`` selects (each key of a frame belongs to one, :func:`output_kind`).
+KINDS = constants.CHECK_KINDS
+_PER_REFLECTOR_KINDS = {keys.GBUFFER_MASK: "coverage", keys.GBUFFER_POSITION: "gbuffer",
+                        keys.GBUFFER_NORMAL: "gbuffer", keys.GBUFFER_VIEW_PROJ: "gbuffer",
+                        keys.REFLECTION_PIXEL: "pixel", keys.VIRTUAL_VERTEX: "virtual", keys.FLAGS: "flags",
+                        keys.VERTEX_OBJECT: "vertex_object", keys.ITERATIONS: "iterations", keys.SCORE: "score",
+                        keys.MARGIN: "margin"}
+_FRAME_KINDS = {keys.IMAGE: "image", keys.OBJECT_ID: "ids", keys.REFLECTED_ID: "ids"}
+#: Arrays of the golden frames that only the oracle writes (what the rules read about the
+#: oracle itself): a candidate need not have them, and they are not judged.
+ORACLE_ONLY = ()
+
+
+def output_kind(key: str) -> str:
+    """The kind of output a frame's key is (:data:`KINDS`); ``"frame"`` for a whole frame
+    (``"*"``), ``"other"`` for a key refsoft does not know."""
+    if key == "*":
+        return "frame"
+    if key.startswith("traces_"):
+        return "trace"
+    if key in _FRAME_KINDS:
+        return _FRAME_KINDS[key]
+    p = keys.parse(key)
+    if p is not None and p[0] in _PER_REFLECTOR_KINDS:
+        return _PER_REFLECTOR_KINDS[p[0]]
+    return "other"
+
+
+def check_kinds(kinds):
+    """``kinds`` (None: all) as a tuple of :data:`KINDS`; an unknown name is refused."""
+    if kinds is None:
+        return KINDS
+    kinds = [k for item in kinds for k in str(item).split(",") if k]
+    bad = [k for k in kinds if k not in KINDS]
+    if bad or not kinds:
+        raise RefsoftError(f"unknown kind of output {bad[0]!r} (kinds: {', '.join(KINDS)})" if bad else
+                           f"--kinds names no kind (kinds: {', '.join(KINDS)})")
+    return tuple(k for k in KINDS if k in kinds)
+
+
 @dataclass
 class Finding:
-    """One output of one case and frame, judged by its rule."""
+    """One output of one case and frame, judged by its rule: ``kind`` is the kind of output
+    (:func:`output_kind`), ``rule`` the rule that judged it."""
 
     case: str
     frame: int
@@ -54,6 +97,7 @@ class Finding:
     total: int = 0
     worst: str = ""
     details: list = field(default_factory=list)
+    rule: str = ""
 
     def line(self) -> str:
         share = f" ({self.count}/{self.total}, {100 * self.count / max(self.total, 1):.3g}%)" if self.total else ""
@@ -61,8 +105,8 @@ class Finding:
         return f"{self.status.upper():8s} {self.case} frame {self.frame} {self.key} [{self.kind}]: {self.message}{share}{worst}"
 
     def to_dict(self) -> dict:
-        return {k: getattr(self, k) for k in ("case", "frame", "key", "kind", "status", "message", "count", "total",
-                                              "worst", "details")}
+        return {k: getattr(self, k) for k in ("case", "frame", "key", "kind", "rule", "status", "message", "count",
+                                              "total", "worst", "details")}
 
 
 def _f32_ulp(x):
@@ -177,8 +221,8 @@ def _compare_float_field(ctx, key, g, c, cover, extent, normals=False):
 
 
 class _Context:
-    def __init__(self, case, frame, entry, out):
-        self.case, self.frame, self.entry, self.out = case, frame, entry, out
+    def __init__(self, case, frame, entry, out, kinds=KINDS):
+        self.case, self.frame, self.entry, self.out, self.kinds = case, frame, entry, out, kinds
         self.findings = []
         self.pictures = []  # file names written into out
         self._oracle = None
@@ -188,8 +232,9 @@ class _Context:
             self._oracle = _Oracle(self.entry, self.frame)
         return self._oracle
 
-    def finding(self, key, kind, status, message="", count=0, total=0, worst="", details=None):
-        f = Finding(self.case, self.frame, key, kind, status, message, int(count), int(total), worst, details or [])
+    def finding(self, key, rule, status, message="", count=0, total=0, worst="", details=None):
+        f = Finding(self.case, self.frame, key, output_kind(key), status, message, int(count), int(total), worst,
+                    details or [], rule)
         self.findings.append(f)
         return f
 
@@ -301,20 +346,27 @@ def _first_divergence(expected, observed):
     return None
 
 
-def _compare_vertices(ctx, k, G, C, cand_traces, prev_pixels):
+def _compare_vertices(ctx, k, G, C, cand_traces, prev_pixels, usable):
     """The per-vertex outputs of reflector ``k``: reflection pixels (ties by the oracle's scores),
-    virtual vertices, flags and vertex objects, iterations, scores, and supplied traces."""
+    virtual vertices, flags and vertex objects, iterations, scores, and supplied traces.
+    ``usable(key)``: the candidate has the key, of the right shape and dtype, and its kind is
+    checked. Without the candidate's pixels (their kind not checked), the other outputs are
+    judged as if every pixel agreed."""
     from ..search import CULLED
 
     live = (G[keys.FLAGS(k)] & CULLED) == 0
-    gp, cp = G[keys.REFLECTION_PIXEL(k)], C[keys.REFLECTION_PIXEL(k)]
-    agree = live & np.all(gp == cp, axis=1)
-    findings, tie = _compare_pixels(ctx, k, G, C, live, agree, cand_traces, prev_pixels)
-    _paint_pixels(ctx, k, G, live, agree, tie)
+    if usable(keys.REFLECTION_PIXEL(k)):
+        gp, cp = G[keys.REFLECTION_PIXEL(k)], C[keys.REFLECTION_PIXEL(k)]
+        agree = live & np.all(gp == cp, axis=1)
+        findings, tie = _compare_pixels(ctx, k, G, C, live, agree, cand_traces, prev_pixels)
+        _paint_pixels(ctx, k, G, live, agree, tie)
+    else:
+        findings, agree, tie = [], live, np.zeros(len(live), dtype=bool)
     n = int(live.sum())
-    findings += _compare_virtual(ctx, k, G, C, agree, tie)
+    if usable(keys.VIRTUAL_VERTEX(k)):
+        findings += _compare_virtual(ctx, k, G, C, agree, tie)
     for name, kind in ((keys.FLAGS(k), "flags"), (keys.VERTEX_OBJECT(k), "ids")):
-        if _comparable(G, C, name):
+        if usable(name):
             bad = agree & (G[name] != C[name])
             if bad.any():
                 i = int(np.flatnonzero(bad)[0])
@@ -323,7 +375,7 @@ def _compare_vertices(ctx, k, G, C, cand_traces, prev_pixels):
             else:
                 findings.append(ctx.finding(name, kind, "pass", "identical where the pixels agree", 0, n))
     name = keys.ITERATIONS(k)
-    if _comparable(G, C, name):
+    if usable(name):
         bad = agree & (G[name] != C[name])
         i = int(np.flatnonzero(bad)[0]) if bad.any() else None
         worst = f"vertex {i}: expected {G[name][i]} / observed {C[name][i]}" if bad.any() else ""
@@ -332,15 +384,11 @@ def _compare_vertices(ctx, k, G, C, cand_traces, prev_pixels):
                                     f"{ITERATION_SHARE_MAX:.0%} allowed)" if bad.any() else "identical", int(bad.sum()), n,
                                     worst))
     name = keys.SCORE(k)
-    if _comparable(G, C, name):
+    if usable(name):
         findings += _compare_float_field(ctx, name, G[name], C[name], agree, 0.0)
-    if cand_traces is not None and k in cand_traces:
+    if cand_traces is not None and k in cand_traces and "trace" in ctx.kinds:
         findings.append(_compare_traces(ctx, k, live, cand_traces[k], prev_pixels))
     return findings
-
-
-def _comparable(G, C, name) -> bool:
-    return name in G and name in C and G[name].shape == C[name].shape
 
 
 def _compare_pixels(ctx, k, G, C, live, agree, cand_traces, prev_pixels):
@@ -417,8 +465,6 @@ def _compare_virtual(ctx, k, G, C, agree, tie) -> list:
     from ..search.method import virtual_relative
 
     vk = keys.VIRTUAL_VERTEX(k)
-    if not _comparable(G, C, vk):
-        return []
     gv, cv = G[vk].astype(np.float64), C[vk].astype(np.float64)
     if tie.any():
         o = ctx.oracle()
@@ -456,12 +502,20 @@ def _vertex_keys(k):
     return {name(k) for name in keys.VERTEX_ARRAYS}
 
 
+def _oracle_only(key) -> bool:
+    p = keys.parse(key)
+    return p is not None and p[0] in ORACLE_ONLY
+
+
 def check_frame(ctx, G, C, loose, cand_traces=None, prev_pixels=None):
-    """Judge every output of one frame; appends to ``ctx.findings``."""
+    """Judge every output of one frame whose kind ``ctx.kinds`` names; appends to
+    ``ctx.findings``. An output the candidate lacks is ``missing`` (a failure)."""
     reflectors = keys.reflectors(G)
     vertex_keys = set().union(*[_vertex_keys(k) for k in reflectors]) if reflectors else set()
-    broken = set()
+    broken = {key for key in G if _oracle_only(key) or output_kind(key) not in ctx.kinds + ("other",)}
     for key in sorted(G):
+        if key in broken:
+            continue
         if key not in C:
             ctx.finding(key, "presence", "missing", "not in the candidate's outputs")
             broken.add(key)
@@ -502,9 +556,8 @@ def check_frame(ctx, G, C, loose, cand_traces=None, prev_pixels=None):
             same = np.array_equal(g, c, equal_nan=True)
             ctx.finding(key, "other", "pass" if same else "accepted", "identical" if same else "differs (not judged)")
     for k in reflectors:
-        if keys.REFLECTION_PIXEL(k) in broken or keys.FLAGS(k) in broken:
-            continue
-        _compare_vertices(ctx, k, G, C, cand_traces, prev_pixels.get(k) if prev_pixels else None)
+        _compare_vertices(ctx, k, G, C, cand_traces, prev_pixels.get(k) if prev_pixels else None,
+                          lambda key: key in G and key not in broken)
 
 
 def _check_report_folder(out, golden, candidate):
@@ -544,7 +597,7 @@ def by_kind(findings) -> dict:
     return dict(sorted(out.items()))
 
 
-def check(golden, candidate, loose=False, out=None, cases=None, progress=False) -> dict:
+def check(golden, candidate, loose=False, out=None, cases=None, progress=False, kinds=None) -> dict:
     """Compare a candidate folder with a golden set; returns the summary (also written to
     ``out/summary.json`` when ``out`` is given).
 
@@ -559,7 +612,11 @@ def check(golden, candidate, loose=False, out=None, cases=None, progress=False) 
         that did not pass, its error mask (and the image's difference), magnified
         :data:`MAGNIFY` times. Pictures an earlier report there listed are removed first.
     cases : list of str, optional
-        Only these cases.
+        Only these cases (the others are excluded, not missing).
+    kinds : list of str, optional
+        Only these kinds of output (:data:`KINDS`; names may also be comma-separated): the
+        others are neither judged nor required. By default every kind: an output or a case
+        frame the candidate lacks is ``missing``, which fails the check like ``fail``.
 
     Raises
     ------
@@ -572,6 +629,7 @@ def check(golden, candidate, loose=False, out=None, cases=None, progress=False) 
     from ..io import read_npz, write_json
 
     golden, candidate = os.fspath(golden), os.fspath(candidate)
+    kinds = check_kinds(kinds)
     manifest = read_manifest(golden)
     if not os.path.isdir(candidate):
         raise RefsoftError(f"{candidate} is not a folder")
@@ -598,7 +656,7 @@ def check(golden, candidate, loose=False, out=None, cases=None, progress=False) 
     prev = {}
     for entry, f in it:
         name = entry["name"]
-        ctx = _Context(name, f, entry, out)
+        ctx = _Context(name, f, entry, out, kinds)
         rel = f"{name}/frame_{f:04d}.npz"
         gpath = os.path.join(golden, rel)
         if not os.path.isfile(gpath) or manifest["files"].get(rel) != sha256(gpath):
@@ -621,7 +679,8 @@ def check(golden, candidate, loose=False, out=None, cases=None, progress=False) 
     counts = {s: sum(1 for f in findings if f.status == s) for s in STATUSES}
     summary = {"golden": os.path.abspath(golden), "candidate": os.path.abspath(candidate), "loose": bool(loose),
                "golden_refsoft": manifest.get("refsoft"), "golden_git": manifest.get("git"),
-               "passed": counts["fail"] == 0, "counts": counts, "by_kind": by_kind(findings),
+               "cases": [e["name"] for e in entries], "kinds": list(kinds),
+               "passed": counts["fail"] == 0 and counts["missing"] == 0, "counts": counts, "by_kind": by_kind(findings),
                "missing_files": missing_cases, "pictures": pictures, "findings": [f.to_dict() for f in findings]}
     if out is not None:
         write_json(os.path.join(out, "summary.json"), summary)

@@ -228,17 +228,53 @@ def test_missing_outputs_and_references(golden, tmp_path):
     shutil.copytree(golden, cand)
     os.remove(cand / "sphere" / "frame_0000.npz")
     s = check(golden, cand, cases=["sphere", "pixel_grid"])
-    assert s["passed"] and s["missing_files"] == ["sphere/frame_0000.npz"]  # listed, not failed
+    assert not s["passed"] and s["missing_files"] == ["sphere/frame_0000.npz"]  # listed, and a failure
+    assert ("*", "missing") in _statuses(s) and s["counts"]["fail"] == 0 and s["counts"]["missing"] == 1
     with np.load(cand / "pixel_grid" / "frame_0000.npz") as z:
         part = {k: z[k] for k in z.files if k != "image"}
     write_npz(cand / "pixel_grid" / "frame_0000.npz", **part)
     s = check(golden, cand, cases=["pixel_grid"])
-    assert ("image", "missing") in _statuses(s)
+    assert not s["passed"] and ("image", "missing") in _statuses(s)
     bad_golden = tmp_path / "bad_golden"
     shutil.copytree(golden, bad_golden)
     os.remove(bad_golden / "pixel_grid" / "frame_0000.npz")
     s = check(bad_golden, golden, cases=["pixel_grid"])
     assert not s["passed"] and ("*", "fail") in _statuses(s)  # a missing reference fails
+
+
+def test_a_subset_passes_only_when_the_candidate_says_so(golden, tmp_path, capsys):
+    """A candidate without a whole case, or without one kind of output, fails (exit 1), and
+    passes once it excludes them with --case or --kinds."""
+    cand = tmp_path / "cand"
+    cand.mkdir()
+    for case in ("sphere", "planar"):
+        shutil.copytree(golden / case, cand / case)
+    for f in (cand / "planar").glob("frame_*.npz"):  # no virtual vertices, scores or margins
+        with np.load(f) as z:
+            write_npz(f, **{k: z[k] for k in z.files if not k.startswith(("virtual_vertex_", "score_", "margin_"))})
+    r = str(tmp_path / "r")
+    assert cli.main(["check", str(golden), str(cand), "--out", r]) == 1  # 19 cases missing
+    out = capsys.readouterr().out
+    assert "MISSING  ellipsoid frame 0 *" in out and "FAILED" in out and "--kinds" in out
+    assert cli.main(["check", str(golden), str(cand), "--case", "sphere", "--case", "planar", "--out", r]) == 1
+    out = capsys.readouterr().out
+    assert "MISSING  planar frame 1 virtual_vertex_1 [virtual]" in out and "score_1 [score]" in out
+    s = check(golden, cand, cases=["sphere", "planar"], kinds=["coverage,gbuffer,pixel", "flags", "vertex_object",
+                                                               "iterations", "image", "ids", "trace"])
+    assert s["passed"] and s["counts"]["missing"] == 0 and _flagged(s) == []
+    assert not {"virtual", "score", "margin"} & {f.kind for f in s["_findings"]}  # excluded: not judged
+    assert {"pixel", "iterations", "flags"} <= {f.kind for f in s["_findings"] if f.case == "planar"}
+    assert cli.main(["check", str(golden), str(cand), "--case", "sphere", "--case", "planar", "--out", r,
+                     "--kinds", "coverage,gbuffer,pixel,flags,vertex_object,iterations,image,ids"]) == 0
+    assert "PASSED" in capsys.readouterr().out
+    assert cli.main(["check", str(golden), str(cand), "--kinds", "pixels", "--out", r]) == 2
+    assert "unknown kind of output 'pixels'" in capsys.readouterr().err
+    # without the reflection pixels, the other per-vertex outputs are judged as if they agreed
+    s = check(golden, cand, cases=["planar"], kinds=["iterations", "flags"])
+    assert s["passed"] and {f.kind for f in s["_findings"]} == {"iterations", "flags"}
+    broken = _candidate(golden, tmp_path / "b", "sphere", 0, lambda a: a["flags_1"].__setitem__(slice(0, 9), 8))
+    s = check(golden, broken, cases=["sphere"], kinds=["flags"])
+    assert not s["passed"] and ("flags_1", "fail") in _statuses(s)
 
 
 def test_cli_exit_codes(golden, tmp_path, capsys, monkeypatch):
