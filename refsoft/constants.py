@@ -73,9 +73,14 @@ CHECK_KINDS = ("coverage", "gbuffer", "pixel", "virtual", "flags", "vertex_objec
 CAMERA_PARALLEL_TOL = 1e-9
 
 # --- Conformance (spec section 8) --------------------------------------------------------
-#: Two reflection pixels are a tie when the oracle's scores differ by at most this many float32
-#: ULP of the better one (``refsoft check``, ``refsoft.conformance.precision``).
-TIE_ULPS = 8
+#: Two reflection pixels are a tie when the oracle's scores of both differ by at most
+#: ``TIE_K * TIE_EPS * (1 + 1 / |U + B|)``, with U and B the two unit directions the score adds
+#: at the oracle's pixel (``refsoft check``, ``refsoft.conformance.precision``): normalising
+#: ``U + B`` amplifies the rounding of U and B by ``1 / |U + B|``, large near grazing angles.
+TIE_K = 8
+#: The unit of that bound: one float32 ULP of a number in [0.5, 1), where scores near the
+#: optimum lie.
+TIE_EPS = 2.0 ** -24
 #: Float outputs (G-buffer positions and normals, virtual vertices, scores) pass within this many
 #: float32 ULP of the oracle's...
 F32_ULP_TOL = 4

@@ -16,8 +16,9 @@ shapes, dtypes and non-finite masks identical; G-buffer coverage identical excep
 centre lies within 1e-4 px of an edge of the oracle's projected (unsnapped) triangles; positions,
 normals, view-projection, scores and virtual vertices within 4 float32 ULP or 1e-6 of the scene's
 extent (normals also by angle, 1e-4 rad); reflection pixels identical, a differing pixel accepted
-as a tie when the oracle's own scores of both pixels differ by at most 8 float32 ULP of the
-better (the oracle's G-buffer is rebuilt for this), failing beyond 1% ties; virtual vertices of
+as a tie when the oracle's own scores of both pixels differ by at most 8 x 2^-24 x (1 + 1 /
+|U + B|), U and B the unit directions the score adds at the oracle's pixel (the oracle's
+G-buffer is rebuilt for this), failing beyond 1% ties; virtual vertices of
 ties recomputed from the candidate's pixel; flags and vertex objects identical where the pixels
 agree, iterations likewise up to 1% of vertices; 8-bit images within 1 per channel (``loose``:
 4, with a 1-pixel window and at most 0.1% of pixels failing). ``object_id`` and
@@ -392,9 +393,11 @@ def _compare_vertices(ctx, k, G, C, cand_traces, prev_pixels, usable):
 
 
 def _compare_pixels(ctx, k, G, C, live, agree, cand_traces, prev_pixels):
-    """The reflection-pixel rule: identical, or a tie by the oracle's own scores of both pixels.
-    Returns (findings, tie (N,) bool)."""
+    """The reflection-pixel rule: identical, or a tie by the oracle's own scores of both pixels,
+    within the bound of :func:`refsoft.conformance.precision.tie_bound` for the score's
+    conditioning ``|U + B|`` at the oracle's pixel. Returns (findings, tie (N,) bool)."""
     from ..search import HIDDEN, scores_at
+    from .precision import score_condition, tie_bound
 
     gp, cp, gflags = G[keys.REFLECTION_PIXEL(k)], C[keys.REFLECTION_PIXEL(k)], G[keys.FLAGS(k)]
     n = int(live.sum())
@@ -409,12 +412,14 @@ def _compare_pixels(ctx, k, G, C, live, agree, cand_traces, prev_pixels):
         s_g = scores_at(gb, eye, o.verts[differ], gp[differ], inverse).astype(np.float64)
         s_c = scores_at(gb, eye, o.verts[differ], cp[differ], inverse).astype(np.float64)
         covered = s_c > constants.NO_SCORE
-        best = np.maximum(s_g, s_c)
-        ok = covered & (np.abs(s_g - s_c) <= constants.TIE_ULPS * _f32_ulp(best))
+        cond = score_condition(gb, eye, o.verts[differ], gp[differ], inverse)
+        bound = tie_bound(cond)
+        ok = covered & (np.abs(s_g - s_c) <= bound)
         tie[differ[ok]] = True
         for j, i in enumerate(differ[:5]):
             msg = (f"vertex {int(i)}: expected {_where(gp[i])} / observed {_where(cp[i])}, oracle scores "
-                   f"{s_g[j]:.9g} / {s_c[j]:.9g}" + (" (tie)" if ok[j] else ""))
+                   f"{s_g[j]:.9g} / {s_c[j]:.9g} (difference {abs(s_g[j] - s_c[j]):.3g}, tie bound {bound[j]:.3g} "
+                   f"at |U + B| = {cond[j]:.3g})" + (" (tie)" if ok[j] else ""))
             details.append(msg + _trace_note(ctx, k, int(i), cp[i], cand_traces, prev_pixels))
     nfail = len(differ) - int(tie.sum())
     key = keys.REFLECTION_PIXEL(k)
@@ -423,7 +428,7 @@ def _compare_pixels(ctx, k, G, C, live, agree, cand_traces, prev_pixels):
                         f"(at most {TIE_SHARE_MAX:.0%} allowed)", len(differ), n, details=details)
     elif tie.any():
         f = ctx.finding(key, "pixel", "accepted", "differing pixels are ties (oracle scores within "
-                        f"{constants.TIE_ULPS} float32 ULP)", int(tie.sum()), n, details=details)
+                        f"{constants.TIE_K} x 2^-24 x (1 + 1/|U + B|))", int(tie.sum()), n, details=details)
     else:
         f = ctx.finding(key, "pixel", "pass", "identical", 0, n)
     return [f], tie
