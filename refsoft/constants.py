@@ -81,6 +81,11 @@ TIE_K = 8
 #: The unit of that bound: one float32 ULP of a number in [0.5, 1), where scores near the
 #: optimum lie.
 TIE_EPS = 2.0 ** -24
+#: A G-buffer pixel is a depth tie when the next fragment's window depth exceeds the winner's by
+#: at most ``DEPTH_TIE_K * TIE_EPS`` (a few float32 ULP of a depth in [0.5, 1), where window
+#: depths lie): a GPU that evaluates depth planes its own way may keep either fragment there, and
+#: ``refsoft check`` accepts a position or normal matching either.
+DEPTH_TIE_K = 8
 #: Float outputs (G-buffer positions and normals, virtual vertices, scores) pass within this many
 #: float32 ULP of the oracle's...
 F32_ULP_TOL = 4

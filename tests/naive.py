@@ -599,3 +599,48 @@ def naive_sphere_reflection_points(centre, radius, eye, points, samples=64):
                 out[i] = r
                 break
     return out
+
+
+# ------------------------------------------------------------------ two nearest fragments
+def naive_depth_layers(clip, faces, width, height):
+    """The two nearest fragments of every pixel, by listing every fragment that covers it.
+
+    Returns ``(depth, face, which, depth2, face2, which2, tris)``: the winner (the smallest
+    depth, the first drawn among equal ones, as :func:`naive_rasterize`) and the second (the
+    smallest depth among the other fragments, the first drawn among equal ones; depth +inf and
+    -1 where there is none). ``which`` and ``which2`` index ``tris``."""
+    tris = setup_triangles(np.asarray(clip, dtype=np.float64), np.asarray(faces), width, height)
+    rows, cols = np.mgrid[0:height, 0:width]
+    px = cols.astype(np.int64) * 256 + 128
+    py = (height - 1 - rows).astype(np.int64) * 256 + 128
+    frags = [[[] for _ in range(width)] for _ in range(height)]  # (depth, draw order) per pixel
+    for t, tri in enumerate(tris):
+        if tri["area"] == 0:
+            continue
+        x, y, z = tri["x"], tri["y"], tri["z"]
+        covered = np.ones((height, width), dtype=bool)
+        e = []
+        for i in range(3):
+            a, b = (i + 1) % 3, (i + 2) % 3
+            ei = edge(x[a], y[a], x[b], y[b], px, py)
+            covered &= (ei > 0) | ((ei == 0) & is_inclusive(x[a], y[a], x[b], y[b]))
+            e.append(ei)
+        zz = (e[0].astype(np.float64) * z[0] + e[1].astype(np.float64) * z[1] + e[2].astype(np.float64) * z[2]) \
+            * (1.0 / float(tri["area"]))
+        zz = np.clip(zz, 0.0, 1.0).astype(np.float32)
+        for r, c in zip(*np.nonzero(covered)):
+            frags[r][c].append((zz[r, c], t))
+    depth = np.ones((height, width), dtype=np.float32)
+    depth2 = np.full((height, width), np.inf, dtype=np.float32)
+    which = np.full((height, width), -1, dtype=np.int32)
+    which2 = np.full((height, width), -1, dtype=np.int32)
+    for r in range(height):
+        for c in range(width):
+            ranked = sorted(frags[r][c])  # by depth, then draw order
+            if ranked and ranked[0][0] < 1.0:  # a fragment at depth 1 does not pass LESS against the clear value
+                depth[r, c], which[r, c] = ranked[0]
+                if len(ranked) > 1:
+                    depth2[r, c], which2[r, c] = ranked[1]
+    face = np.where(which >= 0, [[tris[t]["face"] if t >= 0 else -1 for t in row] for row in which], -1)
+    face2 = np.where(which2 >= 0, [[tris[t]["face"] if t >= 0 else -1 for t in row] for row in which2], -1)
+    return depth, face.astype(np.int32), which, depth2, face2.astype(np.int32), which2, tris

@@ -15,7 +15,9 @@ Rules (tolerances in :mod:`refsoft.constants`, the kinds in the table of ``docs/
 shapes, dtypes and non-finite masks identical; G-buffer coverage identical except pixels whose
 centre lies within 1e-4 px of an edge of the oracle's projected (unsnapped) triangles; positions,
 normals, view-projection, scores and virtual vertices within 4 float32 ULP or 1e-6 of the scene's
-extent (normals also by angle, 1e-4 rad); reflection pixels identical, a differing pixel accepted
+extent (normals also by angle, 1e-4 rad), G-buffer positions and normals at a depth tie (the
+golden frame's ``gbuffer_depth_margin_K`` at most 8 x 2^-24) matching either the winning
+fragment or the next one (rebuilt with :func:`refsoft.raster.gbuffer_layers`); reflection pixels identical, a differing pixel accepted
 as a tie when the oracle's own scores of both pixels differ by at most 8 x 2^-24 x (1 + 1 /
 |U + B|), U and B the unit directions the score adds at the oracle's pixel (the oracle's
 G-buffer is rebuilt for this), failing beyond 1% ties; virtual vertices of
@@ -37,6 +39,7 @@ from .. import constants, keys
 from ..constants import (EDGE_AMBIGUITY_PX, EXTENT_TOL, F32_ULP_TOL, IMAGE_LOOSE_SHARE, IMAGE_TOL, IMAGE_TOL_LOOSE,
                          ITERATION_SHARE_MAX, NORMAL_ANGLE_TOL, TIE_SHARE_MAX)
 from ..errors import InputFileError, RefsoftError
+from .golden import DEPTH_MARGIN
 
 STATUSES = ("pass", "accepted", "fail", "missing")
 #: The report's pictures are magnified this many times (nearest neighbour: every pixel a block).
@@ -53,7 +56,17 @@ _PER_REFLECTOR_KINDS = {keys.GBUFFER_MASK: "coverage", keys.GBUFFER_POSITION: "g
 _FRAME_KINDS = {keys.IMAGE: "image", keys.OBJECT_ID: "ids", keys.REFLECTED_ID: "ids"}
 #: Arrays of the golden frames that only the oracle writes (what the rules read about the
 #: oracle itself): a candidate need not have them, and they are not judged.
-ORACLE_ONLY = ()
+ORACLE_ONLY = (DEPTH_MARGIN,)
+_PER_REFLECTOR_KINDS[DEPTH_MARGIN] = "gbuffer"
+
+
+def _parse(key: str):
+    """:func:`refsoft.keys.parse`, knowing the oracle-only names too."""
+    for name in ORACLE_ONLY:
+        prefix = name + "_"
+        if key.startswith(prefix) and key[len(prefix):].isdigit():
+            return name, int(key[len(prefix):])
+    return keys.parse(key)
 
 
 def output_kind(key: str) -> str:
@@ -65,7 +78,7 @@ def output_kind(key: str) -> str:
         return "trace"
     if key in _FRAME_KINDS:
         return _FRAME_KINDS[key]
-    p = keys.parse(key)
+    p = _parse(key)
     if p is not None and p[0] in _PER_REFLECTOR_KINDS:
         return _PER_REFLECTOR_KINDS[p[0]]
     return "other"
@@ -150,6 +163,23 @@ class _Oracle:
                                             o.get("precision", "float32"))
         return self._gb[k]
 
+    def second_fragment(self, k):
+        """Reflector ``k``'s next fragment behind the G-buffer's, as saved maps: world-space
+        float32 positions and float32 normals (H, W, 3), zero where there is none
+        (:func:`refsoft.raster.gbuffer_layers`)."""
+        from ..raster import gbuffer_layers
+
+        key = ("second", k)
+        if key not in self._gb:
+            gb = self.gbuffer(k)
+            h, w = gb.mask.shape
+            sec = gbuffer_layers(self.scene.world_mesh(k, self.frame, proxy=True), gb.view_proj, w, h,
+                                 gb.position.dtype.name, gb.origin)
+            has = sec.triangle >= 0
+            pos = np.where(has[..., None], sec.position.astype(np.float64) + gb.origin, 0.0).astype(np.float32)
+            self._gb[key] = (pos, sec.normal.astype(np.float32))
+        return self._gb[key]
+
     def edge_distance(self, k, pixels):
         """Distance (px) from each pixel centre (row, col) to the nearest edge of the reflector's
         projected triangles, unsnapped float64 window coordinates."""
@@ -197,28 +227,59 @@ def _compare_mask(ctx, key, g, c, k):
                         f"{EDGE_AMBIGUITY_PX} px of an edge)", int(amb.sum()), g.size)]
 
 
-def _compare_float_field(ctx, key, g, c, cover, extent, normals=False):
-    gg, cc = g[cover], c[cover]
+def _float_rule(gg, cc, extent, normals=False):
+    """Rows of ``cc`` (N, ...) within the float rule of ``gg``'s: ``(ok (N,) bool, |error|)``."""
     ok, err = _float_close(gg, cc, extent)
     ok = ok.all(axis=-1) if ok.ndim > 1 else ok
     if normals:
         cosang = np.einsum("ij,ij->i", gg.astype(np.float64), cc.astype(np.float64)) / np.maximum(
             np.linalg.norm(gg, axis=1) * np.linalg.norm(cc, axis=1), 1e-300)
         ok |= np.arccos(np.clip(cosang, -1, 1)) <= NORMAL_ANGLE_TOL
+    return ok, err
+
+
+def _compare_float_field(ctx, key, g, c, cover, extent, normals=False, depth_tie=None):
+    """The float rule over the elements ``cover`` selects. ``depth_tie``: ``(near (H, W) bool,
+    second)`` for a G-buffer map: at a pixel where the oracle's depth margin is a tie (``near``),
+    a value that fails against the winning fragment but matches the next fragment's by the same
+    rule is accepted; ``second()`` gives the next fragment's map (H, W, 3), rebuilt only then."""
+    gg, cc = g[cover], c[cover]
+    ok, err = _float_rule(gg, cc, extent, normals)
+    tie = np.zeros(len(ok), dtype=bool)
+    if depth_tie is not None and (~ok).any():
+        maybe = ~ok & depth_tie[0][cover]
+        if maybe.any():
+            alt = depth_tie[1]()[cover][maybe]
+            tie[maybe] = _float_rule(alt, cc[maybe], extent, normals)[0]
     same = np.all(gg == cc, axis=-1) if gg.ndim > 1 else gg == cc
     n = len(ok)
     if same.all():
         return [ctx.finding(key, "float", "pass", "identical", 0, n)]
+    bad = ~ok & ~tie
     e = err.max(axis=-1) if err.ndim > 1 else err
-    i = int(np.argmax(np.where(ok, -1, e))) if (~ok).any() else int(np.argmax(e))
+    i = int(np.argmax(np.where(bad, e, -1))) if bad.any() else int(np.argmax(np.where(ok, e, -1)))
     locs = np.argwhere(cover)
     where = locs[i] if len(locs) == n else [i]
     worst = f"at {_where(where)}: expected {np.round(gg[i], 9).tolist()} / observed {np.round(cc[i], 9).tolist()}"
-    if (~ok).any():
+    ties = f"; {int(tie.sum())} match the next fragment at a depth tie" if tie.any() else ""
+    if bad.any():
         return [ctx.finding(key, "float", "fail", f"beyond {F32_ULP_TOL} float32 ULP and {EXTENT_TOL} x extent "
-                            f"{extent:.4g}", int((~ok).sum()), n, worst)]
-    return [ctx.finding(key, "float", "accepted", f"within {F32_ULP_TOL} float32 ULP or {EXTENT_TOL} x extent",
+                            f"{extent:.4g}{ties}", int(bad.sum()), n, worst)]
+    return [ctx.finding(key, "float", "accepted", f"within {F32_ULP_TOL} float32 ULP or {EXTENT_TOL} x extent{ties}",
                         int((~same).sum()), n, worst)]
+
+
+def _depth_tie(ctx, G, name, k):
+    """``depth_tie`` of :func:`_compare_float_field` for reflector ``k``'s position or normal
+    map: pixels whose :data:`~refsoft.conformance.golden.DEPTH_MARGIN` in the golden frame is at
+    most ``DEPTH_TIE_K * TIE_EPS``; None when the golden frame has no depth margin."""
+    margin = G.get(DEPTH_MARGIN(k))
+    if margin is None or margin.shape != G[name(k)].shape[:2]:
+        return None
+    near = margin <= constants.DEPTH_TIE_K * constants.TIE_EPS
+    if not near.any():
+        return None
+    return near, lambda: ctx.oracle().second_fragment(k)[0 if name == keys.GBUFFER_POSITION else 1]
 
 
 class _Context:
@@ -508,7 +569,7 @@ def _vertex_keys(k):
 
 
 def _oracle_only(key) -> bool:
-    p = keys.parse(key)
+    p = _parse(key)
     return p is not None and p[0] in ORACLE_ONLY
 
 
@@ -546,7 +607,8 @@ def check_frame(ctx, G, C, loose, cand_traces=None, prev_pixels=None):
             mk = keys.GBUFFER_MASK(k)
             cover = G[mk] & C[mk] if mk in C and C[mk].shape == G[mk].shape else G[mk]
             extent = ctx.oracle().extent if not np.array_equal(g[cover], c[cover]) else 1.0
-            _compare_float_field(ctx, key, g, c, cover, extent, normals=name == keys.GBUFFER_NORMAL)
+            _compare_float_field(ctx, key, g, c, cover, extent, normals=name == keys.GBUFFER_NORMAL,
+                                 depth_tie=_depth_tie(ctx, G, name, k))
         elif name == keys.GBUFFER_VIEW_PROJ:
             _compare_float_field(ctx, key, g.reshape(1, -1), c.reshape(1, -1), np.ones(1, bool), 1.0)
         elif key == keys.IMAGE:

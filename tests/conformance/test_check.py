@@ -17,14 +17,6 @@ from refsoft.search.reflect import reflector_gbuffer
 from refsoft.scene import scene_vertices
 from refsoft.search import start_pixel
 
-@pytest.fixture(scope="module")
-def golden(tmp_path_factory):
-    """The whole golden set, every canonical case (about a minute)."""
-    out = tmp_path_factory.mktemp("golden")
-    write_golden(out)
-    return out
-
-
 def _candidate(golden, tmp_path, case, frame, mutate, traces=None):
     """A copy of the golden set with one frame's arrays changed by ``mutate(arrays)``."""
     cand = tmp_path / "cand"
