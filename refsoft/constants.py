@@ -96,6 +96,22 @@ NORMAL_ANGLE_TOL = 1e-4
 #: A coverage difference is ambiguous (accepted) where the pixel centre lies this close (pixels)
 #: to an edge of the oracle's unsnapped triangles.
 EDGE_AMBIGUITY_PX = 1e-4
+#: ``refsoft check --profile gpu`` (refsoft.conformance.profiles; derived in docs/precision.md).
+#: A GPU interpolates from its own float32 window coordinates, refsoft from vertices snapped to
+#: 1/256 px: the sample moves relative to the triangle by at most half a step (1/512 px) along
+#: each axis, plus the float32 transform's error (below another 1/512 px up to 8192-px
+#: viewports). G-buffer values may therefore differ by this many pixels times their rate of
+#: change across the screen, and depth ties widen by it times the fragments' depth slopes.
+GPU_SUBPIXEL_PX = 1.0 / 256.0
+#: An edge moves by at most sqrt(2) * GPU_SUBPIXEL_PX: coverage differences, and fragments of
+#: another triangle, are ambiguous within this distance (pixels) of an edge.
+GPU_EDGE_AMBIGUITY_PX = 2.0 / 256.0
+#: ``K`` of the tie bound ``K * TIE_EPS * (1 + 1/|U + B|)`` with built-in normalize (inversesqrt
+#: within 2 ULP) and dot (any order): the worst case of both scores' rounding, the port's and
+#: the oracle's, at both pixels.
+GPU_TIE_K = 52
+#: The profiles of ``refsoft check``.
+CHECK_PROFILES = ("default", "gpu")
 #: At most this share of a reflector's vertices may differ by a tie...
 TIE_SHARE_MAX = 0.01
 #: ...and this share differ in iterations where the pixels agree.

@@ -644,3 +644,32 @@ def naive_depth_layers(clip, faces, width, height):
     face = np.where(which >= 0, [[tris[t]["face"] if t >= 0 else -1 for t in row] for row in which], -1)
     face2 = np.where(which2 >= 0, [[tris[t]["face"] if t >= 0 else -1 for t in row] for row in which2], -1)
     return depth, face.astype(np.int32), which, depth2, face2.astype(np.int32), which2, tris
+
+
+# ------------------------------------------------------- a GPU's own attribute interpolation
+def naive_gl_interpolate(clip, faces, triangle, attributes, width, height, normalize=False):
+    """Attributes of the triangles ``triangle`` (H, W; -1 none) as a GPU interpolates them,
+    everything in float32: window coordinates of the unsnapped vertices, edge functions at the
+    pixel centre, weights ``e_i / w_i`` normalised, and (``normalize``) ``v / sqrt(v . v)``.
+    Triangles crossing the near plane are not handled (the G-buffers this is used on have none)."""
+    f32 = np.float32
+    clip = np.asarray(clip, dtype=f32)
+    rows, cols = np.nonzero(triangle >= 0)
+    v = np.asarray(faces)[triangle[rows, cols]]
+    x = (clip[v, 0] / clip[v, 3] + f32(1)) * f32(0.5 * width)
+    y = (clip[v, 1] / clip[v, 3] + f32(1)) * f32(0.5 * height)
+    iw = f32(1) / clip[v, 3]
+    px = (cols + 0.5).astype(f32)[:, None]
+    py = (height - rows - 0.5).astype(f32)[:, None]
+    j, k = [1, 2, 0], [2, 0, 1]
+    e = (x[:, k] - x[:, j]) * (py - y[:, j]) - (y[:, k] - y[:, j]) * (px - x[:, j])
+    a = e * iw
+    lam = a / (a[:, 0] + a[:, 1] + a[:, 2])[:, None]
+    attr = np.asarray(attributes, dtype=f32)[v]  # (n, 3, C)
+    val = lam[:, 0, None] * attr[:, 0] + lam[:, 1, None] * attr[:, 1] + lam[:, 2, None] * attr[:, 2]
+    if normalize:
+        length = np.sqrt(_sumsq(val.T))
+        val = np.where(length[:, None] > 0, val / np.where(length > 0, length, f32(1))[:, None], f32(0))
+    out = np.zeros(triangle.shape + (attr.shape[2],), dtype=f32)
+    out[rows, cols] = val
+    return out

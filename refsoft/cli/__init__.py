@@ -87,6 +87,10 @@ def _port_commands(sub):
     ck.add_argument("golden", help="golden folder (from refsoft golden)")
     ck.add_argument("candidate", help="the port's outputs in the same layout")
     ck.add_argument("--loose", action="store_true", help="images: 4 per channel, 1-pixel window, 0.1%% may fail")
+    ck.add_argument("--profile", choices=constants.CHECK_PROFILES, default="default",
+                    help="the rules: 'default' (exact, for a port writing refsoft's arithmetic out) or 'gpu' (a port "
+                         "using its GPU's interpolation and built-ins: tolerances derived per stage in "
+                         "docs/precision.md; implies --loose)")
     ck.add_argument("--out", default="out/check", metavar="DIR",
                     help="report folder, outside the golden and candidate folders (default: out/check)")
     ck.add_argument("--case", action="append", default=None, metavar="NAME", help="only this case (repeatable)")

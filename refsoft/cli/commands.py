@@ -182,7 +182,7 @@ def cmd_check(args) -> int:
     from ..conformance.check import MAGNIFY, STATUSES, check
 
     summary = check(args.golden, args.candidate, loose=args.loose, out=args.out, cases=args.case, progress=True,
-                    kinds=args.kinds)
+                    kinds=args.kinds, profile=args.profile)
     findings = summary.pop("_findings")
     for f in findings:
         if f.status != "pass" or args.verbose:
@@ -196,7 +196,8 @@ def cmd_check(args) -> int:
     verdict = "PASSED" if summary["passed"] else "FAILED"
     if c["missing"]:
         print(f"{c['missing']} output(s) missing: a port providing a subset says so with --case and --kinds")
-    print(f"{verdict}: {c['pass']} pass, {c['accepted']} accepted (yellow), {c['fail']} fail, {c['missing']} missing; "
+    print(f"{verdict}: {c['pass']} pass, {c['accepted']} accepted (yellow), {c['fail']} fail, {c['missing']} missing "
+          f"({summary['profile']} profile); "
           f"summary.json and {n_pics} picture{'' if n_pics == 1 else 's'} ({MAGNIFY}x) of what did not pass in "
           f"{args.out}")
     return 0 if summary["passed"] else 1

@@ -29,10 +29,11 @@ def _unit(x):
     return np.divide(x, length, out=np.zeros_like(x), where=length > 0)
 
 
-def _directions(gbuffer, eye, vertices, pixels, inverse=None):
+def _directions(gbuffer, eye, vertices, pixels, inverse=None, lengths=False):
     """``(U, B, N)`` in float64 at each vertex's pixel (row, col): the unit directions to the
     eye and to the vertex (to its mirror image ``W = V - 2 dot(V - P, N) N`` where ``inverse``,
-    spec section 4.6) and the normal, from the G-buffer's values (relative to its origin)."""
+    spec section 4.6) and the normal, from the G-buffer's values (relative to its origin); with
+    ``lengths``, also the distances to the eye and to the vertex (or its image), (N,) each."""
     pixels = np.asarray(pixels, dtype=np.int64).reshape(-1, 2)
     r, c = pixels[:, 0], pixels[:, 1]
     p = gbuffer.position[r, c].astype(np.float64)
@@ -43,6 +44,8 @@ def _directions(gbuffer, eye, vertices, pixels, inverse=None):
     if inverse is not None and np.any(inverse):
         w = v - 2.0 * np.einsum("ij,ij->i", v - p, n)[:, None] * n
         v = np.where(np.asarray(inverse, dtype=bool)[:, None], w, v)
+    if lengths:
+        return _unit(u), _unit(v - p), n, np.linalg.norm(u, axis=1), np.linalg.norm(v - p, axis=1)
     return _unit(u), _unit(v - p), n
 
 
@@ -63,13 +66,26 @@ def score_condition(gbuffer, eye, vertices, pixels, inverse=None) -> np.ndarray:
     return np.linalg.norm(u + b, axis=1)
 
 
-def tie_bound(condition) -> np.ndarray:
+def tie_bound(condition, k=constants.TIE_K) -> np.ndarray:
     """The largest difference of two scores accepted as a tie, for ``|U + B|`` = ``condition``
-    at the oracle's pixel: ``TIE_K * TIE_EPS * (1 + 1 / |U + B|)`` (infinite where ``U + B``
-    is zero: the score is then no evidence either way)."""
+    at the oracle's pixel: ``k * TIE_EPS * (1 + 1 / |U + B|)``, ``k = TIE_K`` by default
+    (infinite where ``U + B`` is zero: the score is then no evidence either way)."""
     cond = np.asarray(condition, dtype=np.float64)
     inv = np.divide(1.0, cond, out=np.full(cond.shape, np.inf), where=cond > 0)
-    return constants.TIE_K * constants.TIE_EPS * (1.0 + inv)
+    return k * constants.TIE_EPS * (1.0 + inv)
+
+
+def position_sensitivity(gbuffer, eye, vertices, pixels, inverse=None) -> np.ndarray:
+    """How much the score at each vertex's pixel may change per unit of error in the
+    G-buffer's position there, to first order, float64 (N,): ``(1/|O - P| + 1/|V - P|) /
+    |U + B|`` (a position error ``e`` turns U by at most ``e / |O - P|`` and B by ``e / |V - P|``,
+    and normalising ``U + B`` amplifies that ``1 / |U + B|`` times; the normal is unchanged).
+    Infinite where ``U + B`` is zero."""
+    u, b, _, du, db = _directions(gbuffer, eye, vertices, pixels, inverse, lengths=True)
+    cond = np.linalg.norm(u + b, axis=1)
+    num = np.divide(1.0, du, out=np.full(du.shape, np.inf), where=du > 0) + np.divide(
+        1.0, db, out=np.full(db.shape, np.inf), where=db > 0)
+    return np.divide(num, cond, out=np.full(cond.shape, np.inf), where=cond > 0)
 
 
 def compare_precisions(scene, frame: int = 0, preset: str = "paper", **options) -> dict:
