@@ -89,15 +89,28 @@ SILHOUETTE_RULES = ("texel", "clip")
 SKIPS = ("cull_reflectors", "reuse", "cull_virtual", "crop_virtual")
 #: Adaptive tessellation levels accepted.
 MAX_TESSELLATION_LEVEL = 8
+#: The kinds of output ``refsoft check --kinds`` selects (refsoft.conformance.check.output_kind).
+CHECK_KINDS = ("coverage", "gbuffer", "pixel", "virtual", "flags", "vertex_object", "iterations", "score", "margin",
+               "image", "ids", "trace")
 
 # --- Camera validation ---------------------------------------------------------------------
 #: |cross(forward, up)| below this means up is parallel to the view direction.
 CAMERA_PARALLEL_TOL = 1e-9
 
 # --- Conformance (spec section 8) --------------------------------------------------------
-#: Two reflection pixels are a tie when the oracle's scores differ by at most this many float32
-#: ULP of the better one (``refsoft check``, ``refsoft.conformance.precision``).
-TIE_ULPS = 8
+#: Two reflection pixels are a tie when the oracle's scores of both differ by at most
+#: ``TIE_K * TIE_EPS * (1 + 1 / |U + B|)``, with U and B the two unit directions the score adds
+#: at the oracle's pixel (``refsoft check``, ``refsoft.conformance.precision``): normalising
+#: ``U + B`` amplifies the rounding of U and B by ``1 / |U + B|``, large near grazing angles.
+TIE_K = 8
+#: The unit of that bound: one float32 ULP of a number in [0.5, 1), where scores near the
+#: optimum lie.
+TIE_EPS = 2.0 ** -24
+#: A G-buffer pixel is a depth tie when the next fragment's window depth exceeds the winner's by
+#: at most ``DEPTH_TIE_K * TIE_EPS`` (a few float32 ULP of a depth in [0.5, 1), where window
+#: depths lie): a GPU that evaluates depth planes its own way may keep either fragment there, and
+#: ``refsoft check`` accepts a position or normal matching either.
+DEPTH_TIE_K = 8
 #: Float outputs (G-buffer positions and normals, virtual vertices, scores) pass within this many
 #: float32 ULP of the oracle's...
 F32_ULP_TOL = 4
@@ -108,6 +121,22 @@ NORMAL_ANGLE_TOL = 1e-4
 #: A coverage difference is ambiguous (accepted) where the pixel centre lies this close (pixels)
 #: to an edge of the oracle's unsnapped triangles.
 EDGE_AMBIGUITY_PX = 1e-4
+#: ``refsoft check --profile gpu`` (refsoft.conformance.profiles; derived in docs/precision.md).
+#: A GPU interpolates from its own float32 window coordinates, refsoft from vertices snapped to
+#: 1/256 px: the sample moves relative to the triangle by at most half a step (1/512 px) along
+#: each axis, plus the float32 transform's error (below another 1/512 px up to 8192-px
+#: viewports). G-buffer values may therefore differ by this many pixels times their rate of
+#: change across the screen, and depth ties widen by it times the fragments' depth slopes.
+GPU_SUBPIXEL_PX = 1.0 / 256.0
+#: An edge moves by at most sqrt(2) * GPU_SUBPIXEL_PX: coverage differences, and fragments of
+#: another triangle, are ambiguous within this distance (pixels) of an edge.
+GPU_EDGE_AMBIGUITY_PX = 2.0 / 256.0
+#: ``K`` of the tie bound ``K * TIE_EPS * (1 + 1/|U + B|)`` with built-in normalize (inversesqrt
+#: within 2 ULP) and dot (any order): the worst case of both scores' rounding, the port's and
+#: the oracle's, at both pixels.
+GPU_TIE_K = 52
+#: The profiles of ``refsoft check``.
+CHECK_PROFILES = ("default", "gpu")
 #: At most this share of a reflector's vertices may differ by a tie...
 TIE_SHARE_MAX = 0.01
 #: ...and this share differ in iterations where the pixels agree.

@@ -993,3 +993,77 @@ def naive_cube_lookup(r, resolution):
         rows.append(resolution - 1 - j)
         cols.append(i)
     return faces, rows, cols
+
+
+# ------------------------------------------------------------------ two nearest fragments
+def naive_depth_layers(clip, faces, width, height):
+    """The two nearest fragments of every pixel, by listing every fragment that covers it.
+
+    Returns ``(depth, face, which, depth2, face2, which2, tris)``: the winner (the smallest
+    depth, the first drawn among equal ones, as :func:`naive_rasterize`) and the second (the
+    smallest depth among the other fragments, the first drawn among equal ones; depth +inf and
+    -1 where there is none). ``which`` and ``which2`` index ``tris``."""
+    tris = setup_triangles(np.asarray(clip, dtype=np.float64), np.asarray(faces), width, height)
+    rows, cols = np.mgrid[0:height, 0:width]
+    px = cols.astype(np.int64) * 256 + 128
+    py = (height - 1 - rows).astype(np.int64) * 256 + 128
+    frags = [[[] for _ in range(width)] for _ in range(height)]  # (depth, draw order) per pixel
+    for t, tri in enumerate(tris):
+        if tri["area"] == 0:
+            continue
+        x, y, z = tri["x"], tri["y"], tri["z"]
+        covered = np.ones((height, width), dtype=bool)
+        e = []
+        for i in range(3):
+            a, b = (i + 1) % 3, (i + 2) % 3
+            ei = edge(x[a], y[a], x[b], y[b], px, py)
+            covered &= (ei > 0) | ((ei == 0) & is_inclusive(x[a], y[a], x[b], y[b]))
+            e.append(ei)
+        zz = (e[0].astype(np.float64) * z[0] + e[1].astype(np.float64) * z[1] + e[2].astype(np.float64) * z[2]) \
+            * (1.0 / float(tri["area"]))
+        zz = np.clip(zz, 0.0, 1.0).astype(np.float32)
+        for r, c in zip(*np.nonzero(covered)):
+            frags[r][c].append((zz[r, c], t))
+    depth = np.ones((height, width), dtype=np.float32)
+    depth2 = np.full((height, width), np.inf, dtype=np.float32)
+    which = np.full((height, width), -1, dtype=np.int32)
+    which2 = np.full((height, width), -1, dtype=np.int32)
+    for r in range(height):
+        for c in range(width):
+            ranked = sorted(frags[r][c])  # by depth, then draw order
+            if ranked and ranked[0][0] < 1.0:  # a fragment at depth 1 does not pass LESS against the clear value
+                depth[r, c], which[r, c] = ranked[0]
+                if len(ranked) > 1:
+                    depth2[r, c], which2[r, c] = ranked[1]
+    face = np.where(which >= 0, [[tris[t]["face"] if t >= 0 else -1 for t in row] for row in which], -1)
+    face2 = np.where(which2 >= 0, [[tris[t]["face"] if t >= 0 else -1 for t in row] for row in which2], -1)
+    return depth, face.astype(np.int32), which, depth2, face2.astype(np.int32), which2, tris
+
+
+# ------------------------------------------------------- a GPU's own attribute interpolation
+def naive_gl_interpolate(clip, faces, triangle, attributes, width, height, normalize=False):
+    """Attributes of the triangles ``triangle`` (H, W; -1 none) as a GPU interpolates them,
+    everything in float32: window coordinates of the unsnapped vertices, edge functions at the
+    pixel centre, weights ``e_i / w_i`` normalised, and (``normalize``) ``v / sqrt(v . v)``.
+    Triangles crossing the near plane are not handled (the G-buffers this is used on have none)."""
+    f32 = np.float32
+    clip = np.asarray(clip, dtype=f32)
+    rows, cols = np.nonzero(triangle >= 0)
+    v = np.asarray(faces)[triangle[rows, cols]]
+    x = (clip[v, 0] / clip[v, 3] + f32(1)) * f32(0.5 * width)
+    y = (clip[v, 1] / clip[v, 3] + f32(1)) * f32(0.5 * height)
+    iw = f32(1) / clip[v, 3]
+    px = (cols + 0.5).astype(f32)[:, None]
+    py = (height - rows - 0.5).astype(f32)[:, None]
+    j, k = [1, 2, 0], [2, 0, 1]
+    e = (x[:, k] - x[:, j]) * (py - y[:, j]) - (y[:, k] - y[:, j]) * (px - x[:, j])
+    a = e * iw
+    lam = a / (a[:, 0] + a[:, 1] + a[:, 2])[:, None]
+    attr = np.asarray(attributes, dtype=f32)[v]  # (n, 3, C)
+    val = lam[:, 0, None] * attr[:, 0] + lam[:, 1, None] * attr[:, 1] + lam[:, 2, None] * attr[:, 2]
+    if normalize:
+        length = np.sqrt(_sumsq(val.T))
+        val = np.where(length[:, None] > 0, val / np.where(length > 0, length, f32(1))[:, None], f32(0))
+    out = np.zeros(triangle.shape + (attr.shape[2],), dtype=f32)
+    out[rows, cols] = val
+    return out

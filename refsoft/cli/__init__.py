@@ -10,6 +10,7 @@ import argparse
 import sys
 
 from . import commands
+from .. import constants
 from .options import (frame_range_options, ldt_options, memory_options, method_options, one_frame_options, out_option,
                       render_options, run_folder_options, scene_options)
 
@@ -57,6 +58,7 @@ def build_parser() -> argparse.ArgumentParser:
     r.set_defaults(func=commands.cmd_render)
 
     _port_commands(sub)
+    _export_command(sub, scene, methods)
     _bench_command(sub)
     tr = sub.add_parser("truth", parents=[scene, frame_range_options(), memory, run_folder_options("out/SCENE-truth")],
                         help="ray-trace the reflections (Embree) as the reference for compare")
@@ -90,12 +92,35 @@ def _port_commands(sub):
     ck.add_argument("golden", help="golden folder (from refsoft golden)")
     ck.add_argument("candidate", help="the port's outputs in the same layout")
     ck.add_argument("--loose", action="store_true", help="images: 4 per channel, 1-pixel window, 0.1%% may fail")
+    ck.add_argument("--profile", choices=constants.CHECK_PROFILES, default="default",
+                    help="the rules: 'default' (exact, for a port writing refsoft's arithmetic out) or 'gpu' (a port "
+                         "using its GPU's interpolation and built-ins: tolerances derived per stage in "
+                         "docs/precision.md; implies --loose)")
     ck.add_argument("--out", default="out/check", metavar="DIR",
                     help="report folder, outside the golden and candidate folders (default: out/check)")
     ck.add_argument("--case", action="append", default=None, metavar="NAME", help="only this case (repeatable)")
+    ck.add_argument("--kinds", action="append", default=None, metavar="KIND[,KIND...]",
+                    help="only these kinds of output, the others neither judged nor required (repeatable or "
+                         "comma-separated): " + ", ".join(constants.CHECK_KINDS) + "; default all: a case or an "
+                         "output the candidate lacks fails")
     ck.add_argument("--verbose", action="store_true", help="also print the outputs that pass")
     ck.set_defaults(func=commands.cmd_check)
 
+
+
+def _export_command(sub, scene, methods):
+    """``export``: a scene's inputs as a port reads them (PLY and JSON)."""
+    e = sub.add_parser("export", parents=[scene, methods, render_options()],
+                       help="write a scene's inputs for a port: world meshes per frame as PLY (float64, with "
+                            "normals), cameras, matrices and options as JSON (docs/ports.md)")
+    which = e.add_mutually_exclusive_group()
+    which.add_argument("--frames", default=None, metavar="N|A:B",
+                       help="frames 0..N-1, or A..B-1 (default: the whole animation; frame 0 of a static scene)")
+    which.add_argument("--frame", type=int, default=None, metavar="K", help="only frame K (a cold start)")
+    e.add_argument("--out", required=True, metavar="DIR", help="output folder (case.json and the PLY files)")
+    e.add_argument("--overwrite", action="store_true",
+                   help="replace an earlier export in DIR (its mesh files not rewritten are removed)")
+    e.set_defaults(func=commands.cmd_export)
 
 
 def _bench_command(sub):

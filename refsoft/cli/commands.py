@@ -227,7 +227,8 @@ def cmd_golden(args) -> int:
 def cmd_check(args) -> int:
     from ..conformance.check import MAGNIFY, STATUSES, check
 
-    summary = check(args.golden, args.candidate, loose=args.loose, out=args.out, cases=args.case, progress=True)
+    summary = check(args.golden, args.candidate, loose=args.loose, out=args.out, cases=args.case, progress=True,
+                    kinds=args.kinds, profile=args.profile)
     findings = summary.pop("_findings")
     for f in findings:
         if f.status != "pass" or args.verbose:
@@ -239,10 +240,27 @@ def cmd_check(args) -> int:
         print(f"{kind:<16}" + "".join(f"{n[s]:>9}" for s in STATUSES))
     c, n_pics = summary["counts"], len(summary["pictures"])
     verdict = "PASSED" if summary["passed"] else "FAILED"
-    print(f"{verdict}: {c['pass']} pass, {c['accepted']} accepted (yellow), {c['fail']} fail, {c['missing']} missing; "
+    if c["missing"]:
+        print(f"{c['missing']} output(s) missing: a port providing a subset says so with --case and --kinds")
+    print(f"{verdict}: {c['pass']} pass, {c['accepted']} accepted (yellow), {c['fail']} fail, {c['missing']} missing "
+          f"({summary['profile']} profile); "
           f"summary.json and {n_pics} picture{'' if n_pics == 1 else 's'} ({MAGNIFY}x) of what did not pass in "
           f"{args.out}")
     return 0 if summary["passed"] else 1
+
+
+def cmd_export(args) -> int:
+    from ..conformance.export import export_frames, export_inputs
+    from ..options import RenderOptions
+
+    scene = _scene(args)
+    frames = export_frames(scene, args.frames, args.frame)
+    options = RenderOptions(**render_kwargs(args))
+    files = export_inputs(args.out, scene, frames, options, overwrite=args.overwrite)
+    size = sum(os.path.getsize(os.path.join(args.out, f)) for f in files)
+    print(f"{scene.name}: inputs of {len(frames)} frame(s) at {scene.camera.width}x{scene.camera.height}, preset "
+          f"{options.preset}: case.json and {len(files) - 1} PLY file(s), {size / 1e6:.1f} MB, in {args.out}")
+    return 0
 
 
 def cmd_bench(args) -> int:

@@ -3,8 +3,11 @@
 Layout (a port writes its outputs in the same layout for ``refsoft check``)::
 
     DIR/manifest.json                 versions, the options of each case, SHA-256 of every file
-    DIR/CASE/frame_NNNN.npz           the spec section 7 arrays (plus score_k and margin_k)
+    DIR/CASE/frame_NNNN.npz           the spec section 7 arrays (plus score_k and margin_k, and
+                                      the oracle's gbuffer_depth_margin_k)
     DIR/CASE/traces_NNNN.json         search traces of a sample of vertices per reflector
+    DIR/CASE/inputs/                  the case's inputs: case.json and world meshes as PLY
+                                      (:mod:`refsoft.conformance.export`)
 
 Traces (``format: refsoft-traces-1``): ``{"reflectors": {"K": [{"vertex": i, "start": [r, c],
 "path": [[r, c], ...], "phases": [0, ..., 1, ...], "pixel": [r, c], "iterations": n, "flags": f,
@@ -32,6 +35,11 @@ TRACE_FORMAT = "refsoft-traces-1"
 GOLDEN_SIZE = (128, 96)
 #: Vertices traced per reflector and frame (evenly spaced vertex indices).
 TRACED_VERTICES = 8
+#: (H, W) float32 per reflector, written by the oracle only: at each G-buffer pixel, the window
+#: depth of the nearest fragment behind the winning one minus the winner's (+inf where fewer
+#: than two fragments cover the pixel; :func:`refsoft.raster.gbuffer_layers`). ``refsoft check``
+#: accepts either fragment where it is within ``DEPTH_TIE_K * TIE_EPS``.
+DEPTH_MARGIN = keys.PerReflector("gbuffer_depth_margin")
 
 
 @dataclass(frozen=True)
@@ -190,14 +198,30 @@ def traced_vertices(n: int) -> np.ndarray:
     return np.unique(np.linspace(0, n - 1, min(TRACED_VERTICES, n)).astype(np.int64)) if n else np.zeros(0, int)
 
 
-def render_case(case: Case):
-    """Yield ``(frame index, arrays, traces)`` for each frame of a case."""
+def depth_margin(scene, k: int, frame: int, gb) -> np.ndarray:
+    """:data:`DEPTH_MARGIN` of reflector ``k`` for the G-buffer ``gb`` the search ran on, whose
+    winning fragments :func:`refsoft.raster.gbuffer_layers` must reproduce bit for bit."""
+    from ..raster import gbuffer_layers
+
+    h, w = gb.mask.shape
+    sec = gbuffer_layers(scene.world_mesh(k, frame, proxy=True), gb.view_proj, w, h, gb.position.dtype.name,
+                         gb.origin)
+    if not np.array_equal(sec.first_triangle, gb.triangle):
+        raise RefsoftError(f"reflector {k} frame {frame}: the depth layers' nearest fragments are not the G-buffer's "
+                           "(an internal error: please report it)")
+    return sec.margin
+
+
+def render_case(case: Case, scene=None):
+    """Yield ``(frame index, arrays, traces)`` for each frame of a case (``scene``: the case's
+    scene, already loaded): the arrays of the golden frame, those of a render and the oracle's
+    :data:`DEPTH_MARGIN` of each reflector."""
     from ..frame import FrameDriver
     from ..options import RenderOptions
     from ..scene import scene_vertices
     from ..search import CULLED, trace_search
 
-    scene = case.load()
+    scene = case.load() if scene is None else scene
     opts = RenderOptions(**case.options)
     driver = FrameDriver(scene, opts)
     previous = {}
@@ -226,7 +250,10 @@ def render_case(case: Case):
                 records.append(trace_record(tr, i))
             traces[str(k)] = records
             previous[k] = pixels
-        yield f, frame.arrays, {"format": TRACE_FORMAT, "reflectors": traces}
+        arrays = dict(frame.arrays)
+        for k in scene.reflector_ids:
+            arrays[DEPTH_MARGIN(k)] = depth_margin(scene, k, f, frame.reflectors[k].state.gbuffer)
+        yield f, arrays, {"format": TRACE_FORMAT, "reflectors": traces}
 
 
 def write_golden(out, cases=None, progress=False, mode=None) -> dict:
@@ -251,6 +278,7 @@ def write_golden(out, cases=None, progress=False, mode=None) -> dict:
 
     from .. import __version__
     from ..io import write_json, write_npz
+    from .export import INPUTS_FOLDER, write_inputs
 
     if mode not in (None, "add", "replace"):
         raise RefsoftError(f"mode must be None, 'add' or 'replace', got {mode!r}")
@@ -273,8 +301,12 @@ def write_golden(out, cases=None, progress=False, mode=None) -> dict:
         entries[case.name] = {"name": case.name, "scene": case.scene, "frames": list(case.frames),
                               "width": GOLDEN_SIZE[0], "height": GOLDEN_SIZE[1],
                               "options": RenderOptions(**case.options).as_dict()}
-        for f, arrays, traces in render_case(case):
-            base = os.path.join(out, case.name)
+        scene = case.load()
+        base = os.path.join(out, case.name)
+        for name in write_inputs(os.path.join(base, INPUTS_FOLDER), scene, case.frames, case.options, case.name):
+            rel = f"{case.name}/{INPUTS_FOLDER}/{name}"
+            files[rel] = sha256(os.path.join(out, *rel.split("/")))
+        for f, arrays, traces in render_case(case, scene):
             npz = os.path.join(base, f"frame_{f:04d}.npz")
             write_npz(npz, **arrays)
             tj = os.path.join(base, f"traces_{f:04d}.json")
@@ -336,8 +368,9 @@ def _remove_listed(out, files):
         if os.path.commonpath([root, p]) == root and p != root and os.path.isfile(p):
             os.unlink(p)
             folder = os.path.dirname(p)
-            if folder != root and not os.listdir(folder):
-                os.rmdir(folder)
+            while folder != root and os.path.commonpath([root, folder]) == root and not os.listdir(folder):
+                os.rmdir(folder)  # an emptied inputs/ folder, then its emptied case folder
+                folder = os.path.dirname(folder)
 
 
 def read_manifest(golden) -> dict:

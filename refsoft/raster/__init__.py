@@ -5,7 +5,8 @@
 2. :func:`interpolate` — perspective-correct attributes of the visible triangle at each pixel.
 
 On top of these, :func:`gbuffer` renders one reflector's position and normal maps, and
-:func:`color_pass` renders the shaded main view with object ids.
+:func:`color_pass` renders the shaded main view with object ids; :func:`gbuffer_layers` gives a
+G-buffer's second-nearest fragment and depth margin (:mod:`refsoft.raster.layers`).
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from ..scene.mesh import Mesh, concatenate
 from . import _kernels, _setup, _shading
 
 __all__ = ["Fragments", "GBuffer", "ColorPass", "rasterize", "interpolate", "gbuffer", "color_pass", "coverage_region",
-           "to_uint8", "PRECISIONS"]
+           "to_uint8", "PRECISIONS", "DepthLayers", "SecondFragment", "depth_layers", "gbuffer_layers"]
 
 #: Accepted precision names and their dtypes.
 PRECISIONS = {"float32": np.float32, "float64": np.float64}
@@ -454,3 +455,7 @@ def color_pass(meshes, colors, camera: Camera) -> ColorPass:
     _shading.shade_ids(nrm, object_id, table, constants.LIGHT_DIRECTION.astype(np.float32),
                        np.float32(constants.AMBIENT), np.float32(constants.DIFFUSE), table[0], color)
     return ColorPass(color, object_id, frags.depth, local_tri)
+
+
+# the two nearest fragments of each pixel (the G-buffer's depth margin), built on the above
+from .layers import DepthLayers, SecondFragment, depth_layers, gbuffer_layers  # noqa: E402

@@ -1,5 +1,6 @@
 """`refsoft golden` and `refsoft check`: the oracle checked against itself passes with nothing
-flagged, and every mutation a buggy port could make is flagged (the mutation suite)."""
+flagged, and every mutation a buggy port could make is flagged (the mutation suite), under both
+profiles."""
 
 import json
 import os
@@ -9,7 +10,7 @@ import numpy as np
 import pytest
 
 import naive
-from refsoft import cli
+from refsoft import cli, constants
 from refsoft.conformance.check import check
 from refsoft.conformance.golden import case_by_name, write_golden
 from refsoft.io import write_npz
@@ -17,13 +18,8 @@ from refsoft.search.reflect import reflector_gbuffer
 from refsoft.scene import scene_vertices
 from refsoft.search import start_pixel
 
-@pytest.fixture(scope="module")
-def golden(tmp_path_factory):
-    """The whole golden set, every canonical case (about a minute)."""
-    out = tmp_path_factory.mktemp("golden")
-    write_golden(out)
-    return out
-
+#: Every test of the mutation suite runs under each profile of `refsoft check`.
+by_profile = pytest.mark.parametrize("profile", constants.CHECK_PROFILES)
 
 def _candidate(golden, tmp_path, case, frame, mutate, traces=None):
     """A copy of the golden set with one frame's arrays changed by ``mutate(arrays)``."""
@@ -49,11 +45,12 @@ def _flagged(summary):
     return [f for f in summary["_findings"] if f.status != "pass"]
 
 
-def test_oracle_against_itself_passes_with_nothing_flagged(golden, tmp_path):
+@by_profile
+def test_oracle_against_itself_passes_with_nothing_flagged(golden, tmp_path, profile):
     from refsoft.conformance.golden import CASES
 
-    s = check(golden, golden, out=tmp_path / "report")
-    assert s["passed"] and _flagged(s) == [] and s["counts"]["pass"] >= 400
+    s = check(golden, golden, out=tmp_path / "report", profile=profile)
+    assert s["passed"] and _flagged(s) == [] and s["counts"]["pass"] >= 400 and s["profile"] == profile
     assert {f.case for f in s["_findings"]} == {c.name for c in CASES}
     assert os.listdir(tmp_path / "report") == ["summary.json"]  # pictures only of what did not pass
     assert sum(k["pass"] for k in s["by_kind"].values()) == s["counts"]["pass"]
@@ -63,8 +60,10 @@ def test_regenerating_gives_identical_files(golden, tmp_path):
     again = tmp_path / "again"
     write_golden(again, ["sphere", "pixel_grid"])
     for case in ("sphere", "pixel_grid"):
-        for f in os.listdir(golden / case):
-            assert (again / case / f).read_bytes() == (golden / case / f).read_bytes(), f
+        names = [p.relative_to(golden) for p in (golden / case).rglob("*") if p.is_file()]
+        assert any(n.parts[1] == "inputs" for n in names)
+        for f in names:
+            assert (again / f).read_bytes() == (golden / f).read_bytes(), f
     m1 = json.loads((golden / "manifest.json").read_text())
     m2 = json.loads((again / "manifest.json").read_text())
     assert {k: v for k, v in m1["files"].items() if k.split("/")[0] in ("sphere", "pixel_grid")} == m2["files"]
@@ -121,31 +120,34 @@ def _apply_port(arrays, port):
     return traces
 
 
-def test_mutation_neighbour_order_changed(golden, tmp_path):
+@by_profile
+def test_mutation_neighbour_order_changed(golden, tmp_path, profile):
     order = [(1, 0), (0, 1), (-1, 0), (0, -1)]  # down, right, up, left instead of left, up, right, down
     port = _port_search("pixel_grid", order, every=3)
     traces = {}
     cand = _candidate(golden, tmp_path, "pixel_grid", 0, lambda a: traces.update(_apply_port(a, port)))
     (cand / "pixel_grid" / "traces_0000.json").write_text(json.dumps(traces))
-    s = check(golden, cand, cases=["pixel_grid"])
+    s = check(golden, cand, cases=["pixel_grid"], profile=profile)
     assert ("traces_1", "fail") in _statuses(s)
     f = [f for f in s["_findings"] if f.key == "traces_1"][0]
     assert "step" in f.details[0]
 
 
-def test_mutation_start_pixel_shifted_by_one(golden, tmp_path):
+@by_profile
+def test_mutation_start_pixel_shifted_by_one(golden, tmp_path, profile):
     port = _port_search("sphere", [(0, -1), (-1, 0), (0, 1), (1, 0)], shift=(1, 0), every=5)
     traces = {}
     cand = _candidate(golden, tmp_path, "sphere", 0, lambda a: traces.update(_apply_port(a, port)))
-    s = check(golden, cand, cases=["sphere"])
+    s = check(golden, cand, cases=["sphere"], profile=profile)
     assert not s["passed"] and ("iterations_1", "fail") in _statuses(s)
     (cand / "sphere" / "traces_0000.json").write_text(json.dumps(traces))
-    s = check(golden, cand, cases=["sphere"])
+    s = check(golden, cand, cases=["sphere"], profile=profile)
     f = [f for f in s["_findings"] if f.key == "traces_1"][0]
     assert f.status == "fail" and f.details[0].split(": step ")[1].startswith("0,")  # they part at the start
 
 
-def test_mutation_fill_rule_flipped(golden, tmp_path, monkeypatch):
+@by_profile
+def test_mutation_fill_rule_flipped(golden, tmp_path, monkeypatch, profile):
     """A port with the opposite fill rule (bottom-right instead of top-left) covers the mirror's
     pixels whose centres lie exactly on its horizontal edges the other way."""
     case = case_by_name("pixel_grid")
@@ -162,61 +164,67 @@ def test_mutation_fill_rule_flipped(golden, tmp_path, monkeypatch):
         a["gbuffer_mask_1"] = flipped
 
     cand = _candidate(golden, tmp_path, "pixel_grid", 0, mutate)
-    s = check(golden, cand, cases=["pixel_grid"], out=tmp_path / "r")
+    s = check(golden, cand, cases=["pixel_grid"], out=tmp_path / "r", profile=profile)
     f = [f for f in s["_findings"] if f.key == "gbuffer_mask_1"][0]
     assert f.status == "accepted" and f.count > 0 and "ambiguous" in f.message  # flagged: centres on edges
     assert (tmp_path / "r" / "pixel_grid_frame_0000_gbuffer_mask_1.png").exists()
 
 
-def test_mutation_float64_arithmetic(golden, tmp_path):
+@by_profile
+def test_mutation_float64_arithmetic(golden, tmp_path, profile):
     with np.load(golden / "sphere_float64" / "frame_0000.npz") as z:
         f64 = {k: z[k] for k in z.files}
     cand = _candidate(golden, tmp_path, "sphere", 0, lambda a: a.update(f64))
-    s = check(golden, cand, cases=["sphere"])
+    s = check(golden, cand, cases=["sphere"], profile=profile)
     assert not s["passed"] and ("score_1", "fail") in _statuses(s)  # float64 scores where float32 are due
 
 
-def test_mutation_fma_like_score(golden, tmp_path):
+@by_profile
+def test_mutation_fma_like_score(golden, tmp_path, profile):
     def mutate(a):
         s = a["score_1"]
         a["score_1"] = np.nextafter(s, np.float32(2.0)).astype(np.float32)  # one ULP up, as a fused multiply-add
 
-    s = check(golden, _candidate(golden, tmp_path, "sphere", 0, mutate), cases=["sphere"])
+    s = check(golden, _candidate(golden, tmp_path, "sphere", 0, mutate), cases=["sphere"], profile=profile)
     assert ("score_1", "accepted") in _statuses(s)  # within 4 ULP: accepted, but flagged yellow
 
 
-def test_mutation_y_flipped_image(golden, tmp_path):
+@by_profile
+def test_mutation_y_flipped_image(golden, tmp_path, profile):
     s = check(golden, _candidate(golden, tmp_path, "sphere", 0, lambda a: a.update(image=a["image"][::-1].copy())),
-              cases=["sphere"])
+              cases=["sphere"], profile=profile)
     assert not s["passed"] and ("image", "fail") in _statuses(s)
 
 
-def test_mutation_dropped_vertex(golden, tmp_path):
+@by_profile
+def test_mutation_dropped_vertex(golden, tmp_path, profile):
     def mutate(a):
         for k in list(a):
             if k.endswith("_1") and not k.startswith("gbuffer"):
                 a[k] = a[k][:-1]
 
-    s = check(golden, _candidate(golden, tmp_path, "sphere", 0, mutate), cases=["sphere"])
+    s = check(golden, _candidate(golden, tmp_path, "sphere", 0, mutate), cases=["sphere"], profile=profile)
     assert not s["passed"] and ("reflection_pixel_1", "fail") in _statuses(s)
 
 
-def test_mutation_transposed_gbuffer(golden, tmp_path):
+@by_profile
+def test_mutation_transposed_gbuffer(golden, tmp_path, profile):
     def mutate(a):
         a["gbuffer_position_1"] = np.ascontiguousarray(a["gbuffer_position_1"].transpose(1, 0, 2))
         a["gbuffer_mask_1"] = np.ascontiguousarray(a["gbuffer_mask_1"].T)
 
-    s = check(golden, _candidate(golden, tmp_path, "sphere", 0, mutate), cases=["sphere"])
+    s = check(golden, _candidate(golden, tmp_path, "sphere", 0, mutate), cases=["sphere"], profile=profile)
     assert not s["passed"] and ("gbuffer_position_1", "fail") in _statuses(s)
 
 
-def test_mutation_pixel_moved_off_the_optimum(golden, tmp_path):
+@by_profile
+def test_mutation_pixel_moved_off_the_optimum(golden, tmp_path, profile):
     """A port that ends one pixel away from the oracle where the scores are not tied fails, and
     the report says where, with the oracle's scores of both pixels."""
     def mutate(a):
         a["reflection_pixel_1"][::50, 1] += 2
 
-    s = check(golden, _candidate(golden, tmp_path, "sphere", 0, mutate), cases=["sphere"])
+    s = check(golden, _candidate(golden, tmp_path, "sphere", 0, mutate), cases=["sphere"], profile=profile)
     f = [f for f in s["_findings"] if f.key == "reflection_pixel_1"][0]
     assert f.status == "fail" and "oracle scores" in f.details[0]
 
@@ -226,12 +234,13 @@ def test_missing_outputs_and_references(golden, tmp_path):
     shutil.copytree(golden, cand)
     os.remove(cand / "sphere" / "frame_0000.npz")
     s = check(golden, cand, cases=["sphere", "pixel_grid"])
-    assert s["passed"] and s["missing_files"] == ["sphere/frame_0000.npz"]  # listed, not failed
+    assert not s["passed"] and s["missing_files"] == ["sphere/frame_0000.npz"]  # listed, and a failure
+    assert ("*", "missing") in _statuses(s) and s["counts"]["fail"] == 0 and s["counts"]["missing"] == 1
     with np.load(cand / "pixel_grid" / "frame_0000.npz") as z:
         part = {k: z[k] for k in z.files if k != "image"}
     write_npz(cand / "pixel_grid" / "frame_0000.npz", **part)
     s = check(golden, cand, cases=["pixel_grid"])
-    assert ("image", "missing") in _statuses(s)
+    assert not s["passed"] and ("image", "missing") in _statuses(s)
     bad_golden = tmp_path / "bad_golden"
     shutil.copytree(golden, bad_golden)
     os.remove(bad_golden / "pixel_grid" / "frame_0000.npz")
@@ -239,9 +248,50 @@ def test_missing_outputs_and_references(golden, tmp_path):
     assert not s["passed"] and ("*", "fail") in _statuses(s)  # a missing reference fails
 
 
+def test_a_subset_passes_only_when_the_candidate_says_so(golden, tmp_path, capsys):
+    """A candidate without a whole case, or without one kind of output, fails (exit 1), and
+    passes once it excludes them with --case or --kinds."""
+    cand = tmp_path / "cand"
+    cand.mkdir()
+    for case in ("sphere", "planar"):
+        shutil.copytree(golden / case, cand / case)
+    for f in (cand / "planar").glob("frame_*.npz"):  # no virtual vertices, scores or margins
+        with np.load(f) as z:
+            write_npz(f, **{k: z[k] for k in z.files if not k.startswith(("virtual_vertex_", "score_", "margin_"))})
+    r = str(tmp_path / "r")
+    assert cli.main(["check", str(golden), str(cand), "--out", r]) == 1  # 19 cases missing
+    out = capsys.readouterr().out
+    assert "MISSING  ellipsoid frame 0 *" in out and "FAILED" in out and "--kinds" in out
+    assert cli.main(["check", str(golden), str(cand), "--case", "sphere", "--case", "planar", "--out", r]) == 1
+    out = capsys.readouterr().out
+    assert "MISSING  planar frame 1 virtual_vertex_1 [virtual]" in out and "score_1 [score]" in out
+    s = check(golden, cand, cases=["sphere", "planar"], kinds=["coverage,gbuffer,pixel", "flags", "vertex_object",
+                                                               "iterations", "image", "ids", "trace"])
+    assert s["passed"] and s["counts"]["missing"] == 0 and _flagged(s) == []
+    assert not {"virtual", "score", "margin"} & {f.kind for f in s["_findings"]}  # excluded: not judged
+    assert {"pixel", "iterations", "flags"} <= {f.kind for f in s["_findings"] if f.case == "planar"}
+    assert cli.main(["check", str(golden), str(cand), "--case", "sphere", "--case", "planar", "--out", r,
+                     "--kinds", "coverage,gbuffer,pixel,flags,vertex_object,iterations,image,ids"]) == 0
+    assert "PASSED" in capsys.readouterr().out
+    assert cli.main(["check", str(golden), str(cand), "--kinds", "pixels", "--out", r]) == 2
+    assert "unknown kind of output 'pixels'" in capsys.readouterr().err
+    # without the reflection pixels, the other per-vertex outputs are judged as if they agreed
+    s = check(golden, cand, cases=["planar"], kinds=["iterations", "flags"])
+    assert s["passed"] and {f.kind for f in s["_findings"]} == {"iterations", "flags"}
+    broken = _candidate(golden, tmp_path / "b", "sphere", 0, lambda a: a["flags_1"].__setitem__(slice(0, 9), 8))
+    s = check(golden, broken, cases=["sphere"], kinds=["flags"])
+    assert not s["passed"] and ("flags_1", "fail") in _statuses(s)
+
+
 def test_cli_exit_codes(golden, tmp_path, capsys, monkeypatch):
     assert cli.main(["check", str(golden), str(golden), "--case", "sphere", "--out", str(tmp_path / "r")]) == 0
     assert "PASSED" in capsys.readouterr().out
+    assert cli.main(["check", str(golden), str(golden), "--case", "sphere", "--profile", "gpu", "--out",
+                     str(tmp_path / "r")]) == 0
+    assert "(gpu profile)" in capsys.readouterr().out
+    with pytest.raises(SystemExit) as exc:  # argparse's choices
+        cli.main(["check", str(golden), str(golden), "--profile", "gl", "--out", str(tmp_path / "r")])
+    assert exc.value.code == 2 and "invalid choice: 'gl'" in capsys.readouterr().err
     cand = _candidate(golden, tmp_path, "sphere", 0, lambda a: a.update(image=a["image"][::-1].copy()))
     monkeypatch.chdir(tmp_path)
     assert cli.main(["check", str(golden), str(cand), "--case", "sphere"]) == 1

@@ -19,7 +19,7 @@ def test_scores64_is_the_kernels_float64_score():
 
 
 @pytest.mark.parametrize("name, floor, diverged", [("sphere", 0.995, 0), ("ellipsoid", 0.999, 0),
-                                                    ("planar", 0.99, 0), ("kitchen", 0.998, 3), ("ufo", 0.9996, 1)])
+                                                    ("planar", 0.99, 0), ("kitchen", 0.998, 0), ("ufo", 0.9996, 1)])
 def test_float32_finds_the_float64_pixel(name, floor, diverged):
     """Floors about a tenth of a point below the figures measured at 320x240 (docs/precision.md)."""
     scene = refsoft.load_scene(name, width=320, height=240)
