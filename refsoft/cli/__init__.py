@@ -52,6 +52,7 @@ def build_parser() -> argparse.ArgumentParser:
     r.set_defaults(func=commands.cmd_render)
 
     _port_commands(sub)
+    _export_command(sub, scene, methods)
     _bench_command(sub)
     tr = sub.add_parser("truth", parents=[scene, frame_range_options(), memory, run_folder_options("out/SCENE-truth")],
                         help="ray-trace the reflections (Embree) as the reference for compare")
@@ -91,6 +92,21 @@ def _port_commands(sub):
     ck.add_argument("--verbose", action="store_true", help="also print the outputs that pass")
     ck.set_defaults(func=commands.cmd_check)
 
+
+
+def _export_command(sub, scene, methods):
+    """``export``: a scene's inputs as a port reads them (PLY and JSON)."""
+    e = sub.add_parser("export", parents=[scene, methods, render_options()],
+                       help="write a scene's inputs for a port: world meshes per frame as PLY (float64, with "
+                            "normals), cameras, matrices and options as JSON (docs/ports.md)")
+    which = e.add_mutually_exclusive_group()
+    which.add_argument("--frames", default=None, metavar="N|A:B",
+                       help="frames 0..N-1, or A..B-1 (default: the whole animation; frame 0 of a static scene)")
+    which.add_argument("--frame", type=int, default=None, metavar="K", help="only frame K (a cold start)")
+    e.add_argument("--out", required=True, metavar="DIR", help="output folder (case.json and the PLY files)")
+    e.add_argument("--overwrite", action="store_true",
+                   help="replace an earlier export in DIR (its mesh files not rewritten are removed)")
+    e.set_defaults(func=commands.cmd_export)
 
 
 def _bench_command(sub):

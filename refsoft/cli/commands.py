@@ -199,6 +199,20 @@ def cmd_check(args) -> int:
     return 0 if summary["passed"] else 1
 
 
+def cmd_export(args) -> int:
+    from ..conformance.export import export_frames, export_inputs
+    from ..options import RenderOptions
+
+    scene = _scene(args)
+    frames = export_frames(scene, args.frames, args.frame)
+    options = RenderOptions(**render_kwargs(args))
+    files = export_inputs(args.out, scene, frames, options, overwrite=args.overwrite)
+    size = sum(os.path.getsize(os.path.join(args.out, f)) for f in files)
+    print(f"{scene.name}: inputs of {len(frames)} frame(s) at {scene.camera.width}x{scene.camera.height}, preset "
+          f"{options.preset}: case.json and {len(files) - 1} PLY file(s), {size / 1e6:.1f} MB, in {args.out}")
+    return 0
+
+
 def cmd_bench(args) -> int:
     from .. import bench
 

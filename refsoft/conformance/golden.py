@@ -5,6 +5,8 @@ Layout (a port writes its outputs in the same layout for ``refsoft check``)::
     DIR/manifest.json                 versions, the options of each case, SHA-256 of every file
     DIR/CASE/frame_NNNN.npz           the spec section 7 arrays (plus score_k and margin_k)
     DIR/CASE/traces_NNNN.json         search traces of a sample of vertices per reflector
+    DIR/CASE/inputs/                  the case's inputs: case.json and world meshes as PLY
+                                      (:mod:`refsoft.conformance.export`)
 
 Traces (``format: refsoft-traces-1``): ``{"reflectors": {"K": [{"vertex": i, "start": [r, c],
 "path": [[r, c], ...], "phases": [0, ..., 1, ...], "pixel": [r, c], "iterations": n, "flags": f,
@@ -190,14 +192,15 @@ def traced_vertices(n: int) -> np.ndarray:
     return np.unique(np.linspace(0, n - 1, min(TRACED_VERTICES, n)).astype(np.int64)) if n else np.zeros(0, int)
 
 
-def render_case(case: Case):
-    """Yield ``(frame index, arrays, traces)`` for each frame of a case."""
+def render_case(case: Case, scene=None):
+    """Yield ``(frame index, arrays, traces)`` for each frame of a case (``scene``: the case's
+    scene, already loaded)."""
     from ..frame import FrameDriver
     from ..options import RenderOptions
     from ..scene import scene_vertices
     from ..search import CULLED, trace_search
 
-    scene = case.load()
+    scene = case.load() if scene is None else scene
     opts = RenderOptions(**case.options)
     driver = FrameDriver(scene, opts)
     previous = {}
@@ -251,6 +254,7 @@ def write_golden(out, cases=None, progress=False, mode=None) -> dict:
 
     from .. import __version__
     from ..io import write_json, write_npz
+    from .export import INPUTS_FOLDER, write_inputs
 
     if mode not in (None, "add", "replace"):
         raise RefsoftError(f"mode must be None, 'add' or 'replace', got {mode!r}")
@@ -273,8 +277,12 @@ def write_golden(out, cases=None, progress=False, mode=None) -> dict:
         entries[case.name] = {"name": case.name, "scene": case.scene, "frames": list(case.frames),
                               "width": GOLDEN_SIZE[0], "height": GOLDEN_SIZE[1],
                               "options": RenderOptions(**case.options).as_dict()}
-        for f, arrays, traces in render_case(case):
-            base = os.path.join(out, case.name)
+        scene = case.load()
+        base = os.path.join(out, case.name)
+        for name in write_inputs(os.path.join(base, INPUTS_FOLDER), scene, case.frames, case.options, case.name):
+            rel = f"{case.name}/{INPUTS_FOLDER}/{name}"
+            files[rel] = sha256(os.path.join(out, *rel.split("/")))
+        for f, arrays, traces in render_case(case, scene):
             npz = os.path.join(base, f"frame_{f:04d}.npz")
             write_npz(npz, **arrays)
             tj = os.path.join(base, f"traces_{f:04d}.json")
@@ -336,8 +344,9 @@ def _remove_listed(out, files):
         if os.path.commonpath([root, p]) == root and p != root and os.path.isfile(p):
             os.unlink(p)
             folder = os.path.dirname(p)
-            if folder != root and not os.listdir(folder):
-                os.rmdir(folder)
+            while folder != root and os.path.commonpath([root, folder]) == root and not os.listdir(folder):
+                os.rmdir(folder)  # an emptied inputs/ folder, then its emptied case folder
+                folder = os.path.dirname(folder)
 
 
 def read_manifest(golden) -> dict:

@@ -74,7 +74,9 @@ def test_add_keeps_the_other_cases_and_regenerating_one_changes_nothing(golden, 
     m = read_manifest(gold)
     assert [c["name"] for c in m["cases"]] == ["sphere", "pixel_grid"]  # canonical order
     assert {k: v for k, v in m["files"].items() if k.startswith("pixel_grid/")} == old["files"]
-    assert set(m["files"]) == set(old["files"]) | {"sphere/frame_0000.npz", "sphere/traces_0000.json"}
+    inputs = {f"sphere/inputs/{n}" for n in os.listdir(gold / "sphere" / "inputs")}
+    assert "sphere/inputs/case.json" in inputs and "sphere/inputs/mesh_1.ply" in inputs
+    assert set(m["files"]) == set(old["files"]) | {"sphere/frame_0000.npz", "sphere/traces_0000.json"} | inputs
     assert check(gold, gold)["passed"]  # both cases checked
     both = (gold / "manifest.json").read_bytes()
     write_golden(gold, ["pixel_grid"], mode="add")  # regenerated: byte-identical files, same manifest
