@@ -52,10 +52,9 @@ void main() {
     int r = start[0], c = start[1];
     if (has_previous) {
         ivec2 q = previous[i];
-        if (q.x != -1 || q.y != -1) {
-            if (covered(q.x, q.y)) { r = q.x; c = q.y; }
-            else fl = RESTARTED;
-        }
+        bool inside = q.x >= 0 && q.x < gheight && q.y >= 0 && q.y < gwidth;   // else: the buffer changed size
+        if (inside && gmask[q.x * gwidth + q.y] != 0) { r = q.x; c = q.y; }
+        else if (inside) fl = RESTARTED;
     }
     bool inverse = false;
     int total = 0;
