@@ -102,14 +102,19 @@ class Pipeline:
         self.gl, self.case = gl, case
         opt = case.options
         self.options = opt
-        for name, allowed in (("method", ("walk", "hierarchy")), ("refine", (False,)), ("tessellate", (None,)),
-                              ("virtual", ("mirror",)), ("silhouette", ("texel",)), ("adaptive_widen", (False,))):
+        for name, allowed in (("method", ("walk", "hierarchy")), ("virtual", ("mirror", "unfold")),
+                              ("silhouette", ("texel", "clip")), ("adaptive_widen", (False,))):
             if opt.get(name) not in allowed:
                 raise NotImplementedError(f"case {case.name}: option {name}={opt.get(name)!r} is not ported")
         self.double = opt.get("precision", "float32") == "float64"
         self.hierarchy = opt["method"] == "hierarchy"
-        if self.hierarchy and self.double:
-            raise NotImplementedError(f"case {case.name}: the hierarchy search is ported in float32 only")
+        self.refine = bool(opt.get("refine", False))
+        self.tessellate = opt.get("tessellate")
+        self.clip = opt.get("silhouette") == "clip"
+        self.unfold = opt.get("virtual") == "unfold"
+        if self.hierarchy and (self.double or self.tessellate is not None or self.clip):
+            raise NotImplementedError(f"case {case.name}: the hierarchy search is ported in float32, without "
+                                      "tessellation or the silhouette cut")
         self.real = np.float64 if self.double else np.float32
         self.nb = NEIGHBOURHOODS[opt["neighbourhood"]]
         self.inverse = opt["inverse"]
@@ -153,8 +158,13 @@ class Pipeline:
             gl.finish()
             times["search"] += _ms(t)
             t = time.perf_counter()
-            vv = self.virtual_vertices(frame, data, gb, res)
-            vcol, vid = self.virtual_pass(frame, data, view, vv, res, k)
+            surface = self.refine_points(gb, data.reflected.points, data.reflected.n_vertices, res) \
+                if self.refine else None
+            vv = self.virtual_vertices(frame, data, gb, res, surface)
+            if self.tessellate is not None or self.clip:
+                vcol, vid = self.virtual_pass_refined(frame, data, view, gb, res, surface, vv, k)
+            else:
+                vcol, vid = self.virtual_pass(frame, data, view, vv, res, k)
             gl.finish()
             times["virtual"] += _ms(t)
             t = time.perf_counter()
@@ -216,15 +226,17 @@ class Pipeline:
         gl.run(gl.compute("interp", MODE=0, DOUBLE=int(self.double)), w * h,
                [None, None, None, None, None, mesh.faces, mesh.points, mesh.normals, params, None, None, None,
                 P, N, M], width=w, height=h, region=(0, h, 0, w))
-        return {"P": P, "N": N, "mask": M, "params": params, "view_proj": vp, "width": w, "height": h}
+        start = gl.buffer(nbytes=16)
+        gl.run(gl.compute("start"), 0, [P, N, M, start], groups=1, gwidth=w, gheight=h)
+        return {"P": P, "N": N, "mask": M, "params": params, "view_proj": vp, "width": w, "height": h,
+                "start": start}
 
     def search(self, frame, data, gb, k) -> dict:
         """Every reflected vertex's search in reflector ``k``'s G-buffer (spec section 4)."""
         gl, opt = self.gl, self.options
         w, h = gb["width"], gb["height"]
         n = data.reflected.n_vertices
-        start = gl.buffer(nbytes=16)
-        gl.run(gl.compute("start"), 0, [gb["P"], gb["N"], gb["mask"], start], groups=1, gwidth=w, gheight=h)
+        start = gb["start"]
         if self.hierarchy:
             return self.hierarchy_search(data, gb, start)
         prev = self.previous.get(k) if opt.get("coherence", True) else None
@@ -282,14 +294,31 @@ class Pipeline:
                cone_factor=CONE_FACTOR, sphere_factor=SPHERE_FACTOR)
         return out
 
-    def virtual_vertices(self, frame, data, gb, res) -> dict:
+    def virtual_vertices(self, frame, data, gb, res, surface=None) -> dict:
+        return self._virtual(gb, data.reflected.points, data.reflected.n_vertices, res["pixel"], res["flags"],
+                             surface)
+
+    def _virtual(self, gb, points, n, pixel, flags, surface=None) -> dict:
+        """Virtual vertices (spec section 4.6) of ``n`` world points, from their pixels or their
+        sub-texel ``surface`` (buffers ``P``, ``N``): float32 and float64 world buffers."""
         gl = self.gl
-        n = data.reflected.n_vertices
         v32, v64 = gl.buffer(nbytes=12 * n), gl.buffer(nbytes=24 * n)
-        gl.run(gl.compute("virtual", DOUBLE=int(self.double), EXACT=int(self.exact)), n,
-               [gb["P"], gb["N"], None, None, data.reflected.points, gb["params"], None, res["pixel"], None, None,
-                None, res["flags"], v32, v64], n=n, gwidth=gb["width"], mode=INVERSE_MODES.index(self.inverse))
+        sp, sn = (surface["P"], surface["N"]) if surface is not None else (None, None)
+        gl.run(gl.compute("virtual", DOUBLE=int(self.double), EXACT=int(self.exact), SURFACE=int(surface is not None)),
+               n, [gb["P"], gb["N"], sp, sn, points, gb["params"], None, pixel, None, None, None, flags, v32, v64],
+               n=n, gwidth=gb["width"], mode=INVERSE_MODES.index(self.inverse), unfold=self.unfold)
         return {"v32": v32, "v64": v64}
+
+    def refine_points(self, gb, points, n, res) -> dict:
+        """Sub-texel reflection points of ``n`` world points from their search results (buffers
+        ``P``, ``N``, ``offset`` relative to the G-buffer's origin)."""
+        gl = self.gl
+        es = 8 if self.double else 4
+        out = {"P": gl.buffer(nbytes=3 * es * n), "N": gl.buffer(nbytes=3 * es * n), "offset": gl.buffer(nbytes=2 * es * n)}
+        gl.run(gl.compute("refine", DOUBLE=int(self.double), EXACT=int(self.exact), MIN_DET=_min_det(self.double)), n,
+               [gb["P"], gb["N"], gb["mask"], None, points, gb["params"], None, res["pixel"], None, None, None,
+                res["flags"], out["P"], out["N"], out["offset"]], n=n, gwidth=gb["width"], gheight=gb["height"])
+        return out
 
     def virtual_pass(self, frame, data, view, vv, res, k):
         """The virtual scene of reflector ``k`` on its stencil: colour and reflected id."""
@@ -304,6 +333,48 @@ class Pipeline:
         s = r.setup(vv["v64"], refl.n_vertices, refl.faces, refl.n_faces, params, flags=res["flags"], bad=bad)
         r.draw(s)
         out = self._shade(r, s, refl, params, mode=2, view_id=view["id"], reflector=k)
+        return out["colour"], out["id"]
+
+    def virtual_pass_refined(self, frame, data, view, gb, res, surface, vv, k):
+        """The virtual scene of reflector ``k`` after the tessellation and the silhouette cut
+        (:mod:`refsoft_glsl.geometry`): the searched vertices first, then the new ones."""
+        from .geometry import Reflected, clip_at_silhouette, tessellate
+
+        gl, opt = self.gl, self.options
+        refl = data.reflected
+        n = refl.n_vertices
+        real = self.real
+        vertices, normals, faces, face_obj = refl.host
+        geo = Reflected(vertices, normals, gl.read(res["pixel"], np.int32, (n, 2)),
+                        gl.read(res["flags"], np.uint32, (n,)),
+                        None if surface is None else tuple(gl.read(surface[key], real, (n, width))
+                                                           for key, width in (("P", 3), ("N", 3), ("offset", 2))),
+                        faces.astype(np.int64), face_obj.astype(np.int32))
+        gpu = _GeometryShaders(self, gb)
+        virtual = [gl.read(vv["v64"], np.float64, (n, 3))]
+        if self.tessellate is not None:
+            tessellate(geo, gpu, gpu.mask, float(self.tessellate), int(opt.get("max_level", 3)),
+                       int(opt.get("tessellate_span", 0)), self.inverse == "search")
+            sub = None if geo.surface is None else tuple(a[n:] for a in geo.surface[:2])
+            virtual.append(gpu.virtual(geo.vertices[n:], geo.pixel[n:], geo.flags[n:], sub))
+        if self.clip:
+            cut_v, cut_n, pixel, flags, _ = clip_at_silhouette(geo, gpu)
+            if len(cut_v):
+                sub = gpu.refine(cut_v, pixel, flags)[:2] if self.refine else None
+                virtual.append(gpu.virtual(cut_v, pixel, flags, sub))
+                geo.vertices = np.concatenate([geo.vertices, cut_v])
+                geo.normals = np.concatenate([geo.normals, cut_n])
+                geo.flags = np.concatenate([geo.flags, flags])
+        v64 = np.concatenate(virtual)
+        mesh = MeshData(gl, v64, geo.normals, geo.faces, geo.face_obj, np.zeros(len(v64), np.int32))
+        W, H = self.case.width, self.case.height
+        params = gl.buffer(params_array(frame.view_proj, W, H))
+        r = self.raster(W, H)
+        bad = CULLED | (HIDDEN if self.inverse == "discard" else 0)
+        s = r.setup(mesh.points, mesh.n_vertices, mesh.faces, mesh.n_faces, params,
+                    flags=gl.buffer(geo.flags.astype(np.uint32)), bad=bad)
+        r.draw(s)
+        out = self._shade(r, s, mesh, params, mode=2, view_id=view["id"], reflector=k)
         return out["colour"], out["id"]
 
     # --- outputs ---------------------------------------------------------------------------------
@@ -325,6 +396,68 @@ class Pipeline:
                 f"vertex_object_{k}": data.reflected.vertex_object.astype(np.int32),
                 f"score_{k}": gl.read(res["score"], real, (n,)),
                 f"margin_{k}": gl.read(res["margin"], real, (n,))}
+
+
+class _GeometryShaders:
+    """The GPU stages :mod:`refsoft_glsl.geometry` calls, on host arrays, in one G-buffer."""
+
+    def __init__(self, pipe, gb):
+        self.pipe, self.gb, self.gl = pipe, gb, pipe.gl
+        self.mask = self.gl.read(gb["mask"], np.int32, (gb["height"], gb["width"])) != 0
+
+    def search(self, points, starts, inverse_search):
+        gl, pipe, gb = self.gl, self.pipe, self.gb
+        m = len(points)
+        out = {"pixel": gl.buffer(nbytes=8 * m), "score": gl.buffer(nbytes=8 * m), "margin": gl.buffer(nbytes=8 * m),
+               "iterations": gl.buffer(nbytes=4 * m), "flags": gl.buffer(nbytes=4 * m)}
+        cap = pipe.options.get("cap") or 2 * (gb["width"] + gb["height"])
+        gl.run(gl.compute("search", NB=pipe.nb, DOUBLE=int(pipe.double), EXACT=int(pipe.exact)), m,
+               [gb["P"], gb["N"], gb["mask"], gb["start"], gl.buffer(np.asarray(points, np.float64)), gb["params"],
+                gl.buffer(np.asarray(starts, np.int32)), out["pixel"], out["score"], out["margin"], out["iterations"],
+                out["flags"]], n=m, cap=int(cap), has_previous=True, inverse_search=bool(inverse_search),
+               gwidth=gb["width"], gheight=gb["height"])
+        return gl.read(out["pixel"], np.int32, (m, 2)), gl.read(out["flags"], np.uint32, (m,))
+
+    def _buffers(self, points, pixel, flags):
+        gl = self.gl
+        return ({"pixel": gl.buffer(np.asarray(pixel, np.int32)), "flags": gl.buffer(np.asarray(flags, np.uint32))},
+                gl.buffer(np.asarray(points, np.float64)))
+
+    def refine(self, points, pixel, flags):
+        m = len(points)
+        res, pts = self._buffers(points, pixel, flags)
+        out = self.pipe.refine_points(self.gb, pts, m, res)
+        return tuple(self.gl.read(out[key], self.pipe.real, (m, width)) for key, width in (("P", 3), ("N", 3), ("offset", 2)))
+
+    def virtual(self, points, pixel, flags, surface):
+        gl = self.gl
+        m = len(points)
+        if m == 0:
+            return np.zeros((0, 3))
+        res, pts = self._buffers(points, pixel, flags)
+        sub = None if surface is None else {"P": gl.buffer(surface[0]), "N": gl.buffer(surface[1])}
+        vv = self.pipe._virtual(self.gb, pts, m, res["pixel"], res["flags"], sub)
+        return gl.read(vv["v64"], np.float64, (m, 3))
+
+    def edge_errors(self, vertices, pixel, offset, e0, e1):
+        gl, gb, pipe = self.gl, self.gb, self.pipe
+        m = len(e0)
+        out = gl.buffer(nbytes=8 * m)
+        off = offset if offset is not None else np.zeros((1, 2), pipe.real)
+        gl.run(gl.compute("edge_error", DOUBLE=int(pipe.double), EXACT=int(pipe.exact)), m,
+               [gb["P"], gb["N"], gb["mask"], None, gl.buffer(np.asarray(vertices, np.float64)), gb["params"], None,
+                gl.buffer(np.asarray(pixel, np.int32)), gl.buffer(np.asarray(off, pipe.real)),
+                gl.buffer(np.c_[e0, e1].astype(np.int32)), out], n=m, subtexel=offset is not None,
+               gwidth=gb["width"], gheight=gb["height"])
+        return gl.read(out, np.float64, (m,))
+
+
+def _min_det(double):
+    """The refinement's determinant threshold 1e-6 in the working precision, bit for bit."""
+    if double:
+        lo, hi = np.array([1e-6]).view(np.uint32)
+        return f"packDouble2x32(uvec2({lo}u, {hi}u))"
+    return f"uintBitsToFloat({int(np.array([1e-6], np.float32).view(np.uint32)[0])}u)"
 
 
 def _ms(t):

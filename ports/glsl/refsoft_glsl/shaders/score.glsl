@@ -50,6 +50,10 @@ REAL dot_exact(VEC3 a, VEC3 b) {
     precise REAL d = (a.x * b.x + a.y * b.y) + a.z * b.z;
     return d;
 }
+
+VEC3 unit3(REAL x, REAL y, REAL z) {
+    return normalize_exact(x, y, z);
+}
 #else
 VEC3 safe_normalize(VEC3 x) {
     return length(x) > REAL(0.0) ? normalize(x) : VEC3(REAL(0.0));
@@ -66,6 +70,10 @@ REAL score_at(int r, int c, VEC3 e, VEC3 v, bool inverse) {
 
 REAL dot_exact(VEC3 a, VEC3 b) {
     return dot(a, b);
+}
+
+VEC3 unit3(REAL x, REAL y, REAL z) {
+    return safe_normalize(VEC3(x, y, z));
 }
 #endif
 
