@@ -279,10 +279,10 @@ class Pipeline:
         levels = np.zeros(32, np.int32)
         levels[:len(sizes)] = offsets
         levels[16:16 + len(sizes)] = sizes
-        gl.run(gl.compute("hbase"), size * size, [gb["P"], gb["N"], gb["mask"], None, None, gb["params"], sph, cone],
+        gl.run(gl.compute("hbase", EXACT=int(self.exact)), size * size, [gb["P"], gb["N"], gb["mask"], None, None, gb["params"], sph, cone],
                size=size, gwidth=w, crop=crop)
         for lvl in range(1, len(sizes)):
-            gl.run(gl.compute("hlevel"), sizes[lvl] ** 2, [None] * 6 + [sph, cone], size=sizes[lvl],
+            gl.run(gl.compute("hlevel", EXACT=int(self.exact)), sizes[lvl] ** 2, [None] * 6 + [sph, cone], size=sizes[lvl],
                    src=int(offsets[lvl - 1]), dst=int(offsets[lvl]))
         out = {"pixel": gl.buffer(nbytes=8 * n), "score": gl.buffer(nbytes=4 * n), "margin": gl.buffer(nbytes=4 * n),
                "iterations": gl.buffer(nbytes=4 * n), "flags": gl.buffer(nbytes=4 * n)}
@@ -365,14 +365,19 @@ class Pipeline:
                 geo.vertices = np.concatenate([geo.vertices, cut_v])
                 geo.normals = np.concatenate([geo.normals, cut_n])
                 geo.flags = np.concatenate([geo.flags, flags])
-        v64 = np.concatenate(virtual)
-        mesh = MeshData(gl, v64, geo.normals, geo.faces, geo.face_obj, np.zeros(len(v64), np.int32))
+        return self.draw_virtual(frame, view, np.concatenate(virtual), geo.normals, geo.faces, geo.face_obj, geo.flags, k)
+
+    def draw_virtual(self, frame, view, v64, normals, faces, face_obj, flags, k):
+        """Rasterize virtual triangles given on the host (float64 world ``v64``) on reflector
+        ``k``'s stencil: colour and reflected id buffers."""
+        gl = self.gl
+        mesh = MeshData(gl, v64, normals, faces, face_obj, np.zeros(len(v64), np.int32))
         W, H = self.case.width, self.case.height
         params = gl.buffer(params_array(frame.view_proj, W, H))
         r = self.raster(W, H)
         bad = CULLED | (HIDDEN if self.inverse == "discard" else 0)
         s = r.setup(mesh.points, mesh.n_vertices, mesh.faces, mesh.n_faces, params,
-                    flags=gl.buffer(geo.flags.astype(np.uint32)), bad=bad)
+                    flags=gl.buffer(np.asarray(flags, np.uint32)), bad=bad)
         r.draw(s)
         out = self._shade(r, s, mesh, params, mode=2, view_id=view["id"], reflector=k)
         return out["colour"], out["id"]

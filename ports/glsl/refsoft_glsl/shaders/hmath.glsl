@@ -2,6 +2,7 @@
 // once (GLSL has no float64 atan; its float32 atan is not accurate enough). refsoft calls the
 // host C library's atan2f and asinf, which are not correctly rounded: the two differ by one ULP
 // in some arguments, which changes a containment test only when it is that close to its limit.
+#if EXACT
 const double D_PI = 3.141592653589793116lf;
 const double D_HALF_PI = 1.570796326794896558lf;
 
@@ -46,3 +47,10 @@ float norm3(float x, float y, float z) {
     precise float n = sqrt((x * x + y * y) + z * z);
     return n;
 }
+#else
+// the plain variant: GLSL's built-ins
+const double D_PI = 3.141592653589793116lf;
+float atan2_f32(float y, float x) { return atan(y, x); }
+float asin_f32(float x) { return asin(x); }
+float norm3(float x, float y, float z) { return length(vec3(x, y, z)); }
+#endif
