@@ -155,14 +155,17 @@ class Pipeline:
             times["gbuffer"] += _ms(t)
             t = time.perf_counter()
             res = self.search(frame, data, gb, k)
-            gl.finish()
-            times["search"] += _ms(t)
-            t = time.perf_counter()
             surface = self.refine_points(gb, data.reflected.points, data.reflected.n_vertices, res) \
                 if self.refine else None
             vv = self.virtual_vertices(frame, data, gb, res, surface)
+            gl.finish()
+            times["search"] += _ms(t)   # the search, the refinement and the virtual vertices, as refsoft's
+            t = time.perf_counter()
             if self.tessellate is not None or self.clip:
-                vcol, vid = self.virtual_pass_refined(frame, data, view, gb, res, surface, vv, k)
+                geometry = self.refined_geometry(data, gb, res, surface, vv)
+                times["tessellate"] = times.get("tessellate", 0.0) + _ms(t)
+                t = time.perf_counter()
+                vcol, vid = self.draw_virtual(frame, view, *geometry, k)
             else:
                 vcol, vid = self.virtual_pass(frame, data, view, vv, res, k)
             gl.finish()
@@ -335,9 +338,10 @@ class Pipeline:
         out = self._shade(r, s, refl, params, mode=2, view_id=view["id"], reflector=k)
         return out["colour"], out["id"]
 
-    def virtual_pass_refined(self, frame, data, view, gb, res, surface, vv, k):
-        """The virtual scene of reflector ``k`` after the tessellation and the silhouette cut
-        (:mod:`refsoft_glsl.geometry`): the searched vertices first, then the new ones."""
+    def refined_geometry(self, data, gb, res, surface, vv):
+        """The reflected geometry after the tessellation and the silhouette cut
+        (:mod:`refsoft_glsl.geometry`), the searched vertices first, then the new ones:
+        ``(virtual vertices (V, 3) float64 world, normals, faces, face objects, flags)``."""
         from .geometry import Reflected, clip_at_silhouette, tessellate
 
         gl, opt = self.gl, self.options
@@ -365,7 +369,7 @@ class Pipeline:
                 geo.vertices = np.concatenate([geo.vertices, cut_v])
                 geo.normals = np.concatenate([geo.normals, cut_n])
                 geo.flags = np.concatenate([geo.flags, flags])
-        return self.draw_virtual(frame, view, np.concatenate(virtual), geo.normals, geo.faces, geo.face_obj, geo.flags, k)
+        return np.concatenate(virtual), geo.normals, geo.faces, geo.face_obj, geo.flags
 
     def draw_virtual(self, frame, view, v64, normals, faces, face_obj, flags, k):
         """Rasterize virtual triangles given on the host (float64 world ``v64``) on reflector
