@@ -1,5 +1,6 @@
 """``refsoft-glsl run GOLDEN --out CANDIDATE [--case NAME ...] [--plain]``: the GLSL port of
-the main method on Mesa llvmpipe, run on a golden set's inputs."""
+the main method on Mesa llvmpipe, run on a golden set's inputs. ``refsoft-glsl info``: the
+renderer, Mesa and LLVM versions it runs on (exit 2 when no llvmpipe EGL context can be made)."""
 
 from __future__ import annotations
 
@@ -20,10 +21,21 @@ def main(argv=None) -> int:
     run.add_argument("--plain", action="store_true",
                      help="the plain variant: GL's own interpolation, built-in normalize/dot, no precise")
     run.add_argument("--quiet", action="store_true", help="no progress lines")
+    sub.add_parser("info", help="the renderer, Mesa and LLVM versions (exit 2 without an llvmpipe EGL context)")
     args = parser.parse_args(argv)
     from .context import GLUnavailable, context
     from .inputs import InputError
     from .run import case_names, gl_versions, run_case
+
+    if args.command == "info":
+        try:
+            v = gl_versions(context())
+        except GLUnavailable as exc:
+            print(f"refsoft-glsl: error: {exc}", file=sys.stderr)
+            return 2
+        for key in ("GL_RENDERER", "GL_VERSION", "GL_VENDOR", "mesa", "llvm"):
+            print(f"{key}: {v[key]}")
+        return 0
 
     try:
         names = case_names(args.golden)
