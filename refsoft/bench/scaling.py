@@ -18,7 +18,7 @@ import os
 import numpy as np
 
 from ..errors import RefsoftError
-from ._common import machine, markdown_table, median_time, plt_or_none, write_csv, write_text
+from ._common import machine, markdown_table, median_time, plt_or_none, run_bench, write_csv, write_text
 
 COLUMNS = ["series", "size", "time_ms", "per_item_ns"]
 
