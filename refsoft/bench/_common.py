@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import io
 import os
+import threading
 import time
 
 import numpy as np
@@ -141,6 +142,8 @@ def plan_scene(name, width=None, height=None):
 
 
 _SCENES, _TRUTHS = {}, {}
+#: A Dask worker of several threads runs tasks at once (--no-timing): one fills the caches at a time.
+_CACHE_LOCK = threading.Lock()
 
 
 def task_scene(spec, width=None, height=None):
@@ -151,10 +154,11 @@ def task_scene(spec, width=None, height=None):
 
     if not isinstance(spec, str):
         return spec
-    if spec not in _SCENES:
-        _SCENES.clear()  # one built-in at a time: tasks come grouped by scene
-        _SCENES[spec] = load_scene(spec)
-    scene = _SCENES[spec]
+    with _CACHE_LOCK:
+        if spec not in _SCENES:
+            _SCENES.clear()  # one built-in at a time: tasks come grouped by scene
+            _SCENES[spec] = load_scene(spec)
+        scene = _SCENES[spec]
     size = {k: v for k, v in (("width", width), ("height", height)) if v is not None}
     return replace(scene, camera=replace(scene.camera, **size)) if size else scene
 
@@ -165,9 +169,10 @@ def task_truths(scene, frames, digest) -> list:
     from ..truth import TruthRenderer
 
     key = (digest, tuple(frames))
-    if key not in _TRUTHS:
-        while len(_TRUTHS) >= 2:
-            _TRUTHS.pop(next(iter(_TRUTHS)))
-        tr = TruthRenderer(scene, exact=True)
-        _TRUTHS[key] = [tr.render_frame(f) for f in frames]
-    return _TRUTHS[key]
+    with _CACHE_LOCK:
+        if key not in _TRUTHS:
+            while len(_TRUTHS) >= 2:
+                _TRUTHS.pop(next(iter(_TRUTHS)))
+            tr = TruthRenderer(scene, exact=True)
+            _TRUTHS[key] = [tr.render_frame(f) for f in frames]
+        return _TRUTHS[key]

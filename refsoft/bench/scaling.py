@@ -66,11 +66,14 @@ def _ball_gbuffer(width, height):
     from ..raster import gbuffer
     from ..scene.primitives import icosphere
 
-    if (width, height) not in _BALL:
-        _BALL.clear()
-        cam = _ball_camera(width, height)
-        _BALL[(width, height)] = (gbuffer(icosphere(5, 1.0), cam, origin=cam.eye), cam)
-    return _BALL[(width, height)]
+    from ._common import _CACHE_LOCK
+
+    with _CACHE_LOCK:
+        if (width, height) not in _BALL:
+            _BALL.clear()
+            cam = _ball_camera(width, height)
+            _BALL[(width, height)] = (gbuffer(icosphere(5, 1.0), cam, origin=cam.eye), cam)
+        return _BALL[(width, height)]
 
 
 def scaling_task(series, size, width, height, repeats) -> dict:
