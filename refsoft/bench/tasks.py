@@ -273,7 +273,8 @@ def _worker_facts():
         affinity = sorted(os.sched_getaffinity(0))
     except AttributeError:
         affinity = list(range(os.cpu_count() or 1))
-    return {**identity(), "host": socket.gethostname(), "affinity": affinity}
+    return {**identity(), "host": socket.gethostname(), "affinity": affinity,
+            "malloc_trim": os.environ.get("MALLOC_TRIM_THRESHOLD_")}
 
 
 class _Progress:
@@ -511,12 +512,35 @@ def _local_cluster(workers, timing, progress):
     share = max(1, ncores // n)
     package_root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
     path = os.pathsep.join(p for p in (package_root, os.environ.get("PYTHONPATH")) if p)
-    with _sigint_blocked():  # the workers ignore SIGINT: a terminal's Ctrl-C reaches this process only
+    with _sigint_blocked(), _worker_environ():  # Ctrl-C reaches this process only (_sigint_blocked)
         cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
                                silence_logs=logging.ERROR, env={"PYTHONPATH": path})
     client = Client(cluster)
     client.run(_set_share, share)
     return cluster, client, n, share
+
+
+class _worker_environ:
+    """While a local cluster starts: its workers without Dask's ``MALLOC_TRIM_THRESHOLD_``
+    (with it glibc returns freed memory at once, and every frame's fresh arrays fault their
+    pages in again: slower tasks, docs/benchmarks.md), and this process's environment as it was
+    afterwards (Dask's nannies, running in this process, write their workers' variables into
+    it, whence every later child would inherit them)."""
+
+    def __enter__(self):
+        import dask
+
+        self.saved = dict(os.environ)
+        self.config = dask.config.set({"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None})
+        self.config.__enter__()
+        return self
+
+    def __exit__(self, *exc):
+        self.config.__exit__(*exc)
+        for k in set(os.environ) - set(self.saved):
+            del os.environ[k]
+        os.environ.update(self.saved)
+        return False
 
 
 def _remote(address, timing, connect_timeout):
@@ -536,7 +560,7 @@ def _remote(address, timing, connect_timeout):
         facts = client.run(_worker_facts)
         nthreads = client.nthreads()
         here = identity()
-        groups = {}
+        groups, trimmed = {}, set()
         for addr, f in facts.items():
             if (f["refsoft"], f["code"]) != (here["refsoft"], here["code"]):
                 raise RefsoftError(f"the Dask worker {addr} runs refsoft {f['refsoft']} (sources {f['code'][:12]}), "
@@ -546,6 +570,8 @@ def _remote(address, timing, connect_timeout):
                 raise RefsoftError(f"timing tasks need one thread per Dask worker; {addr} has {nthreads[addr]} (start "
                                    "workers with --nthreads 1, or give --no-timing)")
             groups.setdefault((f["host"], tuple(f["affinity"])), []).append(addr)
+            if f.get("malloc_trim") is not None:
+                trimmed.add(f["host"])
         shares = {}
         for (host, affinity), addrs in groups.items():
             if timing and len(addrs) > len(affinity):
@@ -555,6 +581,10 @@ def _remote(address, timing, connect_timeout):
                 shares[a] = max(1, len(affinity) // len(addrs))
         for a, s in shares.items():
             client.run(_set_share, s, workers=[a])
+        if timing and trimmed:
+            print(f"refsoft: note: the Dask workers on {', '.join(sorted(trimmed))} run with MALLOC_TRIM_THRESHOLD_ set "
+                  "(Dask's default), which slows every frame; docs/benchmarks.md, 'Sweeps on a cluster', says how to "
+                  "start them without it", file=sys.stderr, flush=True)
     except BaseException:
         client.close()
         raise
