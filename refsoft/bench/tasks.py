@@ -2,8 +2,9 @@
 every result stored as soon as it is done.
 
 A :class:`Task` is a module-level function with its arguments and a *key*: a JSON-able dict of
-everything that determines the result (scene, frames, options, size, ...). The runner adds the
-refsoft version and a digest of refsoft's own source files to the key, hashes it, and stores the
+everything that determines the result (scene, frames, options, size, ...). The runner adds
+:func:`identity` (the refsoft version, a digest of refsoft's own source files, the NumPy and
+Numba versions) to the key, hashes it, and stores the
 result under ``STORE/<hash>.npz`` (written under a temporary name, then renamed: an interrupted
 run leaves whole files only). A later run with the same store computes only the tasks whose
 result is missing (or, with ``fresh``, every task) and reports how many it reused.
@@ -13,8 +14,9 @@ Schedulers:
 - ``"serial"``: one task after another in this process (no Dask import);
 - ``"local"``: a ``dask.distributed.LocalCluster`` on this machine, ``workers`` processes of one
   thread each;
-- ``"tcp://HOST:PORT"``: an existing Dask scheduler and its workers (their refsoft must be the
-  client's: the runner compares versions and source digests before it submits anything).
+- ``"tcp://HOST:PORT"``: an existing Dask scheduler and its workers (their refsoft, NumPy and
+  Numba must be the client's: the runner compares versions and source digests before it
+  submits anything).
 
 Timings stay honest on a shared machine: a worker runs one task at a time, and each task sets
 Numba's thread count to its worker's share of the cores it may run on (the cores divided by the
@@ -156,10 +158,13 @@ def code_digest() -> str:
 
 
 def identity() -> dict:
-    """The refsoft that computes: its version and source digest."""
+    """What computes: refsoft's version and source digest, and the NumPy and Numba versions
+    (other versions may round differently)."""
+    import numba
+
     from .. import __version__
 
-    return {"refsoft": __version__, "code": code_digest()}
+    return {"refsoft": __version__, "code": code_digest(), "numpy": np.__version__, "numba": numba.__version__}
 
 
 def _plain(value):
@@ -566,6 +571,9 @@ def _remote(address, timing, connect_timeout):
                 raise RefsoftError(f"the Dask worker {addr} runs refsoft {f['refsoft']} (sources {f['code'][:12]}), "
                                    f"this is {here['refsoft']} ({here['code'][:12]}): install the same refsoft on "
                                    "every worker")
+            if (f["numpy"], f["numba"]) != (here["numpy"], here["numba"]):
+                raise RefsoftError(f"the Dask worker {addr} runs NumPy {f['numpy']} and Numba {f['numba']}, this is "
+                                   f"NumPy {here['numpy']} and Numba {here['numba']}: install the same on every worker")
             if timing and nthreads.get(addr, 1) > 1:
                 raise RefsoftError(f"timing tasks need one thread per Dask worker; {addr} has {nthreads[addr]} (start "
                                    "workers with --nthreads 1, or give --no-timing)")
