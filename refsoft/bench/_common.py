@@ -1,4 +1,5 @@
-"""Shared helpers of the benchmark commands: CSV and markdown writers, median timing."""
+"""Shared helpers of the benchmark commands: CSV and markdown writers, median timing, and what
+the tasks share in a process (scenes, truths)."""
 
 from __future__ import annotations
 
@@ -88,14 +89,6 @@ def run_bench(tasks, out, desc, progress, scheduler, workers, fresh, connect_tim
     store = None if out is None else os.path.join(os.fspath(out), "tasks")
     return run_tasks(tasks, scheduler=scheduler, workers=workers, store=store, progress=progress, desc=desc,
                      fresh=fresh, connect_timeout=CONNECT_TIMEOUT if connect_timeout is None else connect_timeout)
-
-
-def progress(items, desc, enabled):
-    if not enabled or len(items) < 2:
-        return items
-    from tqdm import tqdm
-
-    return tqdm(items, desc=desc, unit="run", disable=None)
 
 
 def plt_or_none():
