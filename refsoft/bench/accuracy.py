@@ -8,8 +8,11 @@ rim), the mean colour error, for spherical reflectors the mean pixel distance of
 points from the exact ones, and the frame time (the frames after the first, warm). Writes
 ``accuracy.csv`` (a row per scene, size, setting and frame), ``accuracy.md`` (median and worst
 frame per scene, size and setting), ``agreement_SCENE_WxH.png`` (the accurate preset's worst
-frame: render | truth | agreement map) and, with matplotlib, ``accuracy.png`` (agreement against
-time per scene).
+frame: render | truth | agreement map), ``tasks.csv``, ``report.html`` and, with matplotlib,
+``accuracy.png`` (agreement against time per scene).
+
+Each scene, size and setting is one task (:mod:`refsoft.bench.tasks`), its result stored in
+``OUT/tasks`` and reused by a later run with the same inputs.
 """
 
 from __future__ import annotations
@@ -22,7 +25,8 @@ import numpy as np
 from .. import keys
 from ..constants import RIM_PIXELS as RIM
 from ..errors import RefsoftError
-from ._common import machine, markdown_table, plt_or_none, progress, write_csv, write_text
+from ._common import (machine, markdown_table, plan_scene, plt_or_none, run_bench, scene_digest, task_scene,
+                      task_truths, write_csv, write_text)
 
 #: The settings: the two presets, then the accurate preset with one part changed.
 SETTINGS = {
@@ -49,8 +53,77 @@ def frames_of(scene, n: int) -> list:
     return sorted({int(round(x)) for x in np.linspace(0, scene.n_frames - 1, max(1, n))})
 
 
+def plan(scenes=None, sizes=((640, 480), (1024, 768)), frames: int = 5, settings=None, timing=True) -> list:
+    """The benchmark's tasks (:class:`refsoft.bench.tasks.Task`), one per scene, size and
+    setting, in the order of the rows; every input checked here, before any work."""
+    from ..options import RenderOptions
+    from ..scene import builtin_names
+    from .tasks import Task
+
+    scenes = list(builtin_names() if scenes is None else scenes)
+    names = list(SETTINGS) if settings is None else list(settings)
+    unknown = [s for s in names if s not in SETTINGS]
+    if unknown:
+        raise RefsoftError(f"unknown setting {unknown[0]!r} (settings: {', '.join(SETTINGS)})")
+    if frames < 1:
+        raise RefsoftError(f"frames must be at least 1, got {frames}")
+    tasks = []
+    for name in scenes:
+        for w, h in sizes:
+            if w < 1 or h < 1:
+                raise RefsoftError(f"sizes must be at least 1x1, got {w}x{h}")
+            scene, spec = plan_scene(name, w, h)
+            picks = frames_of(scene, frames)
+            digest = scene_digest(scene)
+            for label in names:
+                key = {"bench": "accuracy", "scene": name, "scene_digest": digest, "size": [w, h], "frames": picks,
+                       "setting": label, "options": RenderOptions(**SETTINGS[label]).as_dict(),
+                       "timing": bool(timing), "picture": label == "accurate"}
+                tasks.append(Task(key, accuracy_task, (name, spec, digest, w, h, picks, label, bool(timing)),
+                                  timing=bool(timing), label=f"{name} {w}x{h} {label}"))
+    return tasks
+
+
+def accuracy_task(name, spec, digest, w, h, picks, label, timing) -> dict:
+    """One setting on one scene's frames at one size, against the truth of those frames
+    (computed once per process): ``{"rows": [...]}``, and for the accurate preset its worst
+    frame as render | truth | agreement map (``picture``, uint8 (H, 3W, 3))."""
+    from .. import interrupt
+    from ..frame import FrameDriver
+    from ..options import RenderOptions
+    from ..visualize import agreement_map, side_by_side
+
+    scene = task_scene(spec, w, h)
+    truths = {f: t.arrays for f, t in zip(picks, task_truths(scene, picks, digest))}
+    opts = RenderOptions(**SETTINGS[label])
+    if timing:
+        FrameDriver(scene, opts).render_frame(picks[0])  # compile outside the timing
+    driver = FrameDriver(scene, opts)
+    rows, worst = [], None
+    for i, f in enumerate(picks):
+        interrupt.check()
+        t0 = time.perf_counter()
+        fr = driver.render_frame(f)
+        ms = 1000 * (time.perf_counter() - t0)
+        row = {"scene": name, "size": f"{w}x{h}", "setting": label, "frame": f,
+               "ms": ms if timing and (i > 0 or len(picks) == 1) else None}
+        row.update(_frame_errors(fr.arrays, truths[f]))
+        rows.append(row)
+        if label == "accurate" and (worst is None or row["agreement"] < worst[0]):
+            worst = (row["agreement"], f, fr.arrays)
+    out = {"rows": rows}
+    if worst is not None:
+        a, f, render = worst
+        t = truths[f]
+        out["picture"] = side_by_side(render["image"], t["image"],
+                                      agreement_map(render["reflected_id"], t["reflected_id"], t["image"]))
+        out["picture_frame"] = f
+    return out
+
+
 def accuracy(scenes=None, out=None, sizes=((640, 480), (1024, 768)), frames: int = 5, settings=None,
-             progress_bar=False) -> list:
+             progress_bar=False, *, timing=True, scheduler="serial", workers=None, fresh=False, connect_timeout=None,
+             run_info=None) -> list:
     """Run the accuracy benchmark; returns the per-frame rows (also written to ``out``).
 
     Parameters
@@ -64,44 +137,26 @@ def accuracy(scenes=None, out=None, sizes=((640, 480), (1024, 768)), frames: int
     settings : list of str, optional
         Names from :data:`SETTINGS` (default all).
     progress_bar : bool
+    timing : bool
+        False: agreement figures only (``ms`` empty).
+    scheduler, workers, fresh, connect_timeout
+        As :func:`refsoft.bench.tasks.run_tasks`; results are stored in ``out/tasks`` and reused.
+    run_info : dict, optional
+        Given the runner's :class:`~refsoft.bench.tasks.RunReport` as ``"run"``.
     """
-    from ..frame import FrameDriver
-    from ..options import RenderOptions
-    from ..scene import builtin_names, load_scene
-    from ..truth import TruthRenderer
-
-    scenes = list(builtin_names() if scenes is None else scenes)
-    names = list(SETTINGS) if settings is None else list(settings)
-    unknown = [s for s in names if s not in SETTINGS]
-    if unknown:
-        raise RefsoftError(f"unknown setting {unknown[0]!r} (settings: {', '.join(SETTINGS)})")
-    if frames < 1:
-        raise RefsoftError(f"frames must be at least 1, got {frames}")
+    scenes = list(scenes) if scenes is not None else None
+    tasks = plan(scenes, [tuple(z) for z in sizes], frames, settings, timing)
+    run = run_bench(tasks, out, "accuracy", progress_bar, scheduler, workers, fresh, connect_timeout)
+    if run_info is not None:
+        run_info["run"] = run
     rows, worst_pictures = [], {}
-    work = [(s, tuple(z)) for s in scenes for z in sizes]
-    for name, (w, h) in progress(work, "accuracy", progress_bar):
-        scene = load_scene(name, width=w, height=h)
-        picks = frames_of(scene, frames)
-        truth = TruthRenderer(scene, exact=True)
-        truths = {f: truth.render_frame(f).arrays for f in picks}
-        for label in names:
-            opts = RenderOptions(**SETTINGS[label])
-            FrameDriver(scene, opts).render_frame(picks[0])  # compile outside the timing
-            driver = FrameDriver(scene, opts)
-            for i, f in enumerate(picks):
-                t0 = time.perf_counter()
-                fr = driver.render_frame(f)
-                ms = 1000 * (time.perf_counter() - t0)
-                row = {"scene": name, "size": f"{w}x{h}", "setting": label, "frame": f,
-                       "ms": ms if (i > 0 or len(picks) == 1) else None}
-                row.update(_frame_errors(fr.arrays, truths[f]))
-                rows.append(row)
-                if label == "accurate":
-                    key = (name, f"{w}x{h}")
-                    if key not in worst_pictures or row["agreement"] < worst_pictures[key][0]:
-                        worst_pictures[key] = (row["agreement"], f, fr.arrays, truths[f])
+    for task, result in zip(tasks, run.results):
+        rows += result["rows"]
+        if "picture" in result:
+            k = task.key
+            worst_pictures[(k["scene"], f"{k['size'][0]}x{k['size'][1]}")] = result["picture"]
     if out is not None:
-        _write(out, rows, worst_pictures, frames)
+        _write(out, rows, worst_pictures, frames, timing, run)
     return rows
 
 
@@ -148,29 +203,44 @@ def summarize(rows) -> list:
     return out
 
 
-def _write(out, rows, worst_pictures, frames):
-    from ..io import atomic_path, write_png
-    from ..visualize import agreement_map, side_by_side
+def _write(out, rows, worst_pictures, frames, timing, run):
+    from ..io import write_png
+    from .report import write_report, write_tasks_csv
 
     os.makedirs(out, exist_ok=True)
     write_csv(os.path.join(out, "accuracy.csv"), rows, COLUMNS)
+    write_tasks_csv(out, run)
     summary = summarize(rows)
     m = machine()
     pct = [dict(r, **{k: 100 * r[k] for k in ("median", "worst", "interior", "rim")}) for r in summary]
-    text = [f"# Accuracy against the ray-traced truth\n\nUp to {frames} frames spread over each animation; "
-            f"agreement is the share (%) of reflector pixels whose reflected object is the truth's (median and worst "
-            f"frame; interior and rim: more and less than {RIM} pixels from a reflector's rim, median); ms per warm "
-            f"frame; {m['cpu']}, {m['cores']} cores, numpy {m['numpy']}, numba {m['numba']}.\n\n",
-            markdown_table(pct, SUMMARY, ["scene", "size", "setting", "frames", "median %", "worst %", "interior %",
-                                          "rim %", "colour error", "ms/frame"])]
-    write_text(os.path.join(out, "accuracy.md"), "".join(text))
-    for (scene, size), (_, f, render, truth) in worst_pictures.items():
-        write_png(os.path.join(out, f"agreement_{scene}_{size}.png"),
-                  side_by_side(render["image"], truth["image"],
-                               agreement_map(render["reflected_id"], truth["reflected_id"], truth["image"])))
+    intro = (f"Up to {frames} frames spread over each animation; agreement is the share (%) of reflector pixels whose "
+             f"reflected object is the truth's (median and worst frame; interior and rim: more and less than {RIM} "
+             f"pixels from a reflector's rim, median); "
+             + ("ms per warm frame" if timing else "no timing (--no-timing)")
+             + f"; {m['cpu']}, {m['cores']} cores, numpy {m['numpy']}, numba {m['numba']}.")
+    headers = ["scene", "size", "setting", "frames", "median %", "worst %", "interior %", "rim %", "colour error",
+               "ms/frame"]
+    write_text(os.path.join(out, "accuracy.md"), f"# Accuracy against the ray-traced truth\n\n{intro}\n\n"
+               + markdown_table(pct, SUMMARY, headers))
+    blocks = [("p", intro), ("table", pct, SUMMARY, headers)]
+    pictures = []
+    for (scene, size), picture in worst_pictures.items():
+        path = os.path.join(out, f"agreement_{scene}_{size}.png")
+        write_png(path, picture)
+        pictures.append(("image", path, f"{scene} {size}: render | truth | agreement"))
     plt = plt_or_none()
-    if plt is None:
-        return
+    if plt is not None and timing:
+        _plot(plt, out, summary)
+        blocks.insert(1, ("image", os.path.join(out, "accuracy.png"), "agreement against time per scene"))
+    if pictures:
+        blocks += [("h2", "The accurate preset's worst frame: render | truth | agreement (green agrees, red "
+                          "differs)")] + pictures
+    write_report(out, "Accuracy against the ray-traced truth", blocks, run, plots=plt is not None)
+
+
+def _plot(plt, out, summary):
+    from ..io import atomic_path
+
     scenes = list(dict.fromkeys(r["scene"] for r in summary))
     fig, axes = plt.subplots(1, len(scenes), figsize=(3.4 * len(scenes), 3.2), squeeze=False)
     for ax, name in zip(axes[0], scenes):

@@ -9,6 +9,9 @@ reflection points (``refine``). For every scene and setting: the median run time
 and the error of the last render against the ray-traced truth of the same frames (computed once
 per scene): reflected-id disagreement (all and interior), mean colour error, and for spherical
 reflectors the mean distance of the virtual vertices and reflection pixels from the exact ones.
+
+Each scene and setting is one task (:mod:`refsoft.bench.tasks`), run serially or on a Dask
+cluster, its result stored in ``OUT/tasks`` and reused by a later run with the same inputs.
 """
 
 from __future__ import annotations
@@ -19,7 +22,8 @@ import os
 import numpy as np
 
 from ..errors import RefsoftError
-from ._common import machine, markdown_table, median_time, plt_or_none, progress, write_csv, write_text
+from ._common import (machine, markdown_table, median_time, numba_threads, plan_scene, plt_or_none, run_bench,
+                      scene_digest, task_scene, task_truths, write_csv, write_text)
 
 #: The knobs and their values; the first value of each is the paper preset's. Each other value
 #: is one setting: the paper preset with that knob changed (``preset=accurate``: the accurate
@@ -37,7 +41,7 @@ KNOBS = {
     "virtual": ("mirror", "unfold"),
     "silhouette": ("texel", "clip"),
 }
-COLUMNS = ["scene", "setting", "knob", "value", "time_ms", "disagreement", "interior_disagreement",
+COLUMNS = ["scene", "setting", "knob", "value", "time_ms", "threads", "disagreement", "interior_disagreement",
            "color_error_mean", "virtual_distance_mean", "pixel_distance_mean", "iterations_mean", "pareto"]
 
 
@@ -90,13 +94,11 @@ def pareto_front(times, errors) -> np.ndarray:
     return front
 
 
-def sweep(scenes=("sphere", "quad", "kitchen"), out=None, width=320, height=240, frames=3, repeats=3, knobs=None,
-          progress_bar=False) -> list:
-    """Run the sweep; returns the rows (also written to ``out``: ``sweep.csv``, ``sweep.md`` and,
-    with matplotlib, ``pareto.png``)."""
-    from ..frame import FrameDriver
-    from ..scene.builtin import load_scene
-    from ..truth.raytrace import TruthRenderer
+def plan(scenes=("sphere", "quad", "kitchen"), width=320, height=240, frames=3, repeats=3, knobs=None,
+         timing=True) -> list:
+    """The sweep's tasks (:class:`refsoft.bench.tasks.Task`), one per scene and setting, in the
+    order of the rows; every input checked here, before any work."""
+    from .tasks import Task
 
     if knobs is not None:
         unknown = [k for k in knobs if k not in KNOBS]
@@ -104,57 +106,112 @@ def sweep(scenes=("sphere", "quad", "kitchen"), out=None, width=320, height=240,
             raise RefsoftError(f"unknown knob {unknown[0]!r} (knobs: {', '.join(KNOBS)})")
     if frames < 1 or repeats < 1:
         raise RefsoftError("frames and repeats must be at least 1")
-    plan = settings(knobs)
-    rows = []
-    work = [(s, p) for s in scenes for p in plan]
-    loaded, truths = {}, {}
-    for name, (label, knob, value, setting) in progress(work, "sweep", progress_bar):
-        if name not in loaded:
-            scene = load_scene(name, width=width, height=height)
-            n = min(frames, scene.n_frames)
-            tr = TruthRenderer(scene, exact=True)
-            loaded[name] = (scene, n)
-            truths[name] = [tr.render_frame(f) for f in range(n)]
-        scene, n = loaded[name]
-        opts = _options(setting, width, height)
+    if width < 1 or height < 1:
+        raise RefsoftError(f"width and height must be at least 1, got {width}x{height}")
+    tasks = []
+    for name in scenes:
+        scene, spec = plan_scene(name, width, height)
+        n = min(frames, scene.n_frames)
+        digest = scene_digest(scene)
+        for label, knob, value, setting in settings(knobs):
+            opts = _options(setting, width, height)  # checked here
+            key = {"bench": "sweep", "scene": name, "scene_digest": digest, "size": [width, height],
+                   "frames": list(range(n)), "setting": label, "options": opts.as_dict(), "timing": bool(timing),
+                   "repeats": repeats if timing else None}
+            tasks.append(Task(key, sweep_task, (name, spec, digest, width, height, n, label, knob, value, setting,
+                                                repeats, bool(timing)), timing=bool(timing), label=f"{name} {label}"))
+    return tasks
 
-        def run():
-            d = FrameDriver(scene, opts)
-            return [d.render_frame(f) for f in range(n)]
 
+def sweep_task(name, spec, digest, width, height, n, label, knob, value, setting, repeats, timing) -> dict:
+    """One setting on one scene's frames 0..n-1 (the truth of those frames included, computed
+    once per process): ``{"row": {...}}``, its time and errors."""
+    from .. import interrupt
+    from ..frame import FrameDriver
+
+    scene = task_scene(spec, width, height)
+    truths = task_truths(scene, range(n), digest)
+    opts = _options(setting, width, height)
+
+    def run():
+        d = FrameDriver(scene, opts)
+        out = []
+        for f in range(n):
+            interrupt.check()
+            out.append(d.render_frame(f))
+        return out
+
+    row = {"scene": name, "setting": label, "knob": knob, "value": value}
+    if timing:
         run()  # compile and warm up outside the timing
         t, done = median_time(run, repeats)
-        row = {"scene": name, "setting": label, "knob": knob, "value": value, "time_ms": t / n}
-        row.update(_errors(done, truths[name]))
-        rows.append(row)
+        row.update(time_ms=t / n, threads=numba_threads())
+    else:
+        done = run()
+        row.update(time_ms=None, threads=None)
+    row.update(_errors(done, truths))
+    return {"row": row}
+
+
+def sweep(scenes=("sphere", "quad", "kitchen"), out=None, width=320, height=240, frames=3, repeats=3, knobs=None,
+          progress_bar=False, *, timing=True, scheduler="serial", workers=None, fresh=False,
+          connect_timeout=None, run_info=None) -> list:
+    """Run the sweep; returns the rows (also written to ``out``: ``sweep.csv``, ``sweep.md``,
+    ``tasks.csv``, ``report.html`` and, with matplotlib, ``pareto.png``).
+
+    ``timing=False``: error figures only (``time_ms`` and ``pareto`` empty). ``scheduler``,
+    ``workers``, ``fresh``, ``connect_timeout``: as :func:`refsoft.bench.tasks.run_tasks`; the
+    results are stored in ``out/tasks`` and reused by a later run. ``run_info``: a dict, given
+    the runner's :class:`~refsoft.bench.tasks.RunReport` as ``"run"``."""
+    scenes = list(scenes)
+    tasks = plan(scenes, width, height, frames, repeats, knobs, timing)
+    run = run_bench(tasks, out, "sweep", progress_bar, scheduler, workers, fresh, connect_timeout)
+    if run_info is not None:
+        run_info["run"] = run
+    rows = [r["row"] for r in run.results]
     for name in scenes:
         sel = [r for r in rows if r["scene"] == name]
-        front = pareto_front([r["time_ms"] for r in sel], [r["disagreement"] for r in sel])
-        for r, f in zip(sel, front):
-            r["pareto"] = bool(f)
+        if timing:
+            front = pareto_front([r["time_ms"] for r in sel], [r["disagreement"] for r in sel])
+        for i, r in enumerate(sel):
+            r["pareto"] = bool(front[i]) if timing else None
     if out is not None:
-        _write(out, rows, scenes, width, height, frames, repeats)
+        _write(out, rows, scenes, width, height, frames, repeats, timing, run)
     return rows
 
 
-def _write(out, rows, scenes, width, height, frames, repeats):
+def _write(out, rows, scenes, width, height, frames, repeats, timing, run):
+    from .report import write_report, write_tasks_csv
+
     os.makedirs(out, exist_ok=True)
     write_csv(os.path.join(out, "sweep.csv"), rows, COLUMNS)
+    write_tasks_csv(out, run)
     m = machine()
-    text = [f"# Sweep: run time against error\n\n{width}x{height}, frames 0-{frames - 1} (coherent), median of "
-            f"{repeats} runs per setting; {m['cpu']}, {m['cores']} cores, numpy {m['numpy']}, numba {m['numba']}.\n"
-            "Time is per frame; disagreement is the share of reflector pixels whose reflected object differs "
-            "from the ray-traced truth; * marks the Pareto front (no setting is both faster and closer).\n"]
+    how = (f"median of {repeats} runs per setting" if timing else "errors only (no timing)")
+    intro = (f"{width}x{height}, frames 0-{frames - 1} (coherent), {how}; {m['cpu']}, {m['cores']} cores, numpy "
+             f"{m['numpy']}, numba {m['numba']}.")
+    legend = ("Time is per frame; disagreement is the share of reflector pixels whose reflected object differs "
+              "from the ray-traced truth; * marks the Pareto front (no setting is both faster and closer).")
+    text = [f"# Sweep: run time against error\n\n{intro}\n{legend}\n"]
     cols = ["setting", "time_ms", "disagreement", "interior_disagreement", "color_error_mean", "virtual_distance_mean",
             "iterations_mean"]
+    headers = ["setting", "ms/frame", "disagreement", "interior", "colour error", "V' distance", "iterations"]
+    blocks = [("p", intro), ("p", legend)]
     for name in scenes:
         sel = [dict(r, setting=("* " if r["pareto"] else "") + r["setting"]) for r in rows if r["scene"] == name]
-        text.append(f"\n## {name}\n\n" + markdown_table(sel, cols, ["setting", "ms/frame", "disagreement", "interior",
-                                                                     "colour error", "V' distance", "iterations"]))
+        text.append(f"\n## {name}\n\n" + markdown_table(sel, cols, headers))
+        blocks += [("h2", name), ("table", sel, cols, headers)]
     write_text(os.path.join(out, "sweep.md"), "".join(text))
     plt = plt_or_none()
-    if plt is None:
-        return
+    if plt is not None and timing:
+        _plot(plt, out, rows, scenes)
+        blocks.insert(2, ("image", os.path.join(out, "pareto.png"), "time against disagreement per setting"))
+    elif not timing:
+        blocks.insert(2, ("p", "No Pareto plot: the run took no times (--no-timing)."))
+    write_report(out, "Sweep: run time against error", blocks, run, plots=plt is not None)
+
+
+def _plot(plt, out, rows, scenes):
     fig, axes = plt.subplots(1, len(scenes), figsize=(4.2 * len(scenes), 3.6), squeeze=False)
     for ax, name in zip(axes[0], scenes):
         sel = [r for r in rows if r["scene"] == name]

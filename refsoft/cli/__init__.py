@@ -149,6 +149,18 @@ def _bench_command(sub):
     b.add_argument("--max-subdivisions", type=int, default=7, metavar="N",
                    help="scaling: largest icosphere subdivision")
     b.add_argument("--max-width", type=int, default=2048, metavar="W", help="scaling: largest image width")
+    b.add_argument("--scheduler", default=None, metavar="WHERE",
+                   help="where the tasks run: 'local' (a Dask cluster on this machine; the default when Dask is "
+                        "installed), 'serial' (one after another in this process) or tcp://HOST:PORT (a running Dask "
+                        "scheduler); docs/benchmarks.md, 'Sweeps on a cluster'")
+    b.add_argument("--workers", type=int, default=None, metavar="N",
+                   help="--scheduler local: worker processes (default: the cores; timed runs at most the cores)")
+    b.add_argument("--no-timing", action="store_true",
+                   help="accuracy, sweep, table1: error figures only, no times (then workers may share cores)")
+    b.add_argument("--fresh", action="store_true",
+                   help="compute every task again instead of reusing the results stored in the output folder's tasks/")
+    b.add_argument("--connect-timeout", type=float, default=None, metavar="S",
+                   help="--scheduler tcp://...: seconds to wait for the scheduler and its first worker (default 10)")
     b.set_defaults(func=commands.cmd_bench)
 
 

@@ -265,51 +265,61 @@ def cmd_export(args) -> int:
 
 def cmd_bench(args) -> int:
     from .. import bench
+    from ..bench.report import file_link
 
     out = args.out or os.path.join("out", "bench", args.what)
     t0 = time.perf_counter()
     unused = {"accuracy": ("knob", "width", "height", "repeats", "max_vertices", "max_subdivisions", "max_width"),
               "sweep": ("sizes", "setting", "max_vertices", "max_subdivisions", "max_width"),
-              "scaling": ("scenes", "knob", "frames", "sizes", "setting"),
+              "scaling": ("scenes", "knob", "frames", "sizes", "setting", "no_timing"),
               "table1": ("knob", "repeats", "sizes", "setting", "max_vertices", "max_subdivisions", "max_width")}
     given = [name for name in unused[args.what] if getattr(args, name) not in (None, False, [])
              and getattr(args, name) != BENCH_DEFAULTS.get(name)]
     if given:
         flags = ", ".join("--" + name.replace("_", "-") for name in given)
         raise RefsoftError(f"bench {args.what} takes no {flags}")
+    run = bench.tasks.resolve(args.scheduler, args.workers, args.fresh, args.connect_timeout)
+    info = {}
     repeats = 3 if args.repeats is None else args.repeats
+    timing = {} if args.what == "scaling" else {"timing": not args.no_timing}
     if args.what == "accuracy":
         sizes = [_size(s) for s in args.sizes] if args.sizes else [(640, 480), (1024, 768)]
-        rows = bench.accuracy(args.scenes, out, sizes, args.frames or 5, args.setting, progress_bar=True)
+        rows = bench.accuracy(args.scenes, out, sizes, args.frames or 5, args.setting, progress_bar=True, run_info=info,
+                              **timing, **run)
         for r in bench.accuracy_summary(rows):
             if r["setting"] in ("paper", "accurate"):
+                ms = f", {r['ms']:7.1f} ms/frame" if r["ms"] is not None else ""
                 print(f"{r['scene']:<10} {r['size']:>9} {r['setting']:<9} agreement median {100 * r['median']:6.2f}% "
-                      f"worst {100 * r['worst']:6.2f}%, {r['ms'] or 0:7.1f} ms/frame")
-        print(f"accuracy: {len(rows)} frames in {time.perf_counter() - t0:.0f} s; {out}/accuracy.csv, accuracy.md, "
-              f"agreement_*.png" + (", accuracy.png" if os.path.exists(os.path.join(out, "accuracy.png")) else ""))
+                      f"worst {100 * r['worst']:6.2f}%{ms}")
+        files = "accuracy.csv, accuracy.md, agreement_*.png" + (
+            ", accuracy.png" if os.path.exists(os.path.join(out, "accuracy.png")) and not args.no_timing else "")
+        print(f"accuracy: {len(rows)} frames in {time.perf_counter() - t0:.0f} s ({info['run'].line()}); {out}/{files}")
     elif args.what == "sweep":
         scenes = args.scenes or ["sphere", "quad", "kitchen"]
         rows = bench.sweep(scenes, out, args.width or 320, args.height or 240, args.frames or 3, repeats,
-                           args.knob, progress_bar=True)
-        plot = "pareto.png" if os.path.exists(os.path.join(out, "pareto.png")) else \
-            "no plot (pip install '.[plot]' for matplotlib)"
-        print(f"sweep: {len(rows)} settings over {len(scenes)} scenes in {time.perf_counter() - t0:.0f} s; "
-              f"{out}/sweep.csv, sweep.md, {plot}")
+                           args.knob, progress_bar=True, run_info=info, **timing, **run)
+        plot = "no plot (--no-timing)" if args.no_timing else "pareto.png" if os.path.exists(
+            os.path.join(out, "pareto.png")) else "no plot (pip install '.[plot]' for matplotlib)"
+        print(f"sweep: {len(rows)} settings over {len(scenes)} scenes in {time.perf_counter() - t0:.0f} s "
+              f"({info['run'].line()}); {out}/sweep.csv, sweep.md, {plot}")
     elif args.what == "scaling":
         r = bench.scaling(out, args.width or 1024, args.height or 768, args.max_vertices, args.max_subdivisions,
-                          args.max_width, repeats, progress_bar=True)
+                          args.max_width, repeats, progress_bar=True, run_info=info, **run)
         slopes = ", ".join(f"{k} {v:.2f}" for k, v in r["slopes"].items())
         plot = ".png" if os.path.exists(os.path.join(out, "scaling.png")) else \
             " (no plot: pip install '.[plot]' for matplotlib)"
-        print(f"scaling in {time.perf_counter() - t0:.0f} s; fitted slopes: {slopes}; {out}/scaling.csv, .md{plot}")
+        print(f"scaling in {time.perf_counter() - t0:.0f} s ({info['run'].line()}); fitted slopes: {slopes}; "
+              f"{out}/scaling.csv, .md{plot}")
     else:
         rows = bench.table1(args.scenes or ["kitchen", "ufo", "ants"], out, args.width or 1024, args.height or 768,
-                            args.frames, progress_bar=True)
+                            args.frames, progress_bar=True, run_info=info, **timing, **run)
         for r in rows:
+            ms = f", {r['ms_per_frame']} ms/frame (paper {r['paper_ms_per_frame']})" if r["ms_per_frame"] is not None \
+                else ""
             print(f"{r['scene']:<8} max frame mean {r['max_frame_mean']:6.2f} (paper {r['paper_max_frame_mean']}), "
-                  f"total mean {r['total_mean']:5.2f} (paper {r['paper_total_mean']}), {r['ms_per_frame']} ms/frame "
-                  f"(paper {r['paper_ms_per_frame']})")
-        print(f"{out}/table1.csv, table1.md")
+                  f"total mean {r['total_mean']:5.2f} (paper {r['paper_total_mean']}){ms}")
+        print(f"table1 in {time.perf_counter() - t0:.0f} s ({info['run'].line()}); {out}/table1.csv, table1.md")
+    print(f"report: {file_link(os.path.join(out, 'report.html'))}")
     return 0
 
 
