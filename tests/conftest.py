@@ -10,3 +10,14 @@ sys.path.insert(0, os.path.dirname(__file__))
 @pytest.fixture
 def rng():
     return np.random.default_rng(12345)
+
+
+@pytest.fixture(scope="session")
+def golden_set(tmp_path_factory):
+    """The whole golden set, every canonical case (about a minute), written once per session and
+    shared by the conformance tests and the GLSL port's."""
+    from refsoft.conformance.golden import write_golden
+
+    out = tmp_path_factory.mktemp("golden_all")
+    write_golden(out)
+    return out

@@ -37,7 +37,7 @@ def test_settings_are_one_factor_at_a_time():
 
 def test_sweep_smoke(tmp_path, capsys):
     out = tmp_path / "sweep"
-    assert cli.main(["bench", "sweep", "--scenes", "sphere", "planar", "--width", "48", "--height", "36", "--frames", "2",
+    assert cli.main(["bench", "sweep", "--scheduler", "serial", "--scenes", "sphere", "planar", "--width", "48", "--height", "36", "--frames", "2",
                      "--repeats", "1", "--knob", "inverse", "--knob", "gbuffer_scale", "--out", str(out)]) == 0
     rows = _csv(out / "sweep.csv")
     assert [r["setting"] for r in rows[:5]] == ["default", "gbuffer_scale=0.5", "gbuffer_scale=2.0", "inverse=search",
@@ -50,12 +50,12 @@ def test_sweep_smoke(tmp_path, capsys):
     assert all(r["virtual_distance_mean"] for r in sphere)  # exact points on the ball
     assert any(r["pareto"] == "True" for r in sphere)
     assert "## sphere" in (out / "sweep.md").read_text() and (out / "pareto.png").stat().st_size > 1000
-    assert cli.main(["bench", "sweep", "--knob", "colour", "--out", str(out)]) == 2
+    assert cli.main(["bench", "sweep", "--scheduler", "serial", "--knob", "colour", "--out", str(out)]) == 2
 
 
 def test_scaling_smoke(tmp_path):
     out = tmp_path / "scaling"
-    assert cli.main(["bench", "scaling", "--width", "64", "--height", "48", "--max-vertices", "4096",
+    assert cli.main(["bench", "scaling", "--scheduler", "serial", "--width", "64", "--height", "48", "--max-vertices", "4096",
                      "--max-subdivisions", "2", "--max-width", "256", "--repeats", "1", "--out", str(out)]) == 0
     rows = _csv(out / "scaling.csv")
     series = [r["series"] for r in rows]
@@ -66,7 +66,7 @@ def test_scaling_smoke(tmp_path):
 
 def test_table1_smoke(tmp_path, capsys):
     out = tmp_path / "t1"
-    assert cli.main(["bench", "table1", "--scenes", "kitchen", "ants", "--width", "48", "--height", "36",
+    assert cli.main(["bench", "table1", "--scheduler", "serial", "--scenes", "kitchen", "ants", "--width", "48", "--height", "36",
                      "--frames", "2", "--out", str(out)]) == 0
     rows = _csv(out / "table1.csv")
     assert [r["scene"] for r in rows] == ["kitchen", "ants"]
@@ -81,7 +81,7 @@ def test_without_matplotlib_the_tables_are_still_written(tmp_path, capsys, monke
     sweep_mod = importlib.import_module("refsoft.bench.sweep")  # the package's `sweep` is the function
     monkeypatch.setattr(sweep_mod, "plt_or_none", lambda: None)
     out = tmp_path / "s"
-    assert cli.main(["bench", "sweep", "--scenes", "planar", "--width", "32", "--height", "24", "--frames", "1",
+    assert cli.main(["bench", "sweep", "--scheduler", "serial", "--scenes", "planar", "--width", "32", "--height", "24", "--frames", "1",
                      "--repeats", "1", "--knob", "precision", "--out", str(out)]) == 0
     assert (out / "sweep.csv").exists() and not (out / "pareto.png").exists()
     assert "pip install '.[plot]'" in capsys.readouterr().out

@@ -107,7 +107,7 @@ def test_the_readme_claims_what_its_command_measures(tmp_path):
     readme = open(os.path.join(ROOT, "README.md")).read()
     lo, hi, plo, phi = map(float, re.search(r"agrees on ([\d.]+)-([\d.]+)% of the mirrors'.*?preset agrees on "
                                             r"([\d.]+)-([\d.]+)%", readme, re.S).groups())
-    assert cli.main(["bench", "accuracy", "--scenes", "quad", "--sizes", "160x120", "--frames", "1",
+    assert cli.main(["bench", "accuracy", "--scheduler", "serial", "--scenes", "quad", "--sizes", "160x120", "--frames", "1",
                      "--setting", "paper", "--setting", "accurate", "--out", str(tmp_path)]) == 0
     rows = {r["setting"]: float(r["agreement"]) * 100
             for r in __import__("csv").DictReader(open(tmp_path / "accuracy.csv"))}
