@@ -22,7 +22,7 @@ import numpy as np
 from .. import constants
 from ..errors import RefsoftError
 from ..scene.camera import check_image_size
-from . import _dtype, _CONVERT, _check_faces, _check_mesh, _kernels, _layers, _setup, coverage_region
+from . import CULL_MODES, _dtype, _CONVERT, _check_faces, _check_mesh, _kernels, _layers, _setup, coverage_region
 
 
 @dataclass(frozen=True, eq=False)
@@ -101,7 +101,7 @@ def depth_layers(clip, faces, width: int, height: int, region=None) -> DepthLaye
     win_xy, win_zw = _setup.vertex_window(clip, codes, width, height)
     X, Y, Z, IW, slot, B, tri, valid, bbox, area, bias = _setup.emit_clip_triangles(
         clip, faces, codes, win_xy, win_zw, offsets, clip_offsets, gx, gy, width, height,
-        np.array([r0, r1 - 1, c0, c1 - 1], dtype=np.int64))
+        np.array([r0, r1 - 1, c0, c1 - 1], dtype=np.int64), CULL_MODES[None])
     tile = constants.TILE_SIZE
     rh, rw = r1 - r0, c1 - c0
     tiles_x, tiles_y = -(-rw // tile), -(-rh // tile)
