@@ -10,7 +10,8 @@ import sys
 
 SUBSET = ["tests/test_stress.py", "tests/raster/test_raster_vs_naive.py", "tests/search/test_skips.py",
           "tests/search/test_search.py::test_trace_ends_where_the_kernel_ends_for_every_vertex",
-          "tests/search/test_search.py::test_trace_records_every_candidate"]
+          "tests/search/test_search.py::test_trace_records_every_candidate", "tests/ldt/test_pixel_search.py",
+          "tests/envmap/test_envmap.py"]
 
 PROBE = """
 import numpy as np
