@@ -2,7 +2,8 @@
 
 One factor at a time around the defaults (the paper's method): each knob takes each of its
 values while the others keep theirs. The knobs: G-buffer resolution scale, widen factor, search
-method (walk or Szabo's hierarchy), neighbourhood (crosshair or box), precision, hidden-vertex mode and Szabo's adaptive
+method (walk or Szabo's hierarchy, and the comparison methods: the layered depth textures and
+the environment map, beside the ray-traced truth's own run time), neighbourhood (crosshair or box), precision, hidden-vertex mode and Szabo's adaptive
 tessellation (threshold 1e-3, 3 levels), and sub-texel
 reflection points (``refine``). For every scene and setting: the median run time of
 ``repeats`` coherent renders of frames 0..F-1 (a fresh driver each time, JIT warmed up before),
@@ -27,13 +28,14 @@ from ._common import (machine, markdown_table, median_time, numba_threads, plan_
 
 #: The knobs and their values; the first value of each is the paper preset's. Each other value
 #: is one setting: the paper preset with that knob changed (``preset=accurate``: the accurate
-#: preset itself).
+#: preset itself; ``method=ldt|envmap``: that method with its defaults; ``method=truth``: the
+#: ray-traced truth itself, whose error is zero by definition: its run time is the reference).
 KNOBS = {
     "preset": ("paper", "accurate"),
     "gbuffer_scale": (1.0, 0.5, 2.0),
     "widen": (1.0, 1.25, 1.5),
     "neighbourhood": ("cross", "box"),
-    "method": ("walk", "hierarchy"),
+    "method": ("walk", "hierarchy", "ldt", "envmap", "truth"),
     "precision": ("float32", "float64"),
     "inverse": ("plane", "search", "discard"),
     "tessellate": (None, 1e-3),
@@ -60,6 +62,10 @@ def _options(setting, width, height):
     from ..options import RenderOptions
 
     opts = dict(setting)
+    if opts.get("method") == "truth":
+        return None
+    if opts.get("method") in ("ldt", "envmap"):  # the per-pixel methods read none of the presets' options
+        return RenderOptions(method=opts["method"])
     preset = opts.pop("preset", "paper")
     scale = opts.pop("gbuffer_scale", 1.0)
     widen = opts.get("widen", 1.0)
@@ -116,7 +122,8 @@ def plan(scenes=("sphere", "quad", "kitchen"), width=320, height=240, frames=3, 
         for label, knob, value, setting in settings(knobs):
             opts = _options(setting, width, height)  # checked here
             key = {"bench": "sweep", "scene": name, "scene_digest": digest, "size": [width, height],
-                   "frames": list(range(n)), "setting": label, "options": opts.as_dict(), "timing": bool(timing),
+                   "frames": list(range(n)), "setting": label,
+                   "options": {"method": "truth"} if opts is None else opts.as_dict(), "timing": bool(timing),
                    "repeats": repeats if timing else None}
             tasks.append(Task(key, sweep_task, (name, spec, digest, width, height, n, label, knob, value, setting,
                                                 repeats, bool(timing)), timing=bool(timing), label=f"{name} {label}"))
@@ -134,7 +141,12 @@ def sweep_task(name, spec, digest, width, height, n, label, knob, value, setting
     opts = _options(setting, width, height)
 
     def run():
-        d = FrameDriver(scene, opts)
+        if opts is None:
+            from ..truth.raytrace import TruthRenderer
+
+            d = TruthRenderer(scene)
+        else:
+            d = FrameDriver(scene, opts)
         out = []
         for f in range(n):
             interrupt.check()
