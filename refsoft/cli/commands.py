@@ -214,9 +214,13 @@ def cmd_golden(args) -> int:
             opts = ", ".join(f"{k}={v}" for k, v in c.options.items()) or "defaults"
             print(f"{c.name:<24} {c.scene:<10} frames {list(c.frames)}  {opts}")
         return 0
+    from ..bench.tasks import resolve
+
     mode = "add" if args.add else "replace" if args.replace else None
+    where = resolve(args.scheduler, args.workers, False, args.connect_timeout)
     t0 = time.perf_counter()
-    m = write_golden(args.out, args.case, progress=True, mode=mode)
+    m = write_golden(args.out, args.case, progress=True, mode=mode, scheduler=where["scheduler"],
+                     workers=where["workers"], connect_timeout=where["connect_timeout"])
     written = len(args.case) if args.case else len(CASES)
     print(f"golden set: {len(m['cases'])} cases ({written} written), {len(m['files'])} files at "
           f"{GOLDEN_SIZE[0]}x{GOLDEN_SIZE[1]} in {args.out} in {time.perf_counter() - t0:.1f} s "

@@ -256,7 +256,47 @@ def render_case(case: Case, scene=None):
         yield f, arrays, {"format": TRACE_FORMAT, "reflectors": traces}
 
 
-def write_golden(out, cases=None, progress=False, mode=None) -> dict:
+def golden_case_task(name: str) -> dict:
+    """One case rendered, as a task of :mod:`refsoft.bench.tasks` (a Dask worker imports it by
+    name): ``{"frames": [...], "F/names": [...], "F/NAME": array, "F/traces": {...}}`` for each
+    frame F, its arrays' names in output order."""
+    case = case_by_name(name)
+    out = {"frames": [int(f) for f in case.frames]}
+    for f, arrays, traces in render_case(case, case.load()):
+        out[f"{f}/names"] = list(arrays)
+        out.update({f"{f}/{k}": np.asarray(v) for k, v in arrays.items()})
+        out[f"{f}/traces"] = traces
+    return out
+
+
+def _rendered_cases(chosen, scheduler, workers, connect_timeout, on_frame):
+    """``(case, scene, [(f, arrays, traces)])`` for each chosen case, in order: rendered here one
+    frame at a time (``scheduler="serial"``), or one task per case on Dask (every task done
+    before the first case is yielded, so that a refused or failed run writes nothing)."""
+    if scheduler == "serial":
+        for case in chosen:
+            scene = case.load()
+            yield case, scene, _frames_here(case, scene, on_frame)
+        return
+    from ..bench.tasks import CONNECT_TIMEOUT, Task, run_tasks
+
+    tasks = [Task({"golden": c.name}, golden_case_task, (c.name,), label=c.name) for c in chosen]
+    run = run_tasks(tasks, scheduler=scheduler, workers=workers, store=None, progress=on_frame is not None,
+                    desc="golden", connect_timeout=CONNECT_TIMEOUT if connect_timeout is None else connect_timeout)
+    for case, res in zip(chosen, run.results):
+        yield case, case.load(), [(f, {k: res[f"{f}/{k}"] for k in res[f"{f}/names"]}, res[f"{f}/traces"])
+                                  for f in res["frames"]]
+
+
+def _frames_here(case, scene, on_frame):
+    for item in render_case(case, scene):
+        yield item
+        if on_frame is not None:
+            on_frame()
+
+
+def write_golden(out, cases=None, progress=False, mode=None, scheduler="serial", workers=None,
+                 connect_timeout=None) -> dict:
     """Write the golden set into ``out`` and return the manifest.
 
     Parameters
@@ -273,6 +313,10 @@ def write_golden(out, cases=None, progress=False, mode=None) -> dict:
         checking their files against their SHA-256; ``"replace"`` starts the set anew and, once
         it is written, removes the files the old manifest lists that it did not rewrite. A new
         folder is written the same in every mode.
+    scheduler : {"serial", "local"} or str
+        Where the cases are rendered: here, frame by frame (default), or one task per case on a
+        local Dask cluster of ``workers`` processes or ``"tcp://HOST:PORT"``
+        (:func:`refsoft.bench.tasks.run_tasks`). The files are the same, bit for bit.
     """
     import numba
 
@@ -289,32 +333,30 @@ def write_golden(out, cases=None, progress=False, mode=None) -> dict:
     kept_entries, kept_files, old_files = _existing_set(out, mode, {c.name for c in chosen}, versions)
     total = sum(len(c.frames) for c in chosen)
     bar = None
-    if progress and total > 1:
+    if progress and total > 1 and scheduler == "serial":
         from tqdm import tqdm
 
         bar = tqdm(total=total, desc="golden", unit="frame", disable=None)
+    on_frame = None if not progress else (bar.update if bar is not None else (lambda: None))
     files = dict(kept_files)
     entries = {e["name"]: e for e in kept_entries}
-    for case in chosen:
-        from ..options import RenderOptions
+    from ..options import RenderOptions
 
+    for case, scene, rendered in _rendered_cases(chosen, scheduler, workers, connect_timeout, on_frame):
         entries[case.name] = {"name": case.name, "scene": case.scene, "frames": list(case.frames),
                               "width": GOLDEN_SIZE[0], "height": GOLDEN_SIZE[1],
                               "options": RenderOptions(**case.options).as_dict()}
-        scene = case.load()
         base = os.path.join(out, case.name)
         for name in write_inputs(os.path.join(base, INPUTS_FOLDER), scene, case.frames, case.options, case.name):
             rel = f"{case.name}/{INPUTS_FOLDER}/{name}"
             files[rel] = sha256(os.path.join(out, *rel.split("/")))
-        for f, arrays, traces in render_case(case, scene):
+        for f, arrays, traces in rendered:
             npz = os.path.join(base, f"frame_{f:04d}.npz")
             write_npz(npz, **arrays)
             tj = os.path.join(base, f"traces_{f:04d}.json")
             write_json(tj, traces)
             for p in (npz, tj):
                 files[os.path.relpath(p, out).replace(os.sep, "/")] = sha256(p)
-            if bar is not None:
-                bar.update(1)
     if bar is not None:
         bar.close()
     order = {c.name: i for i, c in enumerate(CASES)}  # canonical order; cases no longer canonical last

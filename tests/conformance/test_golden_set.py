@@ -6,6 +6,7 @@ refsoft's own or null."""
 import json
 import os
 import shutil
+import socket
 import subprocess
 import sys
 
@@ -197,3 +198,19 @@ def test_git_hash_only_of_refsofts_own_work_tree(tmp_path, pyproject, under, our
     in a repository without pyproject.toml, or installed below the top level."""
     got, head = _git_hash_of_copy(tmp_path, pyproject, under)
     assert got == (head if ours else "None")
+
+
+def test_golden_on_two_local_workers_is_the_serial_set_bit_for_bit(tmp_path, capsys):
+    """One task per case on a LocalCluster: the same files (the manifest's SHA-256) as rendered
+    in this process; an unreachable scheduler is refused in one line before anything is written."""
+    names = ["pixel_grid", "sphere"]
+    serial = write_golden(tmp_path / "s", names)
+    local = write_golden(tmp_path / "l", names, scheduler="local", workers=2)
+    assert local["files"] == serial["files"] and local["cases"] == serial["cases"]
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    rc, _, err = run_cli("golden", "--out", tmp_path / "t", "--scheduler", f"tcp://127.0.0.1:{port}",
+                         "--connect-timeout", "1", cwd=tmp_path)
+    assert rc == 2 and len(err.strip().splitlines()) == 1, err
+    assert not (tmp_path / "t" / "manifest.json").exists()
