@@ -86,10 +86,10 @@ def _port_commands(sub):
     mode.add_argument("--replace", action="store_true",
                       help="into an existing set: start it anew (its listed files are removed)")
     go.add_argument("--list", action="store_true", help="list the canonical cases and exit")
-    go.add_argument("--scheduler", default="serial", metavar="WHERE",
-                    help="where the cases are rendered, one task each: 'serial' (in this process, the default), "
-                         "'local' (a Dask cluster on this machine) or tcp://HOST:PORT (a running Dask scheduler); "
-                         "the set is the same, bit for bit")
+    go.add_argument("--scheduler", default=None, metavar="WHERE",
+                    help="where the cases are rendered, one task each: 'local' (a Dask cluster on this machine; the "
+                         "default when Dask is installed), 'serial' (one after another in this process) or "
+                         "tcp://HOST:PORT (a running Dask scheduler); the set is the same, bit for bit")
     go.add_argument("--workers", type=int, default=None, metavar="N",
                     help="--scheduler local: worker processes (default: the cores)")
     go.add_argument("--connect-timeout", type=float, default=None, metavar="S",
