@@ -27,6 +27,12 @@ agree, iterations likewise up to 1% of vertices; 8-bit images within 1 per chann
 ``reflected_id`` are reported, not judged. Candidate traces (``traces_NNNN.json``, see
 :mod:`refsoft.conformance.golden`) are compared step by step with the oracle's walk of the same vertex.
 
+The comparison methods' golden cases (``method`` ``"ldt"`` and ``"envmap"``: no vertex search)
+are judged by the rules of :mod:`refsoft.conformance.comparison` (the per-pixel arrays, the cube
+maps, the cone-test tables) and :mod:`refsoft.conformance.textures` (each ``CASE/ldt_J.npz``,
+once per case), each of its own kind; there ``reflected_id`` is part of the per-pixel decision,
+judged, not only reported.
+
 Those are the ``default`` profile's rules. The ``gpu`` profile (:mod:`refsoft.conformance.profiles`)
 widens the G-buffer's by what a GPU's own interpolation and depth evaluation may change (and
 accepts fragments of another triangle at an edge), judges everything after the G-buffer against
@@ -45,7 +51,7 @@ from .. import constants, keys
 from ..constants import (EXTENT_TOL, F32_ULP_TOL, IMAGE_LOOSE_SHARE, IMAGE_TOL, IMAGE_TOL_LOOSE,
                          ITERATION_SHARE_MAX, NORMAL_ANGLE_TOL, TIE_SHARE_MAX)
 from ..errors import InputFileError, RefsoftError
-from . import comparison
+from . import comparison, textures
 from .golden import DEPTH_MARGIN
 from .profiles import edge_triangles, fragments, profile as get_profile
 
@@ -988,7 +994,7 @@ def check(golden, candidate, loose=False, out=None, cases=None, progress=False, 
             findings += ctx.findings
             continue
         if f == entry["frames"][0] and entry["options"].get("method") == "ldt":
-            comparison.judge_textures(ctx, golden, candidate, manifest)  # ldt_J.npz, once per case
+            textures.judge_textures(ctx, golden, candidate, manifest)  # ldt_J.npz, once per case
         cpath = os.path.join(candidate, rel)
         if not os.path.isfile(cpath):
             ctx.finding("*", "presence", "missing", f"{rel} not in the candidate")

@@ -106,6 +106,40 @@ def test_golden_cases_hold_textures_inputs_and_options(golden):
     assert read_npz(golden / "hollow_box_ldt" / "ldt_2.npz")["depth"].shape[1] >= 2  # a hollow object: 2 layers
 
 
+def test_the_inputs_alone_give_the_textures_and_the_cube_matrices(golden):
+    """An LDT case's inputs hold what the build and the search need beyond the world meshes: each
+    reflected object's model-space mesh (the textures built from it are the golden ones, bit
+    for bit) and per frame its model-to-world and world-to-cube matrices (the search's)."""
+    from refsoft.conformance.export import read_inputs
+    from refsoft.ldt import build_ldt
+    from refsoft.scene.mesh import Mesh
+
+    for name in LDT_CASES:
+        case = case_by_name(name)
+        opts = RenderOptions(**case.options)
+        inp = read_inputs(golden / name / "inputs")
+        scene = case.load()
+        assert sorted(inp["models"]) == [j for j in range(1, len(scene.objects) + 1)
+                                         if not scene.object_by_id(j).reflector]
+        for j, (v, n, f) in inp["models"].items():
+            mesh = Mesh(v, f, n)
+            object.__setattr__(mesh, "normals", n)  # exactly the file's normals
+            built = build_ldt(mesh, opts.ldt_resolution, 8 if opts.ldt_layers == "all" else 1).arrays()
+            want = read_npz(golden / name / f"ldt_{j}.npz")
+            assert all(np.asarray(built[k]).tobytes() == want[k].tobytes() for k in want), (name, j)
+        driver = FrameDriver(scene, opts)
+        for fr in inp["case"]["frames"]:
+            state = next(iter(driver.render_frame(fr["frame"]).reflectors.values())).state
+            ids = driver.method.stack.ids
+            W = np.array([fr["world_to_cube"][str(j)] for j in ids])
+            M = np.array([fr["transforms"][str(j)] for j in ids])
+            assert W.tobytes() == state.W.tobytes(), name
+            assert M.tobytes() == np.array([scene.transform_at(int(j), fr["frame"]).matrix() for j in ids]).tobytes()
+    for name in ENVMAP_CASES + ["sphere"]:  # other methods need no models
+        case_json = json.loads((golden / name / "inputs" / "case.json").read_text())
+        assert not any("model" in o for o in case_json["objects"]) and "world_to_cube" not in case_json["frames"][0]
+
+
 def test_regenerating_gives_identical_files(golden, tmp_path):
     names = ["hollow_box_ldt", "cube_edge_envmap"]
     again = tmp_path / "again"
