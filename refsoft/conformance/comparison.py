@@ -226,7 +226,7 @@ class _Frame:
         n_tie = int(tie.sum())
         many = n_tie > TIE_SHARE_MAX * max(self.n, 1)
         for key in self.dec:
-            differ = ~self.same[key]
+            differ = self.on & ~self.same[key]  # off the reflectors: judge() requires the fill values
             bad = differ & ~tie
             nbad = int(bad.sum())
             worst = ""
@@ -242,9 +242,10 @@ class _Frame:
                              int(differ.sum()), self.n)
             else:
                 self.finding(key, self.rule, "pass", "identical", 0, self.n)
-        if self.ctx.out is not None and (~self.agree).any():
-            red = np.argwhere(~self.agree & ~tie)
-            self.ctx.paint(self.kind, self.shape, np.argwhere(~self.agree & tie), red, self.on & self.agree)
+        differ = self.on & ~self.agree
+        if self.ctx.out is not None and differ.any():
+            self.ctx.paint(self.kind, self.shape, np.argwhere(differ & tie), np.argwhere(differ & ~tie),
+                           self.on & self.agree)
 
     def counters(self, names, share):
         """Arrays identical where the decision agrees (and off the reflectors); ``share``: the

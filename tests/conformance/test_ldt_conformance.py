@@ -404,3 +404,60 @@ def test_segment_distance_against_brute_force(rng):
     near = brute <= 2.0
     assert near.sum() > 30 and (~near).sum() > 30
     assert np.allclose(got[near], brute[near], rtol=0, atol=1e-12) and np.all(np.isinf(got[~near]))
+
+
+def _shifted_fragments(mesh, view_proj, width, height, pixels, triangles):
+    """Each fragment as a GPU could interpolate it: at the pixel centre moved by half the gpu
+    profile's sub-pixel distance along x (exact float64 interpolation)."""
+    from refsoft.conformance.profiles import fragments
+
+    return fragments(mesh, view_proj, width, height, pixels, triangles, offset=(0.5 * constants.GPU_SUBPIXEL_PX, 0.0))
+
+
+def test_gpu_profile_accepts_interpolation_differences(golden, tmp_path):
+    """Texture depths and normals, ray origins and directions interpolated at a sample point
+    1/512 px away (as a GPU's own interpolation may): the default profile fails them, the gpu
+    profile accepts them; the decisions and hits are the oracle's."""
+    from refsoft.conformance.cubes import ldt_face_matrix
+    from refsoft.raster import _setup, rasterize
+
+    case = "balls_ldt"
+    cand = _copy(golden, tmp_path, case)
+    scene = case_by_name(case).load()
+    for p in sorted((cand / case).glob("ldt_*.npz")):
+        j = int(p.stem.split("_")[1])
+        a = read_npz(p)
+        mesh = scene.object_by_id(j).mesh
+        for f in range(6):
+            idx = np.argwhere(a["triangle"][f] >= 0)  # (layer, row, col)
+            fr = _shifted_fragments(mesh, ldt_face_matrix(a["cube_center"], float(a["cube_half"]), f), 64, 64,
+                                    idx[:, 1:], a["triangle"][f][tuple(idx.T)])
+            a["depth"][f][tuple(idx.T)] = fr.depth.astype(np.float32)
+            a["normal"][f][tuple(idx.T)] = fr.normal.astype(np.float32)
+        from refsoft.ldt.build import pair_back_depths
+
+        a["back"] = pair_back_depths(a["depth"], a["count_raw"], bool(a["open"]))[0]
+        write_npz(p, **a)
+    cam = scene.camera_at(0)
+    mesh = scene.world_mesh(1, 0)
+    tri = rasterize(_setup.transform_points(mesh.vertices, cam.view_proj()), mesh.faces, cam.width,
+                    cam.height).triangle
+
+    def reray(a):
+        on = np.argwhere(a[keys.REFLECTED_ID] >= 0)
+        fr = _shifted_fragments(mesh, cam.view_proj(), cam.width, cam.height, on, tri[on[:, 0], on[:, 1]])
+        i = fr.position - cam.eye
+        i /= np.linalg.norm(i, axis=1, keepdims=True)
+        r = i - 2 * np.einsum("ij,ij->i", fr.normal, i)[:, None] * fr.normal
+        a[keys.LDT_RAY_ORIGIN][on[:, 0], on[:, 1]] = fr.position.astype(np.float32)
+        a[keys.LDT_RAY_DIR][on[:, 0], on[:, 1]] = r.astype(np.float32)
+
+    _rewrite(cand / case / "frame_0000.npz", reray)
+    keys_judged = ("ldt_2.depth", "ldt_2.normal", "ldt_3.depth", "ldt_3.normal", keys.LDT_RAY_ORIGIN, keys.LDT_RAY_DIR)
+    exact = check(golden, cand, cases=[case], kinds=["ldt_texture", "ldt_ray"])
+    st = {f.key: f.status for f in exact["_findings"] if f.frame == 0}
+    assert {st[k] for k in keys_judged} == {"fail"}
+    gpu = check(golden, cand, cases=[case], kinds=["ldt_texture", "ldt_ray"], profile="gpu")
+    st = {f.key: f for f in gpu["_findings"] if f.frame == 0}
+    assert gpu["passed"] and {st[k].status for k in keys_judged} == {"accepted"}
+    assert "within GPU interpolation" in st["ldt_2.depth"].message
