@@ -91,7 +91,8 @@ SKIPS = ("cull_reflectors", "reuse", "cull_virtual", "crop_virtual")
 MAX_TESSELLATION_LEVEL = 8
 #: The kinds of output ``refsoft check --kinds`` selects (refsoft.conformance.check.output_kind).
 CHECK_KINDS = ("coverage", "gbuffer", "pixel", "virtual", "flags", "vertex_object", "iterations", "score", "margin",
-               "image", "ids", "trace")
+               "image", "ids", "trace", "ldt_texture", "ldt_region", "ldt_ray", "ldt_pixel", "ldt_counts", "envmap_cube",
+               "envmap_pixel")
 
 # --- Camera validation ---------------------------------------------------------------------
 #: |cross(forward, up)| below this means up is parallel to the view direction.
@@ -146,6 +147,21 @@ ITERATION_SHARE_MAX = 0.01
 IMAGE_TOL = 1
 IMAGE_TOL_LOOSE = 4
 IMAGE_LOOSE_SHARE = 0.001
+
+# --- Conformance of the comparison methods (DESIGN-ldt 2.9 and 5; docs/ports.md) ---------------
+#: A reflector pixel whose LDT result (reflected object, face, layer, texel) differs from the
+#: oracle's is a tie when the oracle's ``ldt_margin`` (its smallest decisive comparison: depth
+#: differences, and texel coordinates' distance from an integer) is at most 8 float32 ULP of 1.0
+#: (``2^-23`` each); more than TIE_SHARE_MAX of a frame's reflector pixels tied fail.
+LDT_TIE_MARGIN = 8 * 2.0 ** -23
+#: LDT hit positions and distances pass, where the texels agree, within this share of the hit
+#: object's cube side in world units, plus F32_ULP_TOL float32 ULP of the value.
+LDT_HIT_TOL = 1e-6
+#: An environment-map texel differing from the oracle's is a tie when the oracle's ``s R`` (or
+#: ``t R``) lies within ``ENVMAP_TIE_ULP * TIE_EPS * R`` of an integer: that many float32 ULP of
+#: a face coordinate in [0.5, 1), scaled to texels (llvmpipe's ``sc * (0.5 / |ma|) + 0.5`` can
+#: differ from ``(sc / |ma| + 1) * 0.5`` in the last bit).
+ENVMAP_TIE_ULP = 8
 
 # --- Truth and metrics (spec section 6) ---------------------------------------------------
 #: The rim of a reflector's stencil, in 8-neighbour steps: "interior" and "rim" agreement split

@@ -57,6 +57,28 @@ LDT_PIXEL_ARRAYS = ("ldt_ray_origin", "ldt_ray_dir", "ldt_hit_position", "ldt_hi
                     "ldt_objects_tested", "ldt_flags", "ldt_object_distance", "ldt_margin")
 
 
+#: The per-pixel arrays one at a time (``refsoft check``'s rules name them).
+LDT_RAY_ORIGIN, LDT_RAY_DIR, LDT_HIT_POSITION, LDT_HIT_DISTANCE = LDT_PIXEL_ARRAYS[:4]
+LDT_FACE, LDT_LAYER, LDT_TEXEL, LDT_RESIDUAL = LDT_PIXEL_ARRAYS[4:8]
+LDT_LINEAR_SAMPLES, LDT_BINARY_STEPS, LDT_FACES_SEARCHED, LDT_OBJECTS_TESTED = LDT_PIXEL_ARRAYS[8:12]
+LDT_FLAGS, LDT_OBJECT_DISTANCE, LDT_MARGIN = LDT_PIXEL_ARRAYS[12:]
+#: The arrays of one object's ``ldt_J.npz`` (refsoft.ldt.LDT.arrays).
+LDT_TEXTURE_ARRAYS = ("depth", "back", "normal", "triangle", "count_raw", "count", "mismatch", "cube_center",
+                      "cube_half", "open", "layers_capped")
+
+# --- the environment map (method "envmap"; refsoft.envmap) ------------------------------------
+#: (H, W) int8: the face looked up at each reflector pixel (0..5), -1 elsewhere.
+ENVMAP_FACE = "envmap_face"
+#: (H, W, 2) int16: the texel (row, col) looked up, -1 elsewhere.
+ENVMAP_TEXEL = "envmap_texel"
+#: (6, R, R, 3) float32 per reflector: the cube map's shaded colours.
+ENVMAP_COLOR = PerReflector("envmap_color")
+#: (6, R, R) int32 per reflector: the cube map's object ids (0 background).
+ENVMAP_ID = PerReflector("envmap_id")
+#: (3,) float64 per reflector: the cube map's centre.
+ENVMAP_CENTER = PerReflector("envmap_center")
+
+
 def ldt_file(j: int) -> str:
     """The name (without ``.npz``) of object ``j``'s layered depth texture, written once per run."""
     return f"ldt_{int(j)}"
@@ -66,7 +88,8 @@ def ldt_file(j: int) -> str:
 #: before a shorter name could).
 PER_REFLECTOR = tuple(sorted((GBUFFER_POSITION, GBUFFER_NORMAL, GBUFFER_MASK, GBUFFER_VIEW_PROJ, REFLECTION_PIXEL,
                               VIRTUAL_VERTEX, ITERATIONS, FLAGS, VERTEX_OBJECT, SCORE, MARGIN,
-                              EXACT_REFLECTION_POINT, EXACT_VIRTUAL_VERTEX, LDT_REGION), key=len, reverse=True))
+                              EXACT_REFLECTION_POINT, EXACT_VIRTUAL_VERTEX, LDT_REGION, ENVMAP_COLOR, ENVMAP_ID,
+                              ENVMAP_CENTER), key=len, reverse=True))
 #: The per-vertex arrays of the vertex search, judged together by ``refsoft check``.
 VERTEX_ARRAYS = (REFLECTION_PIXEL, VIRTUAL_VERTEX, FLAGS, ITERATIONS, SCORE, VERTEX_OBJECT, MARGIN)
 

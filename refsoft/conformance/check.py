@@ -27,6 +27,12 @@ agree, iterations likewise up to 1% of vertices; 8-bit images within 1 per chann
 ``reflected_id`` are reported, not judged. Candidate traces (``traces_NNNN.json``, see
 :mod:`refsoft.conformance.golden`) are compared step by step with the oracle's walk of the same vertex.
 
+The comparison methods' golden cases (``method`` ``"ldt"`` and ``"envmap"``: no vertex search)
+are judged by the rules of :mod:`refsoft.conformance.comparison` (the per-pixel arrays, the cube
+maps, the cone-test tables) and :mod:`refsoft.conformance.textures` (each ``CASE/ldt_J.npz``,
+once per case), each of its own kind; there ``reflected_id`` is part of the per-pixel decision,
+judged, not only reported.
+
 Those are the ``default`` profile's rules. The ``gpu`` profile (:mod:`refsoft.conformance.profiles`)
 widens the G-buffer's by what a GPU's own interpolation and depth evaluation may change (and
 accepts fragments of another triangle at an edge), judges everything after the G-buffer against
@@ -45,6 +51,7 @@ from .. import constants, keys
 from ..constants import (EXTENT_TOL, F32_ULP_TOL, IMAGE_LOOSE_SHARE, IMAGE_TOL, IMAGE_TOL_LOOSE,
                          ITERATION_SHARE_MAX, NORMAL_ANGLE_TOL, TIE_SHARE_MAX)
 from ..errors import InputFileError, RefsoftError
+from . import comparison, textures
 from .golden import DEPTH_MARGIN
 from .profiles import edge_triangles, fragments, profile as get_profile
 
@@ -85,6 +92,9 @@ def output_kind(key: str) -> str:
         return "trace"
     if key in _FRAME_KINDS:
         return _FRAME_KINDS[key]
+    method_kind = comparison.kind_of(key)
+    if method_kind is not None:
+        return method_kind
     p = _parse(key)
     if p is not None and p[0] in _PER_REFLECTOR_KINDS:
         return _PER_REFLECTOR_KINDS[p[0]]
@@ -380,6 +390,7 @@ class _Context:
         self.stages = {}  # reflector -> the candidate's G-buffer its search is judged on
         self.reference = None  # the frame's arrays from the candidate's inputs (_reference_frame)
         self.reference_starts = {}
+        self.loose = False  # the loose image rule (set by check_frame)
         self.findings = []
         self.pictures = []  # file names written into out
         self._oracle = None
@@ -395,9 +406,9 @@ class _Context:
         own = self.stages.get(k)
         return self.oracle().gbuffer(k) if own is None else own
 
-    def finding(self, key, rule, status, message="", count=0, total=0, worst="", details=None):
-        f = Finding(self.case, self.frame, key, output_kind(key), status, message, int(count), int(total), worst,
-                    details or [], rule)
+    def finding(self, key, rule, status, message="", count=0, total=0, worst="", details=None, kind=None):
+        f = Finding(self.case, self.frame, key, kind or output_kind(key), status, message, int(count), int(total),
+                    worst, details or [], rule)
         self.findings.append(f)
         return f
 
@@ -814,28 +825,35 @@ def check_frame(ctx, G, C, loose, cand_traces=None, prev_pixels=None):
     ``ctx.findings``. An output the candidate lacks is ``missing`` (a failure). ``prev_pixels``:
     ``{reflector: pixels}`` of the golden's previous frame (coherence). After the G-buffer, the
     outputs are judged against ``ctx.reference`` when it is set (:func:`_reference_frame`)."""
+    ctx.loose = bool(loose)
     reflectors = keys.reflectors(G)
     vertex_keys = set().union(*[_vertex_keys(k) for k in reflectors]) if reflectors else set()
-    broken = {key for key in G if _oracle_only(key) or output_kind(key) not in ctx.kinds + ("other",)}
+
+    def kind(key):  # reflected_id belongs to a comparison method's per-pixel decision
+        return comparison.frame_kind(G, key) or output_kind(key)
+
+    broken = {key for key in G if _oracle_only(key) or kind(key) not in ctx.kinds + ("other",)}
     for key in sorted(G):
         if key in broken:
             continue
         if key not in C:
-            ctx.finding(key, "presence", "missing", "not in the candidate's outputs")
+            ctx.finding(key, "presence", "missing", "not in the candidate's outputs", kind=kind(key))
             broken.add(key)
             continue
         g, c = G[key], C[key]
         if g.shape != c.shape or g.dtype != c.dtype:
-            ctx.finding(key, "shape/dtype", "fail", f"expected {g.dtype}{list(g.shape)} / observed {c.dtype}{list(c.shape)}")
+            ctx.finding(key, "shape/dtype", "fail", f"expected {g.dtype}{list(g.shape)} / observed {c.dtype}{list(c.shape)}",
+                        kind=kind(key))
             broken.add(key)
             continue
         if g.dtype.kind == "f" and not np.array_equal(np.isfinite(g), np.isfinite(c)):
             bad = np.argwhere(np.isfinite(g) != np.isfinite(c))
             ctx.finding(key, "non-finite", "fail", "non-finite values at other places", len(bad), g.size,
-                        f"at {_where(bad[0])}")
+                        f"at {_where(bad[0])}", kind=kind(key))
             broken.add(key)
+    by_method = comparison.judged_keys(G)
     for key in sorted(G):
-        if key in broken:
+        if key in broken or key in by_method:
             continue
         g, c = G[key], C[key]
         name, k = keys.parse(key) or (None, None)
@@ -863,6 +881,8 @@ def check_frame(ctx, G, C, loose, cand_traces=None, prev_pixels=None):
     for k in reflectors:
         _compare_vertices(ctx, k, G, C, cand_traces, prev_pixels.get(k) if prev_pixels else None,
                           lambda key: key in G and key not in broken)
+    if by_method:
+        comparison.judge_frame(ctx, G, C, lambda key: key in G and key not in broken)
 
 
 def _check_report_folder(out, golden, candidate):
@@ -973,6 +993,8 @@ def check(golden, candidate, loose=False, out=None, cases=None, progress=False, 
             ctx.finding("*", "reference", "fail", f"golden file {rel} is missing or altered (SHA-256)")
             findings += ctx.findings
             continue
+        if f == entry["frames"][0] and entry["options"].get("method") == "ldt":
+            textures.judge_textures(ctx, golden, candidate, manifest)  # ldt_J.npz, once per case
         cpath = os.path.join(candidate, rel)
         if not os.path.isfile(cpath):
             ctx.finding("*", "presence", "missing", f"{rel} not in the candidate")

@@ -10,6 +10,11 @@ Layout (format ``refsoft-inputs-1``; ``docs/ports.md``, "What a port reads")::
     inputs/mesh_K_NNNN.ply      world mesh of object K at frame NNNN, when it moves
     inputs/proxy_K.ply          the closed proxy of an open reflector K that has one (same rule:
     inputs/proxy_K_NNNN.ply     proxy_K_NNNN.ply when it moves)
+    inputs/model_K.ply          method "ldt" only: the model-space mesh of each reflected object K
+                                (the layered depth textures are built from it, before any
+                                transform); each frame then lists its model-to-world matrix
+                                (``transforms``) and the search's world-to-cube matrix
+                                (``world_to_cube``, :func:`refsoft.ldt.search.cube_matrices`)
 
 The PLY files are written here by hand with NumPy structured arrays rather than by trimesh's
 exporter, which does not promise to keep float64 values or the vertex order: every vertex
@@ -170,6 +175,12 @@ def write_inputs(folder, scene, frames, options, case=None) -> list:
             for f, (name, mesh) in _mesh_files(scene, frames, k, proxy).items():
                 per_frame[f]["proxies" if proxy else "meshes"][str(k)] = name
                 files[name] = mesh
+    models = _model_records(scene, frames, opts) if opts.method == "ldt" else {}
+    for k, rec in models.items():
+        files[rec["file"]] = scene.object_by_id(k).mesh
+        for f in frames:
+            per_frame[f].setdefault("transforms", {})[str(k)] = rec["transforms"][f]
+            per_frame[f].setdefault("world_to_cube", {})[str(k)] = rec["world_to_cube"][f]
     cam0 = scene.camera_at(frames[0])
     record = {
         "format": INPUTS_FORMAT, "refsoft": __version__, "case": case or scene.name, "scene": scene.name,
@@ -177,7 +188,8 @@ def write_inputs(folder, scene, frames, options, case=None) -> list:
         "shading": {"light": _floats(constants.LIGHT_DIRECTION), "ambient": float(constants.AMBIENT),
                     "diffuse": float(constants.DIFFUSE), "background": _floats(constants.BACKGROUND_COLOR)},
         "objects": [{"id": k, "name": o.name, "reflector": bool(o.reflector), "open": bool(o.open),
-                     "color": _floats(o.color), "reflectivity": float(o.reflectivity)}
+                     "color": _floats(o.color), "reflectivity": float(o.reflectivity),
+                     **({"model": models[k]["file"]} if k in models else {})}
                     for k, o in enumerate(scene.objects, start=1)],
         "frames": [{"frame": f, "camera": camera_record(scene.camera_at(f)), **per_frame[f]} for f in frames],
     }
@@ -191,6 +203,29 @@ def write_inputs(folder, scene, frames, options, case=None) -> list:
     return ["case.json"] + list(files)
 
 
+def _model_records(scene, frames, opts) -> dict:
+    """Per reflected object K of a method "ldt" case: its model mesh's file name, and per frame
+    its model-to-world matrix and the world-to-cube matrix the search uses (float64, 4 x 4, as
+    nested lists), from the cube of its model-space vertices at ``opts.ldt_resolution``."""
+    from types import SimpleNamespace
+
+    from ..ldt.build import cube_of
+    from ..ldt.search import cube_matrices
+
+    ids = [k for k in range(1, len(scene.objects) + 1) if not scene.object_by_id(k).reflector]
+    cubes = [cube_of(scene.object_by_id(k).mesh.vertices, opts.ldt_resolution) for k in ids]
+    stack = SimpleNamespace(ids=np.asarray(ids, np.int32), centre=np.array([c for c, _ in cubes]).reshape(-1, 3),
+                            half=np.array([h for _, h in cubes], np.float64))
+    out = {k: {"file": f"model_{k}.ply", "transforms": {}, "world_to_cube": {}} for k in ids}
+    for f in frames:
+        transforms = {k: scene.transform_at(k, f) for k in ids}
+        W = cube_matrices(stack, transforms)
+        for i, k in enumerate(ids):
+            out[k]["transforms"][f] = _floats(transforms[k].matrix())
+            out[k]["world_to_cube"][f] = _floats(W[i])
+    return out
+
+
 def read_inputs(folder) -> dict:
     """Read a folder :func:`write_inputs` wrote.
 
@@ -198,7 +233,9 @@ def read_inputs(folder) -> dict:
     -------
     dict
         ``case``: the content of ``case.json``; ``meshes`` and ``proxies``: ``{frame: {object
-        id: (vertices (V, 3) float64, normals (V, 3) float64, faces (F, 3) int32)}}``.
+        id: (vertices (V, 3) float64, normals (V, 3) float64, faces (F, 3) int32)}}``; for a
+        method "ldt" case also ``models``: ``{object id: (vertices, normals, faces)}`` (model
+        space).
     """
     from ..io import read_json
 
@@ -215,6 +252,9 @@ def read_inputs(folder) -> dict:
     for fr in case["frames"]:
         for kind in ("meshes", "proxies"):
             out[kind][fr["frame"]] = {int(k): mesh(name) for k, name in fr[kind].items()}
+    models = {o["id"]: mesh(o["model"]) for o in case["objects"] if "model" in o}
+    if models:  # method "ldt"
+        out["models"] = models
     return out
 
 
@@ -259,6 +299,7 @@ def export_inputs(folder, scene, frames, options, overwrite=False) -> list:
         try:
             data = read_json(old_case, format=INPUTS_FORMAT, required=("frames",))
             old = [n for fr in data["frames"] for kind in ("meshes", "proxies") for n in fr.get(kind, {}).values()]
+            old += [o["model"] for o in data.get("objects", []) if isinstance(o, dict) and "model" in o]
         except (InputFileError, AttributeError, TypeError):
             old = []  # an unreadable case.json lists nothing to remove; it is overwritten
     written = write_inputs(folder, scene, frames, options)

@@ -5,7 +5,10 @@ Layout (a port writes its outputs in the same layout for ``refsoft check``)::
     DIR/manifest.json                 versions, the options of each case, SHA-256 of every file
     DIR/CASE/frame_NNNN.npz           the spec section 7 arrays (plus score_k and margin_k, and
                                       the oracle's gbuffer_depth_margin_k)
-    DIR/CASE/traces_NNNN.json         search traces of a sample of vertices per reflector
+    DIR/CASE/traces_NNNN.json         search traces of a sample of vertices per reflector (vertex
+                                      search cases)
+    DIR/CASE/ldt_J.npz                the layered depth texture of reflected object J (method
+                                      "ldt" cases; :meth:`refsoft.ldt.LDT.arrays`)
     DIR/CASE/inputs/                  the case's inputs: case.json and world meshes as PLY
                                       (:mod:`refsoft.conformance.export`)
 
@@ -52,11 +55,17 @@ class Case:
     options: dict = field(default_factory=dict)
 
     def load(self):
-        if self.scene == "pixel_grid":
-            return pixel_grid_scene()
+        if self.scene in CONFORMANCE_SCENES:
+            return CONFORMANCE_SCENES[self.scene]()
         from ..scene.builtin import load_scene
 
         return load_scene(self.scene, width=GOLDEN_SIZE[0], height=GOLDEN_SIZE[1])
+
+    @property
+    def per_pixel(self) -> bool:
+        """The case renders with a per-pixel comparison method (``ldt``, ``envmap``): no vertex
+        search, so no traces and no G-buffer depth margins."""
+        return self.options.get("method") in PER_PIXEL_METHODS
 
 
 def pixel_grid_scene():
@@ -90,10 +99,59 @@ def pixel_grid_scene():
     return Scene(objects, cam, None, "pixel_grid")
 
 
+def cube_edge_scene():
+    """A conformance scene for the tie rules of the comparison methods: an orthographic camera
+    looking straight down -y (the view direction exactly ``(0, -1, 0)``) at a mirror gutter whose
+    vertex normals have equal x and z components, so that every reflected direction has
+    ``r_x == r_z`` exactly, the largest component: each pixel's environment-map lookup falls on
+    the cube's +X/+Z edge, where only the face order (z over y over x) decides, and each ray's
+    LDT faces tie in ``|u_x| == |u_z|`` for the axis-aligned objects (ties to the smaller axis).
+    A box, a ball and a cube stand along that edge's direction, above one another."""
+    from ..scene.camera import Camera
+    from ..scene.mesh import Mesh
+    from ..scene.primitives import box, icosphere
+    from ..scene.model import Scene, SceneObject, Transform
+
+    w, h = GOLDEN_SIZE
+    radius, length, n_theta, n_len = 20.0, 60.0, 12, 8
+    verts, normals = [], []
+    for along in np.linspace(-0.5 * length, 0.5 * length, n_len + 1):
+        a = along / np.sqrt(2.0)  # along the axis (1, 0, -1) / sqrt(2)
+        for theta in np.radians(np.linspace(30.0, 60.0, n_theta + 1)):  # r_x = r_z > |r_y| throughout
+            c = np.cos(theta) / np.sqrt(2.0)
+            n = np.array([c, np.sin(theta), c])  # one value for x and z: equal bit for bit
+            verts.append(np.array([a, 0.0, -a]) + radius * n)
+            normals.append(n)
+    m = n_theta + 1
+    faces = [t for i in range(n_len) for j in range(n_theta) for p in [i * m + j]
+             for t in ([p, p + m, p + 1], [p + 1, p + m, p + m + 1])]
+    gutter = Mesh(np.array(verts), np.array(faces), np.array(normals), name="gutter")
+    centre = 0.5 * (gutter.vertices.min(axis=0) + gutter.vertices.max(axis=0))
+    edge = centre + 25.0 * np.array([1.0, 0.0, 1.0]) / np.sqrt(2.0)
+    objects = (
+        SceneObject("gutter", gutter, (0.85, 0.85, 0.9), Transform(), reflector=True, open=True),
+        SceneObject("pillar", box((8.0, 16.0, 8.0), 2), (0.9, 0.3, 0.1), Transform(tuple(edge))),
+        SceneObject("ball", icosphere(3, 7.0), (0.2, 0.4, 0.9), Transform(tuple(edge + [0.0, 15.0, 0.0]))),
+        SceneObject("block", box((6.0, 6.0, 6.0), 1), (0.3, 0.8, 0.3), Transform(tuple(edge + [0.0, -13.0, 0.0]))),
+    )
+    cam = Camera(eye=(centre[0], 60.0, centre[2]), target=(centre[0], 0.0, centre[2]), up=(0.0, 0.0, -1.0), width=w,
+                 height=h, near=1.0, far=200.0, projection="orthographic", ortho_height=40.0)
+    return Scene(objects, cam, None, "cube_edge")
+
+
+#: The scenes made for the rules (beside the built-in ones), by name.
+CONFORMANCE_SCENES = {"pixel_grid": pixel_grid_scene, "cube_edge": cube_edge_scene}
+#: The per-pixel comparison methods (refsoft.ldt, refsoft.envmap).
+PER_PIXEL_METHODS = ("ldt", "envmap")
+
+
 #: The canonical cases: every built-in scene with the paper preset (three coherent frames of
 #: each animation), both neighbourhoods, every hidden-vertex mode, the wider frustum, float64,
 #: cold searches, the pixel-grid conformance scene, Szabo's hierarchy search, and the accurate
-#: preset. Each case names its preset, so a change of the default preset never changes a case.
+#: preset; then the comparison methods at a small resolution R = 64: the layered depth textures
+#: (two coherent frames, a hollow object's two layers, float64, the tie scene) and the
+#: environment map (an object touching the mirror, the tie scene). Each case names its preset,
+#: so a change of the default preset never changes a case.
 CASES = (
     Case("sphere", "sphere", (0,), {"preset": "paper"}),
     Case("ellipsoid", "ellipsoid", (0, 1, 2), {"preset": "paper"}),
@@ -116,6 +174,14 @@ CASES = (
     Case("sphere_hierarchy", "sphere", (0,), {"preset": "paper", "method": "hierarchy"}),
     Case("sphere_accurate", "sphere", (0,), {"preset": "accurate"}),
     Case("kitchen_accurate", "kitchen", (0, 1, 2), {"preset": "accurate"}),
+    Case("balls_ldt", "balls", (0, 1), {"preset": "paper", "method": "ldt", "ldt_resolution": 64}),
+    Case("hollow_box_ldt", "hollow_box", (0,), {"preset": "paper", "method": "ldt", "ldt_resolution": 64,
+                                                "ldt_layers": "all"}),
+    Case("genus3_ldt_float64", "genus3", (0,), {"preset": "paper", "method": "ldt", "ldt_resolution": 64,
+                                                "precision": "float64"}),
+    Case("cube_edge_ldt", "cube_edge", (0,), {"preset": "paper", "method": "ldt", "ldt_resolution": 64}),
+    Case("touching_envmap", "touching", (0,), {"preset": "paper", "method": "envmap", "envmap_resolution": 64}),
+    Case("cube_edge_envmap", "cube_edge", (0,), {"preset": "paper", "method": "envmap", "envmap_resolution": 64}),
 )
 
 
@@ -212,10 +278,12 @@ def depth_margin(scene, k: int, frame: int, gb) -> np.ndarray:
     return sec.margin
 
 
-def render_case(case: Case, scene=None):
+def render_case(case: Case, scene=None, run_files=None):
     """Yield ``(frame index, arrays, traces)`` for each frame of a case (``scene``: the case's
     scene, already loaded): the arrays of the golden frame, those of a render and the oracle's
-    :data:`DEPTH_MARGIN` of each reflector."""
+    :data:`DEPTH_MARGIN` of each reflector. A per-pixel method's case (:attr:`Case.per_pixel`)
+    has neither traces (None) nor depth margins; ``run_files``, a dict, then receives the files
+    its method writes once per run, after the first frame (``{"ldt_J": arrays}``)."""
     from ..frame import FrameDriver
     from ..options import RenderOptions
     from ..scene import scene_vertices
@@ -227,6 +295,12 @@ def render_case(case: Case, scene=None):
     previous = {}
     for f in case.frames:
         frame = driver.render_frame(f)
+        if case.per_pixel:
+            once = getattr(driver.method, "run_files", None)
+            if run_files is not None and once is not None and f == case.frames[0]:
+                run_files.update(once())
+            yield f, dict(frame.arrays), None
+            continue
         verts, _ = scene_vertices(scene, f)
         eye = scene.camera_at(f).eye
         traces = {}
@@ -262,10 +336,12 @@ def golden_case_task(name: str) -> dict:
     frame F, its arrays' names in output order."""
     case = case_by_name(name)
     out = {"frames": [int(f) for f in case.frames]}
-    for f, arrays, traces in render_case(case, case.load()):
+    for f, arrays, traces, once in _frames_here(case, case.load(), None):
         out[f"{f}/names"] = list(arrays)
         out.update({f"{f}/{k}": np.asarray(v) for k, v in arrays.items()})
         out[f"{f}/traces"] = traces
+        out[f"{f}/once"] = {run: list(a) for run, a in once.items()}  # the files written once per run
+        out.update({f"{f}/once/{run}/{k}": np.asarray(v) for run, a in once.items() for k, v in a.items()})
     return out
 
 
@@ -284,13 +360,18 @@ def _rendered_cases(chosen, scheduler, workers, connect_timeout, on_frame):
     run = run_tasks(tasks, scheduler=scheduler, workers=workers, store=None, progress=on_frame is not None,
                     desc="golden", connect_timeout=CONNECT_TIMEOUT if connect_timeout is None else connect_timeout)
     for case, res in zip(chosen, run.results):
-        yield case, case.load(), [(f, {k: res[f"{f}/{k}"] for k in res[f"{f}/names"]}, res[f"{f}/traces"])
+        yield case, case.load(), [(f, {k: res[f"{f}/{k}"] for k in res[f"{f}/names"]}, res[f"{f}/traces"],
+                                   {run: {k: res[f"{f}/once/{run}/{k}"] for k in names}
+                                    for run, names in res[f"{f}/once"].items()})
                                   for f in res["frames"]]
 
 
 def _frames_here(case, scene, on_frame):
-    for item in render_case(case, scene):
-        yield item
+    """``(f, arrays, traces, files written once per run after this frame)`` of each frame."""
+    once = {}
+    for f, arrays, traces in render_case(case, scene, once):
+        yield f, arrays, traces, dict(once)
+        once.clear()
         if on_frame is not None:
             on_frame()
 
@@ -350,12 +431,17 @@ def write_golden(out, cases=None, progress=False, mode=None, scheduler="serial",
         for name in write_inputs(os.path.join(base, INPUTS_FOLDER), scene, case.frames, case.options, case.name):
             rel = f"{case.name}/{INPUTS_FOLDER}/{name}"
             files[rel] = sha256(os.path.join(out, *rel.split("/")))
-        for f, arrays, traces in rendered:
+        for f, arrays, traces, once in rendered:
             npz = os.path.join(base, f"frame_{f:04d}.npz")
             write_npz(npz, **arrays)
-            tj = os.path.join(base, f"traces_{f:04d}.json")
-            write_json(tj, traces)
-            for p in (npz, tj):
+            written = [npz]
+            if traces is not None:
+                written.append(os.path.join(base, f"traces_{f:04d}.json"))
+                write_json(written[-1], traces)
+            for name, run_arrays in sorted(once.items()):  # the LDTs, once per case
+                written.append(os.path.join(base, name + ".npz"))
+                write_npz(written[-1], **run_arrays)
+            for p in written:
                 files[os.path.relpath(p, out).replace(os.sep, "/")] = sha256(p)
     if bar is not None:
         bar.close()
@@ -459,7 +545,7 @@ def _check_entry(path, i, e):
             raise InputFileError(f"{where}.{key} must be a JSON {_JSON_NAMES[kind]}")
     if not e["frames"] or not all(isinstance(f, int) and not isinstance(f, bool) and f >= 0 for f in e["frames"]):
         raise InputFileError(f"{where}.frames must be a non-empty list of frame indices")
-    if e["scene"] != "pixel_grid" and e["scene"] not in BUILTIN_SCENES:
+    if e["scene"] not in CONFORMANCE_SCENES and e["scene"] not in BUILTIN_SCENES:
         raise InputFileError(f"{where}.scene: unknown scene {e['scene']!r}")
     try:
         RenderOptions(**{k: (tuple(v) if isinstance(v, list) else v) for k, v in e["options"].items()})
