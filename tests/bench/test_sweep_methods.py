@@ -17,5 +17,8 @@ def test_methods_and_the_truth_are_settings_of_one_sweep(tmp_path):
     assert by["method=ldt"]["disagreement"] < 0.02 < by["method=envmap"]["disagreement"]
     assert all(r["time_ms"] > 0 for r in rows)
     front = pareto_front([r["time_ms"] for r in rows], [r["disagreement"] for r in rows])
-    assert [r["pareto"] for r in rows] == list(front) and by["method=truth"]["pareto"]
+    assert [r["pareto"] for r in rows] == list(front)
+    # nothing is closer than the truth itself: only a setting as exact and faster can hide it
+    exact = [r for r in rows if r["disagreement"] == 0.0]
+    assert by["method=truth"]["pareto"] or min(r["time_ms"] for r in exact) < by["method=truth"]["time_ms"]
     assert (tmp_path / "s" / "sweep.csv").exists()

@@ -203,7 +203,7 @@ def test_git_hash_only_of_refsofts_own_work_tree(tmp_path, pyproject, under, our
 def test_golden_on_two_local_workers_is_the_serial_set_bit_for_bit(tmp_path, capsys):
     """One task per case on a LocalCluster: the same files (the manifest's SHA-256) as rendered
     in this process; an unreachable scheduler is refused in one line before anything is written."""
-    names = ["pixel_grid", "sphere"]
+    names = ["pixel_grid", "sphere", "balls_ldt"]  # balls_ldt: its textures, written once per run
     serial = write_golden(tmp_path / "s", names)
     local = write_golden(tmp_path / "l", names, scheduler="local", workers=2)
     assert local["files"] == serial["files"] and local["cases"] == serial["cases"]
