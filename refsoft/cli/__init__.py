@@ -118,7 +118,7 @@ def _port_commands(sub):
 
 def _export_command(sub, scene, methods):
     """``export``: a scene's inputs as a port reads them (PLY and JSON)."""
-    e = sub.add_parser("export", parents=[scene, methods, render_options()],
+    e = sub.add_parser("export", parents=[scene, methods, render_options(), ldt_options()],
                        help="write a scene's inputs for a port: world meshes per frame as PLY (float64, with "
                             "normals), cameras, matrices and options as JSON (docs/ports.md)")
     which = e.add_mutually_exclusive_group()

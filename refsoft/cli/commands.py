@@ -262,8 +262,9 @@ def cmd_export(args) -> int:
     options = RenderOptions(**render_kwargs(args))
     files = export_inputs(args.out, scene, frames, options, overwrite=args.overwrite)
     size = sum(os.path.getsize(os.path.join(args.out, f)) for f in files)
-    print(f"{scene.name}: inputs of {len(frames)} frame(s) at {scene.camera.width}x{scene.camera.height}, preset "
-          f"{options.preset}: case.json and {len(files) - 1} PLY file(s), {size / 1e6:.1f} MB, in {args.out}")
+    how = f"method {options.method}" if options.method in ("ldt", "envmap") else f"preset {options.preset}"
+    print(f"{scene.name}: inputs of {len(frames)} frame(s) at {scene.camera.width}x{scene.camera.height}, {how}: "
+          f"case.json and {len(files) - 1} PLY file(s), {size / 1e6:.1f} MB, in {args.out}")
     return 0
 
 

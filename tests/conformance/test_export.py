@@ -193,6 +193,12 @@ def test_cli_export(tmp_path, capsys):
         assert capsys.readouterr().err.startswith("refsoft: error:")
     assert cli.main(["export", "sphere", "--out", str(tmp_path / "s")]) == 0  # a static scene: frame 0
     assert [fr["frame"] for fr in json.loads((tmp_path / "s" / "case.json").read_text())["frames"]] == [0]
+    capsys.readouterr()
+    assert cli.main(["export", "balls", "--frame", "0", "--method", "ldt", "--ldt-resolution", "64", "--out",
+                     str(tmp_path / "l")]) == 0  # the comparison methods' options too
+    assert "method ldt" in capsys.readouterr().out
+    rec = json.loads((tmp_path / "l" / "case.json").read_text())
+    assert rec["options"] == RenderOptions(method="ldt", ldt_resolution=64).as_dict()
 
 
 def test_write_inputs_refuses_bad_frames(tmp_path):
