@@ -43,7 +43,8 @@ def test_golden_frames_hold_the_oracle_depth_margin(golden, kitchen2):
     np.testing.assert_array_equal(G["gbuffer_depth_margin_1"], margin)
     np.testing.assert_array_equal(G["gbuffer_position_1"], pos)  # the winner is the G-buffer's
     np.testing.assert_array_equal(G["gbuffer_normal_1"], nrm)
-    assert 1 <= (margin <= BOUND).sum() <= 5  # a handful of tie pixels at the rim
+    ties = margin <= BOUND  # the frame has depth ties at the rim for the tests below to move, few of them
+    assert ties.any() and ties.sum() < 0.01 * np.isfinite(margin).sum()
 
 
 def _second_at(golden, tmp_path, pixels, maps):
