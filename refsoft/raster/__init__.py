@@ -150,18 +150,8 @@ def rasterize(clip, faces, width: int, height: int, peel_depth=None, region=None
     if bad.any():
         raise RefsoftError(f"clip vertex {int(np.argmax(bad))} has w <= 0 inside the near plane: the "
                            "projection must give w > 0 in front of the near plane")
-    g = constants.GUARD_BAND_PIXELS
-    gx, gy = 2.0 * g / width, 2.0 * g / height
-    codes = _setup.vertex_outcodes(clip, gx, gy)
-    counts, clipped = _setup.count_clip_triangles(clip, faces, codes, gx, gy)
-    offsets = np.zeros(len(faces) + 1, dtype=np.int64)
-    np.cumsum(counts, out=offsets[1:])
-    clip_offsets = np.zeros(len(faces) + 1, dtype=np.int64)
-    np.cumsum(clipped, out=clip_offsets[1:])
-    win_xy, win_zw = _setup.vertex_window(clip, codes, width, height)
-    X, Y, Z, IW, slot, B, tri, valid, bbox, area, bias = _setup.emit_clip_triangles(
-        clip, faces, codes, win_xy, win_zw, offsets, clip_offsets, gx, gy, width, height,
-        np.array([r0, r1 - 1, c0, c1 - 1], dtype=np.int64), CULL_MODES[cull])
+    X, Y, Z, IW, slot, B, tri, valid, bbox, area, bias = _setup.setup_region(
+        clip, faces, width, height, r0, r1, c0, c1, CULL_MODES[cull], constants.GUARD_BAND_PIXELS)
     tile = constants.TILE_SIZE
     tiles_x, tiles_y = -(-rw // tile), -(-rh // tile)
     starts, items = _kernels.bin_triangles(valid, bbox, tile, tiles_x, tiles_y, r0, c0)

@@ -290,3 +290,21 @@ def emit_clip_triangles(clip, faces, codes, win_xy, win_zw, offsets, clip_offset
                 B[b, 2, k] = poly_b[i2, k]
             slot[t] = b
     return X, Y, Z, IW, slot, B, tri, valid, bbox, area, bias
+
+
+def setup_region(clip, faces, width, height, r0, r1, c0, c1, cull, guard_band):
+    """Every triangle clipped, snapped and set up for the region rows ``r0:r1``, columns
+    ``c0:c1`` of a ``width`` x ``height`` viewport (the calls of :func:`refsoft.raster.rasterize`,
+    shared with the two-fragment pass): :func:`emit_clip_triangles`'s arrays ``X, Y, Z, IW,
+    slot, B, tri, valid, bbox, area, bias``. ``cull``: 0 none, 1 clockwise, 2 counter-clockwise
+    kept; ``guard_band`` in pixels."""
+    gx, gy = 2.0 * guard_band / width, 2.0 * guard_band / height
+    codes = vertex_outcodes(clip, gx, gy)
+    counts, clipped = count_clip_triangles(clip, faces, codes, gx, gy)
+    offsets = np.zeros(len(faces) + 1, dtype=np.int64)
+    np.cumsum(counts, out=offsets[1:])
+    clip_offsets = np.zeros(len(faces) + 1, dtype=np.int64)
+    np.cumsum(clipped, out=clip_offsets[1:])
+    win_xy, win_zw = vertex_window(clip, codes, width, height)
+    return emit_clip_triangles(clip, faces, codes, win_xy, win_zw, offsets, clip_offsets, gx, gy, width, height,
+                               np.array([r0, r1 - 1, c0, c1 - 1], dtype=np.int64), cull)

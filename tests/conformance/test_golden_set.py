@@ -19,24 +19,7 @@ from refsoft.conformance.golden import GOLDEN_SIZE, read_manifest, write_golden
 from refsoft.errors import RefsoftError
 from refsoft.io import read_npz, write_npz
 
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-
-
-def run_cli(*args, cwd):
-    """``python -m refsoft ARGS`` in a child process: (exit status, stdout, stderr)."""
-    env = dict(os.environ, PYTHONPATH=ROOT + os.pathsep + os.environ.get("PYTHONPATH", ""))
-    r = subprocess.run([sys.executable, "-m", "refsoft", *map(str, args)], cwd=cwd, env=env, capture_output=True,
-                       text=True, timeout=300)
-    return r.returncode, r.stdout, r.stderr
-
-
-def assert_one_line_error(rc, err, *names):
-    assert rc == 2, err
-    assert "Traceback" not in err
-    lines = err.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("refsoft: error: "), err
-    for name in names:
-        assert name in lines[0], (name, lines[0])
+from child_cli import ROOT, assert_one_line_error, run_cli
 
 
 @pytest.fixture(scope="module")

@@ -5,8 +5,6 @@ process, in one line on stderr naming the file, exit status 2 and no traceback."
 import json
 import os
 import shutil
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -15,25 +13,7 @@ from refsoft.conformance.golden import write_golden
 from refsoft.errors import InputFileError
 from refsoft.io import read_json, read_npz, write_npz
 
-ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-
-
-def run_cli(*args, cwd):
-    """``python -m refsoft ARGS`` in a child process: (exit status, stdout, stderr)."""
-    env = dict(os.environ, PYTHONPATH=ROOT + os.pathsep + os.environ.get("PYTHONPATH", ""))
-    r = subprocess.run([sys.executable, "-m", "refsoft", *map(str, args)], cwd=cwd, env=env, capture_output=True,
-                       text=True, timeout=300)
-    return r.returncode, r.stdout, r.stderr
-
-
-def assert_one_line_error(rc, err, *names):
-    assert rc == 2, err
-    assert "Traceback" not in err
-    lines = err.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("refsoft: error: "), err
-    for name in names:
-        assert name in lines[0], (name, lines[0])
-    return lines[0]
+from child_cli import assert_one_line_error, run_cli
 
 
 def truncate(path):

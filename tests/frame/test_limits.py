@@ -152,11 +152,13 @@ def test_full_size_gbuffer_from_lazy_maps_equals_the_uncropped_one():
         np.testing.assert_array_equal(getattr(a, field), getattr(b, field), err_msg=field)
 
 
-def test_ldt_estimate_counts_the_textures_and_bounds_the_traced_peak():
-    """The layered depth textures are counted at the most layers the build peels (8): above the
-    traced peak of a first frame, which builds them, and growing as R^2."""
+@pytest.mark.parametrize("method, option, what", [("ldt", "ldt_resolution", "layered depth textures"),
+                                                  ("envmap", "envmap_resolution", "cube maps")])
+def test_per_pixel_method_estimate_counts_its_textures_and_bounds_the_traced_peak(method, option, what):
+    """The layered depth textures (counted at the most layers the build peels, 8) and the cube
+    maps: above the traced peak of a first frame, which builds them, and growing as R^2."""
     scene = refsoft.load_scene("sphere", width=160, height=120)
-    opts = RenderOptions(method="ldt", ldt_resolution=64)
+    opts = RenderOptions(method=method, **{option: 64})
     FrameDriver(scene, opts).render_frame(0)  # compiled
     tracemalloc.start()
     try:
@@ -166,25 +168,10 @@ def test_ldt_estimate_counts_the_textures_and_bounds_the_traced_peak():
         tracemalloc.stop()
     est = frame_bytes(scene, opts)
     assert peak < est["total"], (peak, est)
-    big = frame_bytes(scene, RenderOptions(method="ldt", ldt_resolution=128))
-    assert big["textures"] == 4 * est["textures"]
-    assert frame_bytes(scene, RenderOptions(method="ldt", ldt_resolution=64, ldt_layers=1))["textures"] < est["textures"]
-    with pytest.raises(LimitError, match="layered depth textures .* --ldt-resolution"):
-        check_frame_memory(scene, RenderOptions(method="ldt", ldt_resolution=4096), limit="1G")
-
-
-def test_envmap_estimate_counts_the_cube_maps_and_bounds_the_traced_peak():
-    scene = refsoft.load_scene("sphere", width=160, height=120)
-    opts = RenderOptions(method="envmap", envmap_resolution=64)
-    FrameDriver(scene, opts).render_frame(0)  # compiled
-    tracemalloc.start()
-    try:
-        FrameDriver(scene, opts).render_frame(0)
-        _, peak = tracemalloc.get_traced_memory()
-    finally:
-        tracemalloc.stop()
-    est = frame_bytes(scene, opts)
-    assert peak < est["total"], (peak, est)
-    assert frame_bytes(scene, RenderOptions(method="envmap", envmap_resolution=128))["textures"] == 4 * est["textures"]
-    with pytest.raises(LimitError, match="cube maps .* --envmap-resolution"):
-        check_frame_memory(scene, RenderOptions(method="envmap", envmap_resolution=4096), limit="1G")
+    assert frame_bytes(scene, RenderOptions(method=method, **{option: 128}))["textures"] == 4 * est["textures"]
+    if method == "ldt":
+        assert frame_bytes(scene, RenderOptions(method="ldt", ldt_resolution=64, ldt_layers=1))["textures"] \
+            < est["textures"]
+    flag = "--" + option.replace("_", "-")
+    with pytest.raises(LimitError, match=f"{what} .* {flag}"):
+        check_frame_memory(scene, RenderOptions(method=method, **{option: 4096}), limit="1G")
