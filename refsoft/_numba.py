@@ -8,38 +8,19 @@ from numba import types
 from numba.extending import overload
 
 #: fastmath=False: no reassociation, no FMA contraction. error_model="numpy": inf/NaN like a GPU.
-#: forceinline=False is set so that no kernel inherits a caller's (Numba passes compile flags on
-#: to the functions compiled while compiling a caller).
-KERNEL_OPTIONS = dict(cache=True, fastmath=False, error_model="numpy", nogil=True, forceinline=False)
+KERNEL_OPTIONS = dict(cache=True, fastmath=False, error_model="numpy", nogil=True)
 
 #: Every dispatcher made by :func:`kernel`, in definition order (see :func:`specialisations`).
 KERNELS = []
-#: The Python functions of the parallel kernels (:func:`_inline_into`).
-_PARALLEL = set()
-
-
-def _inline_into(expr, caller_ir, callee_ir) -> bool:
-    """Numba's inlining decision for an ``inline=True`` helper at one call site: yes, unless the
-    caller is a parallel kernel. The time Numba's parallel passes take grows much faster than the
-    ``prange`` loop's body (the sub-texel refinement compiled in 15 s with its helpers inlined
-    there, in 4 s calling them: docs/benchmarks.md, "Start-up and first run"), so a helper called
-    from a parallel kernel is compiled once on its own and LLVM inlines its machine code
-    (``forceinline``): the same arithmetic, and the same speed."""
-    return getattr(caller_ir.func_id, "func", None) not in _PARALLEL
 
 
 def kernel(fn=None, *, parallel=False, inline=False):
     """``numba.njit`` with refsoft's fixed options (optionally ``parallel=True``; ``inline=True``
-    marks a small helper to be inlined into its callers: at Numba's level into plain kernels, at
-    LLVM's into parallel ones, :func:`_inline_into`)."""
+    inlines a small helper into its callers at Numba's level)."""
 
     def wrap(f):
-        options = dict(KERNEL_OPTIONS)
-        if inline:
-            options.update(inline=_inline_into, forceinline=True)
-        if parallel:
-            _PARALLEL.add(f)
-        dispatcher = numba.njit(parallel=parallel, **options)(f)
+        extra = {"inline": "always"} if inline else {}
+        dispatcher = numba.njit(parallel=parallel, **KERNEL_OPTIONS, **extra)(f)
         KERNELS.append(dispatcher)
         return dispatcher
 

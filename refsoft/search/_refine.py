@@ -1,6 +1,5 @@
 """Sub-texel refinement kernel (see :mod:`refsoft.search.refine`)."""
 
-import numpy as np
 from numba import prange
 
 from .._numba import kernel, like
@@ -121,7 +120,7 @@ def refine(P, N, mask, vertices, eye, pixel, flags, fp, out_p, out_n, out_offset
         t1 = min(max(t1, -lim), lim)
         out_offset[i, 0] = t0
         out_offset[i, 1] = t1
-        _surface(P, N, mask, r, c, t0, t1, fp, out_p, out_n, np.int64(i))
+        _surface(P, N, mask, r, c, t0, t1, fp, out_p, out_n, i)
 
 
 @kernel(parallel=True)
@@ -129,4 +128,4 @@ def surface_at(P, N, mask, pixel, offset, fp, out_p, out_n):
     """P and unit N at texel ``pixel[i]`` plus ``offset[i]`` (rows, cols), by the first-order
     model of :func:`refine`."""
     for i in prange(pixel.shape[0]):
-        _surface(P, N, mask, pixel[i, 0], pixel[i, 1], offset[i, 0], offset[i, 1], fp, out_p, out_n, np.int64(i))
+        _surface(P, N, mask, pixel[i, 0], pixel[i, 1], offset[i, 0], offset[i, 1], fp, out_p, out_n, i)

@@ -47,7 +47,7 @@ def virtual_from_texels(P, N, pixel, vertices, origin, eye, flags, mode, unfold,
     for i in prange(vertices.shape[0]):
         r = pixel[i, 0] if pixel[i, 0] >= 0 else 0
         c = pixel[i, 1] if pixel[i, 1] >= 0 else 0
-        _store(out, np.int64(i), vertices, origin, P[r, c, 0], P[r, c, 1], P[r, c, 2], N[r, c, 0], N[r, c, 1], N[r, c, 2], eye,
+        _store(out, i, vertices, origin, P[r, c, 0], P[r, c, 1], P[r, c, 2], N[r, c, 0], N[r, c, 1], N[r, c, 2], eye,
                flags[i], mode, unfold, fp)
 
 
@@ -55,7 +55,7 @@ def virtual_from_texels(P, N, pixel, vertices, origin, eye, flags, mode, unfold,
 def virtual_from_points(p, n, vertices, origin, eye, flags, mode, unfold, fp, out):
     """Virtual vertices from per-vertex surface points ``p`` and normals ``n`` (relative)."""
     for i in prange(vertices.shape[0]):
-        _store(out, np.int64(i), vertices, origin, p[i, 0], p[i, 1], p[i, 2], n[i, 0], n[i, 1], n[i, 2], eye, flags[i], mode,
+        _store(out, i, vertices, origin, p[i, 0], p[i, 1], p[i, 2], n[i, 0], n[i, 1], n[i, 2], eye, flags[i], mode,
                unfold, fp)
 
 
