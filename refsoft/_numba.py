@@ -1,5 +1,7 @@
 """Shared Numba settings: every kernel is compiled with these flags (spec section 2)."""
 
+import os
+
 import numba
 import numpy as np
 from numba import types
@@ -8,6 +10,9 @@ from numba.extending import overload
 #: fastmath=False: no reassociation, no FMA contraction. error_model="numpy": inf/NaN like a GPU.
 KERNEL_OPTIONS = dict(cache=True, fastmath=False, error_model="numpy", nogil=True)
 
+#: Every dispatcher made by :func:`kernel`, in definition order (see :func:`specialisations`).
+KERNELS = []
+
 
 def kernel(fn=None, *, parallel=False, inline=False):
     """``numba.njit`` with refsoft's fixed options (optionally ``parallel=True``; ``inline=True``
@@ -15,9 +20,22 @@ def kernel(fn=None, *, parallel=False, inline=False):
 
     def wrap(f):
         extra = {"inline": "always"} if inline else {}
-        return numba.njit(parallel=parallel, **KERNEL_OPTIONS, **extra)(f)
+        dispatcher = numba.njit(parallel=parallel, **KERNEL_OPTIONS, **extra)(f)
+        KERNELS.append(dispatcher)
+        return dispatcher
 
     return wrap(fn) if fn is not None else wrap
+
+
+def readonly(a: np.ndarray) -> np.ndarray:
+    """``a`` as a read-only array (a view when it is writable; no copy). Numba compiles a kernel
+    once for writable and once for read-only arrays of the same type: a kernel whose callers pass
+    both (a mesh's frozen arrays, arrays just computed) is given read-only views by its wrapper,
+    one specialisation instead of two."""
+    if a.flags.writeable:
+        a = a.view()
+        a.flags.writeable = False
+    return a
 
 
 def like(value, prototype):
@@ -44,7 +62,67 @@ def kernels_cached(minimum: int = 20) -> bool:
     index files under the package's ``__pycache__`` folders, or under ``$NUMBA_CACHE_DIR``):
     False on a first run, which compiles them (tens of seconds)."""
     import glob
-    import os
 
     root = os.environ.get("NUMBA_CACHE_DIR") or os.path.dirname(os.path.abspath(__file__))
     return len(glob.glob(os.path.join(root, "**", "*.nbi"), recursive=True)) >= minimum
+
+
+def specialisations() -> dict:
+    """The specialisations of refsoft's kernels in this process: kernel name (``module.function``)
+    -> {signature (tuple of Numba types): ``"loaded"`` from Numba's cache or ``"compiled"``}, for
+    the kernels called at least once. A kernel loaded from the cache carries the helpers it calls
+    in its own machine code: they appear only where they were compiled; a helper inlined at
+    Numba's level never has a specialisation of its own."""
+    out = {}
+    for d in KERNELS:
+        hits = d.stats.cache_hits
+        for sig in d.signatures:
+            name = f"{d.py_func.__module__}.{d.py_func.__name__}"
+            out.setdefault(name, {})[sig] = "loaded" if hits.get(sig) else "compiled"
+    return out
+
+
+def _report_compiles():
+    """``REFSOFT_COMPILE_REPORT=1``: at exit, the seconds each kernel took to compile in this
+    process (its own time: the helpers it compiled on the way are counted apart; wall and CPU
+    time of the compiling thread) and how many specialisations were loaded from the cache, on
+    stderr, slowest first."""
+    import atexit
+    import sys
+    import time
+
+    from numba.core import event
+
+    spent, stack = {}, []
+
+    class _Listener(event.Listener):
+        def on_start(self, ev):
+            f = ev.data["dispatcher"].py_func
+            stack.append([f"{f.__module__}.{f.__qualname__}", time.perf_counter(), time.thread_time(), 0.0, 0.0])
+
+        def on_end(self, ev):
+            name, t0, c0, child_t, child_c = stack.pop()
+            dt, dc = time.perf_counter() - t0, time.thread_time() - c0
+            row = spent.setdefault(name, [0, 0.0, 0.0])
+            row[0] += 1
+            row[1] += dt - child_t
+            row[2] += dc - child_c
+            if stack:
+                stack[-1][3] += dt
+                stack[-1][4] += dc
+
+    def report():
+        loaded = sum(v == "loaded" for sigs in specialisations().values() for v in sigs.values())
+        rows = sorted(spent.items(), key=lambda kv: -kv[1][2])
+        print(f"refsoft: compiled {sum(r[0] for _, r in rows)} specialisations in "
+              f"{sum(r[1] for _, r in rows):.1f} s ({sum(r[2] for _, r in rows):.1f} s CPU); "
+              f"loaded {loaded} from the cache", file=sys.stderr)
+        for name, (n, wall, cpu) in rows:
+            print(f"  {name:64s} {n:3d} {wall:7.2f} s {cpu:7.2f} s CPU", file=sys.stderr)
+
+    event.register("numba:compile", _Listener())
+    atexit.register(report)
+
+
+if os.environ.get("REFSOFT_COMPILE_REPORT"):
+    _report_compiles()

@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import constants, limits
+from .._numba import readonly
 from ..scene.camera import Camera, check_image_size
 from ..errors import RefsoftError
 from ..scene.mesh import Mesh, concatenate
@@ -85,7 +86,8 @@ def _check_faces(faces, n_vertices: int) -> np.ndarray:
         raise RefsoftError(f"faces must be an integer array of shape (F, 3), got {f.dtype} {f.shape}")
     if len(f) and (f.min() < 0 or f.max() >= n_vertices):
         raise RefsoftError(f"face indices must be in [0, {n_vertices - 1}], got [{int(f.min())}, {int(f.max())}]")
-    return np.ascontiguousarray(f, dtype=np.int32)
+    # read-only like a Mesh's faces, whoever made them: the kernels are compiled for one array type
+    return readonly(np.ascontiguousarray(f, dtype=np.int32))
 
 
 #: ``rasterize``'s cull choices -> the kernels' code.

@@ -12,7 +12,7 @@ one, so two triangles sharing a clipped edge get bit-identical new vertices.
 import numpy as np
 from numba import prange
 
-from .._numba import kernel
+from .._numba import kernel, readonly
 from ..constants import SUBPIXEL_BITS, SUBPIXEL_HALF, SUBPIXEL_ONE
 
 # Number of clip planes: near, then x <= g w, x >= -g w, y <= g w, y >= -g w.
@@ -20,9 +20,16 @@ N_PLANES = 5
 MAX_POLY = 3 + N_PLANES
 
 
-@kernel(parallel=True)
 def transform_points(points, matrix):
-    """``(matrix @ [p, 1])`` for every point, summed left to right, float64. (N, 3) -> (N, 4)."""
+    """``(matrix @ [p, 1])`` for every point, summed left to right, float64. (N, 3) -> (N, 4).
+
+    ``points`` (N, 3) and ``matrix`` (4, 4): C-contiguous float64 arrays, writable or not (the
+    kernel sees read-only views: one specialisation)."""
+    return _transform_points(readonly(points), readonly(matrix))
+
+
+@kernel(parallel=True)
+def _transform_points(points, matrix):
     n = points.shape[0]
     out = np.empty((n, 4), dtype=np.float64)
     for i in prange(n):
@@ -265,7 +272,7 @@ def emit_clip_triangles(clip, faces, codes, win_xy, win_zw, offsets, clip_offset
             continue
         if clip_offsets[f + 1] == clip_offsets[f]:  # inside every plane: no clipping
             v0, v1, v2 = faces[f, 0], faces[f, 1], faces[f, 2]
-            swapped = _emit(start, f,
+            swapped = _emit(start, np.int64(f),
                             np.int64(win_xy[v0, 0]), np.int64(win_xy[v0, 1]), win_zw[v0, 0], win_zw[v0, 1],
                             np.int64(win_xy[v1, 0]), np.int64(win_xy[v1, 1]), win_zw[v1, 0], win_zw[v1, 1],
                             np.int64(win_xy[v2, 0]), np.int64(win_xy[v2, 1]), win_zw[v2, 0], win_zw[v2, 1],
@@ -281,7 +288,7 @@ def emit_clip_triangles(clip, faces, codes, win_xy, win_zw, offsets, clip_offset
             x0, y0, z0, w0 = _window(poly_c[0], width, height)
             x1, y1, z1, w1 = _window(poly_c[j + 1], width, height)
             x2, y2, z2, w2 = _window(poly_c[j + 2], width, height)
-            swapped = _emit(t, f, x0, y0, z0, w0, x1, y1, z1, w1, x2, y2, z2, w2, width, height, region, cull,
+            swapped = _emit(t, np.int64(f), x0, y0, z0, w0, x1, y1, z1, w1, x2, y2, z2, w2, width, height, region, cull,
                             X, Y, Z, IW, tri, valid, bbox, area, bias)
             i1, i2 = (j + 2, j + 1) if swapped else (j + 1, j + 2)
             for k in range(3):

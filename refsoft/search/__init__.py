@@ -212,7 +212,7 @@ def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", invers
         starts = np.asarray(previous)
         if starts.shape != (n, 2) or not np.issubdtype(starts.dtype, np.integer):
             raise RefsoftError(f"previous must be an integer array of shape ({n}, 2), got {starts.dtype} {starts.shape}")
-        starts = np.ascontiguousarray(starts, dtype=starts.dtype if starts.dtype in (np.int32, np.int64) else np.int64)
+        starts = np.ascontiguousarray(starts, dtype=np.int64)  # one kernel specialisation, fresh or coherent
     start = start_pixel(gbuffer.mask)
     if start is None or not n:
         _check_starts(starts, gbuffer.mask.shape)

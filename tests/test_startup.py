@@ -1,0 +1,68 @@
+"""Start-up (docs/benchmarks.md, "Start-up and first run"): the command line's help and scene list
+load neither Numba nor trimesh; a float32 one-frame render, its kernels cached, loads each kernel
+it runs once, in float32, and compiles nothing. Each case runs in a child process, which starts
+with nothing loaded."""
+
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+#: Packages a command that renders nothing must not import.
+HEAVY = {"numba", "llvmlite", "trimesh", "scipy", "embreex", "imageio", "tqdm", "matplotlib"}
+#: Kernels a one-frame render of the sphere loads from the cache (the accurate preset: the
+#: G-buffer, the search, its refinement and tessellation, the virtual pass, the main view).
+LOADED_KERNELS = 21
+
+MODULES = """
+import json, sys
+from refsoft._start import main
+try:
+    code = main(sys.argv[1:])
+except SystemExit as exc:
+    code = exc.code
+print(json.dumps([code, sorted({m.split(".")[0] for m in sys.modules})]))
+"""
+
+RENDER = """
+import inspect, json
+import refsoft
+from refsoft import _numba
+refsoft.render("sphere", frames=1, width=160, height=120)
+rows = []
+for d in _numba.KERNELS:
+    params = list(inspect.signature(d.py_func).parameters)
+    for sig in d.signatures:
+        fp = str(sig[params.index("fp")]) if "fp" in params else None
+        rows.append([f"{d.py_func.__module__}.{d.py_func.__name__}", fp, bool(d.stats.cache_hits.get(sig))])
+print(json.dumps(rows))
+"""
+
+
+def _run(code, *args):
+    env = dict(os.environ, PYTHONPATH=ROOT + os.pathsep + os.environ.get("PYTHONPATH", ""))
+    r = subprocess.run([sys.executable, "-c", code, *args], cwd=ROOT, env=env, capture_output=True, text=True,
+                       timeout=900)
+    assert r.returncode == 0, r.stderr[-3000:]
+    return json.loads(r.stdout.strip().splitlines()[-1])
+
+
+@pytest.mark.parametrize("args", [["--help"], ["scenes"], ["render", "--help"]])
+def test_help_and_the_scene_list_load_no_kernels(args):
+    code, modules = _run(MODULES, *args)
+    assert code == 0
+    assert not HEAVY & set(modules), sorted(HEAVY & set(modules))
+
+
+def test_a_float32_frame_loads_each_of_its_kernels_once_in_float32():
+    first = _run(RENDER)  # compiles whatever is not cached yet
+    rows = _run(RENDER)  # a start-up with the kernels cached
+    # no float64 variant anywhere, not even among the helpers a first run compiles
+    assert [r for r in first + rows if r[1] not in (None, "float32")] == []
+    names = [r[0] for r in rows]
+    assert sorted({n for n in names if names.count(n) > 1}) == []  # one specialisation per kernel
+    assert [r[0] for r in rows if not r[2]] == []  # every one loaded from the cache, none compiled
+    assert len(rows) <= LOADED_KERNELS, names
