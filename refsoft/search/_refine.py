@@ -1,13 +1,17 @@
 """Sub-texel refinement kernel (see :mod:`refsoft.search.refine`)."""
 
+import numpy as np
 from numba import prange
 
 from .._numba import kernel, like
 from ._kernels import CULLED, HIDDEN, _normalize
-from ..constants import MAX_OFFSET
+from ..constants import MAX_OFFSET, ROWS_PER_TASK
 
 
-@kernel(inline=True)
+# _residual and _stencil are compiled on their own, not inlined at Numba's level: LLVM inlines
+# their machine code into _refine_rows (the same speed), and refine compiles in about 3 s of CPU
+# where it took 13 s with every helper inlined into its parallel loop.
+@kernel
 def _residual(P, N, r, c, vx, vy, vz, ex, ey, ez, fp):
     """``N - h`` at texel (r, c): h the bisector of the directions to the eye and to V."""
     ux, uy, uz = _normalize(ex - P[r, c, 0], ey - P[r, c, 1], ez - P[r, c, 2], fp)
@@ -16,7 +20,7 @@ def _residual(P, N, r, c, vx, vy, vz, ex, ey, ez, fp):
     return N[r, c, 0] - hx, N[r, c, 1] - hy, N[r, c, 2] - hz
 
 
-@kernel(inline=True)
+@kernel
 def _stencil(mask, r, c, dr, dc, fp):
     """The two texels whose difference times ``scale`` is the derivative along (dr, dc) at
     (r, c): central when both neighbours are covered, one-sided next to an uncovered one, none
@@ -71,10 +75,22 @@ def refine(P, N, mask, vertices, eye, pixel, flags, fp, out_p, out_n, out_offset
     none along an axis with no covered neighbour), then P and N at the new point by the same
     first-order model (:func:`_surface`). Arithmetic in the precision of ``fp``. Vertices
     CULLED or HIDDEN keep their texel's P and N (offset 0; zeros when CULLED)."""
+    n = np.int64(vertices.shape[0])
+    for g in prange((n + ROWS_PER_TASK - 1) // ROWS_PER_TASK):
+        lo = np.int64(g) * ROWS_PER_TASK
+        _refine_rows(P, N, mask, vertices, eye, pixel, flags, fp, out_p, out_n, out_offset, lo,
+                     min(n, lo + ROWS_PER_TASK))
+
+
+@kernel
+def _refine_rows(P, N, mask, vertices, eye, pixel, flags, fp, out_p, out_n, out_offset, lo, hi):
+    """:func:`refine` of rows ``lo`` to ``hi - 1``: one task of its parallel loop, compiled on its
+    own (Numba's parallel passes take several times longer over a body this large than the
+    function's own compilation)."""
     zero = like(0.0, fp)
     lim = like(MAX_OFFSET, fp)
     ex, ey, ez = eye[0], eye[1], eye[2]
-    for i in prange(vertices.shape[0]):
+    for i in range(lo, hi):
         r = pixel[i, 0]
         c = pixel[i, 1]
         out_offset[i, 0] = zero
