@@ -21,6 +21,7 @@ from ..scene.camera import Camera, check_image_size
 from ..errors import RefsoftError
 from ..scene.mesh import Mesh, concatenate
 from . import _kernels, _setup, _shading
+from ._threads import SERIAL_MAX_TRIANGLES, one_thread
 
 __all__ = ["Fragments", "GBuffer", "ColorPass", "rasterize", "interpolate", "gbuffer", "color_pass", "coverage_region",
            "shade_fragments",
@@ -153,11 +154,12 @@ def rasterize(clip, faces, width: int, height: int, peel_depth=None, region=None
     if bad.any():
         raise RefsoftError(f"clip vertex {int(np.argmax(bad))} has w <= 0 inside the near plane: the "
                            "projection must give w > 0 in front of the near plane")
-    X, Y, Z, IW, slot, B, tri, valid, bbox, area, bias = _setup.setup_region(
-        clip, faces, width, height, r0, r1, c0, c1, CULL_MODES[cull], constants.GUARD_BAND_PIXELS)
     tile = constants.TILE_SIZE
     tiles_x, tiles_y = -(-rw // tile), -(-rh // tile)
-    starts, items = _kernels.bin_triangles(valid, bbox, tile, tiles_x, tiles_y, r0, c0)
+    with one_thread(len(faces) <= SERIAL_MAX_TRIANGLES):  # the per-triangle front end (_threads)
+        X, Y, Z, IW, slot, B, tri, valid, bbox, area, bias = _setup.setup_region(
+            clip, faces, width, height, r0, r1, c0, c1, CULL_MODES[cull], constants.GUARD_BAND_PIXELS)
+        starts, items = _kernels.bin_triangles(valid, bbox, tile, tiles_x, tiles_y, r0, c0)
     depth = np.full((rh, rw), constants.DEPTH_CLEAR, dtype=np.float32)
     index = np.full((rh, rw), -1, dtype=np.int32)
     triangle = np.full((rh, rw), -1, dtype=np.int32)
@@ -436,7 +438,8 @@ def color_pass(meshes, colors, camera: Camera) -> ColorPass:
     if colors.shape != (len(meshes), 3):
         raise RefsoftError(f"colors must have shape ({len(meshes)}, 3), got {colors.shape}")
     scene = concatenate(meshes)
-    clip = _setup.transform_points(scene.vertices, camera.view_proj())
+    with one_thread(len(scene.faces) <= SERIAL_MAX_TRIANGLES):
+        clip = _setup.transform_points(scene.vertices, camera.view_proj())
     frags = rasterize(clip, scene.faces, camera.width, camera.height)
     table = np.vstack([constants.BACKGROUND_COLOR, colors]).astype(np.float32)
     color, object_id, local_tri = shade_fragments(frags, scene.normals, scene.faces, scene.face_object,

@@ -2,7 +2,7 @@
 
 import numba
 
-from refsoft.raster._threads import SERIAL_MAX_PIXELS, serial_if_small
+from refsoft.raster._threads import SERIAL_MAX_PIXELS, one_thread, serial_if_small
 
 
 def test_serial_if_small_sets_one_thread_inside_and_restores_the_count():
@@ -17,4 +17,13 @@ def test_serial_if_small_sets_one_thread_inside_and_restores_the_count():
             raise ValueError("inside")
     except ValueError:
         pass
+    assert numba.get_num_threads() == before
+
+
+def test_one_thread_only_when_asked():
+    before = numba.get_num_threads()
+    with one_thread(False):
+        assert numba.get_num_threads() == before
+    with one_thread():
+        assert numba.get_num_threads() == 1
     assert numba.get_num_threads() == before
