@@ -5,8 +5,9 @@
 2. :func:`interpolate` — perspective-correct attributes of the visible triangle at each pixel.
 
 On top of these, :func:`gbuffer` renders one reflector's position and normal maps, and
-:func:`color_pass` renders the shaded main view with object ids; :func:`gbuffer_layers` gives a
-G-buffer's second-nearest fragment and depth margin (:mod:`refsoft.raster.layers`).
+:func:`color_pass` renders the shaded main view with object ids (:func:`shade_fragments`: normals
+interpolated and shaded in one pass); :func:`gbuffer_layers` gives a G-buffer's second-nearest
+fragment and depth margin (:mod:`refsoft.raster.layers`).
 """
 
 from __future__ import annotations

@@ -135,6 +135,11 @@ def virtual_pass(scene, parts, camera, stencil, box, inverse, cull=True):
     covered : ndarray (h, w) bool
     n_culled : int
         Parts culled.
+
+    Notes
+    -----
+    A box of at most ``refsoft.raster._threads.SERIAL_MAX_PIXELS`` pixels is rendered on the
+    calling thread only (the same outputs; no wait for other threads).
     """
     r0, r1, c0, c1 = box
     with serial_if_small((r1 - r0) * (c1 - c0)):  # a small box: no hand-off to other threads
