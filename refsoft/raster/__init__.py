@@ -5,8 +5,9 @@
 2. :func:`interpolate` — perspective-correct attributes of the visible triangle at each pixel.
 
 On top of these, :func:`gbuffer` renders one reflector's position and normal maps, and
-:func:`color_pass` renders the shaded main view with object ids; :func:`gbuffer_layers` gives a
-G-buffer's second-nearest fragment and depth margin (:mod:`refsoft.raster.layers`).
+:func:`color_pass` renders the shaded main view with object ids (:func:`shade_fragments`: normals
+interpolated and shaded in one pass); :func:`gbuffer_layers` gives a G-buffer's second-nearest
+fragment and depth margin (:mod:`refsoft.raster.layers`).
 """
 
 from __future__ import annotations
@@ -21,8 +22,10 @@ from ..scene.camera import Camera, check_image_size
 from ..errors import RefsoftError
 from ..scene.mesh import Mesh, concatenate
 from . import _kernels, _setup, _shading
+from ._threads import SERIAL_MAX_TRIANGLES, one_thread
 
 __all__ = ["Fragments", "GBuffer", "ColorPass", "rasterize", "interpolate", "gbuffer", "color_pass", "coverage_region",
+           "shade_fragments",
            "to_uint8", "PRECISIONS", "DepthLayers", "SecondFragment", "depth_layers", "gbuffer_layers"]
 
 #: Accepted precision names and their dtypes.
@@ -152,11 +155,12 @@ def rasterize(clip, faces, width: int, height: int, peel_depth=None, region=None
     if bad.any():
         raise RefsoftError(f"clip vertex {int(np.argmax(bad))} has w <= 0 inside the near plane: the "
                            "projection must give w > 0 in front of the near plane")
-    X, Y, Z, IW, slot, B, tri, valid, bbox, area, bias = _setup.setup_region(
-        clip, faces, width, height, r0, r1, c0, c1, CULL_MODES[cull], constants.GUARD_BAND_PIXELS)
     tile = constants.TILE_SIZE
     tiles_x, tiles_y = -(-rw // tile), -(-rh // tile)
-    starts, items = _kernels.bin_triangles(valid, bbox, tile, tiles_x, tiles_y, r0, c0)
+    with one_thread(len(faces) <= SERIAL_MAX_TRIANGLES):  # the per-triangle front end (_threads)
+        X, Y, Z, IW, slot, B, tri, valid, bbox, area, bias = _setup.setup_region(
+            clip, faces, width, height, r0, r1, c0, c1, CULL_MODES[cull], constants.GUARD_BAND_PIXELS)
+        starts, items = _kernels.bin_triangles(valid, bbox, tile, tiles_x, tiles_y, r0, c0)
     depth = np.full((rh, rw), constants.DEPTH_CLEAR, dtype=np.float32)
     index = np.full((rh, rw), -1, dtype=np.int32)
     triangle = np.full((rh, rw), -1, dtype=np.int32)
@@ -435,18 +439,62 @@ def color_pass(meshes, colors, camera: Camera) -> ColorPass:
     if colors.shape != (len(meshes), 3):
         raise RefsoftError(f"colors must have shape ({len(meshes)}, 3), got {colors.shape}")
     scene = concatenate(meshes)
-    clip = _setup.transform_points(scene.vertices, camera.view_proj())
+    with one_thread(len(scene.faces) <= SERIAL_MAX_TRIANGLES):
+        clip = _setup.transform_points(scene.vertices, camera.view_proj())
     frags = rasterize(clip, scene.faces, camera.width, camera.height)
-    nrm = interpolate(frags, scene.normals, scene.faces, np.float32, normalize=True)
-    object_id = np.empty(frags.triangle.shape, dtype=np.int32)
-    local_tri = np.empty(frags.triangle.shape, dtype=np.int32)
-    _shading.object_ids(frags.triangle, scene.face_object, scene.face_offsets, object_id, local_tri)
     table = np.vstack([constants.BACKGROUND_COLOR, colors]).astype(np.float32)
-    color = np.empty(nrm.shape, dtype=np.float32)
-    # shade() of every pixel, and the background colour off the objects, in one pass
-    _shading.shade_ids(nrm, object_id, table, constants.LIGHT_DIRECTION.astype(np.float32),
-                       np.float32(constants.AMBIENT), np.float32(constants.DIFFUSE), table[0], color)
+    color, object_id, local_tri = shade_fragments(frags, scene.normals, scene.faces, scene.face_object,
+                                                  scene.face_offsets, table)
     return ColorPass(color, object_id, frags.depth, local_tri)
+
+
+def shade_fragments(fragments: Fragments, normals, faces, face_object, face_offset, table, stencil=None):
+    """The visible fragments shaded (:func:`shade` of the renormalised interpolated normal, as
+    ``interpolate(..., np.float32, normalize=True)`` gives it) with their object ids, in one
+    pass over the rasterized region (no normal map is made).
+
+    Parameters
+    ----------
+    fragments : Fragments
+        From :func:`rasterize` with the same ``faces``.
+    normals : array_like, shape (V, 3)
+    faces : array_like, shape (F, 3), integer
+    face_object : array_like, shape (F,), int32
+        The object id (>= 1) of each triangle.
+    face_offset : array_like, shape (M,), int64
+        ``face_offset[k - 1]``: the first triangle of object ``k`` (for the local triangle index).
+    table : array_like, shape (M + 1, 3), float32
+        Row ``k``: object ``k``'s colour; row 0 the colour where nothing is drawn.
+    stencil : ndarray, shape (h, w), bool, optional
+        Shade only these pixels of the region (the others are as if nothing were drawn).
+
+    Returns
+    -------
+    color : ndarray, shape (h, w, 3), float32
+    object_id : ndarray, shape (h, w), int32
+        0 where nothing is drawn.
+    local_triangle : ndarray, shape (h, w), int32
+        ``triangle - face_offset[object_id - 1]``; -1 where nothing is drawn.
+    """
+    s = fragments.setup
+    h, w = fragments.shape
+    r0, c0 = fragments.origin
+    nrm = readonly(np.ascontiguousarray(normals, dtype=np.float32))
+    faces = _check_faces(faces, len(nrm))
+    use_stencil = stencil is not None
+    stencil = readonly(np.ascontiguousarray(stencil, dtype=bool) if use_stencil else np.zeros((1, 1), dtype=bool))
+    color = np.empty((h, w, 3), dtype=np.float32)
+    object_id = np.empty((h, w), dtype=np.int32)
+    local_tri = np.empty((h, w), dtype=np.int32)
+    _kernels.shade_visible(fragments.index, s["X"], s["Y"], s["IW"].astype(np.float32), s["slot"],
+                           s["B"].astype(np.float32), s["tri"], faces, nrm,
+                           readonly(np.ascontiguousarray(face_object, dtype=np.int32)),
+                           readonly(np.ascontiguousarray(face_offset, dtype=np.int64)),
+                           readonly(np.ascontiguousarray(table, dtype=np.float32)),
+                           readonly(constants.LIGHT_DIRECTION.astype(np.float32)), np.float32(constants.AMBIENT),
+                           np.float32(constants.DIFFUSE), stencil, use_stencil, fragments.height, r0, c0,
+                           color, object_id, local_tri)
+    return color, object_id, local_tri
 
 
 # the two nearest fragments of each pixel (the G-buffer's depth margin), built on the above

@@ -28,8 +28,10 @@ def bin_triangles(valid, bbox, tile, tiles_x, tiles_y, r_org, c_org):
     n_tiles = tiles_x * tiles_y
     n = valid.shape[0]
     chunk = (n + BIN_CHUNKS - 1) // BIN_CHUNKS
-    counts = np.zeros((BIN_CHUNKS, n_tiles), dtype=np.int64)
+    counts = np.empty((BIN_CHUNKS, n_tiles), dtype=np.int64)  # zeroed in the loop: no parallel region of its own
     for ch in prange(BIN_CHUNKS):
+        for k in range(n_tiles):
+            counts[ch, k] = 0
         for t in range(ch * chunk, min(n, (ch + 1) * chunk)):
             if not valid[t]:
                 continue
@@ -217,3 +219,48 @@ def interpolate_pair(index, X, Y, IW, slot, B, tri, faces, attr_a, attr_b, heigh
                 row_b[c, 0] = n0 / length
                 row_b[c, 1] = n1 / length
                 row_b[c, 2] = n2 / length
+
+
+@kernel(parallel=True)
+def shade_visible(index, X, Y, IW, slot, B, tri, faces, normals, face_object, face_offset, table, light, ambient,
+                  diffuse, stencil, use_stencil, height, r_org, c_org, color, object_id, local_triangle):
+    """The visible triangle's normal (:func:`interpolate_rows` in float32, renormalised), shaded
+    as :func:`refsoft.raster._shading.shade_ids` does, in one pass: per pixel of the region
+    ``color`` (h, w, 3) float32 ``table[k] * (ambient + diffuse * |n . light|)``, ``object_id``
+    (h, w) int32 ``k = face_object[triangle]`` and ``local_triangle`` (h, w) int32 ``triangle -
+    face_offset[k - 1]``; where nothing is drawn (or, with ``use_stencil``, ``stencil`` (h, w)
+    bool is False) ``table[0]``, 0 and -1. Same float32 arithmetic in the same order as the
+    two kernels it replaces, without their (h, w, 3) normal map."""
+    h, w = index.shape
+    fp = np.float32(0)
+    for r in prange(h):
+        irow = index[r]
+        crow = color[r]
+        for c in range(w):
+            t = irow[c]
+            if t < 0 or (use_stencil and not stencil[r, c]):
+                crow[c, 0] = table[0, 0]
+                crow[c, 1] = table[0, 1]
+                crow[c, 2] = table[0, 2]
+                object_id[r, c] = 0
+                local_triangle[r, c] = -1
+                continue
+            b0, b1, b2 = _barycentrics(t, r + r_org, c + c_org, height, X, Y, IW, slot, B, fp)
+            f = tri[t]
+            v0, v1, v2 = faces[f, 0], faces[f, 1], faces[f, 2]
+            n0 = b0 * normals[v0, 0] + b1 * normals[v1, 0] + b2 * normals[v2, 0]
+            n1 = b0 * normals[v0, 1] + b1 * normals[v1, 1] + b2 * normals[v2, 1]
+            n2 = b0 * normals[v0, 2] + b1 * normals[v1, 2] + b2 * normals[v2, 2]
+            length = np.sqrt((n0 * n0 + n1 * n1) + n2 * n2)
+            if length > 0:
+                n0, n1, n2 = n0 / length, n1 / length, n2 / length
+            else:  # interpolate_rows leaves such a pixel's normal zero
+                n0, n1, n2 = fp, fp, fp
+            k = face_object[f]
+            lam = abs((n0 * light[0] + n1 * light[1]) + n2 * light[2])
+            s = ambient + diffuse * lam
+            crow[c, 0] = table[k, 0] * s
+            crow[c, 1] = table[k, 1] * s
+            crow[c, 2] = table[k, 2] * s
+            object_id[r, c] = k
+            local_triangle[r, c] = f - face_offset[k - 1]

@@ -112,26 +112,17 @@ def _outcodes(c, gx, gy):
 
 
 @kernel(parallel=True)
-def vertex_outcodes(clip, gx, gy):
-    """Per vertex, bit p set when it is outside clip plane p. uint8 (V,)."""
-    n = clip.shape[0]
-    codes = np.empty(n, dtype=np.uint8)
-    for i in prange(n):
-        codes[i] = _outcodes(clip[i], gx, gy)
-    return codes
-
-
-@kernel(parallel=True)
 def count_clip_triangles(clip, faces, codes, gx, gy):
     """Per input triangle: clip triangles it produces (0 when culled by a plane) and whether it
     was clipped (1) or passes whole (0). Two int64 (F,) arrays."""
     nf = faces.shape[0]
-    counts = np.zeros(nf, dtype=np.int64)
-    clipped = np.zeros(nf, dtype=np.int64)
+    counts = np.empty(nf, dtype=np.int64)
+    clipped = np.empty(nf, dtype=np.int64)
     for f in prange(nf):
         o0 = codes[faces[f, 0]]
         o1 = codes[faces[f, 1]]
         o2 = codes[faces[f, 2]]
+        clipped[f] = 0
         if (o0 | o1 | o2) == 0:
             counts[f] = 1
         elif (o0 & o1 & o2) != 0:
@@ -160,22 +151,32 @@ def _window(c, width, height):
 
 
 @kernel(parallel=True)
-def vertex_window(clip, codes, width, height):
-    """Window coordinates of every vertex inside all clip planes (others: zeros, never used):
-    snapped ``x``, ``y`` int32 and ``z``, ``1/w`` float64, as :func:`_window` computes them (a vertex shared by many triangles is set up once, like a GPU's post-transform cache)."""
+def vertex_setup(clip, gx, gy, width, height):
+    """Per vertex, in one pass: its outcode (uint8 (V,), bit p set when it is outside clip plane
+    p) and, for a vertex inside every plane, its window coordinates (others: zeros, never
+    used): snapped ``x``, ``y`` int32 (V, 2) and ``z``, ``1/w`` float64 (V, 2), as
+    :func:`_window` computes them (a vertex shared by many triangles is set up once, like a
+    GPU's post-transform cache). Every output is written in the loop: one parallel region."""
     n = clip.shape[0]
-    out_xy = np.zeros((n, 2), dtype=np.int32)
-    out_zw = np.zeros((n, 2), dtype=np.float64)
+    codes = np.empty(n, dtype=np.uint8)
+    out_xy = np.empty((n, 2), dtype=np.int32)
+    out_zw = np.empty((n, 2), dtype=np.float64)
     for i in prange(n):
-        if codes[i] != 0:
-            continue
         c = clip[i]
+        code = _outcodes(c, gx, gy)
+        codes[i] = code
+        if code != 0:
+            out_xy[i, 0] = 0
+            out_xy[i, 1] = 0
+            out_zw[i, 0] = 0.0
+            out_zw[i, 1] = 0.0
+            continue
         x, y, z, iw = _window(c, width, height)
         out_xy[i, 0] = x
         out_xy[i, 1] = y
         out_zw[i, 0] = z
         out_zw[i, 1] = iw
-    return out_xy, out_zw
+    return codes, out_xy, out_zw
 
 
 @kernel
@@ -306,12 +307,15 @@ def setup_region(clip, faces, width, height, r0, r1, c0, c1, cull, guard_band):
     slot, B, tri, valid, bbox, area, bias``. ``cull``: 0 none, 1 clockwise, 2 counter-clockwise
     kept; ``guard_band`` in pixels."""
     gx, gy = 2.0 * guard_band / width, 2.0 * guard_band / height
-    codes = vertex_outcodes(clip, gx, gy)
-    counts, clipped = count_clip_triangles(clip, faces, codes, gx, gy)
-    offsets = np.zeros(len(faces) + 1, dtype=np.int64)
-    np.cumsum(counts, out=offsets[1:])
-    clip_offsets = np.zeros(len(faces) + 1, dtype=np.int64)
-    np.cumsum(clipped, out=clip_offsets[1:])
-    win_xy, win_zw = vertex_window(clip, codes, width, height)
+    codes, win_xy, win_zw = vertex_setup(clip, gx, gy, width, height)
+    if not codes.any():  # every vertex inside every plane: one clip triangle per face, none clipped
+        offsets = np.arange(len(faces) + 1, dtype=np.int64)
+        clip_offsets = np.zeros(len(faces) + 1, dtype=np.int64)
+    else:
+        counts, clipped = count_clip_triangles(clip, faces, codes, gx, gy)
+        offsets = np.zeros(len(faces) + 1, dtype=np.int64)
+        np.cumsum(counts, out=offsets[1:])
+        clip_offsets = np.zeros(len(faces) + 1, dtype=np.int64)
+        np.cumsum(clipped, out=clip_offsets[1:])
     return emit_clip_triangles(clip, faces, codes, win_xy, win_zw, offsets, clip_offsets, gx, gy, width, height,
                                np.array([r0, r1 - 1, c0, c1 - 1], dtype=np.int64), cull)

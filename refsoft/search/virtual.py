@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..raster import _setup, interpolate, rasterize, shade
+from ..raster import _setup, rasterize, shade_fragments
+from ..raster._threads import serial_if_small
 from ..scene.mesh import concatenate
 from . import CULLED, HIDDEN, SearchResult, skips, virtual_vertices
 from .tessellate import tessellate
@@ -134,7 +135,18 @@ def virtual_pass(scene, parts, camera, stencil, box, inverse, cull=True):
     covered : ndarray (h, w) bool
     n_culled : int
         Parts culled.
+
+    Notes
+    -----
+    A box of at most ``refsoft.raster._threads.SERIAL_MAX_PIXELS`` pixels is rendered on the
+    calling thread only (the same outputs; no wait for other threads).
     """
+    r0, r1, c0, c1 = box
+    with serial_if_small((r1 - r0) * (c1 - c0)):  # a small box: no hand-off to other threads
+        return _virtual_pass(scene, parts, camera, stencil, box, inverse, cull)
+
+
+def _virtual_pass(scene, parts, camera, stencil, box, inverse, cull):
     vp = camera.view_proj()
     bounds = skips.box_planes(box, camera.width, camera.height)
     bad = CULLED | (HIDDEN if inverse == "discard" else 0)
@@ -146,31 +158,40 @@ def virtual_pass(scene, parts, camera, stencil, box, inverse, cull=True):
         if cull and skips.outside_box(clip, bounds):
             n_culled += 1
             continue
-        keep = ~np.any(flags[f] & bad, axis=1)  # triangles whose vertices all have a V'
-        faces.append(f[keep] + offset)
+        # triangles whose vertices all have a V'
+        lost = (flags & bad) != 0
+        keep = ~(lost[f[:, 0]] | lost[f[:, 1]] | lost[f[:, 2]])
+        faces.append(f[keep] + offset if offset else f[keep])
         face_obj.append(fobj[keep])
         normals.append(nrm_v)
         clips.append(clip)
         offset += len(clip)
     r0, r1, c0, c1 = box
     h, w = r1 - r0, c1 - c0
-    colour = np.zeros((h, w, 3), dtype=np.float32)
-    rid = np.zeros((h, w), dtype=np.int32)
-    faces = np.concatenate(faces) if faces else np.zeros((0, 3), np.int64)
+    faces = _joined(faces) if faces else np.zeros((0, 3), np.int64)
     if len(faces) == 0:
-        return colour, rid, np.zeros((h, w), dtype=bool), n_culled
-    face_obj = np.concatenate(face_obj)
-    clip = np.concatenate(clips)
+        return _nothing(h, w, n_culled)
+    face_obj = _joined(face_obj)
+    clip = _joined(clips)
     if cull:  # triangles beyond one side of the box: not set up (the order of the others is kept)
-        keep = ~skips.triangles_outside_box(clip, np.ascontiguousarray(faces, dtype=np.int64), *bounds)
-        faces, face_obj = faces[keep], face_obj[keep]
+        out = skips.triangles_outside_box(clip, np.ascontiguousarray(faces, dtype=np.int64), *bounds)
+        if out.any():
+            faces, face_obj = faces[~out], face_obj[~out]
         if len(faces) == 0:
-            return colour, rid, np.zeros((h, w), dtype=bool), n_culled
+            return _nothing(h, w, n_culled)
     frags = rasterize(clip, faces, camera.width, camera.height, region=box)
-    inside = frags.mask & stencil[r0:r1, c0:c1]
-    nrm = interpolate(frags, np.concatenate(normals), faces, np.float32, normalize=True)
-    colors = np.vstack([np.zeros(3), [o.color for o in scene.objects]]).astype(np.float32)
-    obj = np.where(inside, face_obj[np.maximum(frags.triangle, 0)], 0)
-    colour[inside] = shade(nrm[inside], colors[obj[inside]])
-    rid[inside] = obj[inside]
-    return colour, rid, inside, n_culled
+    table = np.vstack([np.zeros(3), [o.color for o in scene.objects]]).astype(np.float32)
+    # shade() of the covered stencil pixels, 0 elsewhere, in one pass
+    colour, rid, _ = shade_fragments(frags, _joined(normals), faces, face_obj,
+                                     np.zeros(len(table), dtype=np.int64), table, stencil[r0:r1, c0:c1])
+    return colour, rid, rid > 0, n_culled
+
+
+def _joined(arrays):
+    """``np.concatenate`` of a list, without the copy for a single array."""
+    return arrays[0] if len(arrays) == 1 else np.concatenate(arrays)
+
+
+def _nothing(h, w, n_culled):
+    return (np.zeros((h, w, 3), dtype=np.float32), np.zeros((h, w), dtype=np.int32), np.zeros((h, w), dtype=bool),
+            n_culled)

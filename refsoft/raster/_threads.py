@@ -1,0 +1,39 @@
+"""Small passes run on the calling thread only.
+
+A parallel kernel hands part of its loop to the other threads and waits for them; on a busy
+machine a worker may not run for several milliseconds, longer than a small pass takes on one
+thread. So, like llvmpipe, whose vertex processing, triangle setup and binning run on the
+calling thread, refsoft runs a pass's per-triangle front end on one thread up to
+``SERIAL_MAX_TRIANGLES`` triangles, and a whole pass over a small box (a reflector's virtual
+pass) on one thread. Outputs do not depend on the thread count (each parallel loop writes
+disjoint outputs), so the choice changes only the time.
+"""
+
+from contextlib import contextmanager
+
+import numba
+
+#: Passes over at most this many pixels run on one thread (a 256 x 256 box).
+SERIAL_MAX_PIXELS = 1 << 16
+#: Triangle setup and binning of at most this many triangles run on one thread (about 10 ms).
+SERIAL_MAX_TRIANGLES = 1 << 18
+
+
+@contextmanager
+def one_thread(when: bool = True):
+    """Run the Numba kernels called inside on one thread when ``when`` is true (Numba's thread
+    count is per calling thread: other threads are not affected)."""
+    if not when:
+        yield
+        return
+    n = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        yield
+    finally:
+        numba.set_num_threads(n)
+
+
+def serial_if_small(pixels: int):
+    """:func:`one_thread` when ``pixels`` <= SERIAL_MAX_PIXELS."""
+    return one_thread(pixels <= SERIAL_MAX_PIXELS)
