@@ -97,14 +97,13 @@ def measure(scene: str, options=(), size=(1024, 768), frames: int = 2) -> dict:
 
 
 def _baseline(scene: str, frames: str, out: str, options) -> None:
+    import contextlib
     import gc
+    import io
 
-    import numba  # noqa: F401
+    import numba  # noqa: F401  (imported as the render imports it)
 
     from refsoft import _numba, cli
-
-    import contextlib
-    import io
 
     with contextlib.redirect_stdout(io.StringIO()):
         code = cli.main(_cli_args(scene, BASELINE_SIZE, int(frames), out, options))

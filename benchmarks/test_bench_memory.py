@@ -18,11 +18,12 @@ import pytest
 from peak_rss import measure
 
 #: The paper scenes, two cheap built-in ones, the methods with their own estimates on the kitchen,
-#: and the two closest to their estimates found: a bowl filling much of the view and the
-#: hierarchy search's pyramid.
+#: the closest to their estimates found (a bowl filling much of the view, the hierarchy search's
+#: pyramid) and full tessellation.
 CASES = [("kitchen", ()), ("ufo", ()), ("ants", ()), ("sphere", ()), ("planar", ()),
          ("kitchen", ("--method", "ldt")), ("kitchen", ("--method", "envmap")),
-         ("concave", ()), ("planar", ("--method", "hierarchy"))]
+         ("concave", ()), ("planar", ("--method", "hierarchy")),
+         ("kitchen", ("--tessellate", "0")), ("planar", ("--tessellate", "0")), ("sphere", ("--tessellate", "0"))]
 ROUNDS = 3
 MIB = 1 << 20
 

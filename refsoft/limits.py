@@ -8,8 +8,10 @@ plain bytes or a suffix: ``512M``, ``4G``, ``1.5GiB``.
 The estimate counts the arrays a frame keeps (its spec section 7 outputs) and the largest working set
 of one stage (a reflector's G-buffer, packed copy and search arrays; the rasterizer's per-pixel
 and per-triangle buffers), from byte counts per pixel, vertex and triangle listed below. It is
-an estimate (within about 2x of the measured peak on the built-in scenes: tests/frame/test_limits.py),
-meant to stop a typo like ``--width 100000`` before the machine swaps, not to budget tightly.
+an estimate (1.3x-3.4x the peak resident memory a render adds to a process that loaded its kernels
+and scene, on the built-in scenes at 1024x768: docs/benchmarks.md, "Peak memory against the
+memory guard"; within 3x of the traced peak: tests/frame/test_limits.py), meant to stop a typo
+like ``--width 100000`` before the machine swaps, not to budget tightly.
 """
 
 from __future__ import annotations
