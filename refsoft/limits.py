@@ -8,8 +8,10 @@ plain bytes or a suffix: ``512M``, ``4G``, ``1.5GiB``.
 The estimate counts the arrays a frame keeps (its spec section 7 outputs) and the largest working set
 of one stage (a reflector's G-buffer, packed copy and search arrays; the rasterizer's per-pixel
 and per-triangle buffers), from byte counts per pixel, vertex and triangle listed below. It is
-an estimate (within about 2x of the measured peak on the built-in scenes: tests/frame/test_limits.py),
-meant to stop a typo like ``--width 100000`` before the machine swaps, not to budget tightly.
+an estimate (1.3x-3.4x the peak resident memory a render adds to a process that loaded its kernels
+and scene, on the built-in scenes at 1024x768: docs/benchmarks.md, "Peak memory against the
+memory guard"; within 3x of the traced peak: tests/frame/test_limits.py), meant to stop a typo
+like ``--width 100000`` before the machine swaps, not to budget tightly.
 """
 
 from __future__ import annotations
@@ -52,10 +54,18 @@ VERTEX_WORK_BYTES = 24 + 32 + 24 + 2 * (24 + 8) + 29 + 24
 TRIANGLE_WORK_BYTES = 24 + 48 + 32 + 16 + 24 + 16
 #: Adaptive tessellation and the cut at the silhouette grow one reflector's reflected geometry:
 #: at most this many triangles per reflected triangle is assumed (measured 1.1x-3.2x on the
-#: built-in scenes with the accurate preset)...
+#: built-in scenes with the accurate preset). Full tessellation (threshold 0) splits every
+#: triangle 1-to-4 at every level: 4 ** ``max_level`` per reflected triangle is counted then (the
+#: triangles it may make; measured 29x-34x at 3 levels on kitchen, planar and sphere at 1024x768,
+#: whose culled triangles are not split)...
 REFINED_GROWTH = 4
-#: ...each holding its faces, object id, parent, edge keys and the split's temporaries.
+#: ...each holding its faces, object id, parent, edge keys and the split's temporaries...
 REFINED_TRIANGLE_BYTES = 128
+#: ...and half a new vertex (a triangulated surface has about half as many vertices as
+#: triangles), holding its position, normal and virtual vertex (float64 x 3 each), pixel (2
+#: int32), flags and sub-texel point, normal and offset (8 floats, float64 at most): twice, as
+#: each level's arrays are concatenated with the earlier ones.
+REFINED_VERTEX_BYTES = 2 * (3 * 24 + 8 + 1 + 8 * 8)
 
 #: The layered depth textures, per reflected object, texel and layer: depth, back depth, normal
 #: (float32 x 3) and triangle id; per texel: the raw and paired layer counts and the mismatch
@@ -151,7 +161,8 @@ def frame_bytes(scene, options, frames_kept: int = 1) -> dict:
     work = g_px * GBUFFER_WORK_BYTES[p] + n_verts * VERTEX_WORK_BYTES + n_tris * TRIANGLE_WORK_BYTES + view_px * 16
     if options.tessellate is not None or options.silhouette == "clip":
         n_reflected = sum(o.mesh.n_faces for o in scene.objects if not o.reflector)
-        work += n_reflected * REFINED_GROWTH * REFINED_TRIANGLE_BYTES
+        work += n_reflected * refined_growth(options) * REFINED_TRIANGLE_BYTES
+        work += int(n_reflected * (refined_growth(options) - 1) / 2 * REFINED_VERTEX_BYTES)
     if options.method == "hierarchy":
         if options.gbuffer_size is not None:
             side = max(int(options.gbuffer_size[0]), int(options.gbuffer_size[1]))
@@ -162,6 +173,15 @@ def frame_bytes(scene, options, frames_kept: int = 1) -> dict:
     kept = (kept_view + kept_gb + kept_v) * max(int(frames_kept), 1)
     return {"view": kept_view, "gbuffers": kept_gb, "vertices": kept_v, "cache": cache, "work": work,
             "total": kept + cache + work}
+
+
+def refined_growth(options) -> int:
+    """Triangles per reflected triangle counted for the tessellation and the silhouette's cut:
+    :data:`REFINED_GROWTH`, or 4 ** ``max_level`` when larger for full tessellation (threshold 0:
+    every triangle not culled is split at every level)."""
+    if options.tessellate == 0:
+        return max(REFINED_GROWTH, 4 ** int(options.max_level))
+    return REFINED_GROWTH
 
 
 def _ldt_bytes(scene, options, view_px, frames_kept):
