@@ -5,8 +5,8 @@
   N = 1k .. ``max_vertices``;
 - raster against triangles: the ball's G-buffer (raster + interpolation) with 20 x 4^s
   triangles, s = 3 (1,280) .. ``max_subdivisions`` (8: 1,310,720);
-- raster against resolution: the ball with 20,480 triangles at widths 32, 128, 512, 2048 (4:3;
-  768 to 3.1M pixels), those up to ``max_width``;
+- raster against resolution: the ball with 20,480 triangles at widths 32, 128, 512, 2048 and
+  8192 (4:3; 768 pixels to 3.1M at 2048), those up to ``max_width``;
 - a whole frame against scene triangles: the coherent second frame (accurate preset, ``width``
   x ``height``) of a small scene, a mirror ball (1,280 triangles) and a reflected icosphere of
   20 x 4^s triangles beside it (s = 2 .. ``max_subdivisions``), the camera moving a little
