@@ -13,7 +13,7 @@ import pytest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 #: Packages a command that renders nothing must not import.
-HEAVY = {"numba", "llvmlite", "trimesh", "scipy", "embreex", "imageio", "tqdm", "matplotlib"}
+HEAVY = {"numba", "llvmlite", "trimesh", "scipy", "embreex", "imageio", "PIL", "tqdm", "matplotlib"}
 #: Kernels a one-frame render of the sphere loads from the cache (the accurate preset: the
 #: G-buffer, the search, its refinement and tessellation, the virtual pass, the main view).
 LOADED_KERNELS = 21
@@ -91,3 +91,20 @@ def test_the_commands_render_loads_no_linear_algebra_and_no_imageio(tmp_path):
     assert "PIL.PngImagePlugin" in loaded  # the PNG went through Pillow itself
     assert have_blas is False  # Numba's probe was refused ...
     assert linalg_after is True and finder is False  # ... and only it: the finder is gone, SciPy imports again
+
+
+def test_pngs_written_through_pillow_are_the_bytes_imageio_wrote(tmp_path):
+    import imageio.v3 as iio
+    import numpy as np
+
+    from refsoft.io import write_png
+
+    rng = np.random.default_rng(5)
+    images = {"rgb": rng.integers(0, 256, (37, 53, 3), dtype=np.uint8),
+              "gray": rng.integers(0, 256, (20, 31), dtype=np.uint8),
+              "view": rng.integers(0, 256, (40, 60, 3), dtype=np.uint8)[::2, ::3]}  # not contiguous
+    for name, image in images.items():
+        write_png(tmp_path / f"{name}.png", image)
+        iio.imwrite(tmp_path / f"{name}_imageio.png", image, extension=".png")
+        assert (tmp_path / f"{name}.png").read_bytes() == (tmp_path / f"{name}_imageio.png").read_bytes(), name
+        assert np.array_equal(iio.imread(tmp_path / f"{name}.png"), image), name
