@@ -1,7 +1,7 @@
 """Start-up (docs/benchmarks.md, "Start-up and first run"): the command line's help and scene list
 load neither Numba nor trimesh; a float32 one-frame render, its kernels cached, loads each kernel
-it runs once, in float32, and compiles nothing; the command's render loads neither SciPy's linear
-algebra (refused to Numba's BLAS probe alone) nor imageio. Each case runs in a child process, which
+it runs once, in float32, and compiles nothing; the command's render loads neither SciPy (refused
+to Numba's probes of it alone) nor imageio. Each case runs in a child process, which
 starts with nothing loaded."""
 
 import json
@@ -44,15 +44,15 @@ print(json.dumps(rows + [arraymath._HAVE_BLAS]))
 """
 
 #: The command's one-frame render, then what it loaded; then Numba asked for a BLAS as compiling
-#: ``np.dot`` would ask (the refusal was the probe's alone).
+#: ``np.dot`` would ask (the refusal was the probes' alone).
 COMMAND_RENDER = """
 import json, sys
-from refsoft._start import SkipBlasProbe, main
+from refsoft._start import SkipScipyProbes, main
 code = main(sys.argv[1:])
 loaded = sorted(m for m in sys.modules if m.split(".")[0] in ("scipy", "imageio", "PIL"))
 from numba.np import arraymath, linalg
 linalg.ensure_blas()
-print(json.dumps([code, loaded, arraymath._HAVE_BLAS, "scipy.linalg" in sys.modules, SkipBlasProbe in sys.meta_path]))
+print(json.dumps([code, loaded, arraymath._HAVE_BLAS, "scipy.linalg" in sys.modules, SkipScipyProbes in sys.meta_path]))
 """
 
 
@@ -74,7 +74,7 @@ def test_help_and_the_scene_list_load_no_kernels(args):
 def test_a_float32_frame_loads_each_of_its_kernels_once_in_float32():
     *first, _ = _run(RENDER)  # compiles whatever is not cached yet
     *rows, have_blas = _run(RENDER)  # a start-up with the kernels cached
-    assert have_blas is True  # the library leaves Numba's BLAS probe alone (SciPy is a test dependency)
+    assert have_blas is True  # the library leaves Numba's probes alone (SciPy is a test dependency)
     # no float64 variant anywhere, not even among the helpers a first run compiles
     assert [r for r in first + rows if r[1] not in (None, "float32")] == []
     names = [r[0] for r in rows]
@@ -83,14 +83,14 @@ def test_a_float32_frame_loads_each_of_its_kernels_once_in_float32():
     assert len(rows) <= LOADED_KERNELS, names
 
 
-def test_the_commands_render_loads_no_linear_algebra_and_no_imageio(tmp_path):
+def test_the_commands_render_loads_neither_scipy_nor_imageio(tmp_path):
     code, loaded, have_blas, linalg_after, finder = _run(COMMAND_RENDER, "render", "sphere", "--frames", "1", "--width",
                                                          "160", "--height", "120", "--out", str(tmp_path / "s"))
     assert code == 0 and (tmp_path / "s" / "frame_0000.png").is_file()
-    assert [m for m in loaded if m.startswith(("scipy.linalg", "imageio"))] == []
+    assert [m for m in loaded if m.startswith(("scipy", "imageio"))] == []
     assert "PIL.PngImagePlugin" in loaded  # the PNG went through Pillow itself
-    assert have_blas is False  # Numba's probe was refused ...
-    assert linalg_after is True and finder is False  # ... and only it: the finder is gone, SciPy imports again
+    assert have_blas is False  # Numba's probes were refused ...
+    assert linalg_after is True and finder is False  # ... and only they: the finder is gone, SciPy imports again
 
 
 def test_pngs_written_through_pillow_are_the_bytes_imageio_wrote(tmp_path):
