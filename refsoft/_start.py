@@ -1,7 +1,50 @@
 """The ``refsoft`` command's entry point: imports the command line inside the interrupt guard, so
-Ctrl-C at any moment, even while Python loads NumPy and Numba, ends with one line and status 130."""
+Ctrl-C at any moment, even while Python loads NumPy and Numba, ends with one line and status 130.
+
+The command also spares its process SciPy (:class:`SkipScipyProbes`), which no refsoft kernel
+uses.
+"""
 
 import sys
+
+
+class SkipScipyProbes:
+    """An import finder that refuses SciPy to Numba's two probes of it, and only to them.
+
+    When Numba loads its implementations (with the first kernel a process compiles or loads from
+    the cache), ``numba.np.arraymath`` probes for a BLAS by importing ``scipy.linalg.cython_blas``
+    when SciPy is installed: 0.15-0.3 s of a one-frame render's process. The probe's answer only
+    chooses how ``np.correlate`` and ``np.convolve`` take inner products inside compiled code
+    (BLAS or a loop); no refsoft kernel calls either, so their machine code, and every output, is
+    the same without it. Numba's import checks, by importing SciPy, that it is at least 1.0, as
+    every SciPy for Python 3.10 (refsoft's oldest) is. Any other import of SciPy (``np.dot`` or
+    ``np.linalg`` being compiled, the caller's own code) goes through as usual. The command
+    installs this finder in its own process only (:func:`main`); ``import refsoft`` leaves Numba
+    as it is. Should Numba rename a probe, the finder refuses nothing to it.
+    """
+
+    #: (module, function) of each probe whose imports of SciPy are refused; the last runs last.
+    PROBES = (("numba", "_ensure_critical_deps"), ("numba.np.arraymath", "_check_blas"))
+
+    @classmethod
+    def find_spec(cls, name, path=None, target=None):
+        if name != "scipy" and not name.startswith("scipy."):
+            return None
+        frame = sys._getframe(1)
+        while frame is not None:
+            probe = (frame.f_globals.get("__name__"), frame.f_code.co_name)
+            if probe in cls.PROBES:
+                if probe == cls.PROBES[-1]:  # the BLAS probe runs once per process, after the other
+                    sys.meta_path.remove(cls)
+                raise ModuleNotFoundError(f"No module named {name!r} (refused to Numba's probe)", name=name)
+            frame = frame.f_back
+        return None
+
+    @classmethod
+    def install(cls) -> None:
+        """Put the finder first on ``sys.meta_path`` (once), unless Numba has already probed."""
+        if cls not in sys.meta_path and "numba.np.arraymath" not in sys.modules:
+            sys.meta_path.insert(0, cls)
 
 
 def main(argv=None) -> int:
@@ -9,6 +52,7 @@ def main(argv=None) -> int:
 
     if not interrupt.installed():
         interrupt.install()
+    SkipScipyProbes.install()
     try:
         from .cli import main as cli_main
     except KeyboardInterrupt:

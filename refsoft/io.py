@@ -71,11 +71,12 @@ def write_npz(path, **arrays):
 
 
 def write_png(path, image):
-    """Write an (H, W, 3) or (H, W) uint8 image as PNG atomically."""
-    import imageio.v3 as iio
+    """Write an (H, W, 3) or (H, W) uint8 image as PNG atomically (Pillow's encoder with its
+    defaults: the bytes imageio writes through Pillow, without loading imageio's plugin machinery)."""
+    from PIL import Image
 
     with atomic_path(path, ".png") as tmp:
-        iio.imwrite(tmp, np.asarray(image, dtype=np.uint8), extension=".png")
+        Image.fromarray(np.ascontiguousarray(image, dtype=np.uint8)).save(tmp, format="PNG")
 
 
 def write_json(path, data):

@@ -1,7 +1,8 @@
 """Start-up (docs/benchmarks.md, "Start-up and first run"): the command line's help and scene list
 load neither Numba nor trimesh; a float32 one-frame render, its kernels cached, loads each kernel
-it runs once, in float32, and compiles nothing. Each case runs in a child process, which starts
-with nothing loaded."""
+it runs once, in float32, and compiles nothing; the command's render loads neither SciPy (refused
+to Numba's probes of it alone) nor imageio. Each case runs in a child process, which
+starts with nothing loaded."""
 
 import json
 import os
@@ -12,7 +13,7 @@ import pytest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 #: Packages a command that renders nothing must not import.
-HEAVY = {"numba", "llvmlite", "trimesh", "scipy", "embreex", "imageio", "tqdm", "matplotlib"}
+HEAVY = {"numba", "llvmlite", "trimesh", "scipy", "embreex", "imageio", "PIL", "tqdm", "matplotlib"}
 #: Kernels a one-frame render of the sphere loads from the cache (the accurate preset: the
 #: G-buffer, the search, its refinement and tessellation, the virtual pass, the main view).
 LOADED_KERNELS = 21
@@ -38,7 +39,20 @@ for d in _numba.KERNELS:
     for sig in d.signatures:
         fp = str(sig[params.index("fp")]) if "fp" in params else None
         rows.append([f"{d.py_func.__module__}.{d.py_func.__name__}", fp, bool(d.stats.cache_hits.get(sig))])
-print(json.dumps(rows))
+from numba.np import arraymath
+print(json.dumps(rows + [arraymath._HAVE_BLAS]))
+"""
+
+#: The command's one-frame render, then what it loaded; then Numba asked for a BLAS as compiling
+#: ``np.dot`` would ask (the refusal was the probes' alone).
+COMMAND_RENDER = """
+import json, sys
+from refsoft._start import SkipScipyProbes, main
+code = main(sys.argv[1:])
+loaded = sorted(m for m in sys.modules if m.split(".")[0] in ("scipy", "imageio", "PIL"))
+from numba.np import arraymath, linalg
+linalg.ensure_blas()
+print(json.dumps([code, loaded, arraymath._HAVE_BLAS, "scipy.linalg" in sys.modules, SkipScipyProbes in sys.meta_path]))
 """
 
 
@@ -58,11 +72,39 @@ def test_help_and_the_scene_list_load_no_kernels(args):
 
 
 def test_a_float32_frame_loads_each_of_its_kernels_once_in_float32():
-    first = _run(RENDER)  # compiles whatever is not cached yet
-    rows = _run(RENDER)  # a start-up with the kernels cached
+    *first, _ = _run(RENDER)  # compiles whatever is not cached yet
+    *rows, have_blas = _run(RENDER)  # a start-up with the kernels cached
+    assert have_blas is True  # the library leaves Numba's probes alone (SciPy is a test dependency)
     # no float64 variant anywhere, not even among the helpers a first run compiles
     assert [r for r in first + rows if r[1] not in (None, "float32")] == []
     names = [r[0] for r in rows]
     assert sorted({n for n in names if names.count(n) > 1}) == []  # one specialisation per kernel
     assert [r[0] for r in rows if not r[2]] == []  # every one loaded from the cache, none compiled
     assert len(rows) <= LOADED_KERNELS, names
+
+
+def test_the_commands_render_loads_neither_scipy_nor_imageio(tmp_path):
+    code, loaded, have_blas, linalg_after, finder = _run(COMMAND_RENDER, "render", "sphere", "--frames", "1", "--width",
+                                                         "160", "--height", "120", "--out", str(tmp_path / "s"))
+    assert code == 0 and (tmp_path / "s" / "frame_0000.png").is_file()
+    assert [m for m in loaded if m.startswith(("scipy", "imageio"))] == []
+    assert "PIL.PngImagePlugin" in loaded  # the PNG went through Pillow itself
+    assert have_blas is False  # Numba's probes were refused ...
+    assert linalg_after is True and finder is False  # ... and only they: the finder is gone, SciPy imports again
+
+
+def test_pngs_written_through_pillow_are_the_bytes_imageio_wrote(tmp_path):
+    import imageio.v3 as iio
+    import numpy as np
+
+    from refsoft.io import write_png
+
+    rng = np.random.default_rng(5)
+    images = {"rgb": rng.integers(0, 256, (37, 53, 3), dtype=np.uint8),
+              "gray": rng.integers(0, 256, (20, 31), dtype=np.uint8),
+              "view": rng.integers(0, 256, (40, 60, 3), dtype=np.uint8)[::2, ::3]}  # not contiguous
+    for name, image in images.items():
+        write_png(tmp_path / f"{name}.png", image)
+        iio.imwrite(tmp_path / f"{name}_imageio.png", image, extension=".png")
+        assert (tmp_path / f"{name}.png").read_bytes() == (tmp_path / f"{name}_imageio.png").read_bytes(), name
+        assert np.array_equal(iio.imread(tmp_path / f"{name}.png"), image), name
