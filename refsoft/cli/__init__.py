@@ -154,7 +154,7 @@ def _bench_command(sub):
                    help="sweep only these knobs (repeatable): preset, gbuffer_scale, widen, neighbourhood, method, "
                         "precision, inverse, tessellate, refine, virtual, silhouette")
     b.add_argument("--max-vertices", type=int, default=1 << 20, metavar="N", help="scaling: largest vertex count")
-    b.add_argument("--max-subdivisions", type=int, default=7, metavar="N",
+    b.add_argument("--max-subdivisions", type=int, default=8, metavar="N",
                    help="scaling: largest icosphere subdivision")
     b.add_argument("--max-width", type=int, default=2048, metavar="W", help="scaling: largest image width")
     b.add_argument("--scheduler", default=None, metavar="WHERE",

@@ -329,7 +329,7 @@ def cmd_bench(args) -> int:
 
 
 #: The bench options' defaults in the parser (an option at its default counts as not given).
-BENCH_DEFAULTS = {"max_vertices": 1 << 20, "max_subdivisions": 7, "max_width": 2048}
+BENCH_DEFAULTS = {"max_vertices": 1 << 20, "max_subdivisions": 8, "max_width": 2048}
 
 
 def _size(text):
