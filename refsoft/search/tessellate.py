@@ -138,7 +138,10 @@ def _triangle_errors(gbuffer, eye, verts, pixel, flags, offset, f, threshold, mi
     err = np.zeros(len(e0))
     need = np.ones(len(e0), dtype=bool)
     if min_span > 0:  # an edge reflected within min_span pixels: nothing to draw between its ends
-        need = np.abs(pixel[e0].astype(np.int64) - pixel[e1]).max(axis=1) > min_span
+        # per axis, in the pixels' int32 (|differences| < 2^16): a tenth of the time of one
+        # (E, 2) int64 block on 1.3M triangles, whose temporaries outgrow the cache
+        rows, cols = pixel[:, 0], pixel[:, 1]
+        need = (np.abs(rows[e0] - rows[e1]) > min_span) | (np.abs(cols[e0] - cols[e1]) > min_span)
     err[need] = _edge_errors(gbuffer, eye, verts, pixel, offset, e0[need], e1[need])
     bad = ((flags[f] & CULLED) != 0).any(axis=1)
     if threshold > 0:
