@@ -2,10 +2,19 @@
 
 import os
 
-import numba
-import numpy as np
-from numba import types
-from numba.extending import overload
+# OpenMP threads that wait for work sleep at once instead of spinning first. A parallel region
+# ends when both threads are done; on a shared machine (another job on the second core) a
+# spinning thread keeps its core from the other thread, and each region then waits milliseconds
+# for the scheduler: a coherent kitchen frame took 1.1-1.4 s with the spin instead of 0.27-0.49 s
+# (docs/benchmarks.md, "Threads on a shared machine"). Set before Numba loads its OpenMP pool
+# (at the first parallel kernel), which reads it once; a value the user set is kept. Outputs do
+# not depend on it.
+os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+
+import numba  # noqa: E402
+import numpy as np  # noqa: E402
+from numba import types  # noqa: E402
+from numba.extending import overload  # noqa: E402
 
 #: fastmath=False: no reassociation, no FMA contraction. error_model="numpy": inf/NaN like a GPU.
 KERNEL_OPTIONS = dict(cache=True, fastmath=False, error_model="numpy", nogil=True)

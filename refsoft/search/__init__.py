@@ -16,6 +16,7 @@ from .. import validate
 from ..constants import INVERSE_MODES, NEIGHBOURHOODS, SEARCH_METHODS, VIRTUAL_RULES
 from ..errors import RefsoftError
 from ..raster import GBuffer
+from ..raster._threads import SERIAL_MAX_VERTICES, one_thread
 from . import _kernels, _lanes
 from ._kernels import BORDER, CAPPED, CULLED, HIDDEN, RESTARTED
 
@@ -228,12 +229,14 @@ def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", invers
     keys = np.empty(n, dtype=np.int64)
     rel = np.empty((n, 3), dtype=dt)
     first = np.empty((n, 2), dtype=np.int32)
-    if _kernels.prepare(verts, gbuffer.origin, starts, mask, gbuffer.view_proj, LOCALITY_CELL, fp, keys, rel, first):
-        _check_starts(starts, (h, w))
-    order, rank = _kernels.order_by_key(keys, -(-h // LOCALITY_CELL) * -(-w // LOCALITY_CELL))
-    rows = np.empty_like(rel)
-    row_starts = np.empty_like(first)
-    _kernels.gather(rel, first, order, rows, row_starts)
+    with one_thread(n <= SERIAL_MAX_VERTICES):  # microseconds of work: no hand-off to other threads
+        if _kernels.prepare(verts, gbuffer.origin, starts, mask, gbuffer.view_proj, LOCALITY_CELL, fp, keys, rel,
+                            first):
+            _check_starts(starts, (h, w))
+        order, rank = _kernels.order_by_key(keys, -(-h // LOCALITY_CELL) * -(-w // LOCALITY_CELL))
+        rows = np.empty_like(rel)
+        row_starts = np.empty_like(first)
+        _kernels.gather(rel, first, order, rows, row_starts)
     sorted_out = (np.empty((n, 2), np.int32), np.empty(n, dt), np.empty(n, dt), np.empty(n, np.int32),
                   np.empty(n, np.uint8))
     # several walks per thread, their candidates scored together (the one-walk search's results);
@@ -243,7 +246,8 @@ def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", invers
     _lanes.SEARCH[NEIGHBOURHOODS[neighbourhood]](P, N, mask, eye_rel, rows, row_starts, start[0], start[1], int(cap),
                                                  inverse == "search", fp, *sorted_out)
     pixel, score, margin, iterations, flags = (np.empty_like(a) for a in sorted_out)
-    _kernels.scatter(rank, *sorted_out, pixel, score, margin, iterations, flags)
+    with one_thread(n <= SERIAL_MAX_VERTICES):
+        _kernels.scatter(rank, *sorted_out, pixel, score, margin, iterations, flags)
     return SearchResult(pixel, score, margin, iterations, flags, neighbourhood, inverse, int(cap))
 
 

@@ -471,6 +471,32 @@ def test_search_bit_identical_across_thread_counts():
     assert len(out[0]) == 64 and out[0] == out[1] == out[2]
 
 
+def test_bookkeeping_on_one_thread_changes_nothing(sphere_case, monkeypatch):
+    """A search of at most SERIAL_MAX_VERTICES vertices orders its vertices and results on one
+    thread: the same results as the parallel kernels give, and the thread count is restored, also
+    when the search refuses its input."""
+    import numba
+
+    scene, verts, gb = sphere_case
+    before = numba.get_num_threads()
+    prev = np.tile([[H // 2, W // 2]], (len(verts), 1))
+    serial = [search.search(gb, scene.camera.eye, verts, "box", "search", p) for p in (None, prev)]
+    assert numba.get_num_threads() == before
+    monkeypatch.setattr(search, "SERIAL_MAX_VERTICES", 0)
+    for p, one in zip((None, prev), serial):
+        both = search.search(gb, scene.camera.eye, verts, "box", "search", p)
+        for a, b in zip(astuple_arrays(one), astuple_arrays(both)):
+            np.testing.assert_array_equal(a, b)
+    monkeypatch.undo()
+    with pytest.raises(refsoft.RefsoftError):
+        search.search(gb, scene.camera.eye, verts, previous=np.full((len(verts), 2), H + 5))
+    assert numba.get_num_threads() == before
+
+
+def astuple_arrays(res):
+    return res.pixel, res.score, res.margin, res.iterations, res.flags
+
+
 @pytest.mark.parametrize("kwargs, message", [
     (dict(neighbourhood="hex"), "neighbourhood must be one of"),
     (dict(inverse="mirror"), "inverse must be one of"),
