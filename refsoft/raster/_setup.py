@@ -13,6 +13,7 @@ import numpy as np
 from numba import prange
 
 from .._numba import kernel, readonly
+from ._threads import SERIAL_MAX_VERTICES, one_thread
 from ..constants import SUBPIXEL_BITS, SUBPIXEL_HALF, SUBPIXEL_ONE
 
 # Number of clip planes: near, then x <= g w, x >= -g w, y <= g w, y >= -g w.
@@ -25,7 +26,8 @@ def transform_points(points, matrix):
 
     ``points`` (N, 3) and ``matrix`` (4, 4): C-contiguous float64 arrays, writable or not (the
     kernel sees read-only views: one specialisation)."""
-    return _transform_points(readonly(points), readonly(matrix))
+    with one_thread(len(points) <= SERIAL_MAX_VERTICES):  # microseconds of work: no hand-off
+        return _transform_points(readonly(points), readonly(matrix))
 
 
 @kernel(parallel=True)

@@ -5,8 +5,9 @@ machine a worker may not run for several milliseconds, longer than a small pass 
 thread. So, like llvmpipe, whose vertex processing, triangle setup and binning run on the
 calling thread, refsoft runs a pass's per-triangle front end on one thread up to
 ``SERIAL_MAX_TRIANGLES`` triangles, a whole pass over a small box (a reflector's virtual
-pass) on one thread, and a search's bookkeeping around its walks (ordering the vertices and their
-results) on one thread up to ``SERIAL_MAX_VERTICES`` vertices. Outputs do not depend on the thread count (each parallel loop writes
+pass) on one thread, and per-vertex passes of microseconds (transforming points, a search's
+bookkeeping around its walks, virtual vertices) on one thread up to ``SERIAL_MAX_VERTICES``
+vertices. Outputs do not depend on the thread count (each parallel loop writes
 disjoint outputs), so the choice changes only the time.
 """
 
@@ -18,8 +19,8 @@ import numba
 SERIAL_MAX_PIXELS = 1 << 16
 #: Triangle setup and binning of at most this many triangles run on one thread (about 10 ms).
 SERIAL_MAX_TRIANGLES = 1 << 18
-#: A search's per-vertex preparation and its results' reordering run on one thread up to this
-#: many vertices (under a millisecond; the walks themselves stay parallel).
+#: Per-vertex passes (transforms, a search's bookkeeping, virtual vertices) run on one thread up
+#: to this many vertices (under a millisecond; the walks themselves stay parallel).
 SERIAL_MAX_VERTICES = 1 << 16
 
 

@@ -339,12 +339,13 @@ def virtual_vertices(gbuffer: GBuffer, result: SearchResult, vertices, relative:
     if unfold and eye is None:
         raise RefsoftError("virtual_vertices(rule='unfold') needs the eye")
     e = np.zeros(3, dtype=dt) if eye is None else (validate.point(eye, "eye") - o).astype(dt)
-    if surface is None:
-        _virtual.virtual_from_texels(gbuffer.position, gbuffer.normal, np.ascontiguousarray(result.pixel), verts, o, e,
-                                     flags, mode, unfold, dt(0), out)
-    else:
-        p, nrm = (np.ascontiguousarray(np.asarray(a, dtype=dt).reshape(len(verts), 3)) for a in surface)
-        _virtual.virtual_from_points(p, nrm, verts, o, e, flags, mode, unfold, dt(0), out)
+    with one_thread(len(verts) <= SERIAL_MAX_VERTICES):  # microseconds of work: no hand-off
+        if surface is None:
+            _virtual.virtual_from_texels(gbuffer.position, gbuffer.normal, np.ascontiguousarray(result.pixel), verts,
+                                         o, e, flags, mode, unfold, dt(0), out)
+        else:
+            p, nrm = (np.ascontiguousarray(np.asarray(a, dtype=dt).reshape(len(verts), 3)) for a in surface)
+            _virtual.virtual_from_points(p, nrm, verts, o, e, flags, mode, unfold, dt(0), out)
     if relative:
         return out
     return (out.astype(np.float64) + o).astype(dt)
