@@ -11,6 +11,8 @@ import os
 # not depend on it.
 os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
+from contextlib import contextmanager  # noqa: E402
+
 import numba  # noqa: E402
 import numpy as np  # noqa: E402
 from numba import types  # noqa: E402
@@ -30,10 +32,55 @@ def kernel(fn=None, *, parallel=False, inline=False):
     def wrap(f):
         extra = {"inline": "always"} if inline else {}
         dispatcher = numba.njit(parallel=parallel, **KERNEL_OPTIONS, **extra)(f)
+        dispatcher.compile = _compile_once(dispatcher, dispatcher.compile)
         KERNELS.append(dispatcher)
         return dispatcher
 
     return wrap(fn) if fn is not None else wrap
+
+
+def _compile_once(dispatcher, compile_):
+    """``dispatcher.compile`` behind a lock file that every process on the machine shares: while
+    one process compiles a kernel, another that needs it waits, then loads it from Numba's cache
+    (``compile`` looks there first) instead of compiling it again. The first run's second process
+    (:mod:`refsoft._warmup`) and the command compile different kernels at the same time so; two
+    test processes never compile one kernel twice. Numba's own compiler lock is taken first, so
+    the threads of one process wait for each other there and never hold a lock file while another
+    thread of theirs waits for it."""
+    from numba.core import sigutils
+    from numba.core.compiler_lock import global_compiler_lock
+
+    def compile(sig):
+        args, _ = sigutils.normalize_signature(sig)
+        if tuple(args) in dispatcher.overloads:  # compiled or loaded in this process already
+            return compile_(sig)
+        with global_compiler_lock, _lock_file(dispatcher):
+            return compile_(sig)
+
+    return compile
+
+
+@contextmanager
+def _lock_file(dispatcher):
+    """An exclusive ``flock`` on the kernel's lock file beside its cache files (none when the
+    cache folder cannot be written: the kernel is then compiled without waiting for anyone).
+    The operating system releases it when the process ends, whatever the way."""
+    import fcntl
+
+    f = dispatcher.py_func
+    folder = getattr(getattr(dispatcher, "_cache", None), "_cache_path", None)
+    try:
+        os.makedirs(folder, exist_ok=True)
+        fd = os.open(os.path.join(folder, f"{f.__qualname__}-{f.__code__.co_firstlineno}.lock"),
+                     os.O_RDWR | os.O_CREAT, 0o666)
+    except (OSError, TypeError):
+        yield
+        return
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        yield
+    finally:
+        os.close(fd)  # releases the lock
 
 
 def readonly(a: np.ndarray) -> np.ndarray:

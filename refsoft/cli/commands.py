@@ -125,10 +125,12 @@ def cmd_trace(args) -> int:
 
 class _FirstRunNotice:
     """Called just before the first frame (every input checked by then): prints one line when
-    this run will compile the kernels, and remembers whether it did (``compiling``)."""
+    this run will compile the kernels, and remembers whether it did (``compiling``). With
+    ``warm`` (a render's RenderOptions keyword arguments) it also starts the warm-up process
+    (:mod:`refsoft._warmup`), which :meth:`close` ends."""
 
-    def __init__(self, what: str, seconds: int):
-        self.what, self.seconds, self.compiling = what, seconds, False
+    def __init__(self, what: str, seconds: int, warm=None):
+        self.what, self.seconds, self.compiling, self.warm, self.process = what, seconds, False, warm, None
 
     def __call__(self):
         import sys
@@ -140,6 +142,16 @@ class _FirstRunNotice:
         self.compiling = True
         print(f"refsoft: first run: compiling the {self.what} kernels (about {self.seconds} s on 2 cores; cached "
               "for later runs)", file=sys.stderr, flush=True)
+        if self.warm is not None:
+            from .. import _warmup
+
+            self.process = _warmup.start(self.warm)
+
+    def close(self):
+        if self.process is not None:
+            from .. import _warmup
+
+            _warmup.stop(self.process)
 
 
 def _timing(frames, compiling: bool) -> str:
@@ -164,11 +176,15 @@ def cmd_render(args) -> int:
         frames = list(range(args.frame + 1)) if not args.no_coherence else [args.frame]
         write = {args.frame}
     out = args.out or os.path.join("out", scene.name)
-    notice = _FirstRunNotice("render", 35)
+    options = render_kwargs(args)
+    notice = _FirstRunNotice("render", 35, warm=options)
     t0 = time.perf_counter()
     # every frame is written as soon as it is rendered, then dropped (one frame in memory)
-    done, stats = render(scene, frames=frames, out=out, progress=True, memory_limit=args.memory_limit,
-                         keep=False, write=write, overwrite=args.overwrite, on_start=notice, **render_kwargs(args))
+    try:
+        done, stats = render(scene, frames=frames, out=out, progress=True, memory_limit=args.memory_limit,
+                             keep=False, write=write, overwrite=args.overwrite, on_start=notice, **options)
+    finally:
+        notice.close()
     keep = done if write is None else [f for f in done if f.index in write]
     summ = stats["summary"]
     if "ldt_linear_samples" in summ:

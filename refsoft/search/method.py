@@ -96,6 +96,9 @@ class VertexSearch:
     name = "vertex"
     stages = ("gbuffer", "search", "virtual")
     pixel_arrays = {}
+    #: How a reflector's G-buffer is made: :func:`refsoft.raster.gbuffer`, or the first run's
+    #: warm-up process's ray-cast ball (:mod:`refsoft._warmup`).
+    make_gbuffer = staticmethod(gbuffer)
 
     def __init__(self, scene, options):
         self.scene = scene
@@ -187,7 +190,7 @@ class VertexSearch:
             gb = empty_gbuffer(gcam, opt.precision)
             report["outside_view"] = True
         else:
-            gb = gbuffer(proxy, gcam, opt.precision, origin=gcam.eye)
+            gb = self.make_gbuffer(proxy, gcam, opt.precision, origin=gcam.eye)
         t1 = time.perf_counter()
         prev = self.previous.get(k) if opt.coherence else None
         if last is not None and last.key[2] != widen:

@@ -1,0 +1,108 @@
+"""A first run's second process: it compiles the reflection stages' kernels while the command
+compiles the main view's.
+
+A render compiles its kernels as it first calls them, one after another, in pipeline order: the
+main view's and the G-buffer's raster, then the search, the sub-texel refinement, the
+tessellation and the cut, the virtual pass. On a machine with a second core, the command
+(``refsoft render``, on a first run only) starts ``python -m refsoft._warmup OPTIONS`` beside
+itself. This process runs one reflector's stages of the same options, search first, on a small
+ball whose G-buffer it ray-casts with NumPy (no raster kernel needed to start), so that both
+processes compile different kernels at the same time. Each kernel is compiled once: a process
+that needs a kernel the other one is compiling waits for it and loads it from Numba's cache
+(:func:`refsoft._numba._compile_once`). The command ends this process when it is done.
+
+Nothing here changes an output: it only fills Numba's cache, with the types the command's
+own calls have (``tests/test_warmup.py`` checks that a render after it compiles nothing the
+warm-up compiled).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+
+#: The ball's G-buffer size: large enough for walks of several steps, small enough to take no time.
+SIZE = (64, 48)
+
+
+def start(options: dict):
+    """Start the warm-up process for a render with these :class:`refsoft.RenderOptions` keyword
+    arguments (preset included); None for the methods without a vertex search, when there is
+    only one core, or when ``REFSOFT_WARMUP=0``."""
+    if (options.get("method") in ("ldt", "envmap") or (os.cpu_count() or 1) < 2
+            or os.environ.get("REFSOFT_WARMUP", "1") == "0"):
+        return None
+    return subprocess.Popen([sys.executable, "-m", "refsoft._warmup", json.dumps(options)],
+                            stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+
+def stop(process) -> None:
+    """End the warm-up process (its cache files are written whole or not at all)."""
+    if process is not None and process.poll() is None:
+        process.kill()
+        process.wait()
+
+
+def ball_gbuffer(mesh, camera, precision, origin):
+    """The G-buffer of the sphere bounding ``mesh`` (centre the vertices' mean, radius the
+    largest distance to it) seen by ``camera``, by ray casting in NumPy, laid out as
+    :func:`refsoft.raster.gbuffer` lays its own out (the same array types)."""
+    from .raster import GBuffer
+
+    dt = np.dtype(precision)
+    w, h = camera.width, camera.height
+    centre = mesh.vertices.mean(axis=0)
+    radius = np.linalg.norm(mesh.vertices - centre, axis=1).max()
+    col, row = np.meshgrid(np.arange(w) + 0.5, np.arange(h) + 0.5)
+    ndc = np.stack([2 * col / w - 1, 1 - 2 * row / h, np.ones_like(col), np.ones_like(col)], axis=-1)
+    far = ndc @ np.linalg.inv(camera.view_proj()).T
+    d = far[..., :3] / far[..., 3:] - camera.eye
+    d /= np.linalg.norm(d, axis=-1, keepdims=True)
+    oc = camera.eye - centre
+    b = d @ oc
+    disc = b * b - (oc @ oc - radius * radius)
+    mask = disc > 0
+    t = -b - np.sqrt(np.where(mask, disc, 0))
+    hit = camera.eye + t[..., None] * d
+    pos = np.where(mask[..., None], hit - origin, 0).astype(dt)
+    nrm = np.where(mask[..., None], (hit - centre) / radius, 0).astype(dt)
+    return GBuffer(pos, nrm, mask, (0, 0, np.zeros((0, 0), np.float32)), (0, 0, np.zeros((0, 0), np.int32)),
+                   camera.view_proj(), np.asarray(origin, dtype=np.float64))
+
+
+def warm(options: dict) -> None:
+    """One reflector's stages of a render with ``options`` (RenderOptions keyword arguments) on
+    the built-in ``sphere`` scene at :data:`SIZE`: two frames (a fresh and a coherent search),
+    then the composite's conversion to 8 bits."""
+    from .frame.driver import composite
+    from .options import RenderOptions
+    from .raster import to_uint8
+    from .scene import load_scene
+    from .seam import FrameView
+    from .search import method as vertex_search
+
+    opts = RenderOptions(**options)
+    scene = load_scene("sphere", width=SIZE[0], height=SIZE[1])
+    method = vertex_search.VertexSearch(scene, opts)
+    method.make_gbuffer = ball_gbuffer
+    k = scene.reflector_ids[0]
+    meshes = [scene.world_mesh(j) for j in range(1, len(scene.objects) + 1)]
+    transforms = {j: scene.transform_at(j, 0) for j in range(1, len(scene.objects) + 1)}
+    camera = scene.camera_at(0)
+    view = FrameView(scene, 0, camera, meshes, None, transforms)
+    stencil = ball_gbuffer(scene.world_mesh(k, 0, proxy=True), camera, "float32", camera.eye).mask
+    for _ in range(2):
+        res = method.reflect(view, k, stencil)
+    if res.box is not None:
+        colour = np.zeros(stencil.shape + (3,), np.float32)
+        reflected = np.full(stencil.shape, -1, np.int32)
+        composite(colour, reflected, colour.copy(), res.colour, res.reflected_id, res.covered, res.box, 1.0)
+        to_uint8(colour)
+
+
+if __name__ == "__main__":
+    warm(json.loads(sys.argv[1]))

@@ -1,0 +1,113 @@
+"""The first run's warm-up process (refsoft._warmup) and the kernels' compile lock
+(refsoft._numba._compile_once): the warm-up compiles the kernels a render calls, with the same
+types; a kernel's lock file is exclusive across processes."""
+
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import refsoft
+from refsoft import _numba, _warmup
+from refsoft.cli import commands
+
+OPTIONS = [{"preset": "accurate"}, {"preset": "paper"}, {"preset": "accurate", "precision": "float64"}]
+
+
+CHILD = r"""
+import json, sys
+import refsoft
+from refsoft import _numba, _warmup
+options = json.loads(sys.argv[1])
+_warmup.warm(options)
+warmed = {d: set(d.signatures) for d in _numba.KERNELS}
+refsoft.render("sphere", frames=2, width=80, height=60, **options)
+print(json.dumps({"warmed": sorted(d.py_func.__name__ for d in _numba.KERNELS if warmed[d]),
+                  "new": sorted(d.py_func.__name__ for d in _numba.KERNELS if set(d.signatures) - warmed[d])}))
+"""
+
+
+@pytest.mark.parametrize("options", OPTIONS, ids=lambda o: "-".join(map(str, o.values())))
+def test_a_render_after_the_warm_up_calls_its_kernels_with_the_same_types(options):
+    """In a process of its own (every kernel unloaded at the start): the warm-up, then a render
+    with the same options, which must call no kernel with types the warm-up did not."""
+    out = subprocess.run([sys.executable, "-c", CHILD, json.dumps(options)], capture_output=True, text=True,
+                         check=True)
+    got = json.loads(out.stdout.strip().splitlines()[-1])
+    assert "search_lanes" in got["warmed"] and "shade_visible" in got["warmed"]
+    # only the G-buffer's interpolation, which the warm-up's ray-cast ball does not need, may be new
+    assert set(got["new"]) <= {"interpolate_pair"}, got["new"]
+
+
+def test_ball_gbuffer_is_a_ball_seen_by_the_camera():
+    scene = refsoft.load_scene("sphere", width=64, height=48)
+    cam = scene.camera_at(0)
+    proxy = scene.world_mesh(scene.reflector_ids[0], 0, proxy=True)
+    gb = _warmup.ball_gbuffer(proxy, cam, "float32", cam.eye)
+    assert gb.position.dtype == np.float32 and gb.position.shape == (48, 64, 3) and gb.mask.any()
+    centre = proxy.vertices.mean(axis=0)
+    radius = np.linalg.norm(proxy.vertices - centre, axis=1).max()
+    world = gb.position[gb.mask].astype(np.float64) + cam.eye
+    np.testing.assert_allclose(np.linalg.norm(world - centre, axis=1), radius, rtol=1e-5)
+    np.testing.assert_allclose(np.linalg.norm(gb.normal[gb.mask], axis=1), 1, rtol=1e-5)
+    real = refsoft.raster.gbuffer(proxy, cam, "float32", origin=cam.eye)
+    assert (real.mask != gb.mask).mean() < 0.05  # the icosphere proxy and its bounding ball
+
+
+def test_start_only_when_it_can_help(monkeypatch):
+    monkeypatch.setenv("REFSOFT_WARMUP", "0")
+    assert _warmup.start({"preset": "accurate"}) is None
+    monkeypatch.delenv("REFSOFT_WARMUP")
+    assert _warmup.start({"method": "ldt"}) is None and _warmup.start({"method": "envmap"}) is None
+
+
+def test_first_run_notice_starts_and_ends_the_warm_up(monkeypatch):
+    started = []
+
+    class Process:
+        killed = False
+
+        def poll(self):
+            return None if not self.killed else -9
+
+        def kill(self):
+            self.killed = True
+
+        def wait(self):
+            return -9
+
+    monkeypatch.setattr(_numba, "kernels_cached", lambda: False)
+    monkeypatch.setattr(_warmup, "start", lambda options: started.append(options) or Process())
+    notice = commands._FirstRunNotice("render", 35, warm={"preset": "paper"})
+    notice()
+    assert notice.compiling and started == [{"preset": "paper"}]
+    notice.close()
+    assert notice.process.killed
+    monkeypatch.setattr(_numba, "kernels_cached", lambda: True)
+    cached = commands._FirstRunNotice("render", 35, warm={"preset": "paper"})
+    cached()
+    cached.close()
+    assert not cached.compiling and cached.process is None and len(started) == 1
+
+
+def test_every_kernel_compiles_behind_its_lock():
+    assert all(getattr(d.compile, "__name__", "") == "compile" and d.compile.__qualname__.startswith("_compile_once")
+               for d in _numba.KERNELS)
+
+
+def test_lock_file_is_exclusive_across_processes():
+    d = _numba.KERNELS[0]
+    probe = ("import fcntl, os, sys\n"
+             "fd = os.open(sys.argv[1], os.O_RDWR)\n"
+             "try:\n    fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)\n    print('free')\n"
+             "except BlockingIOError:\n    print('held')\n")
+    f = d.py_func
+    path = os.path.join(d._cache._cache_path, f"{f.__qualname__}-{f.__code__.co_firstlineno}.lock")
+    with _numba._lock_file(d):
+        assert os.path.exists(path)
+        held = subprocess.run([sys.executable, "-c", probe, path], capture_output=True, text=True, check=True)
+    free = subprocess.run([sys.executable, "-c", probe, path], capture_output=True, text=True, check=True)
+    assert held.stdout.strip() == "held" and free.stdout.strip() == "free"
