@@ -61,6 +61,27 @@ def bin_triangles(valid, bbox, tile, tiles_x, tiles_y, r_org, c_org):
     return starts, items
 
 
+#: Snapped coordinates below this magnitude (1/256 px, 65536 px) keep every edge value at a pixel
+#: centre of the viewport (at most MAX_IMAGE_EDGE px) below 2^51, so float64 holds it exactly.
+EXACT_COORD = 1 << 24
+
+
+@kernel(inline=True)
+def _span(g, f, q, ja, jb):
+    """``[ja, jb]`` narrowed to the ``j`` where ``g + j f >= q`` (float64 holding integers below
+    2^53: ``g``, ``f``, ``q`` and the products are exact). ``ceil``/``floor`` of the rounded
+    quotient equal those of the exact one where it matters (in [-1, ja, jb + 1]): a quotient of
+    integers with divisor ``|f| < 2^34`` is either an integer, rounded exactly, or 2^-34 away from
+    one, farther than its rounding error."""
+    if f > 0.0:
+        return max(ja, np.ceil((q - g) / f)), jb
+    if f < 0.0:
+        return ja, min(jb, np.floor((q - g) / f))
+    if g >= q:
+        return ja, jb
+    return ja, ja - 1.0
+
+
 @kernel(parallel=True)
 def raster_tiles(starts, items, X, Y, Z, tri, bbox, area, bias, width, height, tile, tiles_x, r_org, c_org,
                  depth, index, triangle, peel, use_peel):
@@ -71,6 +92,11 @@ def raster_tiles(starts, items, X, Y, Z, tri, bbox, area, bias, width, height, t
     edge exclusive). A fragment's window depth is ``(e0 z0 + e1 z1 + e2 z2) * (1 / area)`` in
     float64, clamped to [0, 1] and rounded to float32; it is kept when it is LESS than the stored
     depth (and, when peeling, strictly greater than ``peel``).
+
+    In a whole tile, a triangle whose vertices are within ``EXACT_COORD`` is drawn a tile row at a
+    time without branches (SIMD): its edge values at the row's pixel centres, integers below
+    2^53, are exact in float64 (``e_i = E_i + j * step_i``), so the coverage test ``E_i >=
+    -bias_i`` and the depth are those of the integer path, bit for bit.
     """
     n_tiles = starts.shape[0] - 1
     rh, rw = depth.shape  # the region rasterized, whose first pixel is (r_org, c_org)
@@ -97,6 +123,38 @@ def raster_tiles(starts, items, X, Y, Z, tri, bbox, area, bias, width, height, t
             s0 = -(y2 - y1) * SUBPIXEL_ONE
             s1 = -(y0 - y2) * SUBPIXEL_ONE
             s2 = -(y1 - y0) * SUBPIXEL_ONE
+            if max(max(abs(x0), abs(x1)), max(abs(x2), max(abs(y0), max(abs(y1), abs(y2))))) < EXACT_COORD:
+                # every edge value below is an integer < 2^53: exact in float64
+                pxl = np.int64(c0) * SUBPIXEL_ONE + SUBPIXEL_HALF
+                f0, f1, f2 = np.float64(s0), np.float64(s1), np.float64(s2)
+                q0, q1, q2 = np.float64(-b0), np.float64(-b1), np.float64(-b2)  # covered: E_i >= -bias_i
+                last = np.float64(c1 - c0)
+                for r in range(r0, r1 + 1):
+                    py = np.int64(height - 1 - r) * SUBPIXEL_ONE + SUBPIXEL_HALF
+                    g0 = np.float64((x2 - x1) * (py - y1) - (y2 - y1) * (pxl - x1))
+                    g1 = np.float64((x0 - x2) * (py - y2) - (y0 - y2) * (pxl - x2))
+                    g2 = np.float64((x1 - x0) * (py - y0) - (y1 - y0) * (pxl - x0))
+                    ja, jb = _span(g0, f0, q0, 0.0, last)
+                    ja, jb = _span(g1, f1, q1, ja, jb)
+                    ja, jb = _span(g2, f2, q2, ja, jb)
+                    if ja > jb:
+                        continue
+                    e0 = g0 + ja * f0
+                    e1 = g1 + ja * f1
+                    e2 = g2 + ja * f2
+                    rr = r - r_org
+                    drow = depth[rr]
+                    for c in range(c0 - c_org + np.int64(ja), c0 - c_org + np.int64(jb) + 1):
+                        z = ((e0 * z0 + e1 * z1) + e2 * z2) * inv_area
+                        zf = np.float32(min(max(z, 0.0), 1.0))
+                        if zf < drow[c] and (not use_peel or zf > peel[rr, c]):
+                            drow[c] = zf
+                            index[rr, c] = t
+                            triangle[rr, c] = face
+                        e0 += f0
+                        e1 += f1
+                        e2 += f2
+                continue
             px0 = np.int64(c0) * SUBPIXEL_ONE + SUBPIXEL_HALF
             for r in range(r0, r1 + 1):
                 py = np.int64(height - 1 - r) * SUBPIXEL_ONE + SUBPIXEL_HALF
