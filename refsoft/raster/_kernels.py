@@ -294,7 +294,9 @@ def shade_visible(index, X, Y, IW, slot, B, tri, faces, normals, face_object, fa
     for r in prange(h):
         irow = index[r]
         crow = color[r]
-        for c in range(w):
+        py = np.int64(height - 1 - (r + r_org)) * SUBPIXEL_ONE + SUBPIXEL_HALF
+        c = 0
+        while c < w:
             t = irow[c]
             if t < 0 or (use_stencil and not stencil[r, c]):
                 crow[c, 0] = table[0, 0]
@@ -302,23 +304,70 @@ def shade_visible(index, X, Y, IW, slot, B, tri, faces, normals, face_object, fa
                 crow[c, 2] = table[0, 2]
                 object_id[r, c] = 0
                 local_triangle[r, c] = -1
+                c += 1
                 continue
-            b0, b1, b2 = _barycentrics(t, r + r_org, c + c_org, height, X, Y, IW, slot, B, fp)
+            # a run of pixels of one triangle: its constants are loaded once, its edge values
+            # stepped (exact int64), the per-pixel arithmetic is _barycentrics's
+            end = c + 1
+            while end < w and irow[end] == t and (not use_stencil or stencil[r, end]):
+                end += 1
+            x0, x1, x2 = np.int64(X[t, 0]), np.int64(X[t, 1]), np.int64(X[t, 2])
+            y0, y1, y2 = np.int64(Y[t, 0]), np.int64(Y[t, 1]), np.int64(Y[t, 2])
+            px = np.int64(c + c_org) * SUBPIXEL_ONE + SUBPIXEL_HALF
+            e0 = (x2 - x1) * (py - y1) - (y2 - y1) * (px - x1)
+            e1 = (x0 - x2) * (py - y2) - (y0 - y2) * (px - x2)
+            e2 = (x1 - x0) * (py - y0) - (y1 - y0) * (px - x0)
+            s0 = -(y2 - y1) * SUBPIXEL_ONE
+            s1 = -(y0 - y2) * SUBPIXEL_ONE
+            s2 = -(y1 - y0) * SUBPIXEL_ONE
+            w0, w1, w2 = IW[t, 0], IW[t, 1], IW[t, 2]
+            m = slot[t]
+            # b = l M: the identity, vertices 1 and 2 swapped, or the clip vertices' barycentrics
+            m00, m01, m02, m10, m11, m12, m20, m21, m22 = fp, fp, fp, fp, fp, fp, fp, fp, fp
+            if m >= 0:
+                m00, m01, m02 = B[m, 0, 0], B[m, 0, 1], B[m, 0, 2]
+                m10, m11, m12 = B[m, 1, 0], B[m, 1, 1], B[m, 1, 2]
+                m20, m21, m22 = B[m, 2, 0], B[m, 2, 1], B[m, 2, 2]
             f = tri[t]
             v0, v1, v2 = faces[f, 0], faces[f, 1], faces[f, 2]
-            n0 = b0 * normals[v0, 0] + b1 * normals[v1, 0] + b2 * normals[v2, 0]
-            n1 = b0 * normals[v0, 1] + b1 * normals[v1, 1] + b2 * normals[v2, 1]
-            n2 = b0 * normals[v0, 2] + b1 * normals[v1, 2] + b2 * normals[v2, 2]
-            length = np.sqrt((n0 * n0 + n1 * n1) + n2 * n2)
-            if length > 0:
-                n0, n1, n2 = n0 / length, n1 / length, n2 / length
-            else:  # interpolate_rows leaves such a pixel's normal zero
-                n0, n1, n2 = fp, fp, fp
+            na0, na1, na2 = normals[v0, 0], normals[v0, 1], normals[v0, 2]
+            nb0, nb1, nb2 = normals[v1, 0], normals[v1, 1], normals[v1, 2]
+            nc0, nc1, nc2 = normals[v2, 0], normals[v2, 1], normals[v2, 2]
             k = face_object[f]
-            lam = abs((n0 * light[0] + n1 * light[1]) + n2 * light[2])
-            s = ambient + diffuse * lam
-            crow[c, 0] = table[k, 0] * s
-            crow[c, 1] = table[k, 1] * s
-            crow[c, 2] = table[k, 2] * s
-            object_id[r, c] = k
-            local_triangle[r, c] = f - face_offset[k - 1]
+            k0, k1, k2 = table[k, 0], table[k, 1], table[k, 2]
+            local = f - face_offset[k - 1]
+            for cc in range(c, end):
+                a0 = np.float32(e0) * w0
+                a1 = np.float32(e1) * w1
+                a2 = np.float32(e2) * w2
+                sa = a0 + a1 + a2
+                l0 = a0 / sa
+                l1 = a1 / sa
+                l2 = a2 / sa
+                if m == -1:
+                    b0, b1, b2 = l0, l1, l2
+                elif m == -2:
+                    b0, b1, b2 = l0, l2, l1
+                else:
+                    b0 = l0 * m00 + l1 * m10 + l2 * m20
+                    b1 = l0 * m01 + l1 * m11 + l2 * m21
+                    b2 = l0 * m02 + l1 * m12 + l2 * m22
+                n0 = b0 * na0 + b1 * nb0 + b2 * nc0
+                n1 = b0 * na1 + b1 * nb1 + b2 * nc1
+                n2 = b0 * na2 + b1 * nb2 + b2 * nc2
+                length = np.sqrt((n0 * n0 + n1 * n1) + n2 * n2)
+                if length > 0:
+                    n0, n1, n2 = n0 / length, n1 / length, n2 / length
+                else:  # interpolate_rows leaves such a pixel's normal zero
+                    n0, n1, n2 = fp, fp, fp
+                lam = abs((n0 * light[0] + n1 * light[1]) + n2 * light[2])
+                sh = ambient + diffuse * lam
+                crow[cc, 0] = k0 * sh
+                crow[cc, 1] = k1 * sh
+                crow[cc, 2] = k2 * sh
+                object_id[r, cc] = k
+                local_triangle[r, cc] = local
+                e0 += s0
+                e1 += s1
+                e2 += s2
+            c = end

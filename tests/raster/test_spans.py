@@ -1,12 +1,15 @@
 """The per-row spans of the coverage kernel (refsoft.raster._kernels._span and the float64 path of
-raster_tiles) against per-pixel references, on small and degenerate triangles."""
+raster_tiles) and the run-by-run shading pass against per-pixel references, on small and
+degenerate triangles."""
 
 import numpy as np
 import pytest
-from naive import naive_rasterize
+from naive import naive_object_ids, naive_rasterize, naive_shade
 
-from refsoft import raster
-from refsoft.raster import _kernels
+from refsoft import constants, raster
+from refsoft.raster import _kernels, _setup
+
+from test_raster_vs_naive import CAMERAS, random_soup
 
 
 def _span_reference(g, f, q, ja, jb):
@@ -105,3 +108,27 @@ def test_peeled_awkward_triangles_match_the_reference(rng):
     assert (frags.triangle >= 0).sum() > 50
     np.testing.assert_array_equal(frags.triangle, face)
     np.testing.assert_array_equal(frags.depth, depth)
+
+
+def test_shading_of_clipped_triangles_equals_interpolate_then_the_reference(rng):
+    """Runs of clipped triangles (barycentrics through their matrix) and unclipped ones of both
+    windings, as raster.interpolate and the per-pixel shading reference give them."""
+    cam = CAMERAS["perspective"]
+    verts, faces = random_soup(rng, 60)
+    normals = rng.normal(size=verts.shape)
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    clip = _setup.transform_points(verts, cam.view_proj())
+    frags = raster.rasterize(clip, faces, cam.width, cam.height)
+    assert (frags.setup["slot"][frags.index[frags.index >= 0]] >= 0).sum() > 100  # clipped pixels
+    sizes = [20, 25, 15]
+    face_offset = np.cumsum([0] + sizes).astype(np.int64)
+    face_object = np.repeat(np.arange(1, 4, dtype=np.int32), sizes)
+    table = rng.uniform(0.0, 1.0, (4, 3)).astype(np.float32)
+    nrm = raster.interpolate(frags, normals, faces, np.float32, normalize=True)
+    ids, local = naive_object_ids(frags.triangle, face_offset)
+    expected = naive_shade(nrm, ids, table, constants.LIGHT_DIRECTION.astype(np.float32),
+                           np.float32(constants.AMBIENT), np.float32(constants.DIFFUSE))
+    color, got_ids, got_local = raster.shade_fragments(frags, normals, faces, face_object, face_offset, table)
+    np.testing.assert_array_equal(color, expected)
+    np.testing.assert_array_equal(got_ids, ids)
+    np.testing.assert_array_equal(got_local, local)
