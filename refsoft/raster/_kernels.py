@@ -10,7 +10,7 @@ import numpy as np
 from numba import prange
 
 from .._numba import kernel, like
-from ..constants import SUBPIXEL_HALF, SUBPIXEL_ONE
+from ..constants import DEPTH_CLEAR, SUBPIXEL_HALF, SUBPIXEL_ONE
 
 
 #: Triangles are binned in this many contiguous chunks, in parallel; the result does not
@@ -85,18 +85,20 @@ def _span(g, f, q, ja, jb):
 @kernel(parallel=True)
 def raster_tiles(starts, items, X, Y, Z, tri, bbox, area, bias, width, height, tile, tiles_x, r_org, c_org,
                  depth, index, triangle, peel, use_peel):
-    """Depth-tested coverage. Writes ``depth`` (float32), ``index`` (clip triangle, int32) and
-    ``triangle`` (input triangle, int32).
+    """Depth-tested coverage. Clears, then writes, ``depth`` (float32, ``DEPTH_CLEAR`` where
+    nothing is drawn), ``index`` (clip triangle, int32, -1) and ``triangle`` (input triangle,
+    int32, -1): each tile's thread clears its own pixels, so the maps may come uninitialised.
 
     A pixel centre is covered when ``e_i + bias_i >= 0`` for the three edges (bias -1 makes an
     edge exclusive). A fragment's window depth is ``(e0 z0 + e1 z1 + e2 z2) * (1 / area)`` in
     float64, clamped to [0, 1] and rounded to float32; it is kept when it is LESS than the stored
     depth (and, when peeling, strictly greater than ``peel``).
 
-    In a whole tile, a triangle whose vertices are within ``EXACT_COORD`` is drawn a tile row at a
-    time without branches (SIMD): its edge values at the row's pixel centres, integers below
-    2^53, are exact in float64 (``e_i = E_i + j * step_i``), so the coverage test ``E_i >=
-    -bias_i`` and the depth are those of the integer path, bit for bit.
+    For a triangle whose snapped vertices are within ``EXACT_COORD``, every edge value at a pixel
+    centre is an integer below 2^53, exact in float64: a row's covered columns are found at
+    once (:func:`_span`) and only they are visited, the edge values stepped in float64 without
+    error, so coverage and depth are the integer path's, bit for bit. Other triangles are
+    scanned column by column in int64.
     """
     n_tiles = starts.shape[0] - 1
     rh, rw = depth.shape  # the region rasterized, whose first pixel is (r_org, c_org)
@@ -107,6 +109,11 @@ def raster_tiles(starts, items, X, Y, Z, tri, bbox, area, bias, width, height, t
         r_hi = min(r_lo + tile, r_org + rh) - 1
         c_lo = c_org + tx * tile
         c_hi = min(c_lo + tile, c_org + rw) - 1
+        for r in range(r_lo - r_org, r_hi - r_org + 1):
+            for c in range(c_lo - c_org, c_hi - c_org + 1):
+                depth[r, c] = DEPTH_CLEAR
+                index[r, c] = -1
+                triangle[r, c] = -1
         for s in range(starts[k], starts[k + 1]):
             t = items[s]
             r0 = max(bbox[t, 2], r_lo)
