@@ -61,6 +61,9 @@ def bin_triangles(valid, bbox, tile, tiles_x, tiles_y, r_org, c_org):
     return starts, items
 
 
+#: float32 lanes of a SIMD register (AVX2): shade_visible shades whole multiples of it.
+SIMD_LANES = 8
+
 #: Snapped coordinates below this magnitude (1/256 px, 65536 px) keep every edge value at a pixel
 #: centre of the viewport (at most MAX_IMAGE_EDGE px) below 2^51, so float64 holds it exactly.
 EXACT_COORD = 1 << 24
@@ -286,6 +289,45 @@ def interpolate_pair(index, X, Y, IW, slot, B, tri, faces, attr_a, attr_b, heigh
                 row_b[c, 2] = n2 / length
 
 
+@kernel
+def _shade_run(crow, orow, lrow, g0, g1, g2, f0, f1, f2, w0, w1, w2, swap, na0, na1, na2, nb0, nb1, nb2, nc0, nc1,
+               nc2, lx, ly, lz, ambient, diffuse, k0, k1, k2, k, local):
+    """:func:`shade_visible` along a run of one unclipped triangle (``swap``: vertices 1 and 2
+    swapped) whose edge values are exact in float64 (``g_i + j f_i``, see :func:`raster_tiles`):
+    ``np.float32`` of the exact float64 value is ``np.float32`` of the integer. Same float32
+    arithmetic; without branches, so that the loop runs on SIMD lanes. Colours of
+    ``len(crow) // 3`` pixels are written (those past the run are overwritten by the caller),
+    ids and local triangles of the run's ``len(orow)``."""
+    fp = np.float32(0)
+    for j in range(crow.shape[0] // 3):
+        fj = np.float64(np.int32(j))
+        a0 = np.float32(g0 + fj * f0) * w0
+        a1 = np.float32(g1 + fj * f1) * w1
+        a2 = np.float32(g2 + fj * f2) * w2
+        sa = a0 + a1 + a2
+        l0 = a0 / sa
+        l1 = a1 / sa
+        l2 = a2 / sa
+        b1 = l2 if swap else l1
+        b2 = l1 if swap else l2
+        n0 = l0 * na0 + b1 * nb0 + b2 * nc0
+        n1 = l0 * na1 + b1 * nb1 + b2 * nc1
+        n2 = l0 * na2 + b1 * nb2 + b2 * nc2
+        length = np.sqrt((n0 * n0 + n1 * n1) + n2 * n2)
+        pos = length > 0
+        u0 = n0 / length
+        u1 = n1 / length
+        u2 = n2 / length
+        lam = abs(((u0 if pos else fp) * lx + (u1 if pos else fp) * ly) + (u2 if pos else fp) * lz)
+        sh = ambient + diffuse * lam
+        crow[3 * j] = k0 * sh
+        crow[3 * j + 1] = k1 * sh
+        crow[3 * j + 2] = k2 * sh
+    for j in range(orow.shape[0]):  # apart: stores to several arrays in one loop keep it scalar
+        orow[j] = k
+        lrow[j] = local
+
+
 @kernel(parallel=True)
 def shade_visible(index, X, Y, IW, slot, B, tri, faces, normals, face_object, face_offset, table, light, ambient,
                   diffuse, stencil, use_stencil, height, r_org, c_org, color, object_id, local_triangle):
@@ -295,9 +337,15 @@ def shade_visible(index, X, Y, IW, slot, B, tri, faces, normals, face_object, fa
     (h, w) int32 ``k = face_object[triangle]`` and ``local_triangle`` (h, w) int32 ``triangle -
     face_offset[k - 1]``; where nothing is drawn (or, with ``use_stencil``, ``stencil`` (h, w)
     bool is False) ``table[0]``, 0 and -1. Same float32 arithmetic in the same order as the
-    two kernels it replaces, without their (h, w, 3) normal map."""
+    two kernels it replaces, without their (h, w, 3) normal map.
+
+    Each row is walked as runs of pixels of one clip triangle: the triangle's constants are
+    loaded once per run and its int64 edge values stepped exactly; a run of an unclipped
+    triangle within ``EXACT_COORD`` is shaded on SIMD lanes (:func:`_shade_run`)."""
     h, w = index.shape
     fp = np.float32(0)
+    lx, ly, lz = light[0], light[1], light[2]
+    flat = color.reshape(h * w * 3)  # (r, c, ch) at 3 (r w + c) + ch: a stride SIMD code can see
     for r in prange(h):
         irow = index[r]
         crow = color[r]
@@ -343,6 +391,16 @@ def shade_visible(index, X, Y, IW, slot, B, tri, faces, normals, face_object, fa
             k = face_object[f]
             k0, k1, k2 = table[k, 0], table[k, 1], table[k, 2]
             local = f - face_offset[k - 1]
+            if m < 0 and max(max(abs(x0), abs(x1)), max(abs(x2), max(abs(y0), max(abs(y1), abs(y2))))) < EXACT_COORD:
+                # whole SIMD widths: the pixels shaded past the run are shaded again by theirs,
+                # later in this row (not past the row: another thread's)
+                lanes = end - c if end - c < 2 else min(-(-(end - c) // SIMD_LANES) * SIMD_LANES, w - c)
+                _shade_run(flat[3 * (r * w + c):3 * (r * w + c + lanes)], object_id[r, c:end],
+                           local_triangle[r, c:end], np.float64(e0), np.float64(e1), np.float64(e2),
+                           np.float64(s0), np.float64(s1), np.float64(s2), w0, w1, w2, m == -2, na0, na1, na2, nb0,
+                           nb1, nb2, nc0, nc1, nc2, lx, ly, lz, ambient, diffuse, k0, k1, k2, k, local)
+                c = end
+                continue
             for cc in range(c, end):
                 a0 = np.float32(e0) * w0
                 a1 = np.float32(e1) * w1
@@ -367,7 +425,7 @@ def shade_visible(index, X, Y, IW, slot, B, tri, faces, normals, face_object, fa
                     n0, n1, n2 = n0 / length, n1 / length, n2 / length
                 else:  # interpolate_rows leaves such a pixel's normal zero
                     n0, n1, n2 = fp, fp, fp
-                lam = abs((n0 * light[0] + n1 * light[1]) + n2 * light[2])
+                lam = abs((n0 * lx + n1 * ly) + n2 * lz)
                 sh = ambient + diffuse * lam
                 crow[cc, 0] = k0 * sh
                 crow[cc, 1] = k1 * sh
