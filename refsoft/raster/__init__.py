@@ -161,7 +161,10 @@ def rasterize(clip, faces, width: int, height: int, peel_depth=None, region=None
         X, Y, Z, IW, slot, B, tri, valid, bbox, area, bias = _setup.setup_region(
             clip, faces, width, height, r0, r1, c0, c1, CULL_MODES[cull], constants.GUARD_BAND_PIXELS)
         starts, items = _kernels.bin_triangles(valid, bbox, tile, tiles_x, tiles_y, r0, c0)
-    depth, index, triangle = limits.maps((rh, rw), np.float32, np.int32, np.int32)  # cleared by raster_tiles
+    depth, index, triangle = limits.maps((rh, rw), np.float32, np.int32, np.int32)
+    depth.fill(constants.DEPTH_CLEAR)
+    index.fill(-1)
+    triangle.fill(-1)
     _kernels.raster_tiles(starts, items, X, Y, Z, tri, bbox, area, bias, width, height, tile, tiles_x, r0, c0,
                           depth, index, triangle, peel, use_peel)
     setup = {"X": X, "Y": Y, "Z": Z, "IW": IW, "slot": slot, "B": B, "tri": tri}

@@ -10,7 +10,7 @@ import numpy as np
 from numba import prange
 
 from .._numba import kernel, like
-from ..constants import DEPTH_CLEAR, SUBPIXEL_HALF, SUBPIXEL_ONE
+from ..constants import SUBPIXEL_HALF, SUBPIXEL_ONE
 
 
 #: Triangles are binned in this many contiguous chunks, in parallel; the result does not
@@ -88,9 +88,8 @@ def _span(g, f, q, ja, jb):
 @kernel(parallel=True)
 def raster_tiles(starts, items, X, Y, Z, tri, bbox, area, bias, width, height, tile, tiles_x, r_org, c_org,
                  depth, index, triangle, peel, use_peel):
-    """Depth-tested coverage. Clears, then writes, ``depth`` (float32, ``DEPTH_CLEAR`` where
-    nothing is drawn), ``index`` (clip triangle, int32, -1) and ``triangle`` (input triangle,
-    int32, -1): each tile's thread clears its own pixels, so the maps may come uninitialised.
+    """Depth-tested coverage. Writes ``depth`` (float32), ``index`` (clip triangle, int32) and
+    ``triangle`` (input triangle, int32).
 
     A pixel centre is covered when ``e_i + bias_i >= 0`` for the three edges (bias -1 makes an
     edge exclusive). A fragment's window depth is ``(e0 z0 + e1 z1 + e2 z2) * (1 / area)`` in
@@ -112,11 +111,6 @@ def raster_tiles(starts, items, X, Y, Z, tri, bbox, area, bias, width, height, t
         r_hi = min(r_lo + tile, r_org + rh) - 1
         c_lo = c_org + tx * tile
         c_hi = min(c_lo + tile, c_org + rw) - 1
-        for r in range(r_lo - r_org, r_hi - r_org + 1):
-            for c in range(c_lo - c_org, c_hi - c_org + 1):
-                depth[r, c] = DEPTH_CLEAR
-                index[r, c] = -1
-                triangle[r, c] = -1
         for s in range(starts[k], starts[k + 1]):
             t = items[s]
             r0 = max(bbox[t, 2], r_lo)
@@ -339,9 +333,9 @@ def shade_visible(index, X, Y, IW, slot, B, tri, faces, normals, face_object, fa
     bool is False) ``table[0]``, 0 and -1. Same float32 arithmetic in the same order as the
     two kernels it replaces, without their (h, w, 3) normal map.
 
-    Each row is walked as runs of pixels of one clip triangle: the triangle's constants are
-    loaded once per run and its int64 edge values stepped exactly; a run of an unclipped
-    triangle within ``EXACT_COORD`` is shaded on SIMD lanes (:func:`_shade_run`)."""
+    Each row is walked as runs of pixels of one clip triangle, whose constants are loaded once
+    per run; a run of an unclipped triangle within ``EXACT_COORD`` is shaded on SIMD lanes
+    (:func:`_shade_run`), others pixel by pixel (:func:`_barycentrics`)."""
     h, w = index.shape
     fp = np.float32(0)
     lx, ly, lz = light[0], light[1], light[2]
@@ -361,28 +355,13 @@ def shade_visible(index, X, Y, IW, slot, B, tri, faces, normals, face_object, fa
                 local_triangle[r, c] = -1
                 c += 1
                 continue
-            # a run of pixels of one triangle: its constants are loaded once, its edge values
-            # stepped (exact int64), the per-pixel arithmetic is _barycentrics's
+            # a run of pixels of one triangle: its constants are loaded once
             end = c + 1
             while end < w and irow[end] == t and (not use_stencil or stencil[r, end]):
                 end += 1
             x0, x1, x2 = np.int64(X[t, 0]), np.int64(X[t, 1]), np.int64(X[t, 2])
             y0, y1, y2 = np.int64(Y[t, 0]), np.int64(Y[t, 1]), np.int64(Y[t, 2])
-            px = np.int64(c + c_org) * SUBPIXEL_ONE + SUBPIXEL_HALF
-            e0 = (x2 - x1) * (py - y1) - (y2 - y1) * (px - x1)
-            e1 = (x0 - x2) * (py - y2) - (y0 - y2) * (px - x2)
-            e2 = (x1 - x0) * (py - y0) - (y1 - y0) * (px - x0)
-            s0 = -(y2 - y1) * SUBPIXEL_ONE
-            s1 = -(y0 - y2) * SUBPIXEL_ONE
-            s2 = -(y1 - y0) * SUBPIXEL_ONE
-            w0, w1, w2 = IW[t, 0], IW[t, 1], IW[t, 2]
             m = slot[t]
-            # b = l M: the identity, vertices 1 and 2 swapped, or the clip vertices' barycentrics
-            m00, m01, m02, m10, m11, m12, m20, m21, m22 = fp, fp, fp, fp, fp, fp, fp, fp, fp
-            if m >= 0:
-                m00, m01, m02 = B[m, 0, 0], B[m, 0, 1], B[m, 0, 2]
-                m10, m11, m12 = B[m, 1, 0], B[m, 1, 1], B[m, 1, 2]
-                m20, m21, m22 = B[m, 2, 0], B[m, 2, 1], B[m, 2, 2]
             f = tri[t]
             v0, v1, v2 = faces[f, 0], faces[f, 1], faces[f, 2]
             na0, na1, na2 = normals[v0, 0], normals[v0, 1], normals[v0, 2]
@@ -392,31 +371,22 @@ def shade_visible(index, X, Y, IW, slot, B, tri, faces, normals, face_object, fa
             k0, k1, k2 = table[k, 0], table[k, 1], table[k, 2]
             local = f - face_offset[k - 1]
             if m < 0 and max(max(abs(x0), abs(x1)), max(abs(x2), max(abs(y0), max(abs(y1), abs(y2))))) < EXACT_COORD:
+                px = np.int64(c + c_org) * SUBPIXEL_ONE + SUBPIXEL_HALF
+                e0 = (x2 - x1) * (py - y1) - (y2 - y1) * (px - x1)
+                e1 = (x0 - x2) * (py - y2) - (y0 - y2) * (px - x2)
+                e2 = (x1 - x0) * (py - y0) - (y1 - y0) * (px - x0)
                 # whole SIMD widths: the pixels shaded past the run are shaded again by theirs,
                 # later in this row (not past the row: another thread's)
                 lanes = end - c if end - c < 2 else min(-(-(end - c) // SIMD_LANES) * SIMD_LANES, w - c)
                 _shade_run(flat[3 * (r * w + c):3 * (r * w + c + lanes)], object_id[r, c:end],
                            local_triangle[r, c:end], np.float64(e0), np.float64(e1), np.float64(e2),
-                           np.float64(s0), np.float64(s1), np.float64(s2), w0, w1, w2, m == -2, na0, na1, na2, nb0,
-                           nb1, nb2, nc0, nc1, nc2, lx, ly, lz, ambient, diffuse, k0, k1, k2, k, local)
+                           np.float64(-(y2 - y1) * SUBPIXEL_ONE), np.float64(-(y0 - y2) * SUBPIXEL_ONE),
+                           np.float64(-(y1 - y0) * SUBPIXEL_ONE), IW[t, 0], IW[t, 1], IW[t, 2], m == -2, na0, na1,
+                           na2, nb0, nb1, nb2, nc0, nc1, nc2, lx, ly, lz, ambient, diffuse, k0, k1, k2, k, local)
                 c = end
                 continue
-            for cc in range(c, end):
-                a0 = np.float32(e0) * w0
-                a1 = np.float32(e1) * w1
-                a2 = np.float32(e2) * w2
-                sa = a0 + a1 + a2
-                l0 = a0 / sa
-                l1 = a1 / sa
-                l2 = a2 / sa
-                if m == -1:
-                    b0, b1, b2 = l0, l1, l2
-                elif m == -2:
-                    b0, b1, b2 = l0, l2, l1
-                else:
-                    b0 = l0 * m00 + l1 * m10 + l2 * m20
-                    b1 = l0 * m01 + l1 * m11 + l2 * m21
-                    b2 = l0 * m02 + l1 * m12 + l2 * m22
+            for cc in range(c, end):  # clipped, or beyond EXACT_COORD: pixel by pixel in int64
+                b0, b1, b2 = _barycentrics(t, r + r_org, cc + c_org, height, X, Y, IW, slot, B, fp)
                 n0 = b0 * na0 + b1 * nb0 + b2 * nc0
                 n1 = b0 * na1 + b1 * nb1 + b2 * nc1
                 n2 = b0 * na2 + b1 * nb2 + b2 * nc2
@@ -432,7 +402,4 @@ def shade_visible(index, X, Y, IW, slot, B, tri, faces, normals, face_object, fa
                 crow[cc, 2] = k2 * sh
                 object_id[r, cc] = k
                 local_triangle[r, cc] = local
-                e0 += s0
-                e1 += s1
-                e2 += s2
             c = end
