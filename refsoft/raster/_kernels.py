@@ -69,13 +69,14 @@ SIMD_LANES = 8
 EXACT_COORD = 1 << 24
 
 
-@kernel(inline=True)
+@kernel
 def _span(g, f, q, ja, jb):
     """``[ja, jb]`` narrowed to the ``j`` where ``g + j f >= q`` (float64 holding integers below
     2^53: ``g``, ``f``, ``q`` and the products are exact). ``ceil``/``floor`` of the rounded
     quotient equal those of the exact one where it matters (in [-1, ja, jb + 1]): a quotient of
     integers with divisor ``|f| < 2^34`` is either an integer, rounded exactly, or 2^-34 away from
-    one, farther than its rounding error."""
+    one, farther than its rounding error. Compiled apart, not inlined at Numba's level: Numba's
+    parallel passes over raster_tiles's loop body then cost less (LLVM still inlines it)."""
     if f > 0.0:
         return max(ja, np.ceil((q - g) / f)), jb
     if f < 0.0:
