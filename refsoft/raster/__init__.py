@@ -161,9 +161,10 @@ def rasterize(clip, faces, width: int, height: int, peel_depth=None, region=None
         X, Y, Z, IW, slot, B, tri, valid, bbox, area, bias = _setup.setup_region(
             clip, faces, width, height, r0, r1, c0, c1, CULL_MODES[cull], constants.GUARD_BAND_PIXELS)
         starts, items = _kernels.bin_triangles(valid, bbox, tile, tiles_x, tiles_y, r0, c0)
-    depth = np.full((rh, rw), constants.DEPTH_CLEAR, dtype=np.float32)
-    index = np.full((rh, rw), -1, dtype=np.int32)
-    triangle = np.full((rh, rw), -1, dtype=np.int32)
+    depth, index, triangle = limits.maps((rh, rw), np.float32, np.int32, np.int32)
+    depth.fill(constants.DEPTH_CLEAR)
+    index.fill(-1)
+    triangle.fill(-1)
     _kernels.raster_tiles(starts, items, X, Y, Z, tri, bbox, area, bias, width, height, tile, tiles_x, r0, c0,
                           depth, index, triangle, peel, use_peel)
     setup = {"X": X, "Y": Y, "Z": Z, "IW": IW, "slot": slot, "B": B, "tri": tri}
@@ -484,8 +485,7 @@ def shade_fragments(fragments: Fragments, normals, faces, face_object, face_offs
     use_stencil = stencil is not None
     stencil = readonly(np.ascontiguousarray(stencil, dtype=bool) if use_stencil else np.zeros((1, 1), dtype=bool))
     color = np.empty((h, w, 3), dtype=np.float32)
-    object_id = np.empty((h, w), dtype=np.int32)
-    local_tri = np.empty((h, w), dtype=np.int32)
+    object_id, local_tri = limits.maps((h, w), np.int32, np.int32)
     _kernels.shade_visible(fragments.index, s["X"], s["Y"], s["IW"].astype(np.float32), s["slot"],
                            s["B"].astype(np.float32), s["tri"], faces, nrm,
                            readonly(np.ascontiguousarray(face_object, dtype=np.int32)),

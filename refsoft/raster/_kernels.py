@@ -61,6 +61,31 @@ def bin_triangles(valid, bbox, tile, tiles_x, tiles_y, r_org, c_org):
     return starts, items
 
 
+#: float32 lanes of a SIMD register (AVX2): shade_visible shades whole multiples of it.
+SIMD_LANES = 8
+
+#: Snapped coordinates below this magnitude (1/256 px, 65536 px) keep every edge value at a pixel
+#: centre of the viewport (at most MAX_IMAGE_EDGE px) below 2^51, so float64 holds it exactly.
+EXACT_COORD = 1 << 24
+
+
+@kernel
+def _span(g, f, q, ja, jb):
+    """``[ja, jb]`` narrowed to the ``j`` where ``g + j f >= q`` (float64 holding integers below
+    2^53: ``g``, ``f``, ``q`` and the products are exact). ``ceil``/``floor`` of the rounded
+    quotient equal those of the exact one where it matters (in [-1, ja, jb + 1]): a quotient of
+    integers with divisor ``|f| < 2^34`` is either an integer, rounded exactly, or 2^-34 away from
+    one, farther than its rounding error. Compiled apart, not inlined at Numba's level: Numba's
+    parallel passes over raster_tiles's loop body then cost less (LLVM still inlines it)."""
+    if f > 0.0:
+        return max(ja, np.ceil((q - g) / f)), jb
+    if f < 0.0:
+        return ja, min(jb, np.floor((q - g) / f))
+    if g >= q:
+        return ja, jb
+    return ja, ja - 1.0
+
+
 @kernel(parallel=True)
 def raster_tiles(starts, items, X, Y, Z, tri, bbox, area, bias, width, height, tile, tiles_x, r_org, c_org,
                  depth, index, triangle, peel, use_peel):
@@ -71,6 +96,12 @@ def raster_tiles(starts, items, X, Y, Z, tri, bbox, area, bias, width, height, t
     edge exclusive). A fragment's window depth is ``(e0 z0 + e1 z1 + e2 z2) * (1 / area)`` in
     float64, clamped to [0, 1] and rounded to float32; it is kept when it is LESS than the stored
     depth (and, when peeling, strictly greater than ``peel``).
+
+    For a triangle whose snapped vertices are within ``EXACT_COORD``, every edge value at a pixel
+    centre is an integer below 2^53, exact in float64: a row's covered columns are found at
+    once (:func:`_span`) and only they are visited, the edge values stepped in float64 without
+    error, so coverage and depth are the integer path's, bit for bit. Other triangles are
+    scanned column by column in int64.
     """
     n_tiles = starts.shape[0] - 1
     rh, rw = depth.shape  # the region rasterized, whose first pixel is (r_org, c_org)
@@ -97,6 +128,38 @@ def raster_tiles(starts, items, X, Y, Z, tri, bbox, area, bias, width, height, t
             s0 = -(y2 - y1) * SUBPIXEL_ONE
             s1 = -(y0 - y2) * SUBPIXEL_ONE
             s2 = -(y1 - y0) * SUBPIXEL_ONE
+            if max(max(abs(x0), abs(x1)), max(abs(x2), max(abs(y0), max(abs(y1), abs(y2))))) < EXACT_COORD:
+                # every edge value below is an integer < 2^53: exact in float64
+                pxl = np.int64(c0) * SUBPIXEL_ONE + SUBPIXEL_HALF
+                f0, f1, f2 = np.float64(s0), np.float64(s1), np.float64(s2)
+                q0, q1, q2 = np.float64(-b0), np.float64(-b1), np.float64(-b2)  # covered: E_i >= -bias_i
+                last = np.float64(c1 - c0)
+                for r in range(r0, r1 + 1):
+                    py = np.int64(height - 1 - r) * SUBPIXEL_ONE + SUBPIXEL_HALF
+                    g0 = np.float64((x2 - x1) * (py - y1) - (y2 - y1) * (pxl - x1))
+                    g1 = np.float64((x0 - x2) * (py - y2) - (y0 - y2) * (pxl - x2))
+                    g2 = np.float64((x1 - x0) * (py - y0) - (y1 - y0) * (pxl - x0))
+                    ja, jb = _span(g0, f0, q0, 0.0, last)
+                    ja, jb = _span(g1, f1, q1, ja, jb)
+                    ja, jb = _span(g2, f2, q2, ja, jb)
+                    if ja > jb:
+                        continue
+                    e0 = g0 + ja * f0
+                    e1 = g1 + ja * f1
+                    e2 = g2 + ja * f2
+                    rr = r - r_org
+                    drow = depth[rr]
+                    for c in range(c0 - c_org + np.int64(ja), c0 - c_org + np.int64(jb) + 1):
+                        z = ((e0 * z0 + e1 * z1) + e2 * z2) * inv_area
+                        zf = np.float32(min(max(z, 0.0), 1.0))
+                        if zf < drow[c] and (not use_peel or zf > peel[rr, c]):
+                            drow[c] = zf
+                            index[rr, c] = t
+                            triangle[rr, c] = face
+                        e0 += f0
+                        e1 += f1
+                        e2 += f2
+                continue
             px0 = np.int64(c0) * SUBPIXEL_ONE + SUBPIXEL_HALF
             for r in range(r0, r1 + 1):
                 py = np.int64(height - 1 - r) * SUBPIXEL_ONE + SUBPIXEL_HALF
@@ -221,6 +284,45 @@ def interpolate_pair(index, X, Y, IW, slot, B, tri, faces, attr_a, attr_b, heigh
                 row_b[c, 2] = n2 / length
 
 
+@kernel
+def _shade_run(crow, orow, lrow, g0, g1, g2, f0, f1, f2, w0, w1, w2, swap, na0, na1, na2, nb0, nb1, nb2, nc0, nc1,
+               nc2, lx, ly, lz, ambient, diffuse, k0, k1, k2, k, local):
+    """:func:`shade_visible` along a run of one unclipped triangle (``swap``: vertices 1 and 2
+    swapped) whose edge values are exact in float64 (``g_i + j f_i``, see :func:`raster_tiles`):
+    ``np.float32`` of the exact float64 value is ``np.float32`` of the integer. Same float32
+    arithmetic; without branches, so that the loop runs on SIMD lanes. Colours of
+    ``len(crow) // 3`` pixels are written (those past the run are overwritten by the caller),
+    ids and local triangles of the run's ``len(orow)``."""
+    fp = np.float32(0)
+    for j in range(crow.shape[0] // 3):
+        fj = np.float64(np.int32(j))
+        a0 = np.float32(g0 + fj * f0) * w0
+        a1 = np.float32(g1 + fj * f1) * w1
+        a2 = np.float32(g2 + fj * f2) * w2
+        sa = a0 + a1 + a2
+        l0 = a0 / sa
+        l1 = a1 / sa
+        l2 = a2 / sa
+        b1 = l2 if swap else l1
+        b2 = l1 if swap else l2
+        n0 = l0 * na0 + b1 * nb0 + b2 * nc0
+        n1 = l0 * na1 + b1 * nb1 + b2 * nc1
+        n2 = l0 * na2 + b1 * nb2 + b2 * nc2
+        length = np.sqrt((n0 * n0 + n1 * n1) + n2 * n2)
+        pos = length > 0
+        u0 = n0 / length
+        u1 = n1 / length
+        u2 = n2 / length
+        lam = abs(((u0 if pos else fp) * lx + (u1 if pos else fp) * ly) + (u2 if pos else fp) * lz)
+        sh = ambient + diffuse * lam
+        crow[3 * j] = k0 * sh
+        crow[3 * j + 1] = k1 * sh
+        crow[3 * j + 2] = k2 * sh
+    for j in range(orow.shape[0]):  # apart: stores to several arrays in one loop keep it scalar
+        orow[j] = k
+        lrow[j] = local
+
+
 @kernel(parallel=True)
 def shade_visible(index, X, Y, IW, slot, B, tri, faces, normals, face_object, face_offset, table, light, ambient,
                   diffuse, stencil, use_stencil, height, r_org, c_org, color, object_id, local_triangle):
@@ -230,13 +332,21 @@ def shade_visible(index, X, Y, IW, slot, B, tri, faces, normals, face_object, fa
     (h, w) int32 ``k = face_object[triangle]`` and ``local_triangle`` (h, w) int32 ``triangle -
     face_offset[k - 1]``; where nothing is drawn (or, with ``use_stencil``, ``stencil`` (h, w)
     bool is False) ``table[0]``, 0 and -1. Same float32 arithmetic in the same order as the
-    two kernels it replaces, without their (h, w, 3) normal map."""
+    two kernels it replaces, without their (h, w, 3) normal map.
+
+    Each row is walked as runs of pixels of one clip triangle, whose constants are loaded once
+    per run; a run of an unclipped triangle within ``EXACT_COORD`` is shaded on SIMD lanes
+    (:func:`_shade_run`), others pixel by pixel (:func:`_barycentrics`)."""
     h, w = index.shape
     fp = np.float32(0)
+    lx, ly, lz = light[0], light[1], light[2]
+    flat = color.reshape(h * w * 3)  # (r, c, ch) at 3 (r w + c) + ch: a stride SIMD code can see
     for r in prange(h):
         irow = index[r]
         crow = color[r]
-        for c in range(w):
+        py = np.int64(height - 1 - (r + r_org)) * SUBPIXEL_ONE + SUBPIXEL_HALF
+        c = 0
+        while c < w:
             t = irow[c]
             if t < 0 or (use_stencil and not stencil[r, c]):
                 crow[c, 0] = table[0, 0]
@@ -244,23 +354,53 @@ def shade_visible(index, X, Y, IW, slot, B, tri, faces, normals, face_object, fa
                 crow[c, 2] = table[0, 2]
                 object_id[r, c] = 0
                 local_triangle[r, c] = -1
+                c += 1
                 continue
-            b0, b1, b2 = _barycentrics(t, r + r_org, c + c_org, height, X, Y, IW, slot, B, fp)
+            # a run of pixels of one triangle: its constants are loaded once
+            end = c + 1
+            while end < w and irow[end] == t and (not use_stencil or stencil[r, end]):
+                end += 1
+            x0, x1, x2 = np.int64(X[t, 0]), np.int64(X[t, 1]), np.int64(X[t, 2])
+            y0, y1, y2 = np.int64(Y[t, 0]), np.int64(Y[t, 1]), np.int64(Y[t, 2])
+            m = slot[t]
             f = tri[t]
             v0, v1, v2 = faces[f, 0], faces[f, 1], faces[f, 2]
-            n0 = b0 * normals[v0, 0] + b1 * normals[v1, 0] + b2 * normals[v2, 0]
-            n1 = b0 * normals[v0, 1] + b1 * normals[v1, 1] + b2 * normals[v2, 1]
-            n2 = b0 * normals[v0, 2] + b1 * normals[v1, 2] + b2 * normals[v2, 2]
-            length = np.sqrt((n0 * n0 + n1 * n1) + n2 * n2)
-            if length > 0:
-                n0, n1, n2 = n0 / length, n1 / length, n2 / length
-            else:  # interpolate_rows leaves such a pixel's normal zero
-                n0, n1, n2 = fp, fp, fp
+            na0, na1, na2 = normals[v0, 0], normals[v0, 1], normals[v0, 2]
+            nb0, nb1, nb2 = normals[v1, 0], normals[v1, 1], normals[v1, 2]
+            nc0, nc1, nc2 = normals[v2, 0], normals[v2, 1], normals[v2, 2]
             k = face_object[f]
-            lam = abs((n0 * light[0] + n1 * light[1]) + n2 * light[2])
-            s = ambient + diffuse * lam
-            crow[c, 0] = table[k, 0] * s
-            crow[c, 1] = table[k, 1] * s
-            crow[c, 2] = table[k, 2] * s
-            object_id[r, c] = k
-            local_triangle[r, c] = f - face_offset[k - 1]
+            k0, k1, k2 = table[k, 0], table[k, 1], table[k, 2]
+            local = f - face_offset[k - 1]
+            if m < 0 and max(max(abs(x0), abs(x1)), max(abs(x2), max(abs(y0), max(abs(y1), abs(y2))))) < EXACT_COORD:
+                px = np.int64(c + c_org) * SUBPIXEL_ONE + SUBPIXEL_HALF
+                e0 = (x2 - x1) * (py - y1) - (y2 - y1) * (px - x1)
+                e1 = (x0 - x2) * (py - y2) - (y0 - y2) * (px - x2)
+                e2 = (x1 - x0) * (py - y0) - (y1 - y0) * (px - x0)
+                # whole SIMD widths: the pixels shaded past the run are shaded again by theirs,
+                # later in this row (not past the row: another thread's)
+                lanes = end - c if end - c < 2 else min(-(-(end - c) // SIMD_LANES) * SIMD_LANES, w - c)
+                _shade_run(flat[3 * (r * w + c):3 * (r * w + c + lanes)], object_id[r, c:end],
+                           local_triangle[r, c:end], np.float64(e0), np.float64(e1), np.float64(e2),
+                           np.float64(-(y2 - y1) * SUBPIXEL_ONE), np.float64(-(y0 - y2) * SUBPIXEL_ONE),
+                           np.float64(-(y1 - y0) * SUBPIXEL_ONE), IW[t, 0], IW[t, 1], IW[t, 2], m == -2, na0, na1,
+                           na2, nb0, nb1, nb2, nc0, nc1, nc2, lx, ly, lz, ambient, diffuse, k0, k1, k2, k, local)
+                c = end
+                continue
+            for cc in range(c, end):  # clipped, or beyond EXACT_COORD: pixel by pixel in int64
+                b0, b1, b2 = _barycentrics(t, r + r_org, cc + c_org, height, X, Y, IW, slot, B, fp)
+                n0 = b0 * na0 + b1 * nb0 + b2 * nc0
+                n1 = b0 * na1 + b1 * nb1 + b2 * nc1
+                n2 = b0 * na2 + b1 * nb2 + b2 * nc2
+                length = np.sqrt((n0 * n0 + n1 * n1) + n2 * n2)
+                if length > 0:
+                    n0, n1, n2 = n0 / length, n1 / length, n2 / length
+                else:  # interpolate_rows leaves such a pixel's normal zero
+                    n0, n1, n2 = fp, fp, fp
+                lam = abs((n0 * lx + n1 * ly) + n2 * lz)
+                sh = ambient + diffuse * lam
+                crow[cc, 0] = k0 * sh
+                crow[cc, 1] = k1 * sh
+                crow[cc, 2] = k2 * sh
+                object_id[r, cc] = k
+                local_triangle[r, cc] = local
+            c = end

@@ -139,6 +139,20 @@ def test_lazy_zeros_are_zero_writable_arrays(shape, dtype):
     assert isinstance(base, mmap.mmap) == (a.nbytes >= LAZY_ZEROS_BYTES)
 
 
+@pytest.mark.parametrize("shape", [(1, 1), (3, 5), (768, 1024)])
+def test_maps_from_one_block_are_separate_aligned_arrays(shape):
+    from refsoft.limits import maps
+
+    a, b, c = maps(shape, np.float32, np.int32, np.uint8)
+    for m, dt in ((a, np.float32), (b, np.int32), (c, np.uint8)):
+        assert m.shape == shape and m.dtype == dt and m.flags.c_contiguous and m.flags.writeable
+        assert m.ctypes.data % np.dtype(dt).itemsize == 0
+    a.fill(1.5)
+    b.fill(-1)
+    c.fill(7)
+    assert (a == 1.5).all() and (b == -1).all() and (c == 7).all()  # no overlap
+
+
 def test_full_size_gbuffer_from_lazy_maps_equals_the_uncropped_one():
     import refsoft
     from refsoft import raster
