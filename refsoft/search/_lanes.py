@@ -32,7 +32,7 @@ from numba import literally, prange
 
 from .._numba import kernel, like
 from ..constants import LONE_MARGIN, NO_SCORE
-from ._kernels import OFFSETS, RESTART, RESTARTED, REUSE, _normalize, end_walk, score_pnu
+from ._kernels import OFFSETS, RESTART, RESTARTED, REUSE, _normalize, end_walk_at, score_pnu
 
 #: Walks advanced together by one thread.
 LANES = 16
@@ -99,8 +99,10 @@ def _score_at(P, N, eye, r, c, vx, vy, vz, inverse, fp):
                      inverse, fp)
 
 
-# The walks' helpers are compiled on their own and inlined by LLVM into search_group (fast to
-# compile, the machine code of one function).
+# The walks' helpers are compiled on their own and LLVM inlines their machine code into
+# search_group: quick to compile, and the code of one function. Inlined at Numba's level instead,
+# each array argument would become a variable of its own with a reference count increment and
+# decrement (atomic) per call, which only the parallel passes' copy propagation removes.
 
 
 @kernel(llvm_inline=True)
@@ -206,13 +208,14 @@ def _move(s, NB, best_k, best, it, CUR, PREV, W, SV):
 
 
 @kernel(llvm_inline=True)
-def _end(P, N, eye, inverse_search, fp, s, it, best_k, best, second, border, W, SV):
-    """Walk ``s`` stops after ``it`` steps: converged (``best_k`` 0) or capped. A hidden vertex's
-    walk goes on as the inverse search from there (with ``inverse_search``: returns ``(False,
-    ...)``); otherwise returns ``(True, score, margin, iterations, flags)``, the vertex's results
-    (its pixel is the walk's: the slot is free once they are written)."""
-    r = W[s, R]
-    c = W[s, C]
+def _end(inverse_search, fp, s, it, best_k, best, second, border, W, SV, px, py, pz, nx, ny, nz, ex, ey, ez):
+    """Walk ``s`` stops after ``it`` steps: converged (``best_k`` 0) or capped, at a pixel of
+    position ``(px, py, pz)`` and normal ``(nx, ny, nz)``, the eye at ``(ex, ey, ez)`` (scalars:
+    the G-buffer's arrays, shared by the threads, are not passed, and their reference counts
+    not touched per walk). A hidden vertex's walk goes on as the inverse search from there (with
+    ``inverse_search``: returns ``(False, ...)``); otherwise returns ``(True, score, margin,
+    iterations, flags)``, the vertex's results (its pixel is the walk's: the slot is free once
+    they are written)."""
     s0 = SV[s, S0]
     if best_k == 0:
         res_s = best
@@ -220,16 +223,20 @@ def _end(P, N, eye, inverse_search, fp, s, it, best_k, best, second, border, W, 
     else:  # capped: the walk keeps the pixel whose neighbourhood it evaluated last
         res_s = s0
         res_m = best - s0
-    fl, total, inverse = end_walk(W[s, FL], W[s, IT0], it, best_k != 0, border, W[s, PH], SV[s, 0], SV[s, 1], SV[s, 2],
-                                  P, N, r, c, 0, inverse_search, fp)
+    vx = SV[s, 0]
+    vy = SV[s, 1]
+    vz = SV[s, 2]
+    fl, total, inverse = end_walk_at(W[s, FL], W[s, IT0], it, best_k != 0, border, W[s, PH], vx, vy, vz, px, py, pz,
+                                     nx, ny, nz, inverse_search, fp)
     if inverse:
         W[s, PH] = 1
         W[s, FL] = fl
         W[s, IT0] = total
         W[s, IT] = 0
         W[s, MOVED] = 0
-        SV[s, S0] = _score_at(P, N, eye, r, c, SV[s, 0], SV[s, 1], SV[s, 2], True, fp)
-    return not inverse, res_s, res_m, total, fl  # one exit: LLVM drops the calls' reference counts
+        ux, uy, uz = _normalize(ex - px, ey - py, ez - pz, fp)
+        SV[s, S0] = score_pnu(px, py, pz, nx, ny, nz, ux, uy, uz, vx, vy, vz, True, fp)
+    return not inverse, res_s, res_m, total, fl
 
 
 @kernel
@@ -280,13 +287,16 @@ def search_group(P, N, mask, eye, vertices, starts, default_r, default_c, cap, i
             if best_k != 0 and it < cap:
                 _move(s, NB, best_k, best, it, CUR, PREV, W, SV)
                 continue
-            done, res_s, res_m, total, fl = _end(P, N, eye, inverse_search, fp, s, it, best_k, best, second, border,
-                                                 W, SV)
+            r = W[s, R]
+            c = W[s, C]
+            done, res_s, res_m, total, fl = _end(inverse_search, fp, s, it, best_k, best, second, border, W, SV,
+                                                 P[r, c, 0], P[r, c, 1], P[r, c, 2], N[r, c, 0], N[r, c, 1],
+                                                 N[r, c, 2], eye[0], eye[1], eye[2])
             if not done:
                 continue
             i = W[s, VI]
-            pixel[i, 0] = W[s, R]
-            pixel[i, 1] = W[s, C]
+            pixel[i, 0] = r
+            pixel[i, 1] = c
             best_out[i] = res_s
             margin_out[i] = res_m
             iterations[i] = total
