@@ -164,7 +164,7 @@ def cmd_render(args) -> int:
         frames = list(range(args.frame + 1)) if not args.no_coherence else [args.frame]
         write = {args.frame}
     out = args.out or os.path.join("out", scene.name)
-    notice = _FirstRunNotice("render", 35)
+    notice = _FirstRunNotice("render", 30)
     t0 = time.perf_counter()
     # every frame is written as soon as it is rendered, then dropped (one frame in memory)
     done, stats = render(scene, frames=frames, out=out, progress=True, memory_limit=args.memory_limit,
