@@ -25,12 +25,15 @@ KERNEL_OPTIONS = dict(cache=True, fastmath=False, error_model="numpy", nogil=Tru
 KERNELS = []
 
 
-def kernel(fn=None, *, parallel=False, inline=False):
+def kernel(fn=None, *, parallel=False, inline=False, llvm_inline=False):
     """``numba.njit`` with refsoft's fixed options (optionally ``parallel=True``; ``inline=True``
-    inlines a small helper into its callers at Numba's level)."""
+    inlines a small helper into its callers at Numba's level; ``llvm_inline=True`` compiles it on
+    its own and has LLVM inline its machine code into every caller)."""
 
     def wrap(f):
         extra = {"inline": "always"} if inline else {}
+        if llvm_inline:
+            extra["forceinline"] = True
         dispatcher = numba.njit(parallel=parallel, **KERNEL_OPTIONS, **extra)(f)
         dispatcher.compile = _compile_once(dispatcher, dispatcher.compile)
         KERNELS.append(dispatcher)

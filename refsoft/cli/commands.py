@@ -177,7 +177,7 @@ def cmd_render(args) -> int:
         write = {args.frame}
     out = args.out or os.path.join("out", scene.name)
     options = render_kwargs(args)
-    notice = _FirstRunNotice("render", 35, warm=options)
+    notice = _FirstRunNotice("render", 30, warm=options)
     t0 = time.perf_counter()
     # every frame is written as soon as it is rendered, then dropped (one frame in memory)
     try:

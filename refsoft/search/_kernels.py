@@ -198,18 +198,26 @@ def walk(G, mask, v, r, c, n_candidates, cap, inverse, fp, record, n_record, pha
 def end_walk(flags, total, it, capped, border, phase, vx, vy, vz, P, N, r, c, n0, inverse_search, fp):
     """The end of a walk of ``it`` steps for vertex ``(vx, vy, vz)`` at pixel (r, c), whose
     position is ``P[r, c, 0:3]`` and normal ``N[r, c, n0:n0 + 3]`` (the packed G-buffer: ``P = N =
-    G``, ``n0 = 3``) (spec sections 4.4 and 4.6), shared by every search: ``flags`` gains CAPPED when the
-    walk was ``capped``; after the first walk (``phase`` 0) HIDDEN when the vertex is behind the
-    pixel's tangent plane, ``dot(V - P, N) < 0``; then BORDER when ``border`` (a neighbour
-    uncovered or outside), unless the inverse search follows. Returns ``(flags, total + it,
-    inverse)``: ``inverse`` True when the inverse search (``inverse_search``) is to start from
-    that pixel, its walk to end here again with phase 1, these flags and this total."""
+    G``, ``n0 = 3``): :func:`end_walk_at` at that pixel."""
+    return end_walk_at(flags, total, it, capped, border, phase, vx, vy, vz, P[r, c, 0], P[r, c, 1], P[r, c, 2],
+                       N[r, c, n0], N[r, c, n0 + 1], N[r, c, n0 + 2], inverse_search, fp)
+
+
+@kernel(inline=True)
+def end_walk_at(flags, total, it, capped, border, phase, vx, vy, vz, px, py, pz, nx, ny, nz, inverse_search, fp):
+    """The end of a walk of ``it`` steps for vertex ``(vx, vy, vz)`` at a pixel of position
+    ``(px, py, pz)`` and normal ``(nx, ny, nz)`` (spec sections 4.4 and 4.6), shared by every
+    search: ``flags`` gains CAPPED when the walk was ``capped``; after the first walk (``phase``
+    0) HIDDEN when the vertex is behind the pixel's tangent plane, ``dot(V - P, N) < 0``; then
+    BORDER when ``border`` (a neighbour uncovered or outside), unless the inverse search follows.
+    Returns ``(flags, total + it, inverse)``: ``inverse`` True when the inverse search
+    (``inverse_search``) is to start from that pixel, its walk to end here again with phase 1,
+    these flags and this total."""
     if capped:
         flags |= CAPPED
     total += it
     if phase == 0:
-        d = ((vx - P[r, c, 0]) * N[r, c, n0] + (vy - P[r, c, 1]) * N[r, c, n0 + 1]) \
-            + (vz - P[r, c, 2]) * N[r, c, n0 + 2]
+        d = ((vx - px) * nx + (vy - py) * ny) + (vz - pz) * nz
         if d < like(0.0, fp):
             flags |= HIDDEN
             if inverse_search:

@@ -28,11 +28,11 @@ Measured: docs/benchmarks.md ("Reflection-point search").
 """
 
 import numpy as np
-from numba import prange
+from numba import literally, prange
 
 from .._numba import kernel, like
 from ..constants import LONE_MARGIN, NO_SCORE
-from ._kernels import OFFSETS, RESTART, RESTARTED, REUSE, _normalize, end_walk, score_pnu
+from ._kernels import OFFSETS, RESTART, RESTARTED, REUSE, _normalize, end_walk_at, score_pnu
 
 #: Walks advanced together by one thread.
 LANES = 16
@@ -81,53 +81,68 @@ def score_batch(n, P0, P1, P2, N0, N1, N2, ex, ey, ez, VX, VY, VZ, INV, OUT, fp)
         OUT[j] = (nx * hx + ny * hy) + nz * hz
 
 
+# Per walk slot, the columns of its int64 state ``W``: the vertex's row (-1: the slot is free),
+# the current pixel, the candidate moved to last (0: none, the previous neighbourhood's scores are
+# unknown), the iterations of this phase and of the first, the phase (1: inverse search), the
+# flags. Its float state ``SV`` (working precision) holds the vertex (columns 0-2) and the score
+# at the current pixel (column S0). The state is in two arrays, not one per field: each array
+# a helper takes costs it a reference count increment and decrement per call.
+VI, R, C, MOVED, IT, IT0, PH, FL = range(8)
+S0 = 3
+
+
 @kernel(inline=True)
-def _score_at(P, N, eye, r, c, v, inverse, fp):
-    """The (inverse) score of vertex ``v`` at pixel (r, c), one at a time."""
+def _score_at(P, N, eye, r, c, vx, vy, vz, inverse, fp):
+    """The (inverse) score of vertex ``(vx, vy, vz)`` at pixel (r, c), one at a time."""
     ux, uy, uz = _normalize(eye[0] - P[r, c, 0], eye[1] - P[r, c, 1], eye[2] - P[r, c, 2], fp)
-    return score_pnu(P[r, c, 0], P[r, c, 1], P[r, c, 2], N[r, c, 0], N[r, c, 1], N[r, c, 2], ux, uy, uz, v[0], v[1],
-                     v[2], inverse, fp)
+    return score_pnu(P[r, c, 0], P[r, c, 1], P[r, c, 2], N[r, c, 0], N[r, c, 1], N[r, c, 2], ux, uy, uz, vx, vy, vz,
+                     inverse, fp)
 
 
-@kernel(inline=True)
-def _begin(P, N, eye, vertices, starts, default_r, default_c, fp, i, s, V, VI, R, C, S0, IT, IT0, PH, FL, MOVED):
+# The walks' helpers are compiled on their own and LLVM inlines their machine code into
+# search_group: quick to compile, and the code of one function. Inlined at Numba's level instead,
+# each array argument would become a variable of its own with a reference count increment and
+# decrement (atomic) per call, which only the parallel passes' copy propagation removes.
+
+
+@kernel(llvm_inline=True)
+def _begin(P, N, eye, vertices, starts, default_r, default_c, fp, i, s, W, SV):
     """Walk slot ``s`` takes the vertex of row ``i``: its start (previous pixel, else the
     default start) and the start's score; counters cleared, flags RESTARTED or none."""
-    VI[s] = i
+    W[s, VI] = i
     for k in range(3):
-        V[s, k] = vertices[i, k]
+        SV[s, k] = vertices[i, k]
     r0 = starts[i, 0]
     c0 = starts[i, 1]
-    FL[s] = RESTARTED if r0 == RESTART else 0
+    W[s, FL] = RESTARTED if r0 == RESTART else 0
     if r0 < 0:
         r0 = default_r
         c0 = default_c
-    R[s] = r0
-    C[s] = c0
-    S0[s] = _score_at(P, N, eye, r0, c0, V[s], False, fp)
-    IT[s] = 0
-    IT0[s] = 0
-    PH[s] = 0
-    MOVED[s] = 0
+    W[s, R] = r0
+    W[s, C] = c0
+    SV[s, S0] = _score_at(P, N, eye, r0, c0, SV[s, 0], SV[s, 1], SV[s, 2], False, fp)
+    W[s, IT] = 0
+    W[s, IT0] = 0
+    W[s, PH] = 0
+    W[s, MOVED] = 0
 
 
-@kernel(inline=True)
-def _gather(P, N, mask, NB, V, VI, R, C, PH, MOVED, P0, P1, P2, N0, N1, N2, VX, VY, VZ, INV, IDX):
+@kernel(llvm_inline=True)
+def _gather(P, N, mask, NB, W, SV, cand, INV, IDX):
     """Gathers the candidates of this round that need a score, those of every active walk that
-    are covered and not in its previous neighbourhood (whose scores are known): entry ``m`` of
-    ``P0, P1, P2``, ``N0, N1, N2`` and ``VX, VY, VZ`` (rows of one (9, NB * LANES) block) holds P,
-    N of the candidate's pixel and its walk's vertex, ``INV[m]`` whether that walk is in its
-    inverse phase. ``IDX[s * NB + k - 1]`` is where walk ``s``'s candidate ``k`` is: entry ``m``;
-    -1 uncovered or outside; ``-2 - j`` known, the previous neighbourhood's candidate ``j``.
-    Returns the number of entries filled."""
+    are covered and not in its previous neighbourhood (whose scores are known): column ``m`` of
+    ``cand`` (9, NB * LANES) holds P, N of the candidate's pixel and its walk's vertex (one row
+    per channel), ``INV[m]`` whether that walk is in its inverse phase. ``IDX[s * NB + k - 1]``
+    is where walk ``s``'s candidate ``k`` is: column ``m``; -1 uncovered or outside; ``-2 - j``
+    known, the previous neighbourhood's candidate ``j``. Returns the number of columns filled."""
     h, w = mask.shape
     m = 0
     for s in range(LANES):
-        if VI[s] < 0:
+        if W[s, VI] < 0:
             continue
-        r = R[s]
-        c = C[s]
-        moved = MOVED[s]
+        r = W[s, R]
+        c = W[s, C]
+        moved = W[s, MOVED]
         for k in range(1, NB + 1):
             q = s * NB + k - 1
             rr = r + OFFSETS[k, 0]
@@ -141,28 +156,23 @@ def _gather(P, N, mask, NB, V, VI, R, C, PH, MOVED, P0, P1, P2, N0, N1, N2, VX, 
                     IDX[q] = -2 - j
                     continue
             IDX[q] = m
-            P0[m] = P[rr, cc, 0]
-            P1[m] = P[rr, cc, 1]
-            P2[m] = P[rr, cc, 2]
-            N0[m] = N[rr, cc, 0]
-            N1[m] = N[rr, cc, 1]
-            N2[m] = N[rr, cc, 2]
-            VX[m] = V[s, 0]
-            VY[m] = V[s, 1]
-            VZ[m] = V[s, 2]
-            INV[m] = PH[s] == 1
+            for ch in range(3):
+                cand[ch, m] = P[rr, cc, ch]
+                cand[3 + ch, m] = N[rr, cc, ch]
+                cand[6 + ch, m] = SV[s, ch]
+            INV[m] = W[s, PH] == 1
             m += 1
     return m
 
 
-@kernel(inline=True)
-def _compare(s, NB, S0, PREV, IDX, OUT, CUR, fp):
+@kernel(llvm_inline=True)
+def _compare(s, NB, SV, PREV, IDX, OUT, CUR, fp):
     """Walk ``s``'s neighbourhood in the visiting order, as ``_kernels.walk`` compares it: its
     scores into ``CUR`` (the current pixel's first; uncovered candidates left as they were).
     Returns ``(best_k, best, second, border)``: the best candidate (0: the current pixel), its
     score, the second-best score (``NO_SCORE`` when there is none) and whether a candidate is uncovered
     or outside."""
-    s0 = S0[s]
+    s0 = SV[s, S0]
     best = s0
     best_k = 0
     second = like(NO_SCORE, fp)
@@ -184,59 +194,58 @@ def _compare(s, NB, S0, PREV, IDX, OUT, CUR, fp):
     return best_k, best, second, border
 
 
-@kernel(inline=True)
-def _move(s, NB, best_k, best, it, CUR, PREV, MOVED, S0, R, C, IT):
+@kernel(llvm_inline=True)
+def _move(s, NB, best_k, best, it, CUR, PREV, W, SV):
     """Walk ``s`` moves to its candidate ``best_k`` (score ``best``) after ``it`` steps; the
     neighbourhood's scores are kept for the next round."""
     for k in range(NB + 1):
         PREV[s, k] = CUR[k]
-    MOVED[s] = best_k
-    S0[s] = best
-    R[s] = R[s] + OFFSETS[best_k, 0]
-    C[s] = C[s] + OFFSETS[best_k, 1]
-    IT[s] = it
+    W[s, MOVED] = best_k
+    SV[s, S0] = best
+    W[s, R] = W[s, R] + OFFSETS[best_k, 0]
+    W[s, C] = W[s, C] + OFFSETS[best_k, 1]
+    W[s, IT] = it
 
 
-@kernel(inline=True)
-def _end(P, N, eye, inverse_search, fp, s, it, best_k, best, second, border, V, VI, R, C, S0, IT, IT0, PH, FL,
-         MOVED, pixel, best_out, margin_out, iterations, flags_out):
-    """Walk ``s`` stops after ``it`` steps: converged (``best_k`` 0) or capped. A hidden vertex's
-    walk goes on as the inverse search from there (with ``inverse_search``: returns False);
-    otherwise the vertex's results are written (returns True: the slot is free)."""
-    r = R[s]
-    c = C[s]
-    s0 = S0[s]
+@kernel(llvm_inline=True)
+def _end(inverse_search, fp, s, it, best_k, best, second, border, W, SV, px, py, pz, nx, ny, nz, ex, ey, ez):
+    """Walk ``s`` stops after ``it`` steps: converged (``best_k`` 0) or capped, at a pixel of
+    position ``(px, py, pz)`` and normal ``(nx, ny, nz)``, the eye at ``(ex, ey, ez)`` (scalars:
+    the G-buffer's arrays, shared by the threads, are not passed, and their reference counts
+    not touched per walk). A hidden vertex's walk goes on as the inverse search from there (with
+    ``inverse_search``: returns ``(False, ...)``); otherwise returns ``(True, score, margin,
+    iterations, flags)``, the vertex's results (its pixel is the walk's: the slot is free once
+    they are written)."""
+    s0 = SV[s, S0]
     if best_k == 0:
         res_s = best
         res_m = best - second if second > like(NO_SCORE, fp) else like(LONE_MARGIN, fp)
     else:  # capped: the walk keeps the pixel whose neighbourhood it evaluated last
         res_s = s0
         res_m = best - s0
-    fl, total, inverse = end_walk(FL[s], IT0[s], it, best_k != 0, border, PH[s], V[s, 0], V[s, 1], V[s, 2], P, N,
-                                  r, c, 0, inverse_search, fp)
+    vx = SV[s, 0]
+    vy = SV[s, 1]
+    vz = SV[s, 2]
+    fl, total, inverse = end_walk_at(W[s, FL], W[s, IT0], it, best_k != 0, border, W[s, PH], vx, vy, vz, px, py, pz,
+                                     nx, ny, nz, inverse_search, fp)
     if inverse:
-        PH[s] = 1
-        FL[s] = fl
-        IT0[s] = total
-        IT[s] = 0
-        MOVED[s] = 0
-        S0[s] = _score_at(P, N, eye, r, c, V[s], True, fp)
-        return False
-    i = VI[s]
-    pixel[i, 0] = r
-    pixel[i, 1] = c
-    best_out[i] = res_s
-    margin_out[i] = res_m
-    iterations[i] = total
-    flags_out[i] = fl
-    return True
+        W[s, PH] = 1
+        W[s, FL] = fl
+        W[s, IT0] = total
+        W[s, IT] = 0
+        W[s, MOVED] = 0
+        ux, uy, uz = _normalize(ex - px, ey - py, ez - pz, fp)
+        SV[s, S0] = score_pnu(px, py, pz, nx, ny, nz, ux, uy, uz, vx, vy, vz, True, fp)
+    return not inverse, res_s, res_m, total, fl
 
 
-@kernel(inline=True)
-def _search_group(P, N, mask, eye, vertices, starts, default_r, default_c, cap, inverse_search, fp, pixel, best_out,
-                  margin_out, iterations, flags_out, NB, lo, hi):
-    """The searches of rows ``lo`` to ``hi - 1``, ``LANES`` walks at a time, each of
-    ``NB`` neighbours around its current pixel."""
+@kernel
+def search_group(P, N, mask, eye, vertices, starts, default_r, default_c, cap, inverse_search, fp, pixel, best_out,
+                 margin_out, iterations, flags_out, NB, lo, hi):
+    """The searches of rows ``lo`` to ``hi - 1``, ``LANES`` walks at a time, each of ``NB``
+    neighbours around its current pixel. ``NB`` is a constant of the compiled code (``literally``:
+    one specialisation per neighbourhood)."""
+    literally(NB)
     dt = best_out.dtype
     # per candidate of a round: P, N of its pixel and its vertex (one row per channel), whether
     # its walk is in the inverse phase, its score; where each walk's candidates are (_gather)
@@ -254,54 +263,58 @@ def _search_group(P, N, mask, eye, vertices, starts, default_r, default_c, cap, 
     OUT = np.zeros(NB * LANES, dt)
     IDX = np.zeros(NB * LANES, np.int64)
     CUR = np.zeros(NB + 1, dt)
-    # per walk slot: vertex (relative), vertex index (-1 free), pixel, score there, the
-    # previous neighbourhood's scores and the candidate moved to (0: none), iterations
-    # (this phase, first phase), phase (1: inverse search), flags
-    V = np.zeros((LANES, 3), dt)
-    VI = np.full(LANES, -1, np.int64)
-    R = np.zeros(LANES, np.int64)
-    C = np.zeros(LANES, np.int64)
-    S0 = np.zeros(LANES, dt)
+    # per walk slot: its state (W, SV) and the previous neighbourhood's scores
+    W = np.zeros((LANES, 8), np.int64)
+    W[:, VI] = -1
+    SV = np.zeros((LANES, 4), dt)
     PREV = np.zeros((LANES, NB + 1), dt)
-    MOVED = np.zeros(LANES, np.int64)
-    IT = np.zeros(LANES, np.int64)
-    IT0 = np.zeros(LANES, np.int64)
-    PH = np.zeros(LANES, np.int64)
-    FL = np.zeros(LANES, np.int64)
     nxt = lo
     active = 0
     for s in range(LANES):
         if nxt < hi:
-            _begin(P, N, eye, vertices, starts, default_r, default_c, fp, nxt, s, V, VI, R, C, S0, IT, IT0, PH, FL,
-                   MOVED)
+            _begin(P, N, eye, vertices, starts, default_r, default_c, fp, nxt, s, W, SV)
             nxt += 1
             active += 1
     while active > 0:
-        m = _gather(P, N, mask, NB, V, VI, R, C, PH, MOVED, P0, P1, P2, N0, N1, N2, VX, VY, VZ, INV, IDX)
+        m = _gather(P, N, mask, NB, W, SV, cand, INV, IDX)
         score_batch((m + VECTOR - 1) // VECTOR * VECTOR, P0, P1, P2, N0, N1, N2, eye[0], eye[1], eye[2], VX, VY, VZ,
                     INV, OUT, fp)
         for s in range(LANES):
-            if VI[s] < 0:
+            if W[s, VI] < 0:
                 continue
-            best_k, best, second, border = _compare(s, NB, S0, PREV, IDX, OUT, CUR, fp)
-            it = IT[s] + 1
+            best_k, best, second, border = _compare(s, NB, SV, PREV, IDX, OUT, CUR, fp)
+            it = W[s, IT] + 1
             if best_k != 0 and it < cap:
-                _move(s, NB, best_k, best, it, CUR, PREV, MOVED, S0, R, C, IT)
-            elif _end(P, N, eye, inverse_search, fp, s, it, best_k, best, second, border, V, VI, R, C, S0, IT, IT0,
-                      PH, FL, MOVED, pixel, best_out, margin_out, iterations, flags_out):
-                if nxt < hi:  # the slot takes the group's next vertex
-                    _begin(P, N, eye, vertices, starts, default_r, default_c, fp, nxt, s, V, VI, R, C, S0, IT, IT0,
-                           PH, FL, MOVED)
-                    nxt += 1
-                else:
-                    VI[s] = -1
-                    active -= 1
+                _move(s, NB, best_k, best, it, CUR, PREV, W, SV)
+                continue
+            r = W[s, R]
+            c = W[s, C]
+            done, res_s, res_m, total, fl = _end(inverse_search, fp, s, it, best_k, best, second, border, W, SV,
+                                                 P[r, c, 0], P[r, c, 1], P[r, c, 2], N[r, c, 0], N[r, c, 1],
+                                                 N[r, c, 2], eye[0], eye[1], eye[2])
+            if not done:
+                continue
+            i = W[s, VI]
+            pixel[i, 0] = r
+            pixel[i, 1] = c
+            best_out[i] = res_s
+            margin_out[i] = res_m
+            iterations[i] = total
+            flags_out[i] = fl
+            if nxt < hi:  # the slot takes the group's next vertex
+                _begin(P, N, eye, vertices, starts, default_r, default_c, fp, nxt, s, W, SV)
+                nxt += 1
+            else:
+                W[s, VI] = -1
+                active -= 1
 
 
 def _make_search(n_neighbours):
     """The lanes kernel for a neighbourhood of ``n_neighbours`` (4: the crosshair, 8: the box)
-    around the current pixel; the count is a constant of the compiled code (one source, two
-    kernels, each as fast as one written for its neighbourhood alone)."""
+    around the current pixel. Its parallel loop calls ``search_group``, compiled on its own (a
+    parallel loop's body costs Numba's parallel passes far more compile time than the same code
+    in a function of its own), with the count as a literal: a constant of the compiled code, one
+    specialisation per neighbourhood, each as fast as one written for its neighbourhood alone."""
     NB = n_neighbours
 
     @kernel(parallel=True)
@@ -309,9 +322,9 @@ def _make_search(n_neighbours):
                      margin_out, iterations, flags_out):
         n = vertices.shape[0]
         for g in prange((n + SEARCH_GROUP - 1) // SEARCH_GROUP):
-            _search_group(P, N, mask, eye, vertices, starts, default_r, default_c, cap, inverse_search, fp, pixel,
-                          best_out, margin_out, iterations, flags_out, NB, g * SEARCH_GROUP,
-                          min(n, (g + 1) * SEARCH_GROUP))
+            search_group(P, N, mask, eye, vertices, starts, default_r, default_c, cap, inverse_search, fp, pixel,
+                         best_out, margin_out, iterations, flags_out, NB, g * SEARCH_GROUP,
+                         min(n, (g + 1) * SEARCH_GROUP))
 
     return search_lanes
 
