@@ -36,7 +36,10 @@ def start(options: dict):
     if (options.get("method") in ("ldt", "envmap") or (os.cpu_count() or 1) < 2
             or os.environ.get("REFSOFT_WARMUP", "1") == "0"):
         return None
-    return subprocess.Popen([sys.executable, "-m", "refsoft._warmup", json.dumps(options)],
+    # started in the folder that holds this refsoft package: ``-m`` imports from the working
+    # folder first, and a source tree there (as in CI) would fill another package's cache
+    home = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    return subprocess.Popen([sys.executable, "-m", "refsoft._warmup", json.dumps(options)], cwd=home,
                             stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
 
 

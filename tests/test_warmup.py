@@ -111,3 +111,14 @@ def test_lock_file_is_exclusive_across_processes():
         held = subprocess.run([sys.executable, "-c", probe, path], capture_output=True, text=True, check=True)
     free = subprocess.run([sys.executable, "-c", probe, path], capture_output=True, text=True, check=True)
     assert held.stdout.strip() == "held" and free.stdout.strip() == "free"
+
+
+def test_the_warm_up_process_imports_this_refsoft_wherever_it_starts(tmp_path, monkeypatch):
+    """Started from a folder holding another ``refsoft`` (a source tree beside an installed
+    package), the process still runs the refsoft that started it, whose cache the command reads."""
+    (tmp_path / "refsoft").mkdir()
+    (tmp_path / "refsoft" / "__init__.py").write_text("raise SystemExit(3)\n")
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("REFSOFT_WARMUP", raising=False)
+    process = _warmup.start({"preset": "paper"})
+    assert process is not None and process.wait(timeout=600) == 0
