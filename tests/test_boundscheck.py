@@ -23,16 +23,60 @@ except IndexError:
 """
 
 
-def test_subset_passes_with_numba_boundscheck(tmp_path):
-    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-    env = dict(os.environ, NUMBA_BOUNDSCHECK="1", NUMBA_CACHE_DIR=str(tmp_path / "numba-cache"))
-    probe = subprocess.run([sys.executable, "-c", PROBE], env=env, cwd=root, capture_output=True, text=True,
-                           timeout=600)
+class Child:
+    """The bounds-checked run of :data:`SUBSET`, in a child process with its own empty Numba cache.
+
+    It recompiles every kernel it reaches (minutes of one core) while the rest of the suite runs
+    on the other: ``conftest.py`` starts it when this test is collected (:meth:`start`) and the
+    test waits for its verdict. Output goes to a file in its own temporary folder, removed with
+    it at the session's end (:meth:`close`)."""
+
+    def __init__(self):
+        import tempfile
+
+        self.root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+        self.folder = tempfile.mkdtemp(prefix="refsoft-boundscheck-")
+        self.env = dict(os.environ, NUMBA_BOUNDSCHECK="1", NUMBA_CACHE_DIR=os.path.join(self.folder, "numba-cache"))
+        self.log = os.path.join(self.folder, "pytest.log")
+        # the built-in animations of test_skips are left out here (minutes with bounds checks); the
+        # stress suite and the skips' own scene reach the same kernels
+        with open(self.log, "wb") as out:
+            self.process = subprocess.Popen(
+                [sys.executable, "-m", "pytest", "-q", "-x", "-p", "no:cacheprovider", "-k", "not builtin", *SUBSET],
+                env=self.env, cwd=self.root, stdin=subprocess.DEVNULL, stdout=out, stderr=subprocess.STDOUT)
+
+    def result(self, timeout=3000):
+        """(exit status, the run's output)."""
+        code = self.process.wait(timeout=timeout)
+        with open(self.log, encoding="utf-8", errors="replace") as f:
+            return code, f.read()
+
+    def close(self):
+        import shutil
+
+        if self.process.poll() is None:
+            self.process.kill()
+            self.process.wait()
+        shutil.rmtree(self.folder, ignore_errors=True)
+
+
+#: The child started at collection (None until then, or when this test is not collected).
+CHILD = None
+
+
+def start():
+    """Start the child (once); ``conftest.py`` calls this when the test is collected."""
+    global CHILD
+    if CHILD is None:
+        CHILD = Child()
+    return CHILD
+
+
+def test_subset_passes_with_numba_boundscheck():
+    child = start()  # already running when the session was collected with conftest.py's hook
+    probe = subprocess.run([sys.executable, "-c", PROBE], env=child.env, cwd=child.root, capture_output=True,
+                           text=True, timeout=600)
     assert probe.stdout.strip() == "checked", probe.stdout + probe.stderr  # the flag reached refsoft's kernels
-    # the built-in animations of test_skips are left out here (minutes with bounds checks); the
-    # stress suite and the skips' own scene reach the same kernels
-    r = subprocess.run([sys.executable, "-m", "pytest", "-q", "-x", "-p", "no:cacheprovider", "-k", "not builtin",
-                        *SUBSET], env=env,
-                       cwd=root, capture_output=True, text=True, timeout=3000)
-    assert r.returncode == 0, r.stdout[-4000:] + r.stderr[-2000:]
-    assert " passed" in r.stdout and "skipped" not in r.stdout.splitlines()[-1]
+    code, said = child.result()
+    assert code == 0, said[-6000:]
+    assert " passed" in said and "skipped" not in said.rstrip().splitlines()[-1]
