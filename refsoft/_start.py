@@ -2,10 +2,14 @@
 Ctrl-C at any moment, even while Python loads NumPy and Numba, ends with one line and status 130.
 
 The command also spares its process SciPy (:class:`SkipScipyProbes`), which no refsoft kernel
-uses.
+uses, and Numba's implementation registries while it only loads cached kernels
+(:func:`refsoft._numba.load_cached_without_registries`).
 """
 
 import sys
+
+#: True in the ``refsoft`` command's own process, from the start of :func:`main`.
+COMMAND = False
 
 
 class SkipScipyProbes:
@@ -48,8 +52,10 @@ class SkipScipyProbes:
 
 
 def main(argv=None) -> int:
+    global COMMAND
     from . import interrupt
 
+    COMMAND = True
     if not interrupt.installed():
         interrupt.install()
     SkipScipyProbes.install()

@@ -49,10 +49,12 @@ COMMAND_RENDER = """
 import json, sys
 from refsoft._start import SkipScipyProbes, main
 code = main(sys.argv[1:])
+registries = "numba.np.arraymath" in sys.modules
 loaded = sorted(m for m in sys.modules if m.split(".")[0] in ("scipy", "imageio", "PIL"))
 from numba.np import arraymath, linalg
 linalg.ensure_blas()
-print(json.dumps([code, loaded, arraymath._HAVE_BLAS, "scipy.linalg" in sys.modules, SkipScipyProbes in sys.meta_path]))
+print(json.dumps([code, loaded, arraymath._HAVE_BLAS, "scipy.linalg" in sys.modules, SkipScipyProbes in sys.meta_path,
+                  registries]))
 """
 
 
@@ -84,8 +86,13 @@ def test_a_float32_frame_loads_each_of_its_kernels_once_in_float32():
 
 
 def test_the_commands_render_loads_neither_scipy_nor_imageio(tmp_path):
-    code, loaded, have_blas, linalg_after, finder = _run(COMMAND_RENDER, "render", "sphere", "--frames", "1", "--width",
-                                                         "160", "--height", "120", "--out", str(tmp_path / "s"))
+    args = ["render", "sphere", "--frames", "1", "--width", "160", "--height", "120", "--out"]
+    _run(COMMAND_RENDER, *args, str(tmp_path / "first"))  # compiles whatever is not cached yet
+    code, loaded, have_blas, linalg_after, finder, registries = _run(COMMAND_RENDER, *args, str(tmp_path / "s"))
+    # its kernels cached, the command loaded them without Numba's registries, to the same outputs
+    assert registries is False
+    for name in ("frame_0000.png", "frame_0000.npz"):
+        assert (tmp_path / "s" / name).read_bytes() == (tmp_path / "first" / name).read_bytes(), name
     assert code == 0 and (tmp_path / "s" / "frame_0000.png").is_file()
     assert [m for m in loaded if m.startswith(("scipy", "imageio"))] == []
     assert "PIL.PngImagePlugin" in loaded  # the PNG went through Pillow itself
