@@ -1,6 +1,7 @@
 """Shared Numba settings: every kernel is compiled with these flags (spec section 2)."""
 
 import os
+import sys
 
 # OpenMP threads that wait for work sleep at once instead of spinning first. A parallel region
 # ends when both threads are done; on a shared machine (another job on the second core) a
@@ -219,7 +220,7 @@ def load_cached_without_registries() -> bool:
     return True
 
 
-if getattr(__import__("sys").modules.get("refsoft._start"), "COMMAND", False):
+if getattr(sys.modules.get("refsoft._start"), "COMMAND", False):
     load_cached_without_registries()
 
 if os.environ.get("REFSOFT_COMPILE_REPORT"):
