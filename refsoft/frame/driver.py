@@ -227,14 +227,20 @@ def frame_indices(scene: Scene, frames=None) -> list:
 def run_frames(renderer, indices, out=None, progress=False, desc="frames", keep=True, write=None, done=None,
                on_frame=None) -> list:
     """``renderer.render_frame(f)`` for each index in order, each frame written to ``out`` (when
-    given) as soon as it is done. With ``progress`` and several frames: a tqdm bar on a terminal,
-    else (a log) a line every tenth of the run.
+    given) while the next one renders. With ``progress`` and several frames: a tqdm bar on a
+    terminal, else (a log) a line every tenth of the run.
+
+    A frame's files are written by one background thread (compressing ``frame_NNNN.npz`` takes
+    about as long as rendering a frame, and zlib lets the renderer run meanwhile), one frame after
+    another, each file atomically; the run waits for a frame's files before it counts the frame as
+    done, and on an error or an interrupt it still waits for the files being written. The bytes
+    are those of a write in the main thread.
 
     ``write``: the indices to write (default: all). ``keep=False`` drops each frame's arrays and
     per-reflector results once written (the returned frames keep their timings and reports), so
-    a long run holds one frame. ``done``: a list the finished frames are appended to as they
-    finish (what was done when an interrupt stops the run); ``on_frame(done)`` is called after
-    each."""
+    a long run holds at most two frames (one rendering, one being written). ``done``: a list the
+    finished (rendered and written) frames are appended to as they finish (what was done when an
+    interrupt stops the run); ``on_frame(done)`` is called after each."""
     import os
     import sys
 
@@ -252,20 +258,45 @@ def run_frames(renderer, indices, out=None, progress=False, desc="frames", keep=
         else:
             lines = max(1, -(-len(indices) // 10))
     t0 = time.perf_counter()
-    for n, f in enumerate(it, start=1):
-        interrupt.check()
-        fr = renderer.render_frame(f)
-        if out is not None and (write is None or f in write):
-            write_frame(out, fr)
+    writer = None
+    if out is not None:
+        from concurrent.futures import ThreadPoolExecutor
+
+        writer = ThreadPoolExecutor(1, thread_name_prefix="refsoft-write")
+    pending = []  # the frame whose files are being written, with its write (at most one)
+
+    def finish():
+        fr, written = pending.pop()
+        if written is not None:
+            written.result()  # the write's error, if any, is raised here
         if not keep:
             fr.arrays = {}
             fr.reflectors = {}
         done.append(fr)
         if on_frame is not None:
             on_frame(done)
+        n = len(done)
         if lines and (n % lines == 0 or n == len(indices)):
             print(f"{desc}: {n}/{len(indices)} frames ({100 * n // len(indices)}%), "
                   f"{time.perf_counter() - t0:.1f} s", file=sys.stderr, flush=True)
+
+    try:
+        for f in it:
+            interrupt.check()
+            fr = renderer.render_frame(f)
+            if pending:
+                finish()
+            writes = writer is not None and (write is None or f in write)
+            pending.append((fr, writer.submit(write_frame, out, fr) if writes else None))
+        if pending:
+            finish()
+    finally:
+        if pending:  # stopped by an error or an interrupt: the frame being written is still kept
+            fr, written = pending[0]
+            if written is None or written.exception() is None:
+                finish()
+        if writer is not None:
+            writer.shutdown(wait=True)
     return done
 
 
@@ -340,7 +371,8 @@ def render(scene, frames=None, out=None, progress=False, memory_limit=None, keep
     opts = RenderOptions(preset=preset, **options)
     indices = frame_indices(scene, frames)
     driver = FrameDriver(scene, opts, memory_limit)
-    check_frame_memory(scene, opts, len(indices) if keep else 1, memory_limit)
+    # kept: every frame, or (keep=False) the one rendering and the one being written
+    check_frame_memory(scene, opts, len(indices) if keep else min(len(indices), 1 if out is None else 2), memory_limit)
     return run_to_folder(driver, indices, out, "render", opts, progress, keep, write, overwrite, on_start)
 
 
