@@ -79,14 +79,22 @@ def ball_gbuffer(mesh, camera, precision, origin):
 
 def warm(options: dict) -> None:
     """One reflector's stages of a render with ``options`` (RenderOptions keyword arguments) on
-    the built-in ``sphere`` scene at :data:`SIZE`: two frames (a fresh and a coherent search),
-    then the composite's conversion to 8 bits."""
+    the built-in ``sphere`` scene at :data:`SIZE`.
+
+    The order is the one that keeps both processes busy: the search first (the command needs it
+    right after the main view's raster, its own first work); then the kernels that come after
+    the sub-texel refinement, called on the ball's search results through the functions the
+    render calls them through (the same types), while the command, done with its raster,
+    compiles the refinement itself; then two frames of the reflector's stages (a fresh and a
+    coherent search: whatever is left) and the composite's conversion to 8 bits."""
     from .frame.driver import composite
     from .options import RenderOptions
     from .raster import to_uint8
     from .scene import load_scene
-    from .seam import FrameView
     from .search import method as vertex_search
+    from .search import search
+    from .search.reflect import coherent_starts, gbuffer_camera
+    from .seam import FrameView
 
     opts = RenderOptions(**options)
     scene = load_scene("sphere", width=SIZE[0], height=SIZE[1])
@@ -97,7 +105,14 @@ def warm(options: dict) -> None:
     transforms = {j: scene.transform_at(j, 0) for j in range(1, len(scene.objects) + 1)}
     camera = scene.camera_at(0)
     view = FrameView(scene, 0, camera, meshes, None, transforms)
-    stencil = ball_gbuffer(scene.world_mesh(k, 0, proxy=True), camera, "float32", camera.eye).mask
+    proxy = scene.world_mesh(k, 0, proxy=True)
+    gcam = gbuffer_camera(scene, 0, opts.widen, opts.gbuffer_size)
+    gb = ball_gbuffer(proxy, gcam, opts.precision, gcam.eye)
+    verts = view.vertices
+    res = search(gb, camera.eye, verts, opts.neighbourhood, opts.inverse, coherent_starts(None, len(verts), gb.mask.shape),
+                 opts.cap, method=opts.method)
+    _after_refinement(opts, gb, res, verts, camera)
+    stencil = ball_gbuffer(proxy, camera, "float32", camera.eye).mask
     for _ in range(2):
         res = method.reflect(view, k, stencil)
     if res.box is not None:
@@ -105,6 +120,29 @@ def warm(options: dict) -> None:
         reflected = np.full(stencil.shape, -1, np.int32)
         composite(colour, reflected, colour.copy(), res.colour, res.reflected_id, res.covered, res.box, 1.0)
         to_uint8(colour)
+
+
+def _after_refinement(opts, gb, res, verts, camera) -> None:
+    """Compile, in the order a frame needs them after the refinement, the kernels these options
+    call there: the virtual vertices from sub-texel points, the virtual pass's box test, the
+    tessellation's edge errors and the 8-bit conversion; each through the function the render
+    calls it through, which fixes its argument types (``tests/test_warmup.py`` checks that the
+    render then compiles none of them again)."""
+    from .raster import to_uint8
+    from .search import skips, virtual_vertices
+    from .search.tessellate import edge_errors
+
+    n = min(len(verts), 8)
+    if opts.refine and n:
+        surface = np.zeros((len(verts), 3), gb.position.dtype)
+        virtual_vertices(gb, res, verts, relative=True, surface=(surface, surface), rule=opts.virtual, eye=camera.eye)
+    if opts.cull_virtual:
+        skips.triangles_outside_box(np.zeros((3, 4)), np.zeros((1, 3), np.int64),
+                                    *skips.box_planes((0, 1, 0, 1), camera.width, camera.height))
+    if opts.tessellate is not None and n:
+        offset = np.zeros((n, 2), gb.position.dtype) if opts.refine else None
+        edge_errors(gb, camera.eye, verts[:n], verts[:n][::-1], res.pixel[:n], res.pixel[:n][::-1], offset, offset)
+    to_uint8(np.zeros((1, 1, 3), np.float32))
 
 
 if __name__ == "__main__":

@@ -26,6 +26,7 @@ _warmup.warm(options)
 warmed = {d: set(d.signatures) for d in _numba.KERNELS}
 refsoft.render("sphere", frames=2, width=80, height=60, **options)
 print(json.dumps({"warmed": sorted(d.py_func.__name__ for d in _numba.KERNELS if warmed[d]),
+                  "types": {d.py_func.__name__: len(warmed[d]) for d in _numba.KERNELS if warmed[d]},
                   "new": sorted(d.py_func.__name__ for d in _numba.KERNELS if set(d.signatures) - warmed[d])}))
 """
 
@@ -40,6 +41,12 @@ def test_a_render_after_the_warm_up_calls_its_kernels_with_the_same_types(option
     assert "search_lanes" in got["warmed"] and "shade_visible" in got["warmed"]
     # only the G-buffer's interpolation, which the warm-up's ray-cast ball does not need, may be new
     assert set(got["new"]) <= {"interpolate_pair"}, got["new"]
+    # the kernels compiled ahead of the frame's order were called with the render's types only
+    primed = {"virtual_from_points", "triangles_outside_box", "edge_errors", "to_uint8_flat"}
+    calls = {name: got["types"].get(name, 0) for name in primed}
+    if options["preset"] == "accurate":  # which calls all four
+        assert calls == dict.fromkeys(primed, 1), calls
+    assert max(calls.values()) <= 1, calls
 
 
 def test_ball_gbuffer_is_a_ball_seen_by_the_camera():
