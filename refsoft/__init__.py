@@ -24,7 +24,7 @@ if _sys.argv[:1] == ["-m"] or _os.path.basename(_sys.argv[0] if _sys.argv else "
 
     from . import interrupt as _interrupt
 
-    _interrupt.install()
+    _interrupt.install(hold=True)  # released by the entry point, refsoft._start.main
     # At exit, the interpreter's last garbage collections traverse every object Numba and LLVM
     # made (0.3-0.5 s of a one-frame render's process): frozen, they are skipped. Registered
     # first, this runs after every other exit handler; objects still go away by reference count.

@@ -60,8 +60,14 @@ def main(argv=None) -> int:
         interrupt.install()
     SkipScipyProbes.install()
     try:
+        interrupt.release()
         from .cli import main as cli_main
     except KeyboardInterrupt:
+        print("refsoft: interrupted", file=sys.stderr)
+        return 130
+    except Exception:  # an interrupt a library turned into another error while it imported
+        if not interrupt.seen():
+            raise
         print("refsoft: interrupted", file=sys.stderr)
         return 130
     return cli_main(argv, installed=True)
@@ -77,4 +83,13 @@ def run() -> None:
         code = 130
         print("refsoft: interrupted", file=sys.stderr)
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the work is done: an interrupt now changes nothing
+    if code == 130:
+        # interrupted: leave at once with that status. An interrupt raised inside some library's
+        # C-level call of Python code during its import can leave Python's "unhandled Ctrl-C"
+        # mark set, which would turn a normal exit into death by SIGINT (status -2)
+        import os
+
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
     sys.exit(code)

@@ -1,6 +1,8 @@
 """Ctrl-C that ends cleanly at any moment.
 
-The command line installs :func:`install`'s handler. Before compiled code is loaded (NumPy,
+The command line installs :func:`install`'s handler when the package is imported, and holds a
+first interrupt (records it only) until its entry point runs and acts on it. Before compiled code
+is loaded (NumPy,
 trimesh and the like are importing) an interrupt raises ``KeyboardInterrupt`` at once, as Python's
 own handler does, and is recorded too, so one that a library swallows (some catch every exception
 while they import) is still seen at the next :func:`check`. Once Numba's compiler is loaded, raising
@@ -26,13 +28,14 @@ MESSAGE = "refsoft: interrupted"
 
 _seen = False
 _previous = None
+_held = False
 
 
 def _handler(signum, frame):
     global _seen
     first = not _seen
     _seen = True
-    if not first or "llvmlite" not in sys.modules:
+    if not first or ("llvmlite" not in sys.modules and not _held):
         raise KeyboardInterrupt
     threading.Thread(target=_leave_if_stuck, daemon=True).start()
 
@@ -47,14 +50,25 @@ def _leave_if_stuck():
     os._exit(130)
 
 
-def install() -> None:
-    """Install the handler (main thread only; a no-op elsewhere)."""
-    global _previous, _seen
-    _seen = False
+def install(hold: bool = False) -> None:
+    """Install the handler (main thread only; a no-op elsewhere). ``hold``: only record a first
+    interrupt until :func:`release` (the command's package import holds it, so that one landing
+    while Python still finds and compiles the entry module, outside any code of refsoft's that
+    could catch it, is acted on by the entry point instead)."""
+    global _previous, _seen, _held
+    _seen, _held = False, hold
     try:
         _previous = signal.signal(signal.SIGINT, _handler)
     except ValueError:  # not the main thread
         _previous = None
+
+
+def release() -> None:
+    """End :func:`install`'s hold: an interrupt raises at once again (until compiled code
+    loads), and one that arrived during the hold raises ``KeyboardInterrupt`` now."""
+    global _held
+    _held = False
+    check()
 
 
 def installed() -> bool:

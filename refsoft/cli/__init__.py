@@ -199,7 +199,8 @@ def main(argv=None, installed=False) -> int:
     except KeyboardInterrupt:
         print(interrupt.MESSAGE, file=sys.stderr)
         return 130
-    except SystemError:  # an interrupt inside a compiled call surfaces as "returned a result with an exception set"
+    except Exception:  # an interrupt inside a compiled call surfaces as "returned a result with an exception
+        # set", one inside NumPy's import as an ImportError: Ctrl-C was pressed, whatever the exception says
         if not interrupt.seen():
             raise
         print(interrupt.MESSAGE, file=sys.stderr)
