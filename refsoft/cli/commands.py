@@ -179,7 +179,7 @@ def cmd_render(args) -> int:
     options = render_kwargs(args)
     notice = _FirstRunNotice("render", 30, warm=options)
     t0 = time.perf_counter()
-    # every frame is written as soon as it is rendered, then dropped (one frame in memory)
+    # each frame is written while the next one renders, then dropped (at most two frames in memory)
     try:
         done, stats = render(scene, frames=frames, out=out, progress=True, memory_limit=args.memory_limit,
                              keep=False, write=write, overwrite=args.overwrite, on_start=notice, **options)
