@@ -188,3 +188,23 @@ def test_triangle_errors_equal_the_plain_reduction(min_span):
         assert np.isinf(want).any() and (want > 0).any()
     assert np.all(fl & search.HIDDEN, axis=1).any()
 
+
+def test_reflected_mesh_is_reused_for_the_same_mesh_objects_only():
+    """The concatenated non-reflector meshes are made again unless every mesh is the very
+    object they were made from; either way they equal ``concatenate`` of the meshes."""
+    from refsoft.scene.mesh import concatenate
+    from refsoft.search.virtual import reflected_mesh
+
+    scene = refsoft.load_scene("sphere", width=64, height=48)
+    meshes = [scene.world_mesh(k) for k in range(1, len(scene.objects) + 1)]
+    ids = [k for k, o in enumerate(scene.objects, start=1) if not o.reflector]
+    want = concatenate([meshes[k - 1] for k in ids], ids)
+    first = reflected_mesh(scene, meshes)
+    assert reflected_mesh(scene, list(meshes), first) is first
+    other = list(meshes)
+    other[ids[0] - 1] = scene.world_mesh(ids[0])  # equal values, another object
+    again = reflected_mesh(scene, other, first)
+    assert again is not first and again[0][0] is other[ids[0] - 1]
+    for got in (first[1], again[1]):
+        for name in ("vertices", "normals", "faces", "face_object", "vertex_offsets", "face_offsets"):
+            np.testing.assert_array_equal(getattr(got, name), getattr(want, name))
