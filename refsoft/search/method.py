@@ -21,7 +21,7 @@ from ..seam import ReflectorResult, stencil_box
 from . import CULLED, SearchResult, search, skips, virtual_vertices
 from .reflect import Reflection, coherent_starts, gbuffer_camera
 from .refine import refine as refine_points
-from .virtual import refined_parts, virtual_parts, virtual_pass
+from .virtual import reflected_mesh, refined_parts, virtual_parts, virtual_pass
 
 
 @dataclass
@@ -105,6 +105,7 @@ class VertexSearch:
         self.options = options
         self.previous = {}
         self._last = {}
+        self._reflected = None  # the concatenated non-reflector meshes (reflected_mesh)
 
     # --- the seam --------------------------------------------------------------------------
     def reflect(self, view, k: int, stencil) -> ReflectorResult:
@@ -122,7 +123,9 @@ class VertexSearch:
             if opt.tessellate is None and opt.silhouette != "clip":
                 parts = virtual_parts(self.scene, view.meshes, refl)
             else:
-                parts, counts = refined_parts(self.scene, view.meshes, refl, view.vertices, opt, view.camera.eye)
+                self._reflected = reflected_mesh(self.scene, view.meshes, self._reflected)
+                parts, counts = refined_parts(self.scene, view.meshes, refl, view.vertices, opt, view.camera.eye,
+                                              self._reflected[1])
                 report.update(counts)
                 times["tessellate"] = 1000 * (time.perf_counter() - t)
                 t = time.perf_counter()

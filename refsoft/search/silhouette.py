@@ -26,6 +26,7 @@ import numpy as np
 
 from ..scene.mesh import normalize_rows
 from . import CULLED, HIDDEN, search
+from .tessellate import _distinct
 from ..constants import CLIP_ITERATIONS
 
 
@@ -69,10 +70,13 @@ class Clip:
 
 def mixed_faces(faces, flags) -> np.ndarray:
     """(T,) bool: faces with a hidden and a visible corner and no CULLED corner."""
-    f = flags[faces]
-    hidden = (f & HIDDEN) != 0
-    culled = np.any((f & CULLED) != 0, axis=1)
-    return hidden.any(axis=1) & ~hidden.all(axis=1) & ~culled
+    faces = np.asarray(faces)
+    # per-vertex tests gathered per corner (axis-1 reductions over rows of three are slow)
+    hidden = (flags & HIDDEN) != 0
+    culled = (flags & CULLED) != 0
+    f0, f1, f2 = faces[:, 0], faces[:, 1], faces[:, 2]
+    h0, h1, h2 = hidden[f0], hidden[f1], hidden[f2]
+    return ((h0 != h1) | (h0 != h2)) & ~(culled[f0] | culled[f1] | culled[f2])
 
 
 def clip_at_silhouette(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, neighbourhood="cross",
@@ -112,7 +116,7 @@ def clip_at_silhouette(gbuffer, eye, vertices, normals, faces, face_obj, pixel, 
     cross = hidden[a] != hidden[b]
     vis = np.where(hidden[a], b, a)[cross]
     hid = np.where(hidden[a], a, b)[cross]
-    key = np.unique(vis * np.int64(n) + hid)
+    key = _distinct(np.sort(vis * np.int64(n) + hid))
     vis, hid = key // n, key % n
     lo_t = np.zeros(len(key))
     hi_t = np.ones(len(key))
@@ -135,36 +139,39 @@ def clip_at_silhouette(gbuffer, eye, vertices, normals, faces, face_obj, pixel, 
     parts, per_face = _visible_parts(f, hidden, key, n)
     counts = np.ones(len(faces), dtype=np.int64)
     counts[mixed] = per_face
-    first = np.concatenate([[0], np.cumsum(counts)[:-1]])
     out = np.repeat(faces, counts, axis=0)
     out_obj = np.repeat(np.asarray(face_obj), counts)
-    rows = np.repeat(first[mixed], per_face) + (np.arange(len(parts)) - np.repeat(np.cumsum(per_face) - per_face,
-                                                                                   per_face))
-    out[rows] = parts
+    # the rows of the mixed faces' parts: those whose face is mixed, in face order
+    is_mixed = np.zeros(len(faces), dtype=bool)
+    is_mixed[mixed] = True
+    out[np.repeat(is_mixed, counts)] = parts
     return Clip(cut_v, cut_n, got_pixel, got_flags, out, out_obj, len(key), len(key) * iterations,
                 np.c_[vis, hid], lo_t)
 
 
 def _visible_parts(f, hidden, key, n):
-    """The visible part of each mixed face ``f[j]`` (M, 3): its faces, in face order (2 for a
-    face with one hidden corner, 1 for two), and their count per face; the cut point of edge
-    (visible u, hidden v) is vertex ``n + searchsorted(key, u * n + v)``."""
-    def cut(u, v):
-        return n + np.searchsorted(key, u * n + v)
-
-    h = hidden[f]
-    one = h.sum(axis=1) == 1
+    """The visible part of each mixed face ``f[j]`` (M, 3) (one or two hidden corners): its
+    faces, in face order (2 for a face with one hidden corner, 1 for two), and their count per
+    face; the cut point of edge (visible u, hidden v) is vertex ``n + searchsorted(key, u * n + v)``."""
+    h0, h1, h2 = hidden[f[:, 0]], hidden[f[:, 1]], hidden[f[:, 2]]
+    one = (h0.astype(np.int8) + h1 + h2) == 1
     rows = np.arange(len(f))
-    k = np.where(one, np.argmax(h, axis=1), np.argmax(~h, axis=1))
+    # k: the corner unlike the other two (the hidden one of one, the visible one of two)
+    k = np.where(h0 == h1, 2, np.where(h0 == h2, 1, 0))
     # one hidden corner z = f[k]: x, y, z = f[k+1], f[k+2], f[k]; two: x = f[k] visible, then y, z
     x = np.where(one, f[rows, (k + 1) % 3], f[rows, k])
     y = np.where(one, f[rows, (k + 2) % 3], f[rows, (k + 1) % 3])
     z = np.where(one, f[rows, k], f[rows, (k + 2) % 3])
+    # the cut edges: x-z for all; y-z for one hidden corner, x-y for two (one lookup)
+    u = np.concatenate([x, np.where(one, y, x)])
+    v = np.concatenate([z, np.where(one, z, y)])
+    cuts = n + np.searchsorted(key, u * n + v)
+    c_xz, c_2 = cuts[:len(f)], cuts[len(f):]
     per_face = np.where(one, 2, 1)
-    first = np.where(one, np.c_[x, y, cut(y, z)].T, np.c_[x, cut(x, y), cut(x, z)].T).T
-    second = np.c_[x, cut(y, z), cut(x, z)]
+    # one: (x, y, X_yz) and (x, X_yz, X_xz); two: (x, X_xy, X_xz)
+    first = np.column_stack([x, np.where(one, y, c_2), np.where(one, c_2, c_xz)])
     parts = np.empty((int(per_face.sum()), 3), dtype=np.int64)
     at = np.cumsum(per_face) - per_face
     parts[at] = first
-    parts[at[one] + 1] = second[one]
+    parts[at[one] + 1] = np.column_stack([x, c_2, c_xz])[one]
     return parts, per_face

@@ -69,6 +69,23 @@ def _edge_keys(u, v, n):
     return lo.astype(np.int64) * n + hi
 
 
+# Red-green children per split pattern (bit k set: edge k, from corner k to k + 1, is split),
+# as slots of the row (a, b, c, mid_ab, mid_bc, mid_ca): 1 triangle whole; one edge k split:
+# (v_k, m_k, v_k+2), (m_k, v_k+1, v_k+2); two split, edge k not: (v_k, v_k+1, m_k+1),
+# (v_k, m_k+1, m_k+2), (m_k+2, m_k+1, v_k+2); all three: the corners, then the middle.
+_CHILDREN = np.array([
+    [[0, 1, 2], [0, 0, 0], [0, 0, 0], [0, 0, 0]],  # none
+    [[0, 3, 2], [3, 1, 2], [0, 0, 0], [0, 0, 0]],  # ab
+    [[1, 4, 0], [4, 2, 0], [0, 0, 0], [0, 0, 0]],  # bc
+    [[2, 0, 3], [2, 3, 4], [4, 3, 1], [0, 0, 0]],  # ab, bc (ca whole)
+    [[2, 5, 1], [5, 0, 1], [0, 0, 0], [0, 0, 0]],  # ca
+    [[1, 2, 5], [1, 5, 3], [3, 5, 0], [0, 0, 0]],  # ab, ca (bc whole)
+    [[0, 1, 4], [0, 4, 5], [5, 4, 2], [0, 0, 0]],  # bc, ca (ab whole)
+    [[0, 3, 5], [3, 1, 4], [5, 4, 2], [3, 4, 5]],  # all three
+], dtype=np.int64)
+_N_CHILDREN = np.array([1, 2, 2, 3, 2, 3, 3, 4], dtype=np.int64)
+
+
 def _split(faces, edge_keys, edge_mid, n_vertices, only=None):
     """Red-green refinement of ``faces`` (T, 3), vectorised: a triangle whose three edges are
     split gives 4, two edges 3, one edge 2; ``edge_keys`` (sorted, :func:`_edge_keys`) are the
@@ -76,56 +93,33 @@ def _split(faces, edge_keys, edge_mid, n_vertices, only=None):
     Returns (faces, parent). ``only`` (bool (T,)): split just these 1-to-4 and leave the others
     whole, T-junctions and all (the thesis's rule, for comparison)."""
     f = np.asarray(faces, dtype=np.int64)
+    out, count = _children(f, edge_keys, edge_mid, n_vertices, only)
+    return out, np.repeat(np.arange(len(f)), count)
+
+
+def _children(f, edge_keys, edge_mid, n_vertices, only=None):
+    """:func:`_split`'s children of int64 faces ``f`` and their count per face (T,)."""
     t = len(f)
-    a, b, c = f[:, 0], f[:, 1], f[:, 2]
-    ends = [(a, b), (b, c), (c, a)]
-    has = np.zeros((t, 3), dtype=bool)
-    mid = np.full((t, 3), -1, dtype=np.int64)
-    for k, (u, v) in enumerate(ends):
-        key = _edge_keys(u, v, n_vertices)
-        pos = np.clip(np.searchsorted(edge_keys, key), 0, max(len(edge_keys) - 1, 0))
-        hit = (edge_keys[pos] == key) if len(edge_keys) else np.zeros(t, dtype=bool)
-        has[:, k] = hit
-        mid[:, k] = np.where(hit, edge_mid[pos] if len(edge_mid) else -1, -1)
+    # one lookup of the 3 T edge keys, edge k of every face in block k
+    key = _edge_keys(f.T.reshape(-1), f[:, [1, 2, 0]].T.reshape(-1), n_vertices)
+    slots = np.empty((t, 6), dtype=np.int64)
+    slots[:, :3] = f
+    if len(edge_keys):
+        pos = np.minimum(np.searchsorted(edge_keys, key), len(edge_keys) - 1)
+        hit = edge_keys[pos] == key
+        slots[:, 3:] = edge_mid[pos].reshape(3, t).T  # read only where the edge is split
+    else:
+        hit = np.zeros(3 * t, dtype=bool)
+    has = hit.reshape(3, t)
     if only is not None:
-        has &= np.asarray(only, dtype=bool)[:, None]
-        mid = np.where(has, mid, -1)
-    n = has.sum(axis=1)
-    count = np.choose(n, [1, 2, 3, 4])
-    start = np.concatenate([[0], np.cumsum(count)[:-1]])
-    out = np.empty((int(count.sum()), 3), dtype=np.int64)
+        has = has & np.asarray(only, dtype=bool)
+    pattern = has[0] + 2 * has[1].astype(np.int64) + 4 * has[2].astype(np.int64)
+    count = _N_CHILDREN[pattern]
     parent = np.repeat(np.arange(t), count)
-    v = f  # v[:, k] = vertex k
-    rows = np.arange(t)
-    # no split: the triangle itself
-    s0 = n == 0
-    out[start[s0]] = f[s0]
-    # three: corners, then the middle
-    s3 = n == 3
-    ab, bc, ca = mid[s3, 0], mid[s3, 1], mid[s3, 2]
-    st = start[s3]
-    out[st] = np.c_[a[s3], ab, ca]
-    out[st + 1] = np.c_[ab, b[s3], bc]
-    out[st + 2] = np.c_[ca, bc, c[s3]]
-    out[st + 3] = np.c_[ab, bc, ca]
-    # one: the split edge k from v_k to v_k+1, the opposite vertex v_k+2
-    s1 = n == 1
-    k = np.argmax(has[s1], axis=1)
-    r1 = rows[s1]
-    v0, v1, opp = v[r1, k], v[r1, (k + 1) % 3], v[r1, (k + 2) % 3]
-    m = mid[r1, k]
-    out[start[s1]] = np.c_[v0, m, opp]
-    out[start[s1] + 1] = np.c_[m, v1, opp]
-    # two: the unsplit edge k keeps a triangle of its own
-    s2 = n == 2
-    k = np.argmin(has[s2], axis=1)
-    r2 = rows[s2]
-    v0, v1, opp = v[r2, k], v[r2, (k + 1) % 3], v[r2, (k + 2) % 3]
-    m1, m2 = mid[r2, (k + 1) % 3], mid[r2, (k + 2) % 3]
-    out[start[s2]] = np.c_[v0, v1, m1]
-    out[start[s2] + 1] = np.c_[v0, m1, m2]
-    out[start[s2] + 2] = np.c_[m2, m1, opp]
-    return out, parent
+    child = np.arange(len(parent)) - np.repeat(np.cumsum(count) - count, count)
+    # each child's three slots, read from its parent's row of ``slots``
+    at = _CHILDREN[pattern[parent], child] + 6 * parent[:, None]
+    return slots.reshape(-1)[at], count
 
 
 def _triangle_errors(gbuffer, eye, verts, pixel, flags, offset, f, threshold, min_span) -> np.ndarray:
@@ -136,17 +130,24 @@ def _triangle_errors(gbuffer, eye, verts, pixel, flags, offset, f, threshold, mi
     ``min_span`` apart count 0."""
     e0, e1 = f.reshape(-1), f[:, [1, 2, 0]].reshape(-1)
     err = np.zeros(len(e0))
-    need = np.ones(len(e0), dtype=bool)
     if min_span > 0:  # an edge reflected within min_span pixels: nothing to draw between its ends
         # per axis, in the pixels' int32 (|differences| < 2^16): a tenth of the time of one
         # (E, 2) int64 block on 1.3M triangles, whose temporaries outgrow the cache
         rows, cols = pixel[:, 0], pixel[:, 1]
-        need = (np.abs(rows[e0] - rows[e1]) > min_span) | (np.abs(cols[e0] - cols[e1]) > min_span)
-    err[need] = _edge_errors(gbuffer, eye, verts, pixel, offset, e0[need], e1[need])
-    bad = ((flags[f] & CULLED) != 0).any(axis=1)
+        need = np.flatnonzero((np.abs(rows[e0] - rows[e1]) > min_span) | (np.abs(cols[e0] - cols[e1]) > min_span))
+        err[need] = _edge_errors(gbuffer, eye, verts, pixel, offset, e0[need], e1[need])
+    else:
+        err[:] = _edge_errors(gbuffer, eye, verts, pixel, offset, e0, e1)
+    # per-vertex tests gathered per corner, and the maximum of three columns: axis-1
+    # reductions over rows of three are several times slower
+    f0, f1, f2 = f[:, 0], f[:, 1], f[:, 2]
+    culled = (flags & CULLED) != 0
+    bad = culled[f0] | culled[f1] | culled[f2]
     if threshold > 0:
-        bad |= ((flags[f] & HIDDEN) != 0).all(axis=1)
-    return np.where(bad, -np.inf, err.reshape(-1, 3).max(axis=1))
+        hidden = (flags & HIDDEN) != 0
+        bad |= hidden[f0] & hidden[f1] & hidden[f2]
+    err = err.reshape(-1, 3)
+    return np.where(bad, -np.inf, np.maximum(np.maximum(err[:, 0], err[:, 1]), err[:, 2]))
 
 
 def _apply_split(faces, face_obj, keys, mids, ea, eb, n_vertices, only=None):
@@ -159,14 +160,25 @@ def _apply_split(faces, face_obj, keys, mids, ea, eb, n_vertices, only=None):
         mask = np.zeros(len(faces), dtype=bool)
         mask[only] = True
     new_faces, parent = _split_some(faces, keys, mids, ea, eb, n_vertices, mask)
-    touched = np.zeros(len(faces), dtype=bool)
-    touched[np.unique(parent[np.bincount(parent, minlength=len(faces))[parent] > 1])] = True
+    touched = np.bincount(parent, minlength=len(faces)) > 1  # the faces split into several
     return new_faces, face_obj[parent], touched[parent]
 
 
 def _split_edges(tris) -> np.ndarray:
-    """The sorted unique edge keys of triangles ``tris`` (T, 3)."""
-    return np.unique(np.concatenate([_edge_keys(tris[:, i], tris[:, (i + 1) % 3], KEY_BASE) for i in range(3)]))
+    """The sorted unique edge keys of triangles ``tris`` (T, 3) (``np.unique``'s result)."""
+    keys = np.sort(_edge_keys(tris.reshape(-1), tris[:, [1, 2, 0]].reshape(-1), KEY_BASE))
+    return _distinct(keys)
+
+
+def _distinct(keys) -> np.ndarray:
+    """The distinct values of sorted ``keys``, in order (``np.unique`` of sorted keys, which
+    hashes and sorts again)."""
+    if len(keys) == 0:
+        return keys
+    first = np.empty(len(keys), dtype=bool)
+    first[0] = True
+    np.not_equal(keys[1:], keys[:-1], out=first[1:])
+    return keys[first]
 
 
 def _midpoint_starts(mask, pa, pb) -> np.ndarray:
@@ -174,10 +186,10 @@ def _midpoint_starts(mask, pa, pb) -> np.ndarray:
     pixel halfway between, where covered; else the first parent's; (-1, -1) where neither."""
     start = (pa + pb) // 2
     h, w = mask.shape
-    ok = np.all(pa >= 0, axis=1) & np.all(pb >= 0, axis=1)
+    ok = (pa[:, 0] >= 0) & (pa[:, 1] >= 0) & (pb[:, 0] >= 0) & (pb[:, 1] >= 0)
     ok &= mask[np.clip(start[:, 0], 0, h - 1), np.clip(start[:, 1], 0, w - 1)]
     start = np.where(ok[:, None], start, pa)
-    return np.where(np.all(start >= 0, axis=1)[:, None], start, -1)
+    return np.where(((start[:, 0] >= 0) & (start[:, 1] >= 0))[:, None], start, -1)
 
 
 def _split_some(faces, keys, mids, ea, eb, n_vertices, only=None):
@@ -187,21 +199,18 @@ def _split_some(faces, keys, mids, ea, eb, n_vertices, only=None):
     marked = np.zeros(n_vertices, dtype=bool)
     marked[ea] = True
     marked[eb] = True
-    sel = np.flatnonzero(marked[faces].sum(axis=1) >= 2)
-    sub_faces, sub_parent = _split(faces[sel], keys, mids, KEY_BASE, None if only is None else only[sel])
+    m0, m1, m2 = marked[faces[:, 0]], marked[faces[:, 1]], marked[faces[:, 2]]
+    sel = np.flatnonzero((m0 & m1) | (m2 & (m0 | m1)))  # two or three corners marked
+    sub_faces, sub_counts = _children(faces[sel], keys, mids, KEY_BASE, None if only is None else only[sel])
     counts = np.ones(len(faces), dtype=np.int64)
-    counts[sel] = np.bincount(sub_parent, minlength=len(sel))
+    counts[sel] = sub_counts
     parent = np.repeat(np.arange(len(faces)), counts)
-    out = faces[parent]
-    first = np.cumsum(counts) - counts
-    out[np.repeat(first[sel], counts[sel]) + (np.arange(len(sub_parent)) - first_of(sub_parent))] = sub_faces
+    out = np.repeat(faces, counts, axis=0)
+    # the children of the faces in ``sel``: the rows whose parent is one, in order
+    in_sel = np.zeros(len(faces), dtype=bool)
+    in_sel[sel] = True
+    out[in_sel[parent]] = sub_faces
     return out, parent
-
-
-def first_of(parent) -> np.ndarray:
-    """For sorted group ids ``parent``, the index of each element's group's first element."""
-    starts = np.flatnonzero(np.r_[True, parent[1:] != parent[:-1]])
-    return np.repeat(starts, np.diff(np.r_[starts, len(parent)]))
 
 
 @dataclass(frozen=True, eq=False)
@@ -303,7 +312,8 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
         ea, eb = keys // KEY_BASE, keys % KEY_BASE
         mids = n_total + np.arange(len(keys), dtype=np.int64)
         new_v = 0.5 * (allv[ea] + allv[eb])
-        new_n = normalize_rows(np.concatenate(norms)[ea] + np.concatenate(norms)[eb])
+        alln = np.concatenate(norms)
+        new_n = normalize_rows(alln[ea] + alln[eb])
         start = _midpoint_starts(gbuffer.mask, allp[ea].astype(np.int64), allp[eb].astype(np.int64))
         res = search(gbuffer, eye, new_v, neighbourhood, inverse, start, cap, method=method)
         for lst, a in zip((verts, norms, pix, fl), (new_v, new_n, res.pixel, res.flags)):

@@ -41,7 +41,31 @@ def virtual_parts(scene, meshes, refl):
     return parts
 
 
-def refined_parts(scene, meshes, refl, verts, opt, eye):
+def reflected_mesh(scene, meshes, last=None):
+    """The meshes of the non-reflector objects concatenated, their object ids as face ids.
+
+    Parameters
+    ----------
+    scene : Scene
+    meshes : list of Mesh
+        Every object's world mesh.
+    last : (tuple of Mesh, Combined), optional
+        A previous result: reused when made from the same mesh objects (a static object's
+        world mesh is the same object frame after frame).
+
+    Returns
+    -------
+    (tuple of Mesh, Combined)
+        The meshes concatenated and the concatenation.
+    """
+    ids = [k for k, obj in enumerate(scene.objects, start=1) if not obj.reflector]
+    sources = tuple(meshes[k - 1] for k in ids)
+    if last is not None and len(last[0]) == len(sources) and all(a is b for a, b in zip(last[0], sources)):
+        return last
+    return sources, concatenate(sources, ids)
+
+
+def refined_parts(scene, meshes, refl, verts, opt, eye, reflected=None):
     """One part holding the reflected geometry after the options that add vertices: Szabo's
     adaptive tessellation (``opt.tessellate``, :func:`refsoft.search.tessellate.tessellate`),
     then the cut at the silhouette (``opt.silhouette == "clip"``,
@@ -56,8 +80,8 @@ def refined_parts(scene, meshes, refl, verts, opt, eye):
     """
     from .silhouette import clip_at_silhouette
 
-    ids = [k for k, obj in enumerate(scene.objects, start=1) if not obj.reflector]
-    reflected = concatenate([meshes[k - 1] for k in ids], ids)
+    if reflected is None:
+        reflected = reflected_mesh(scene, meshes)[1]
     res, gb = refl.result, refl.gbuffer
     vertices, normals, faces, face_obj = verts, reflected.normals, reflected.faces, reflected.face_object
     pixel, flags, surface, virtual = res.pixel, res.flags, refl.surface, refl.virtual64

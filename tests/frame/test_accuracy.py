@@ -113,6 +113,34 @@ def test_visible_parts_keep_the_winding_and_replace_every_mixed_face(clipped):
     assert np.all(np.sum(fn[big] * pn[owner][big], axis=1) > 0)
 
 
+def test_visible_parts_equal_the_rule_written_out_face_by_face(clipped):
+    """The clipped faces against a plain loop over the faces with the module's rule: a mixed
+    face with one hidden corner h (a, b visible, in the face's order) gives (a, b, X_bh) and
+    (a, X_bh, X_ha), one with two (a visible) gives (a, X_ab, X_ca), the others stay."""
+    _, _, verts, comb, res, clip = clipped
+    n = len(verts)
+    cut = {(int(u), int(v)): n + i for i, (u, v) in enumerate(clip.ends)}
+    hidden = (res.flags & search.HIDDEN) != 0
+    mixed = silhouette.mixed_faces(comb.faces, res.flags)
+    want, want_obj = [], []
+    for face, obj, m in zip(comb.faces.tolist(), comb.face_object.tolist(), mixed):
+        if not m:
+            kids = [face]
+        elif sum(bool(hidden[i]) for i in face) == 1:
+            k = [bool(hidden[i]) for i in face].index(True)
+            a, b, h = face[(k + 1) % 3], face[(k + 2) % 3], face[k]
+            kids = [[a, b, cut[b, h]], [a, cut[b, h], cut[a, h]]]
+        else:
+            k = [bool(hidden[i]) for i in face].index(False)
+            a, b, c = face[k], face[(k + 1) % 3], face[(k + 2) % 3]
+            kids = [[a, cut[a, b], cut[a, c]]]
+        want += kids
+        want_obj += [obj] * len(kids)
+    assert mixed.sum() > 20 and len(cut) == clip.cut
+    np.testing.assert_array_equal(clip.faces, np.array(want, dtype=np.int64))
+    np.testing.assert_array_equal(clip.face_obj, np.array(want_obj, dtype=np.int32))
+
+
 def test_the_cut_brings_the_floor_reflection_to_the_rim():
     """Against the truth on the sphere scene's rim (2 pixels of the ball's stencil): cutting the
     mixed triangles at the silhouette agrees with the truth on more rim pixels than leaving them

@@ -109,3 +109,102 @@ def test_splitting_only_the_touched_faces_gives_the_full_split(rng):
         got = _split_some(faces, keys, mids, ea, eb, n + len(keys))
         np.testing.assert_array_equal(got[0], want[0])
         np.testing.assert_array_equal(got[1], want[1])
+
+
+def test_split_edges_and_distinct_equal_np_unique(rng):
+    """The sorted distinct edge keys of split triangles (a sort and a comparison of neighbours)
+    are ``np.unique``'s, empty input included."""
+    from refsoft.search.tessellate import _distinct, _split_edges
+
+    for t in (0, 1, 50, 3000):
+        tris = rng.integers(0, max(t // 2, 3), size=(t, 3)).astype(np.int64)
+        want = np.unique(np.concatenate([_edge_keys(tris[:, i], tris[:, (i + 1) % 3], KEY_BASE) for i in range(3)]))
+        got = _split_edges(tris)
+        assert got.dtype == want.dtype
+        np.testing.assert_array_equal(got, want)
+        keys = np.sort(rng.integers(-5, 5 + t, size=t))
+        np.testing.assert_array_equal(_distinct(keys), np.unique(keys))
+
+
+def test_apply_split_marks_the_faces_split_into_several(rng):
+    """``_apply_split``'s next candidates are the children of the faces that were split, its
+    object ids the parents' (against ``_split`` and a plain count of children per parent)."""
+    from refsoft.search.tessellate import _apply_split, _split_edges
+
+    mesh = primitives.icosphere(3)
+    faces = mesh.faces.astype(np.int64)
+    face_obj = rng.integers(1, 9, size=len(faces)).astype(np.int32)
+    n = mesh.n_vertices
+    for share in (0.02, 0.3):
+        chosen = np.flatnonzero(rng.random(len(faces)) < share)
+        keys = _split_edges(faces[chosen])
+        mids = n + np.arange(len(keys), dtype=np.int64)
+        ea, eb = keys // KEY_BASE, keys % KEY_BASE
+        want, parent = _split(faces, keys, mids, KEY_BASE)
+        kids = {}
+        for p in parent.tolist():
+            kids[p] = kids.get(p, 0) + 1
+        got, obj, active = _apply_split(faces, face_obj, keys, mids, ea, eb, n + len(keys))
+        np.testing.assert_array_equal(got, want)
+        np.testing.assert_array_equal(obj, face_obj[parent])
+        np.testing.assert_array_equal(active, np.array([kids[p] > 1 for p in parent.tolist()]))
+        assert 0 < active.sum() < len(active)
+
+
+@pytest.mark.parametrize("min_span", [0, 1])
+def test_triangle_errors_equal_the_plain_reduction(min_span):
+    """Each triangle's largest edge error, -inf for a CULLED corner (and, when adaptive, all
+    corners hidden), against per-edge :func:`edge_errors` reduced row by row."""
+    from refsoft import raster, search
+    from refsoft.scene import scene_vertices
+    from refsoft.search.tessellate import _triangle_errors, edge_errors
+
+    scene = refsoft.load_scene("sphere", width=160, height=120)
+    cam = scene.camera
+    verts, _ = scene_vertices(scene)
+    gb = raster.gbuffer(scene.world_mesh(1, proxy=True), cam, origin=cam.eye)
+    res = search.search(gb, cam.eye, verts, "cross", "plane")
+    ids = [k for k, o in enumerate(scene.objects, start=1) if not o.reflector]
+    f = refsoft.scene.mesh.concatenate([scene.world_mesh(k) for k in ids], ids).faces
+    ends = [(f[:, i], f[:, (i + 1) % 3]) for i in range(3)]
+    per_edge = np.stack([edge_errors(gb, cam.eye, verts[a], verts[b], res.pixel[a], res.pixel[b]) for a, b in ends],
+                        axis=1)
+    if min_span:
+        for i, (a, b) in enumerate(ends):
+            near = np.all(np.abs(res.pixel[a] - res.pixel[b]) <= min_span, axis=1)
+            per_edge[near, i] = 0.0
+    # flags with CULLED and HIDDEN corners to leave out (the errors do not read them)
+    flags = res.flags.copy()
+    flags[::11] |= search.CULLED
+    flags[:len(flags) // 3] |= search.HIDDEN
+    fl = flags[f]
+    for threshold in (0.0, 1e-4):
+        bad = np.any(fl & search.CULLED, axis=1)
+        if threshold > 0:
+            bad |= np.all(fl & search.HIDDEN, axis=1)
+        want = np.where(bad, -np.inf, per_edge.max(axis=1))
+        got = _triangle_errors(gb, cam.eye, verts, res.pixel, flags, None, f, threshold, min_span)
+        np.testing.assert_array_equal(got, want)
+        assert np.isinf(want).any() and (want > 0).any()
+    assert np.all(fl & search.HIDDEN, axis=1).any()
+
+
+def test_reflected_mesh_is_reused_for_the_same_mesh_objects_only():
+    """The concatenated non-reflector meshes are made again unless every mesh is the very
+    object they were made from; either way they equal ``concatenate`` of the meshes."""
+    from refsoft.scene.mesh import concatenate
+    from refsoft.search.virtual import reflected_mesh
+
+    scene = refsoft.load_scene("sphere", width=64, height=48)
+    meshes = [scene.world_mesh(k) for k in range(1, len(scene.objects) + 1)]
+    ids = [k for k, o in enumerate(scene.objects, start=1) if not o.reflector]
+    want = concatenate([meshes[k - 1] for k in ids], ids)
+    first = reflected_mesh(scene, meshes)
+    assert reflected_mesh(scene, list(meshes), first) is first
+    other = list(meshes)
+    other[ids[0] - 1] = scene.world_mesh(ids[0])  # equal values, another object
+    again = reflected_mesh(scene, other, first)
+    assert again is not first and again[0][0] is other[ids[0] - 1]
+    for got in (first[1], again[1]):
+        for name in ("vertices", "normals", "faces", "face_object", "vertex_offsets", "face_offsets"):
+            np.testing.assert_array_equal(getattr(got, name), getattr(want, name))
