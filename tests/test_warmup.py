@@ -100,6 +100,30 @@ def test_first_run_notice_starts_and_ends_the_warm_up(monkeypatch):
     assert not cached.compiling and cached.process is None and len(started) == 1
 
 
+def test_a_first_run_starts_the_warm_up_before_the_scene_and_ends_it_on_bad_input(monkeypatch, tmp_path):
+    from refsoft.cli import main
+
+    events = []
+
+    class Process:
+        def poll(self):
+            return None
+
+        def kill(self):
+            events.append("killed")
+
+        def wait(self):
+            return -9
+
+    real_load = commands._scene
+    monkeypatch.setattr(_numba, "kernels_cached", lambda: False)
+    monkeypatch.setattr(_warmup, "start", lambda options: events.append("started") or Process())
+    monkeypatch.setattr(commands, "_scene", lambda args: events.append("scene") or real_load(args))
+    assert main(["render", "sphere", "--frames", "2", "--frame", "1", "--out", str(tmp_path / "o")]) == 2
+    assert events == ["started", "scene", "killed"]
+    assert not (tmp_path / "o").exists()
+
+
 def test_every_kernel_compiles_behind_its_lock():
     assert all(getattr(d.compile, "__name__", "") == "compile" and d.compile.__qualname__.startswith("_compile_once")
                for d in _numba.KERNELS)

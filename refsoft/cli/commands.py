@@ -127,25 +127,37 @@ class _FirstRunNotice:
     """Called just before the first frame (every input checked by then): prints one line when
     this run will compile the kernels, and remembers whether it did (``compiling``). With
     ``warm`` (a render's RenderOptions keyword arguments) it also starts the warm-up process
-    (:mod:`refsoft._warmup`), which :meth:`close` ends."""
+    (:mod:`refsoft._warmup`), at the latest then, or earlier with :meth:`start`; :meth:`close`
+    ends it."""
 
     def __init__(self, what: str, seconds: int, warm=None):
         self.what, self.seconds, self.compiling, self.warm, self.process = what, seconds, False, warm, None
+        self._first = None
+
+    def _first_run(self) -> bool:
+        if self._first is None:
+            from .._numba import kernels_cached
+
+            self._first = not kernels_cached()
+        return self._first
+
+    def start(self):
+        """On a first run, start the warm-up process now (it then imports and prepares while the
+        command loads the scene; :meth:`close` ends it, also when the inputs turn out wrong)."""
+        if self.warm is not None and self.process is None and self._first_run():
+            from .. import _warmup
+
+            self.process = _warmup.start(self.warm)
 
     def __call__(self):
         import sys
 
-        from .._numba import kernels_cached
-
-        if kernels_cached():
+        if not self._first_run():
             return
         self.compiling = True
         print(f"refsoft: first run: compiling the {self.what} kernels (about {self.seconds} s on 2 cores; cached "
               "for later runs)", file=sys.stderr, flush=True)
-        if self.warm is not None:
-            from .. import _warmup
-
-            self.process = _warmup.start(self.warm)
+        self.start()
 
     def close(self):
         if self.process is not None:
@@ -167,20 +179,21 @@ def _timing(frames, compiling: bool) -> str:
 def cmd_render(args) -> int:
     from ..frame import render
 
-    scene = _scene(args)
-    frames = _one_of(args)
-    write = None
-    if args.frame is not None:
-        if args.frame < 0 or (scene.animation is not None and args.frame >= scene.n_frames):
-            raise RefsoftError(f"--frame must be in [0, {scene.n_frames - 1}], got {args.frame}")
-        frames = list(range(args.frame + 1)) if not args.no_coherence else [args.frame]
-        write = {args.frame}
-    out = args.out or os.path.join("out", scene.name)
     options = render_kwargs(args)
     notice = _FirstRunNotice("render", 30, warm=options)
-    t0 = time.perf_counter()
-    # each frame is written while the next one renders, then dropped (at most two frames in memory)
+    notice.start()  # a first run's warm-up process starts before the scene is loaded
     try:
+        scene = _scene(args)
+        frames = _one_of(args)
+        write = None
+        if args.frame is not None:
+            if args.frame < 0 or (scene.animation is not None and args.frame >= scene.n_frames):
+                raise RefsoftError(f"--frame must be in [0, {scene.n_frames - 1}], got {args.frame}")
+            frames = list(range(args.frame + 1)) if not args.no_coherence else [args.frame]
+            write = {args.frame}
+        out = args.out or os.path.join("out", scene.name)
+        t0 = time.perf_counter()
+        # each frame is written while the next one renders, then dropped (at most two frames in memory)
         done, stats = render(scene, frames=frames, out=out, progress=True, memory_limit=args.memory_limit,
                              keep=False, write=write, overwrite=args.overwrite, on_start=notice, **options)
     finally:
