@@ -11,7 +11,8 @@ Two processes per case, both fresh interpreters with Numba's cache warm:
   garbage and reports its resident set then (``VmRSS``): what the guard does not count.
 
 The guard's estimate is :func:`refsoft.limits.frame_bytes` for the options the command line
-builds, with one frame kept (the command line writes each frame and drops it).
+builds, with two frames kept, as the command line checks a run of several frames (it writes
+each frame while the next one renders, then drops it).
 
 Run by hand: ``PYTHONPATH=. python benchmarks/peak_rss.py SCENE [OPTIONS]`` prints one JSON line.
 """
@@ -59,19 +60,20 @@ def _kernels(stderr: str) -> tuple[int | None, int | None]:
     return (int(m.group(1)), int(m.group(2))) if m else (None, None)
 
 
-def estimate(scene: str, size, options) -> dict:
-    """The guard's estimate (bytes, :func:`refsoft.limits.frame_bytes`) of the render the command
-    line runs with ``options`` (command-line words), as its ``render`` passes them."""
+def estimate(scene: str, size, options, frames: int = 2) -> dict:
+    """The guard's estimate (bytes, :func:`refsoft.limits.frame_bytes`) of the render of
+    ``frames`` frames the command line runs with ``options`` (command-line words), as its
+    ``render`` checks it."""
     from refsoft import cli
     from refsoft.cli.options import render_kwargs
     from refsoft.frame import RenderOptions
     from refsoft.limits import frame_bytes
     from refsoft.scene import load_scene
 
-    args = cli.build_parser().parse_args(_cli_args(scene, size, 2, "unused", options))
+    args = cli.build_parser().parse_args(_cli_args(scene, size, frames, "unused", options))
     kw = render_kwargs(args)
     opts = RenderOptions(preset=kw.pop("preset", "accurate"), **kw)
-    return frame_bytes(load_scene(scene, width=size[0], height=size[1]), opts, 1)
+    return frame_bytes(load_scene(scene, width=size[0], height=size[1]), opts, min(frames, 2))
 
 
 def measure(scene: str, options=(), size=(1024, 768), frames: int = 2) -> dict:
@@ -87,7 +89,7 @@ def measure(scene: str, options=(), size=(1024, 768), frames: int = 2) -> dict:
         if code != 0:
             raise RuntimeError(f"baseline {scene} {options} failed ({code}): {err2.strip()[-400:]}")
     base = json.loads(base_out.strip().splitlines()[-1])
-    est = estimate(scene, size, list(options))
+    est = estimate(scene, size, list(options), frames)
     return {"scene": scene, "options": " ".join(options), "width": size[0], "height": size[1], "frames": frames,
             "peak_rss": peak, "baseline_rss": base["rss"], "baseline_peak_rss": base["peak_rss"],
             "over_baseline": peak - base["rss"], "estimate": est["total"],
