@@ -15,6 +15,7 @@ from refsoft.search import silhouette
 from refsoft.truth import TruthRenderer
 from refsoft.truth.analytic import sphere_reflection_points
 from refsoft.truth.metrics import disagreement, rim
+from scene_data import sphere_searched
 
 
 # --- the unfolded virtual vertex ---------------------------------------------------------------
@@ -58,13 +59,8 @@ def test_unfolded_virtual_vertices_project_onto_their_reflection_pixels():
 # --- the cut at the silhouette -----------------------------------------------------------------
 @pytest.fixture(scope="module")
 def clipped():
-    scene = refsoft.load_scene("sphere", width=160, height=120)
+    scene, gb, verts, _, comb, res = sphere_searched("discard")
     cam = scene.camera
-    verts, owner = scene_vertices(scene)
-    gb = raster.gbuffer(scene.world_mesh(1, proxy=True), cam, origin=cam.eye)
-    res = search.search(gb, cam.eye, verts, "cross", "discard")
-    ids = [k for k, o in enumerate(scene.objects, start=1) if not o.reflector]
-    comb = refsoft.scene.mesh.concatenate([scene.world_mesh(k) for k in ids], ids)
     clip = silhouette.clip_at_silhouette(gb, cam.eye, verts, comb.normals, comb.faces, comb.face_object, res.pixel,
                                          res.flags, iterations=8)
     return scene, gb, verts, comb, res, clip

@@ -155,17 +155,14 @@ def test_apply_split_marks_the_faces_split_into_several(rng):
 def test_triangle_errors_equal_the_plain_reduction(min_span):
     """Each triangle's largest edge error, -inf for a CULLED corner (and, when adaptive, all
     corners hidden), against per-edge :func:`edge_errors` reduced row by row."""
-    from refsoft import raster, search
-    from refsoft.scene import scene_vertices
+    from scene_data import sphere_searched
+
+    from refsoft import search
     from refsoft.search.tessellate import _triangle_errors, edge_errors
 
-    scene = refsoft.load_scene("sphere", width=160, height=120)
+    scene, gb, verts, _, comb, res = sphere_searched("plane")
     cam = scene.camera
-    verts, _ = scene_vertices(scene)
-    gb = raster.gbuffer(scene.world_mesh(1, proxy=True), cam, origin=cam.eye)
-    res = search.search(gb, cam.eye, verts, "cross", "plane")
-    ids = [k for k, o in enumerate(scene.objects, start=1) if not o.reflector]
-    f = refsoft.scene.mesh.concatenate([scene.world_mesh(k) for k in ids], ids).faces
+    f = comb.faces
     ends = [(f[:, i], f[:, (i + 1) % 3]) for i in range(3)]
     per_edge = np.stack([edge_errors(gb, cam.eye, verts[a], verts[b], res.pixel[a], res.pixel[b]) for a, b in ends],
                         axis=1)
