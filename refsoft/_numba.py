@@ -32,21 +32,47 @@ if hasattr(numba_cpu.CPUTargetOptions, "no_cfunc_wrapper"):
 KERNELS = []
 
 
-def kernel(fn=None, *, parallel=False, inline=False, llvm_inline=False):
+def kernel(fn=None, *, parallel=False, inline=False, llvm_inline=False, serial=False):
     """``numba.njit`` with refsoft's fixed options (optionally ``parallel=True``; ``inline=True``
     inlines a small helper into its callers at Numba's level; ``llvm_inline=True`` compiles it on
-    its own and has LLVM inline its machine code into every caller)."""
+    its own and has LLVM inline its machine code into every caller).
+
+    ``serial=True`` (with ``parallel``) also makes ``kernel.serial``: the same function compiled
+    without parallel loops (``prange`` runs as ``range``), for inputs small enough for one
+    thread (:func:`refsoft.raster._threads.variant`). Each loop iteration writes its own
+    outputs, so both give the same results bit for bit; each is compiled when first called, and
+    the serial one takes about a second of CPU less to compile (Numba's parallel lowering), so a
+    run on small scenes compiles no parallel variant of these kernels at all."""
 
     def wrap(f):
         extra = {"inline": "always"} if inline else {}
         if llvm_inline:
             extra["forceinline"] = True
-        dispatcher = numba.njit(parallel=parallel, **KERNEL_OPTIONS, **extra)(f)
-        dispatcher.compile = _compile_once(dispatcher, dispatcher.compile)
-        KERNELS.append(dispatcher)
+        dispatcher = _njit(f, parallel, extra)
+        if serial and parallel:
+            dispatcher.serial = _njit(_renamed(f, "_serial"), False, extra)
         return dispatcher
 
     return wrap(fn) if fn is not None else wrap
+
+
+def _njit(f, parallel, extra):
+    dispatcher = numba.njit(parallel=parallel, **KERNEL_OPTIONS, **extra)(f)
+    dispatcher.compile = _compile_once(dispatcher, dispatcher.compile)
+    KERNELS.append(dispatcher)
+    return dispatcher
+
+
+def _renamed(f, suffix):
+    """A copy of function ``f`` whose name ends in ``suffix``: Numba names a kernel's cache files
+    (and refsoft its lock file) after the function's qualified name, so the copy's compiled code
+    is cached apart from the original's."""
+    import types as pytypes
+
+    g = pytypes.FunctionType(f.__code__, f.__globals__, f.__name__ + suffix, f.__defaults__, f.__closure__)
+    g.__qualname__ = f.__qualname__ + suffix
+    g.__module__, g.__doc__, g.__kwdefaults__ = f.__module__, f.__doc__, f.__kwdefaults__
+    return g
 
 
 def _compile_once(dispatcher, compile_):

@@ -18,7 +18,7 @@ from ..constants import SUBPIXEL_HALF, SUBPIXEL_ONE
 BIN_CHUNKS = 16
 
 
-@kernel(parallel=True)
+@kernel(parallel=True, serial=True)
 def bin_triangles(valid, bbox, tile, tiles_x, tiles_y, r_org, c_org):
     """Per-tile lists of clip triangles (in index order) whose pixel box meets the tile; tiles
     cover the rasterized region, whose first pixel is (r_org, c_org).

@@ -13,7 +13,7 @@ import numpy as np
 from numba import prange
 
 from .._numba import kernel, readonly
-from ._threads import SERIAL_MAX_VERTICES, one_thread
+from ._threads import SERIAL_MAX_VERTICES, variant
 from ..constants import SUBPIXEL_BITS, SUBPIXEL_HALF, SUBPIXEL_ONE
 
 # Number of clip planes: near, then x <= g w, x >= -g w, y <= g w, y >= -g w.
@@ -26,11 +26,11 @@ def transform_points(points, matrix):
 
     ``points`` (N, 3) and ``matrix`` (4, 4): C-contiguous float64 arrays, writable or not (the
     kernel sees read-only views: one specialisation)."""
-    with one_thread(len(points) <= SERIAL_MAX_VERTICES):  # microseconds of work: no hand-off
-        return _transform_points(readonly(points), readonly(matrix))
+    # microseconds of work for a few thousand points: no hand-off to other threads
+    return variant(_transform_points, len(points) <= SERIAL_MAX_VERTICES)(readonly(points), readonly(matrix))
 
 
-@kernel(parallel=True)
+@kernel(parallel=True, serial=True)
 def _transform_points(points, matrix):
     n = points.shape[0]
     out = np.empty((n, 4), dtype=np.float64)
@@ -113,7 +113,7 @@ def _outcodes(c, gx, gy):
     return code
 
 
-@kernel(parallel=True)
+@kernel(parallel=True, serial=True)
 def count_clip_triangles(clip, faces, codes, gx, gy):
     """Per input triangle: clip triangles it produces (0 when culled by a plane) and whether it
     was clipped (1) or passes whole (0). Two int64 (F,) arrays."""
@@ -152,7 +152,7 @@ def _window(c, width, height):
             0.5 * (c[2] / c[3]) + 0.5, 1.0 / c[3])
 
 
-@kernel(parallel=True)
+@kernel(parallel=True, serial=True)
 def vertex_setup(clip, gx, gy, width, height):
     """Per vertex, in one pass: its outcode (uint8 (V,), bit p set when it is outside clip plane
     p) and, for a vertex inside every plane, its window coordinates (others: zeros, never
@@ -237,7 +237,7 @@ def _emit(t, f, x0, y0, z0, w0, x1, y1, z1, w1, x2, y2, z2, w2, width, height, r
     return swapped
 
 
-@kernel(parallel=True)
+@kernel(parallel=True, serial=True)
 def emit_clip_triangles(clip, faces, codes, win_xy, win_zw, offsets, clip_offsets, gx, gy, width, height, region,
                         cull):
     """Clip, snap and set up every triangle.
@@ -302,22 +302,23 @@ def emit_clip_triangles(clip, faces, codes, win_xy, win_zw, offsets, clip_offset
     return X, Y, Z, IW, slot, B, tri, valid, bbox, area, bias
 
 
-def setup_region(clip, faces, width, height, r0, r1, c0, c1, cull, guard_band):
+def setup_region(clip, faces, width, height, r0, r1, c0, c1, cull, guard_band, small=False):
     """Every triangle clipped, snapped and set up for the region rows ``r0:r1``, columns
     ``c0:c1`` of a ``width`` x ``height`` viewport (the calls of :func:`refsoft.raster.rasterize`,
     shared with the two-fragment pass): :func:`emit_clip_triangles`'s arrays ``X, Y, Z, IW,
     slot, B, tri, valid, bbox, area, bias``. ``cull``: 0 none, 1 clockwise, 2 counter-clockwise
-    kept; ``guard_band`` in pixels."""
+    kept; ``guard_band`` in pixels; ``small``: on the calling thread, the kernels' serial variants
+    (:func:`refsoft.raster._threads.variant`)."""
     gx, gy = 2.0 * guard_band / width, 2.0 * guard_band / height
-    codes, win_xy, win_zw = vertex_setup(clip, gx, gy, width, height)
+    codes, win_xy, win_zw = variant(vertex_setup, small)(clip, gx, gy, width, height)
     if not codes.any():  # every vertex inside every plane: one clip triangle per face, none clipped
         offsets = np.arange(len(faces) + 1, dtype=np.int64)
         clip_offsets = np.zeros(len(faces) + 1, dtype=np.int64)
     else:
-        counts, clipped = count_clip_triangles(clip, faces, codes, gx, gy)
+        counts, clipped = variant(count_clip_triangles, small)(clip, faces, codes, gx, gy)
         offsets = np.zeros(len(faces) + 1, dtype=np.int64)
         np.cumsum(counts, out=offsets[1:])
         clip_offsets = np.zeros(len(faces) + 1, dtype=np.int64)
         np.cumsum(clipped, out=clip_offsets[1:])
-    return emit_clip_triangles(clip, faces, codes, win_xy, win_zw, offsets, clip_offsets, gx, gy, width, height,
-                               np.array([r0, r1 - 1, c0, c1 - 1], dtype=np.int64), cull)
+    return variant(emit_clip_triangles, small)(clip, faces, codes, win_xy, win_zw, offsets, clip_offsets, gx, gy,
+                                               width, height, np.array([r0, r1 - 1, c0, c1 - 1], dtype=np.int64), cull)

@@ -39,6 +39,12 @@ def one_thread(when: bool = True):
         numba.set_num_threads(n)
 
 
+def variant(kernel, small: bool):
+    """``kernel.serial`` (the kernel compiled without parallel loops, :func:`refsoft._numba.kernel`)
+    when ``small``, else the parallel kernel: the same results either way."""
+    return kernel.serial if small else kernel
+
+
 def serial_if_small(pixels: int):
     """:func:`one_thread` when ``pixels`` <= SERIAL_MAX_PIXELS."""
     return one_thread(pixels <= SERIAL_MAX_PIXELS)

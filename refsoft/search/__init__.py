@@ -16,7 +16,7 @@ from .. import validate
 from ..constants import INVERSE_MODES, NEIGHBOURHOODS, SEARCH_METHODS, VIRTUAL_RULES
 from ..errors import RefsoftError
 from ..raster import GBuffer
-from ..raster._threads import SERIAL_MAX_VERTICES, one_thread
+from ..raster._threads import SERIAL_MAX_VERTICES, variant
 from . import _kernels, _lanes
 from ._kernels import BORDER, CAPPED, CULLED, HIDDEN, RESTARTED
 
@@ -229,14 +229,14 @@ def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", invers
     keys = np.empty(n, dtype=np.int64)
     rel = np.empty((n, 3), dtype=dt)
     first = np.empty((n, 2), dtype=np.int32)
-    with one_thread(n <= SERIAL_MAX_VERTICES):  # microseconds of work: no hand-off to other threads
-        if _kernels.prepare(verts, gbuffer.origin, starts, mask, gbuffer.view_proj, LOCALITY_CELL, fp, keys, rel,
-                            first):
-            _check_starts(starts, (h, w))
-        order, rank = _kernels.order_by_key(keys, -(-h // LOCALITY_CELL) * -(-w // LOCALITY_CELL))
-        rows = np.empty_like(rel)
-        row_starts = np.empty_like(first)
-        _kernels.gather(rel, first, order, rows, row_starts)
+    small = n <= SERIAL_MAX_VERTICES  # microseconds of work: on this thread, the serial variants
+    if variant(_kernels.prepare, small)(verts, gbuffer.origin, starts, mask, gbuffer.view_proj, LOCALITY_CELL, fp,
+                                        keys, rel, first):
+        _check_starts(starts, (h, w))
+    order, rank = _kernels.order_by_key(keys, -(-h // LOCALITY_CELL) * -(-w // LOCALITY_CELL))
+    rows = np.empty_like(rel)
+    row_starts = np.empty_like(first)
+    variant(_kernels.gather, small)(rel, first, order, rows, row_starts)
     sorted_out = (np.empty((n, 2), np.int32), np.empty(n, dt), np.empty(n, dt), np.empty(n, np.int32),
                   np.empty(n, np.uint8))
     # several walks per thread, their candidates scored together (the one-walk search's results);
@@ -246,8 +246,7 @@ def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", invers
     _lanes.SEARCH[NEIGHBOURHOODS[neighbourhood]](P, N, mask, eye_rel, rows, row_starts, start[0], start[1], int(cap),
                                                  inverse == "search", fp, *sorted_out)
     pixel, score, margin, iterations, flags = (np.empty_like(a) for a in sorted_out)
-    with one_thread(n <= SERIAL_MAX_VERTICES):
-        _kernels.scatter(rank, *sorted_out, pixel, score, margin, iterations, flags)
+    variant(_kernels.scatter, small)(rank, *sorted_out, pixel, score, margin, iterations, flags)
     return SearchResult(pixel, score, margin, iterations, flags, neighbourhood, inverse, int(cap))
 
 
@@ -339,13 +338,13 @@ def virtual_vertices(gbuffer: GBuffer, result: SearchResult, vertices, relative:
     if unfold and eye is None:
         raise RefsoftError("virtual_vertices(rule='unfold') needs the eye")
     e = np.zeros(3, dtype=dt) if eye is None else (validate.point(eye, "eye") - o).astype(dt)
-    with one_thread(len(verts) <= SERIAL_MAX_VERTICES):  # microseconds of work: no hand-off
-        if surface is None:
-            _virtual.virtual_from_texels(gbuffer.position, gbuffer.normal, np.ascontiguousarray(result.pixel), verts,
-                                         o, e, flags, mode, unfold, dt(0), out)
-        else:
-            p, nrm = (np.ascontiguousarray(np.asarray(a, dtype=dt).reshape(len(verts), 3)) for a in surface)
-            _virtual.virtual_from_points(p, nrm, verts, o, e, flags, mode, unfold, dt(0), out)
+    small = len(verts) <= SERIAL_MAX_VERTICES  # microseconds of work: on this thread, the serial variants
+    if surface is None:
+        variant(_virtual.virtual_from_texels, small)(gbuffer.position, gbuffer.normal, np.ascontiguousarray(result.pixel),
+                                                     verts, o, e, flags, mode, unfold, dt(0), out)
+    else:
+        p, nrm = (np.ascontiguousarray(np.asarray(a, dtype=dt).reshape(len(verts), 3)) for a in surface)
+        variant(_virtual.virtual_from_points, small)(p, nrm, verts, o, e, flags, mode, unfold, dt(0), out)
     if relative:
         return out
     return (out.astype(np.float64) + o).astype(dt)

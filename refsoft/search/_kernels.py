@@ -251,7 +251,7 @@ RESTART = -2
 BAD_START = -3
 
 
-@kernel(parallel=True)
+@kernel(parallel=True, serial=True)
 def prepare(vertices, origin, starts, mask, view_proj, cell, fp, keys, rel, first):
     """Per vertex ``i``: the locality key ``keys[i]`` (the ``cell`` x ``cell`` G-buffer cell where
     its search starts: its previous pixel, else its projection, clamped); ``rel[i]`` the vertex
@@ -318,7 +318,7 @@ def order_by_key(keys, n_keys):
     return order, rank
 
 
-@kernel(parallel=True)
+@kernel(parallel=True, serial=True)
 def gather(rel, first, order, V, S):
     """Row ``j`` of the search's inputs, ``V[j]`` and ``S[j]``, is row ``order[j]`` of
     ``prepare``'s ``rel`` and ``first``: in search order, the walks read their inputs one after
@@ -331,7 +331,7 @@ def gather(rel, first, order, V, S):
         S[j, 1] = first[i, 1]
 
 
-@kernel(parallel=True)
+@kernel(parallel=True, serial=True)
 def scatter(rank, pixel_s, score_s, margin_s, iterations_s, flags_s, pixel, score, margin, iterations, flags):
     """Vertex ``i``'s results from row ``rank[i]`` of the results in search order. (Reading
     scattered rows and writing in order is 3x faster than the converse on 1M vertices.)"""

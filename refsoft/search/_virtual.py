@@ -40,7 +40,7 @@ def _virtual_one(vx, vy, vz, px, py, pz, nx, ny, nz, ex, ey, ez, fl, mode, unfol
     return vx - k * nx, vy - k * ny, vz - k * nz
 
 
-@kernel(parallel=True)
+@kernel(parallel=True, serial=True)
 def virtual_from_texels(P, N, pixel, vertices, origin, eye, flags, mode, unfold, fp, out):
     """Virtual vertices from each vertex's reflection texel (``vertices`` world float64, made
     relative to ``origin`` and rounded to the working precision here; ``eye`` relative)."""
@@ -51,7 +51,7 @@ def virtual_from_texels(P, N, pixel, vertices, origin, eye, flags, mode, unfold,
                flags[i], mode, unfold, fp)
 
 
-@kernel(parallel=True)
+@kernel(parallel=True, serial=True)
 def virtual_from_points(p, n, vertices, origin, eye, flags, mode, unfold, fp, out):
     """Virtual vertices from per-vertex surface points ``p`` and normals ``n`` (relative)."""
     for i in prange(vertices.shape[0]):

@@ -1,4 +1,5 @@
-"""Small passes on one thread (refsoft.raster._threads): the thread count inside and after."""
+"""Small passes on one thread (refsoft.raster._threads): the thread count inside and after, the
+kernels' serial variants."""
 
 import numba
 
@@ -44,3 +45,48 @@ def test_openmp_threads_wait_passively_unless_the_user_says_otherwise():
     env["OMP_WAIT_POLICY"] = "ACTIVE"
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
     assert out.stdout.split() == ["ACTIVE", "False"]
+
+
+def test_serial_variants_are_the_same_kernels_cached_apart():
+    """Every ``kernel.serial`` is the parallel kernel's own function compiled without parallel
+    loops, under a name of its own (its cache and lock files are its own)."""
+    import refsoft.search._virtual  # noqa: F401  (their kernels)
+    from refsoft import _numba
+    from refsoft.raster._threads import variant
+
+    pairs = [(d, d.serial) for d in _numba.KERNELS if hasattr(d, "serial")]
+    assert {d.py_func.__name__ for d, _ in pairs} >= {
+        "_transform_points", "vertex_setup", "count_clip_triangles", "emit_clip_triangles", "bin_triangles",
+        "prepare", "gather", "scatter", "virtual_from_texels", "virtual_from_points"}
+    for par, ser in pairs:
+        assert ser in _numba.KERNELS
+        assert par.targetoptions.get("parallel") and not ser.targetoptions.get("parallel")
+        assert ser.py_func.__code__ is par.py_func.__code__
+        assert ser.py_func.__qualname__ == par.py_func.__qualname__ + "_serial"
+        assert variant(par, True) is ser and variant(par, False) is par
+
+
+def test_small_passes_equal_the_parallel_kernels(monkeypatch):
+    """The raster front end and the point transform through their serial variants (small
+    inputs) and through the parallel kernels (thresholds set to 0): the same arrays, bit for bit."""
+    import numpy as np
+
+    import refsoft
+    from refsoft import raster
+    from refsoft.raster import _setup
+
+    scene = refsoft.load_scene("kitchen", width=160, height=120)
+    cam = scene.camera
+    mesh = refsoft.scene.mesh.concatenate([scene.world_mesh(k) for k in range(1, len(scene.objects) + 1)])
+    runs = []
+    for small in (True, False):
+        if not small:
+            monkeypatch.setattr(raster, "SERIAL_MAX_TRIANGLES", 0)
+            monkeypatch.setattr(_setup, "SERIAL_MAX_VERTICES", 0)
+        clip = _setup.transform_points(mesh.vertices, cam.view_proj())
+        frags = raster.rasterize(clip, mesh.faces, cam.width, cam.height)
+        runs.append([clip, frags.depth, frags.triangle, frags.index, *frags.setup.values()])
+    assert len(runs[0][-1])  # the clip-triangle table B: some triangles were clipped
+    for a, b in zip(*runs):
+        assert a.dtype == b.dtype
+        np.testing.assert_array_equal(a, b)

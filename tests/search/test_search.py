@@ -472,9 +472,9 @@ def test_search_bit_identical_across_thread_counts():
 
 
 def test_bookkeeping_on_one_thread_changes_nothing(sphere_case, monkeypatch):
-    """A search of at most SERIAL_MAX_VERTICES vertices orders its vertices and results on one
-    thread: the same results as the parallel kernels give, and the thread count is restored, also
-    when the search refuses its input."""
+    """A search of at most SERIAL_MAX_VERTICES vertices orders its vertices and results with the
+    kernels' serial variants: the same results as the parallel kernels give, and the thread count
+    is left as it was, also when the search refuses its input."""
     import numba
 
     scene, verts, gb = sphere_case
