@@ -9,6 +9,12 @@ pass) on one thread, and per-vertex passes of microseconds (transforming points,
 bookkeeping around its walks, virtual vertices) on one thread up to ``SERIAL_MAX_VERTICES``
 vertices. Outputs do not depend on the thread count (each parallel loop writes
 disjoint outputs), so the choice changes only the time.
+
+The per-triangle front end and the per-vertex passes call their kernels' serial variants
+(:func:`variant`: the same functions compiled without parallel loops), which compile faster;
+a run whose inputs stay under these thresholds never compiles their parallel variants. The
+per-pixel passes over small boxes run their parallel kernels on one thread (:func:`one_thread`),
+since the main view needs those kernels parallel anyway.
 """
 
 from contextlib import contextmanager
