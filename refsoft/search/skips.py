@@ -111,7 +111,7 @@ def outside_box(clip, bounds) -> bool:
                 or np.all(z < -w))
 
 
-@kernel(parallel=True)
+@kernel(parallel=True, serial=True)
 def triangles_outside_box(clip, faces, x_lo, x_hi, y_lo, y_hi):
     """Per triangle, :func:`outside_box` of its three clip vertices (the same half-space tests),
     bool (F,): those triangles cover no pixel of the box and need not be set up at all."""

@@ -51,13 +51,14 @@ def test_serial_variants_are_the_same_kernels_cached_apart():
     """Every ``kernel.serial`` is the parallel kernel's own function compiled without parallel
     loops, under a name of its own (its cache and lock files are its own)."""
     import refsoft.search._virtual  # noqa: F401  (their kernels)
+    import refsoft.search.skips  # noqa: F401
     from refsoft import _numba
     from refsoft.raster._threads import variant
 
     pairs = [(d, d.serial) for d in _numba.KERNELS if hasattr(d, "serial")]
     assert {d.py_func.__name__ for d, _ in pairs} >= {
         "_transform_points", "vertex_setup", "count_clip_triangles", "emit_clip_triangles", "bin_triangles",
-        "prepare", "gather", "scatter", "virtual_from_texels", "virtual_from_points"}
+        "prepare", "gather", "scatter", "virtual_from_texels", "virtual_from_points", "triangles_outside_box"}
     for par, ser in pairs:
         assert ser in _numba.KERNELS
         assert par.targetoptions.get("parallel") and not ser.targetoptions.get("parallel")
