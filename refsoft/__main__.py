@@ -5,7 +5,9 @@ try:
 except KeyboardInterrupt:  # Ctrl-C while this very import runs (the guard is refsoft's __init__'s handler)
     import sys
 
-    print("refsoft: interrupted", file=sys.stderr)
+    from .interrupt import MESSAGE
+
+    print(MESSAGE, file=sys.stderr)
     sys.exit(130)
 
 run()

@@ -62,13 +62,11 @@ def main(argv=None) -> int:
     try:
         interrupt.release()
         from .cli import main as cli_main
-    except KeyboardInterrupt:
-        print("refsoft: interrupted", file=sys.stderr)
-        return 130
-    except Exception:  # an interrupt a library turned into another error while it imported
-        if not interrupt.seen():
+    except (KeyboardInterrupt, Exception) as exc:
+        # an Exception counts when a library turned the interrupt into another error while it imported
+        if not isinstance(exc, KeyboardInterrupt) and not interrupt.seen():
             raise
-        print("refsoft: interrupted", file=sys.stderr)
+        print(interrupt.MESSAGE, file=sys.stderr)
         return 130
     return cli_main(argv, installed=True)
 
@@ -80,8 +78,10 @@ def run() -> None:
     try:
         code = main()
     except KeyboardInterrupt:  # between the guard's own steps
+        from .interrupt import MESSAGE
+
         code = 130
-        print("refsoft: interrupted", file=sys.stderr)
+        print(MESSAGE, file=sys.stderr)
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the work is done: an interrupt now changes nothing
     if code == 130:
         # interrupted: leave at once with that status. An interrupt raised inside some library's

@@ -292,7 +292,7 @@ def run_frames(renderer, indices, out=None, progress=False, desc="frames", keep=
             finish()
     finally:
         if pending:  # stopped by an error or an interrupt: the frame being written is still kept
-            fr, written = pending[0]
+            written = pending[0][1]
             if written is None or written.exception() is None:
                 finish()
         if writer is not None:
