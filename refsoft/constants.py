@@ -182,11 +182,6 @@ CLIP_ITERATIONS = 10
 BOX_MARGIN_PIXELS = 2.0
 #: Largest offset, in texels along each axis, one refinement step may move the point.
 MAX_OFFSET = 1.0
-#: Rows one task of the sub-texel refinement's parallel loop takes: the loop's body is a function
-#: compiled apart, called once per task, so the call costs nothing per row. Results do not depend
-#: on it (each row is computed alone).
-ROWS_PER_TASK = 512
-
 # --- Exact reflection points on spheres (the truth) ------------------------------------------
 #: Samples along the arc used to bracket the roots.
 ARC_SAMPLES = 64

@@ -18,6 +18,7 @@ import numpy as np
 
 from .. import constants, limits
 from .._numba import readonly
+from .._parallel import parallel_range
 from ..scene.camera import Camera, check_image_size
 from ..errors import RefsoftError
 from ..scene.mesh import Mesh, concatenate
@@ -165,8 +166,8 @@ def rasterize(clip, faces, width: int, height: int, peel_depth=None, region=None
     depth.fill(constants.DEPTH_CLEAR)
     index.fill(-1)
     triangle.fill(-1)
-    _kernels.raster_tiles(starts, items, X, Y, Z, tri, bbox, area, bias, width, height, tile, tiles_x, r0, c0,
-                          depth, index, triangle, peel, use_peel)
+    parallel_range(_kernels.raster_tiles, tiles_x * tiles_y, starts, items, X, Y, Z, tri, bbox, area, bias, width,
+                   height, tile, tiles_x, r0, c0, depth, index, triangle, peel, use_peel)
     setup = {"X": X, "Y": Y, "Z": Z, "IW": IW, "slot": slot, "B": B, "tri": tri}
     return Fragments(depth, triangle, index, setup, len(faces), height, (r0, c0))
 
@@ -203,9 +204,8 @@ def interpolate(fragments: Fragments, attributes, faces, precision="float32", no
     h, w = fragments.shape
     out = np.zeros((h, w, attr.shape[1]), dtype=dt)
     r0, c0 = fragments.origin
-    _kernels.interpolate_rows(fragments.index, s["X"], s["Y"], s["IW"].astype(dt), s["slot"],
-                              s["B"].astype(dt), s["tri"], faces, attr, fragments.height, r0, c0, bool(normalize),
-                              _CONVERT[dt], out)
+    parallel_range(_kernels.interpolate_rows, h, fragments.index, s["X"], s["Y"], s["IW"].astype(dt), s["slot"],
+                   s["B"].astype(dt), s["tri"], faces, attr, fragments.height, r0, c0, bool(normalize), _CONVERT[dt], out)
     return out
 
 
@@ -343,9 +343,9 @@ def gbuffer(mesh: Mesh, camera: Camera, precision="float32", origin=None, crop=T
     pos_r = pos[r0:r0 + h, c0:c0 + w] if region is None else np.zeros((h, w, 3), dtype=dt)
     nrm_r = nrm[r0:r0 + h, c0:c0 + w] if region is None else np.zeros((h, w, 3), dtype=dt)
     s = frags.setup
-    _kernels.interpolate_pair(frags.index, s["X"], s["Y"], s["IW"].astype(dt), s["slot"], s["B"].astype(dt), s["tri"],
-                              mesh.faces, np.ascontiguousarray(mesh.vertices - o, dtype=dt),
-                              np.ascontiguousarray(mesh.normals, dtype=dt), H, r0, c0, _CONVERT[dt], pos_r, nrm_r)
+    parallel_range(_kernels.interpolate_pair, h, frags.index, s["X"], s["Y"], s["IW"].astype(dt), s["slot"],
+                   s["B"].astype(dt), s["tri"], mesh.faces, np.ascontiguousarray(mesh.vertices - o, dtype=dt),
+                   np.ascontiguousarray(mesh.normals, dtype=dt), H, r0, c0, _CONVERT[dt], pos_r, nrm_r)
     if region is None:
         return GBuffer(pos, nrm, frags.mask, frags.depth, frags.triangle, vp, o)
     pos[r0:r0 + h, c0:c0 + w] = pos_r
@@ -363,7 +363,7 @@ def to_uint8(color) -> np.ndarray:
         c = c.astype(np.float64)
     flat = np.ascontiguousarray(c).reshape(-1)
     out = np.empty(flat.shape, dtype=np.uint8)
-    _shading.to_uint8_flat(flat, out)
+    parallel_range(_shading.to_uint8_flat, len(flat), flat, out)
     return out.reshape(c.shape)
 
 
@@ -486,14 +486,14 @@ def shade_fragments(fragments: Fragments, normals, faces, face_object, face_offs
     stencil = readonly(np.ascontiguousarray(stencil, dtype=bool) if use_stencil else np.zeros((1, 1), dtype=bool))
     color = np.empty((h, w, 3), dtype=np.float32)
     object_id, local_tri = limits.maps((h, w), np.int32, np.int32)
-    _kernels.shade_visible(fragments.index, s["X"], s["Y"], s["IW"].astype(np.float32), s["slot"],
-                           s["B"].astype(np.float32), s["tri"], faces, nrm,
-                           readonly(np.ascontiguousarray(face_object, dtype=np.int32)),
-                           readonly(np.ascontiguousarray(face_offset, dtype=np.int64)),
-                           readonly(np.ascontiguousarray(table, dtype=np.float32)),
-                           readonly(constants.LIGHT_DIRECTION.astype(np.float32)), np.float32(constants.AMBIENT),
-                           np.float32(constants.DIFFUSE), stencil, use_stencil, fragments.height, r0, c0,
-                           color, object_id, local_tri)
+    parallel_range(_kernels.shade_visible, h, fragments.index, s["X"], s["Y"], s["IW"].astype(np.float32), s["slot"],
+                   s["B"].astype(np.float32), s["tri"], faces, nrm,
+                   readonly(np.ascontiguousarray(face_object, dtype=np.int32)),
+                   readonly(np.ascontiguousarray(face_offset, dtype=np.int64)),
+                   readonly(np.ascontiguousarray(table, dtype=np.float32)),
+                   readonly(constants.LIGHT_DIRECTION.astype(np.float32)), np.float32(constants.AMBIENT),
+                   np.float32(constants.DIFFUSE), stencil, use_stencil, fragments.height, r0, c0, color, object_id,
+                   local_tri)
     return color, object_id, local_tri
 
 

@@ -86,10 +86,11 @@ def _span(g, f, q, ja, jb):
     return ja, ja - 1.0
 
 
-@kernel(parallel=True)
-def raster_tiles(starts, items, X, Y, Z, tri, bbox, area, bias, width, height, tile, tiles_x, r_org, c_org,
+@kernel
+def raster_tiles(lo, hi, starts, items, X, Y, Z, tri, bbox, area, bias, width, height, tile, tiles_x, r_org, c_org,
                  depth, index, triangle, peel, use_peel):
-    """Depth-tested coverage. Writes ``depth`` (float32), ``index`` (clip triangle, int32) and
+    """Depth-tested coverage of tiles ``lo .. hi - 1`` (run over every tile by
+    :func:`refsoft._parallel.parallel_range`, each tile's pixels written by one thread). Writes ``depth`` (float32), ``index`` (clip triangle, int32) and
     ``triangle`` (input triangle, int32).
 
     A pixel centre is covered when ``e_i + bias_i >= 0`` for the three edges (bias -1 makes an
@@ -103,9 +104,8 @@ def raster_tiles(starts, items, X, Y, Z, tri, bbox, area, bias, width, height, t
     error, so coverage and depth are the integer path's, bit for bit. Other triangles are
     scanned column by column in int64.
     """
-    n_tiles = starts.shape[0] - 1
     rh, rw = depth.shape  # the region rasterized, whose first pixel is (r_org, c_org)
-    for k in prange(n_tiles):
+    for k in range(lo, hi):
         ty = k // tiles_x
         tx = k - ty * tiles_x
         r_lo = r_org + ty * tile
@@ -215,9 +215,11 @@ def _barycentrics(t, r, c, height, X, Y, IW, slot, B, fp):
     return b0, b1, b2
 
 
-@kernel(parallel=True)
-def interpolate_rows(index, X, Y, IW, slot, B, tri, faces, attributes, height, r_org, c_org, normalize, fp, out):
-    """Perspective-correct attributes of the visible triangle at every covered pixel.
+@kernel
+def interpolate_rows(lo, hi, index, X, Y, IW, slot, B, tri, faces, attributes, height, r_org, c_org, normalize, fp,
+                     out):
+    """Perspective-correct attributes of the visible triangle at every covered pixel of rows
+    ``lo .. hi - 1`` (run over every row by :func:`refsoft._parallel.parallel_range`).
 
     In the precision of the scalar ``fp`` (``np.float32(0)`` or ``np.float64(0)``, matching
     the dtype of ``attributes``, ``IW``, ``B`` and ``out``): ``a_i = e_i * (1 / w_i)``,
@@ -230,7 +232,7 @@ def interpolate_rows(index, X, Y, IW, slot, B, tri, faces, attributes, height, r
     """
     h, w = index.shape
     n_ch = attributes.shape[1]
-    for r in prange(h):
+    for r in range(lo, hi):
         acc = np.empty(n_ch, dtype=attributes.dtype)
         irow = index[r]
         orow = out[r]
@@ -256,12 +258,14 @@ def interpolate_rows(index, X, Y, IW, slot, B, tri, faces, attributes, height, r
                     orow[c, ch] = acc[ch]
 
 
-@kernel(parallel=True)
-def interpolate_pair(index, X, Y, IW, slot, B, tri, faces, attr_a, attr_b, height, r_org, c_org, fp, out_a, out_b):
+@kernel
+def interpolate_pair(lo, hi, index, X, Y, IW, slot, B, tri, faces, attr_a, attr_b, height, r_org, c_org, fp, out_a,
+                     out_b):
     """:func:`interpolate_rows` of two 3-vector attributes at once, the second renormalised (the
-    G-buffer's positions and normals share each pixel's barycentrics). Same arithmetic."""
+    G-buffer's positions and normals share each pixel's barycentrics), rows ``lo .. hi - 1``. Same
+    arithmetic."""
     h, w = index.shape
-    for r in prange(h):
+    for r in range(lo, hi):
         irow = index[r]
         row_a = out_a[r]
         row_b = out_b[r]
@@ -323,10 +327,10 @@ def _shade_run(crow, orow, lrow, g0, g1, g2, f0, f1, f2, w0, w1, w2, swap, na0, 
         lrow[j] = local
 
 
-@kernel(parallel=True)
-def shade_visible(index, X, Y, IW, slot, B, tri, faces, normals, face_object, face_offset, table, light, ambient,
-                  diffuse, stencil, use_stencil, height, r_org, c_org, color, object_id, local_triangle):
-    """The visible triangle's normal (:func:`interpolate_rows` in float32, renormalised), shaded
+@kernel
+def shade_visible(lo, hi, index, X, Y, IW, slot, B, tri, faces, normals, face_object, face_offset, table, light,
+                  ambient, diffuse, stencil, use_stencil, height, r_org, c_org, color, object_id, local_triangle):
+    """Rows ``lo .. hi - 1`` (run over every row by :func:`refsoft._parallel.parallel_range`): the visible triangle's normal (:func:`interpolate_rows` in float32, renormalised), shaded
     as :func:`refsoft.raster._shading.shade_ids` does, in one pass: per pixel of the region
     ``color`` (h, w, 3) float32 ``table[k] * (ambient + diffuse * |n . light|)``, ``object_id``
     (h, w) int32 ``k = face_object[triangle]`` and ``local_triangle`` (h, w) int32 ``triangle -
@@ -341,7 +345,7 @@ def shade_visible(index, X, Y, IW, slot, B, tri, faces, normals, face_object, fa
     fp = np.float32(0)
     lx, ly, lz = light[0], light[1], light[2]
     flat = color.reshape(h * w * 3)  # (r, c, ch) at 3 (r w + c) + ch: a stride SIMD code can see
-    for r in prange(h):
+    for r in range(lo, hi):
         irow = index[r]
         crow = color[r]
         py = np.int64(height - 1 - (r + r_org)) * SUBPIXEL_ONE + SUBPIXEL_HALF

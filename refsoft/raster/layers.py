@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import constants
+from .._parallel import parallel_range
 from ..errors import RefsoftError
 from ..scene.camera import check_image_size
 from . import CULL_MODES, _dtype, _CONVERT, _check_faces, _check_mesh, _kernels, _layers, _setup, coverage_region
@@ -179,9 +180,9 @@ def gbuffer_layers(mesh, view_proj, width: int, height: int, precision="float32"
     # the second fragment's attributes with the G-buffer's own interpolation kernel
     pos_r = np.zeros((h, w, 3), dtype=dt)
     nrm_r = np.zeros((h, w, 3), dtype=dt)
-    _kernels.interpolate_pair(lay.second_index, s["X"], s["Y"], s["IW"].astype(dt), s["slot"], s["B"].astype(dt),
-                              s["tri"], mesh.faces, np.ascontiguousarray(mesh.vertices - o, dtype=dt),
-                              np.ascontiguousarray(mesh.normals, dtype=dt), H, r0, c0, _CONVERT[dt], pos_r, nrm_r)
+    parallel_range(_kernels.interpolate_pair, h, lay.second_index, s["X"], s["Y"], s["IW"].astype(dt), s["slot"],
+                   s["B"].astype(dt), s["tri"], mesh.faces, np.ascontiguousarray(mesh.vertices - o, dtype=dt),
+                   np.ascontiguousarray(mesh.normals, dtype=dt), H, r0, c0, _CONVERT[dt], pos_r, nrm_r)
     pos[r0:r0 + h, c0:c0 + w] = pos_r
     nrm[r0:r0 + h, c0:c0 + w] = nrm_r
     margin[r0:r0 + h, c0:c0 + w] = lay.margin

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import validate
+from .._parallel import parallel_range
 from ..constants import INVERSE_MODES, NEIGHBOURHOODS, SEARCH_METHODS, VIRTUAL_RULES
 from ..errors import RefsoftError
 from ..raster import GBuffer
@@ -243,8 +244,8 @@ def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", invers
     # the eye direction of a pixel is computed with its score (as ``_packed`` computes it: the
     # same values), which costs less than packing the whole G-buffer for a few steps per vertex
     eye_rel = (eye - gbuffer.origin).astype(dt)
-    _lanes.SEARCH[NEIGHBOURHOODS[neighbourhood]](P, N, mask, eye_rel, rows, row_starts, start[0], start[1], int(cap),
-                                                 inverse == "search", fp, *sorted_out)
+    parallel_range(_lanes.SEARCH[NEIGHBOURHOODS[neighbourhood]], -(-n // _lanes.SEARCH_GROUP), P, N, mask, eye_rel,
+                   rows, row_starts, start[0], start[1], int(cap), inverse == "search", fp, *sorted_out)
     pixel, score, margin, iterations, flags = (np.empty_like(a) for a in sorted_out)
     variant(_kernels.scatter, small)(rank, *sorted_out, pixel, score, margin, iterations, flags)
     return SearchResult(pixel, score, margin, iterations, flags, neighbourhood, inverse, int(cap))

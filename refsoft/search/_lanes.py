@@ -28,7 +28,7 @@ Measured: docs/benchmarks.md ("Reflection-point search").
 """
 
 import numpy as np
-from numba import literally, prange
+from numba import literally
 
 from .._numba import kernel, like
 from ..constants import LONE_MARGIN, NO_SCORE
@@ -311,17 +311,17 @@ def search_group(P, N, mask, eye, vertices, starts, default_r, default_c, cap, i
 
 def _make_search(n_neighbours):
     """The lanes kernel for a neighbourhood of ``n_neighbours`` (4: the crosshair, 8: the box)
-    around the current pixel. Its parallel loop calls ``search_group``, compiled on its own (a
-    parallel loop's body costs Numba's parallel passes far more compile time than the same code
-    in a function of its own), with the count as a literal: a constant of the compiled code, one
-    specialisation per neighbourhood, each as fast as one written for its neighbourhood alone."""
+    around the current pixel, over groups ``lo .. hi - 1`` (run over every group by
+    :func:`refsoft._parallel.parallel_range`). It calls ``search_group``, compiled on its own, with
+    the count as a literal: a constant of the compiled code, one specialisation per neighbourhood,
+    each as fast as one written for its neighbourhood alone."""
     NB = n_neighbours
 
-    @kernel(parallel=True)
-    def search_lanes(P, N, mask, eye, vertices, starts, default_r, default_c, cap, inverse_search, fp, pixel, best_out,
-                     margin_out, iterations, flags_out):
+    @kernel
+    def search_lanes(lo, hi, P, N, mask, eye, vertices, starts, default_r, default_c, cap, inverse_search, fp, pixel,
+                     best_out, margin_out, iterations, flags_out):
         n = vertices.shape[0]
-        for g in prange((n + SEARCH_GROUP - 1) // SEARCH_GROUP):
+        for g in range(lo, hi):
             search_group(P, N, mask, eye, vertices, starts, default_r, default_c, cap, inverse_search, fp, pixel,
                          best_out, margin_out, iterations, flags_out, NB, g * SEARCH_GROUP,
                          min(n, (g + 1) * SEARCH_GROUP))

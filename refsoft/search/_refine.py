@@ -1,16 +1,15 @@
 """Sub-texel refinement kernel (see :mod:`refsoft.search.refine`)."""
 
 import numpy as np
-from numba import prange
 
 from .._numba import kernel, like
 from ._kernels import CULLED, HIDDEN, _normalize
-from ..constants import MAX_OFFSET, ROWS_PER_TASK
+from ..constants import MAX_OFFSET
 
 
 # _residual and _stencil are compiled on their own, not inlined at Numba's level: LLVM inlines
-# their machine code into _refine_rows (the same speed), and refine compiles in about 3 s of CPU
-# where it took 13 s with every helper inlined into its parallel loop.
+# their machine code into refine (the same speed), and refine compiles in a fraction of the time
+# it took with every helper inlined into it.
 @kernel
 def _residual(P, N, r, c, vx, vy, vz, ex, ey, ez, fp):
     """``N - h`` at texel (r, c): h the bisector of the directions to the eye and to V."""
@@ -68,25 +67,14 @@ def _surface(P, N, mask, r, c, t0, t1, fp, out_p, out_n, i):
     out_n[i, 2] = nz
 
 
-@kernel(parallel=True)
-def refine(P, N, mask, vertices, eye, pixel, flags, fp, out_p, out_n, out_offset):
-    """For each vertex: one Gauss-Newton step on ``N(x) - h(x) = 0`` from its reflection pixel,
+@kernel
+def refine(lo, hi, P, N, mask, vertices, eye, pixel, flags, fp, out_p, out_n, out_offset):
+    """For each vertex ``lo .. hi - 1`` (run over every vertex by
+    :func:`refsoft._parallel.parallel_range`): one Gauss-Newton step on ``N(x) - h(x) = 0`` from its reflection pixel,
     with the residual's derivatives by central differences (one-sided next to uncovered texels,
     none along an axis with no covered neighbour), then P and N at the new point by the same
     first-order model (:func:`_surface`). Arithmetic in the precision of ``fp``. Vertices
     CULLED or HIDDEN keep their texel's P and N (offset 0; zeros when CULLED)."""
-    n = np.int64(vertices.shape[0])
-    for g in prange((n + ROWS_PER_TASK - 1) // ROWS_PER_TASK):
-        lo = np.int64(g) * ROWS_PER_TASK
-        _refine_rows(P, N, mask, vertices, eye, pixel, flags, fp, out_p, out_n, out_offset, lo,
-                     min(n, lo + ROWS_PER_TASK))
-
-
-@kernel
-def _refine_rows(P, N, mask, vertices, eye, pixel, flags, fp, out_p, out_n, out_offset, lo, hi):
-    """:func:`refine` of rows ``lo`` to ``hi - 1``: one task of its parallel loop, compiled on its
-    own (Numba's parallel passes take several times longer over a body this large than the
-    function's own compilation)."""
     zero = like(0.0, fp)
     lim = like(MAX_OFFSET, fp)
     ex, ey, ez = eye[0], eye[1], eye[2]
@@ -139,9 +127,9 @@ def _refine_rows(P, N, mask, vertices, eye, pixel, flags, fp, out_p, out_n, out_
         _surface(P, N, mask, r, c, t0, t1, fp, out_p, out_n, i)
 
 
-@kernel(parallel=True)
-def surface_at(P, N, mask, pixel, offset, fp, out_p, out_n):
+@kernel
+def surface_at(lo, hi, P, N, mask, pixel, offset, fp, out_p, out_n):
     """P and unit N at texel ``pixel[i]`` plus ``offset[i]`` (rows, cols), by the first-order
-    model of :func:`refine`."""
-    for i in prange(pixel.shape[0]):
+    model of :func:`refine`, for ``i`` in ``lo .. hi - 1``."""
+    for i in range(lo, hi):
         _surface(P, N, mask, pixel[i, 0], pixel[i, 1], offset[i, 0], offset[i, 1], fp, out_p, out_n, i)

@@ -2,7 +2,6 @@
 a small difference of cosines)."""
 
 import numpy as np
-from numba import prange
 
 from .._numba import kernel, like
 from ._refine import surface_values
@@ -16,13 +15,14 @@ def _unit(x, y, z):
     return 0.0, 0.0, 0.0
 
 
-@kernel(parallel=True)
-def edge_errors(P, N, mask, origin, eye, verts, pixel, offset, e0, e1, subtexel, fp, out):
-    """``out[i]``: the thesis's error of edge (e0[i], e1[i]) (see
+@kernel
+def edge_errors(lo, hi, P, N, mask, origin, eye, verts, pixel, offset, e0, e1, subtexel, fp, out):
+    """``out[i]`` for ``i`` in ``lo .. hi - 1`` (run over every edge by
+    :func:`refsoft._parallel.parallel_range`): the thesis's error of edge (e0[i], e1[i]) (see
     :func:`refsoft.search.tessellate.edge_errors`), 1 where an end has no pixel or the point the error
     is taken at is not covered."""
     h, w = mask.shape
-    for i in prange(e0.shape[0]):
+    for i in range(lo, hi):
         a = e0[i]
         b = e1[i]
         out[i] = 1.0

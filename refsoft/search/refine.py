@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._parallel import parallel_range
 from ..errors import RefsoftError
 from ..raster import GBuffer
 from . import _refine
@@ -68,7 +69,7 @@ def refine(gbuffer: GBuffer, eye, vertices, result):
     o = gbuffer.origin
     v = np.ascontiguousarray((verts - o).astype(dt))
     e = ((eye - o).astype(dt))
-    _refine.refine(gbuffer.position, gbuffer.normal, gbuffer.mask, v, e, pix,
+    parallel_range(_refine.refine, len(v), gbuffer.position, gbuffer.normal, gbuffer.mask, v, e, pix,
                    np.ascontiguousarray(result.flags, dtype=np.uint8), dt(0), p, nrm, off)
     return p, nrm, off
 
@@ -104,5 +105,6 @@ def surface_at(gbuffer: GBuffer, pixels, offsets):
     p = np.zeros((len(pix), 3), dtype=dt)
     n = np.zeros((len(pix), 3), dtype=dt)
     if len(pix):
-        _refine.surface_at(gbuffer.position, gbuffer.normal, gbuffer.mask, pix, off, dt(0), p, n)
+        parallel_range(_refine.surface_at, len(pix), gbuffer.position, gbuffer.normal, gbuffer.mask, pix, off, dt(0),
+                       p, n)
     return p, n

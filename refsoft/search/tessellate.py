@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import _tessellate as _kernels
+from .._parallel import parallel_range
 from ..errors import RefsoftError
 from ..scene.mesh import normalize_rows
 from . import CULLED, HIDDEN, search
@@ -56,10 +57,11 @@ def _edge_errors(gbuffer, eye, verts, pixel, offset, e0, e1):
     sub = offset is not None
     off = np.ascontiguousarray(offset, dtype=dt) if sub else np.zeros((1, 2), dtype=dt)
     out = np.empty(len(e0))
-    _kernels.edge_errors(gbuffer.position, gbuffer.normal, gbuffer.mask, np.asarray(gbuffer.origin, np.float64),
-                         np.asarray(eye, dtype=np.float64), np.ascontiguousarray(verts, dtype=np.float64),
-                         np.ascontiguousarray(pixel, dtype=np.int64), off, np.ascontiguousarray(e0, dtype=np.int64),
-                         np.ascontiguousarray(e1, dtype=np.int64), sub, dt.type(0), out)
+    parallel_range(_kernels.edge_errors, len(e0), gbuffer.position, gbuffer.normal, gbuffer.mask,
+                   np.asarray(gbuffer.origin, np.float64), np.asarray(eye, dtype=np.float64),
+                   np.ascontiguousarray(verts, dtype=np.float64), np.ascontiguousarray(pixel, dtype=np.int64), off,
+                   np.ascontiguousarray(e0, dtype=np.int64), np.ascontiguousarray(e1, dtype=np.int64), sub, dt.type(0),
+                   out)
     return out
 
 
