@@ -2,7 +2,9 @@
 
 A kernel written as ``fn(lo, hi, *args)``, a plain loop over the iterations ``lo .. hi - 1`` that
 writes disjoint outputs, is run by :func:`parallel_range` over ``0 .. n - 1`` split into one
-contiguous part per thread (the first on the calling thread), as Numba splits a ``prange`` loop.
+contiguous part per thread (the first on the calling thread), as Numba splits a ``prange`` loop;
+a part the pool's threads have not started when the calling thread is done is run by the calling
+thread.
 Kernels release the GIL (``nogil``), so the parts run at once. The results are those of one
 thread, bit for bit.
 
@@ -11,7 +13,8 @@ with a wrapper for each array it reads, which costs 0.5-5 s of CPU per kernel on
 (0.05 s for each array the loop uses, more for a large body); the same kernel without the parallel
 loop compiles in a fraction of that. The thread count is Numba's (``numba.get_num_threads()``:
 ``NUMBA_NUM_THREADS``, ``numba.set_num_threads`` and :func:`refsoft.raster._threads.one_thread`
-apply); the threads wait for work without spinning.
+apply); the pool's threads wait for work without spinning, and on a busy machine, where the pool's
+thread may not run for milliseconds, the calling thread does not wait for it to start.
 """
 
 import threading
@@ -39,8 +42,10 @@ def parts(n: int, threads: int) -> list:
 
 def parallel_range(fn, n: int, *args) -> None:
     """``fn(lo, hi, *args)`` over ``range(n)``, split into one part per thread (Numba's thread
-    count), the first part on the calling thread. Waits for every part; raises the first part's
-    error, if any, once all have ended."""
+    count), the first part on the calling thread. A part no other thread has started by the time
+    the calling thread is done with its own is taken back and run by the calling thread, so a busy
+    machine (the pool's thread not yet scheduled) costs no wait. Waits for every part; raises the
+    first error, if any, once all have ended."""
     n = int(n)
     threads = min(numba.get_num_threads(), n)
     if threads <= 1:
@@ -51,11 +56,17 @@ def parallel_range(fn, n: int, *args) -> None:
     error = None
     try:
         fn(b[0], b[1], *args)
-    except BaseException as exc:  # the other parts still write into the caller's arrays: wait for them
+        for i, f in enumerate(futures, start=1):
+            if f.cancel():  # not started by the pool: this thread runs it
+                fn(b[i], b[i + 1], *args)
+    except BaseException as exc:  # parts already started still write into the caller's arrays: wait for them
         error = exc
+        for f in futures:
+            f.cancel()
     for f in futures:
-        exc = f.exception()
-        if error is None and exc is not None:
-            error = exc
+        if not f.cancelled():
+            exc = f.exception()
+            if error is None and exc is not None:
+                error = exc
     if error is not None:
         raise error

@@ -73,3 +73,22 @@ def test_an_error_in_a_part_is_raised_after_every_part_has_ended():
         parallel_range(part, 4)
     # on several threads the calling thread's part finished before the error was raised
     assert ended == ([0] if numba.get_num_threads() > 1 else [])
+
+
+def test_parts_the_pool_has_not_started_run_on_the_calling_thread():
+    """With the pool's threads all busy, the calling thread runs every part itself, at once."""
+    from refsoft import _parallel
+
+    release = threading.Event()
+    pool = _parallel._executor()
+    blockers = [pool.submit(release.wait, 10) for _ in range(pool._max_workers)]
+    seen = []
+    try:
+        parallel_range(lambda lo, hi: seen.append((lo, hi, threading.get_ident())), 10)
+    finally:
+        release.set()
+        for f in blockers:
+            f.result()
+    threads = min(numba.get_num_threads(), 10)
+    assert [(lo, hi) for lo, hi, _ in seen] == list(zip(parts(10, threads), parts(10, threads)[1:]))
+    assert {t for _, _, t in seen} == {threading.get_ident()}
