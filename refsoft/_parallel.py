@@ -37,12 +37,13 @@ def parts(n: int, threads: int) -> list:
     return [n * i // threads for i in range(threads + 1)]
 
 
-def parallel_range(fn, n: int, *args) -> None:
+def parallel_range(fn, n: int, *args, serial: bool = False) -> None:
     """``fn(lo, hi, *args)`` over ``range(n)``, split into one part per thread (Numba's thread
     count), the first part on the calling thread. Waits for every part; raises the first part's
-    error, if any, once all have ended."""
+    error, if any, once all have ended. ``serial=True`` runs ``fn(0, n, *args)`` on the calling
+    thread alone (a pass too small to gain from other threads: the same results)."""
     n = int(n)
-    threads = min(numba.get_num_threads(), n)
+    threads = 1 if serial else min(numba.get_num_threads(), n)
     if threads <= 1:
         fn(0, n, *args)
         return
