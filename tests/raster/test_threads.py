@@ -1,5 +1,5 @@
 """Small passes on one thread (refsoft.raster._threads): the thread count inside and after, the
-kernels' serial variants."""
+same results on one thread and split among threads."""
 
 import numba
 
@@ -45,25 +45,6 @@ def test_openmp_threads_wait_passively_unless_the_user_says_otherwise():
     env["OMP_WAIT_POLICY"] = "ACTIVE"
     out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
     assert out.stdout.split() == ["ACTIVE", "False"]
-
-
-def test_serial_variants_are_the_same_kernels_cached_apart():
-    """Every ``kernel.serial`` is the parallel kernel's own function compiled without parallel
-    loops, under a name of its own (its cache and lock files are its own)."""
-    import refsoft.search._virtual  # noqa: F401  (their kernels)
-    import refsoft.search.skips  # noqa: F401
-    from refsoft import _numba
-    from refsoft.raster._threads import variant
-
-    pairs = [(d, d.serial) for d in _numba.KERNELS if hasattr(d, "serial")]
-    assert {d.py_func.__name__ for d, _ in pairs} >= {
-        "prepare", "gather", "scatter", "virtual_from_texels", "virtual_from_points", "triangles_outside_box"}
-    for par, ser in pairs:
-        assert ser in _numba.KERNELS
-        assert par.targetoptions.get("parallel") and not ser.targetoptions.get("parallel")
-        assert ser.py_func.__code__ is par.py_func.__code__
-        assert ser.py_func.__qualname__ == par.py_func.__qualname__ + "_serial"
-        assert variant(par, True) is ser and variant(par, False) is par
 
 
 def test_binning_on_one_thread_and_split_among_threads_lists_each_tile_in_index_order():
