@@ -47,6 +47,22 @@ def test_openmp_threads_wait_passively_unless_the_user_says_otherwise():
     assert out.stdout.split() == ["ACTIVE", "False"]
 
 
+def test_no_kernel_has_a_parallel_loop():
+    """Every kernel is compiled without Numba's parallel lowering: loops run on several threads
+    are kernels over a range, called by refsoft._parallel.parallel_range."""
+    import importlib
+
+    from refsoft import _numba
+
+    for name in ("raster", "raster.layers", "search", "search._hierarchy", "search._virtual", "search.skips",
+                 "search.refine", "search.tessellate", "truth.analytic", "truth._primary", "ldt._search"):
+        importlib.import_module(f"refsoft.{name}")  # every module that defines kernels
+    assert len(_numba.KERNELS) > 50
+    parallel = [d.py_func.__qualname__ for d in _numba.KERNELS
+                if d.targetoptions.get("parallel") or "prange" in d.py_func.__code__.co_names]
+    assert parallel == []
+
+
 def test_binning_on_one_thread_and_split_among_threads_lists_each_tile_in_index_order():
     """bin_triangles against a plain loop over tiles and triangles, on the calling thread alone
     and split among threads: the same lists, each in triangle order."""
