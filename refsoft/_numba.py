@@ -3,13 +3,15 @@
 import os
 import sys
 
-# OpenMP threads that wait for work sleep at once instead of spinning first. A parallel region
-# ends when both threads are done; on a shared machine (another job on the second core) a
-# spinning thread keeps its core from the other thread, and each region then waits milliseconds
-# for the scheduler: a coherent kitchen frame took 1.1-1.4 s with the spin instead of 0.27-0.49 s
-# (docs/benchmarks.md, "Threads on a shared machine"). Set before Numba loads its OpenMP pool
-# (at the first parallel kernel), which reads it once; a value the user set is kept. Outputs do
-# not depend on it.
+# OpenMP threads that wait for work sleep at once instead of spinning first: on a shared machine
+# a spinning thread keeps its core from the other thread, and each parallel region then waits
+# milliseconds for the scheduler (docs/benchmarks.md, "Threads on a shared machine"). refsoft's
+# kernels have no parallel loops (refsoft._parallel runs them on threads of its own), but
+# numba.get_num_threads and numba.set_num_threads, which hold refsoft's thread count, still load
+# Numba's threading layer. OpenMP, when it is that layer, reads this once as it loads and starts
+# its threads only when a parallel Numba function runs, which none of refsoft's is: the setting
+# matters only to such a function run in the same process. A value the user set is kept. Outputs
+# do not depend on it.
 os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 from contextlib import contextmanager  # noqa: E402
@@ -32,47 +34,25 @@ if hasattr(numba_cpu.CPUTargetOptions, "no_cfunc_wrapper"):
 KERNELS = []
 
 
-def kernel(fn=None, *, parallel=False, inline=False, llvm_inline=False, serial=False):
-    """``numba.njit`` with refsoft's fixed options (optionally ``parallel=True``; ``inline=True``
-    inlines a small helper into its callers at Numba's level; ``llvm_inline=True`` compiles it on
-    its own and has LLVM inline its machine code into every caller).
+def kernel(fn=None, *, inline=False, llvm_inline=False):
+    """``numba.njit`` with refsoft's fixed options (``inline=True`` inlines a small helper into its
+    callers at Numba's level; ``llvm_inline=True`` compiles it on its own and has LLVM inline its
+    machine code into every caller).
 
-    ``serial=True`` (with ``parallel``) also makes ``kernel.serial``: the same function compiled
-    without parallel loops (``prange`` runs as ``range``), for inputs small enough for one
-    thread (:func:`refsoft.raster._threads.variant`). Each loop iteration writes its own
-    outputs, so both give the same results bit for bit; each is compiled when first called, and
-    the serial one takes about a second of CPU less to compile (Numba's parallel lowering), so a
-    run on small scenes compiles no parallel variant of these kernels at all."""
+    Kernels have no parallel loops: a loop run on several threads is a kernel over a range of
+    iterations, called by :func:`refsoft._parallel.parallel_range` (Numba's parallel lowering
+    would compile the loop's body a second time)."""
 
     def wrap(f):
         extra = {"inline": "always"} if inline else {}
         if llvm_inline:
             extra["forceinline"] = True
-        dispatcher = _njit(f, parallel, extra)
-        if serial and parallel:
-            dispatcher.serial = _njit(_renamed(f, "_serial"), False, extra)
+        dispatcher = numba.njit(**KERNEL_OPTIONS, **extra)(f)
+        dispatcher.compile = _compile_once(dispatcher, dispatcher.compile)
+        KERNELS.append(dispatcher)
         return dispatcher
 
     return wrap(fn) if fn is not None else wrap
-
-
-def _njit(f, parallel, extra):
-    dispatcher = numba.njit(parallel=parallel, **KERNEL_OPTIONS, **extra)(f)
-    dispatcher.compile = _compile_once(dispatcher, dispatcher.compile)
-    KERNELS.append(dispatcher)
-    return dispatcher
-
-
-def _renamed(f, suffix):
-    """A copy of function ``f`` whose name ends in ``suffix``: Numba names a kernel's cache files
-    (and refsoft its lock file) after the function's qualified name, so the copy's compiled code
-    is cached apart from the original's."""
-    import types as pytypes
-
-    g = pytypes.FunctionType(f.__code__, f.__globals__, f.__name__ + suffix, f.__defaults__, f.__closure__)
-    g.__qualname__ = f.__qualname__ + suffix
-    g.__module__, g.__doc__, g.__kwdefaults__ = f.__module__, f.__doc__, f.__kwdefaults__
-    return g
 
 
 def _compile_once(dispatcher, compile_):

@@ -40,14 +40,15 @@ def parts(n: int, threads: int) -> list:
     return [n * i // threads for i in range(threads + 1)]
 
 
-def parallel_range(fn, n: int, *args) -> None:
+def parallel_range(fn, n: int, *args, serial: bool = False) -> None:
     """``fn(lo, hi, *args)`` over ``range(n)``, split into one part per thread (Numba's thread
     count), the first part on the calling thread. A part no other thread has started by the time
     the calling thread is done with its own is taken back and run by the calling thread, so a busy
     machine (the pool's thread not yet scheduled) costs no wait. Waits for every part; raises the
-    first error, if any, once all have ended."""
+    first error, if any, once all have ended. ``serial=True`` runs ``fn(0, n, *args)`` on the
+    calling thread alone (a pass too small to gain from other threads: the same results)."""
     n = int(n)
-    threads = min(numba.get_num_threads(), n)
+    threads = 1 if serial else min(numba.get_num_threads(), n)
     if threads <= 1:
         fn(0, n, *args)
         return

@@ -136,9 +136,9 @@ def _after_refinement(opts, gb, res, verts, camera) -> None:
     if opts.refine and n:
         surface = np.zeros((len(verts), 3), gb.position.dtype)
         virtual_vertices(gb, res, verts, relative=True, surface=(surface, surface), rule=opts.virtual, eye=camera.eye)
-    if opts.cull_virtual:  # a virtual pass of a few triangles: the serial variant (most scenes')
-        skips.triangles_outside_box.serial(np.zeros((3, 4)), np.zeros((1, 3), np.int64),
-                                           *skips.box_planes((0, 1, 0, 1), camera.width, camera.height))
+    if opts.cull_virtual:
+        skips.triangles_outside_box(np.zeros((3, 4)), np.zeros((1, 3), np.int64),
+                                    *skips.box_planes((0, 1, 0, 1), camera.width, camera.height), serial=True)
     if opts.tessellate is not None and n:
         offset = np.zeros((n, 2), gb.position.dtype) if opts.refine else None
         edge_errors(gb, camera.eye, verts[:n], verts[:n][::-1], res.pixel[:n], res.pixel[:n][::-1], offset, offset)

@@ -60,6 +60,16 @@ def test_parts_run_on_as_many_threads_as_numba_counts():
     assert [(lo, hi) for lo, hi, _ in seen] == [(0, 10)] and seen[0][2] == threading.get_ident()
 
 
+def test_serial_runs_the_whole_range_on_the_calling_thread():
+    seen = []
+    parallel_range(lambda lo, hi, tag: seen.append((lo, hi, tag, threading.get_ident())), 10, "x", serial=True)
+    assert seen == [(0, 10, "x", threading.get_ident())]
+    x = np.random.default_rng(4).random(1001, dtype=np.float32)
+    out = np.full_like(x, np.nan)
+    parallel_range(_square_root_sum, len(x), x, out, serial=True)
+    assert out.tobytes() == (np.sqrt(x) + x * np.float32(0.5)).tobytes()
+
+
 def test_an_error_in_a_part_is_raised_after_every_part_has_ended():
     ended = []
 

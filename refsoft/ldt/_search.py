@@ -9,7 +9,6 @@ outputs, so the result does not depend on the thread count. ``tests/naive.py``'s
 """
 
 import numpy as np
-from numba import prange
 
 from .._numba import kernel, like
 from .constants import (LAYER_MISMATCH, NO_FACE_WITHIN_TAU, OPEN_OBJECT, ORIGIN_IN_CUBE, REGION_CULLED,
@@ -130,19 +129,20 @@ def _face_search(q0x, q0y, q0z, ux, uy, uz, s_in, s_out, umax, n_lin, f, k, dept
     return True, hi, j, row_hi, col_hi, e, samples, steps, margin, False
 
 
-@kernel(parallel=True)
-def search_pixels(P, N, eye, ortho, view_dir, tri, region, use_regions, W, depth, back, count, mismatch, is_open,
-                  table, R, n_lin, tau, max_faces, fp,
+@kernel
+def search_pixels(lo, hi, P, N, eye, ortho, view_dir, tri, region, use_regions, W, depth, back, count, mismatch,
+                  is_open, table, R, n_lin, tau, max_faces, fp,
                   ray, t_out, obj_out, face_out, layer_out, texel_out, residual_out, samples_out, steps_out,
                   faces_out, objects_out, flags_out, obj_dist, margin_out, hit_out):
-    """The LDT search of every pixel ``i`` (rows of ``P``, ``N``): see :func:`refsoft.ldt.search.search`
-    for the arrays. ``n_lin`` 0 means "texel"; ``max_faces`` 3 or 1 (the entry face only)."""
+    """The LDT search of every pixel ``i`` in ``lo .. hi - 1`` (rows of ``P``, ``N``; run over every
+    pixel by :func:`refsoft._parallel.parallel_range`): see :func:`refsoft.ldt.search.search` for
+    the arrays. ``n_lin`` 0 means "texel"; ``max_faces`` 3 or 1 (the entry face only)."""
     K = W.shape[0]
     zero = like(0.0, fp)
     one = like(1.0, fp)
     two = like(2.0, fp)
     inf = like(np.inf, fp)
-    for i in prange(P.shape[0]):
+    for i in range(lo, hi):
         px, py, pz = P[i, 0], P[i, 1], P[i, 2]
         if ortho:
             ix, iy, iz = view_dir[0], view_dir[1], view_dir[2]
@@ -183,14 +183,14 @@ def search_pixels(P, N, eye, ortho, view_dir, tri, region, use_regions, W, depth
                     if abs(qa) > one:
                         miss = True
                     continue
-                lo = (-one - qa) / ua
-                hi = (one - qa) / ua
-                if hi < lo:
-                    lo, hi = hi, lo
-                if lo > near:  # ties keep the smaller axis
-                    near = lo
+                s_lo = (-one - qa) / ua
+                s_hi = (one - qa) / ua
+                if s_hi < s_lo:
+                    s_lo, s_hi = s_hi, s_lo
+                if s_lo > near:  # ties keep the smaller axis
+                    near = s_lo
                     entry = a
-                far = min(far, hi)
+                far = min(far, s_hi)
             s_in = max(zero, near)
             if miss or entry < 0 or not s_in < far:
                 continue

@@ -189,6 +189,7 @@ def search(P, N, eye, triangle, region, W, stack: Stack, view_dir=None, linear=C
     -------
     PixelSearch
     """
+    from .._parallel import parallel_range
     from ._search import search_pixels
 
     dt = _dtype(precision)
@@ -217,13 +218,14 @@ def search(P, N, eye, triangle, region, W, stack: Stack, view_dir=None, linear=C
                       np.empty(n, np.uint8), np.empty((n, K), dt), np.empty(n, dt))
     if n == 0:
         return out
-    search_pixels(P, N, np.asarray(eye, dt), ortho, vd, tri if regions == "cone" else np.zeros(n, np.int64),
-                  region if regions == "cone" else np.ones((1, K), bool), regions == "cone",
-                  np.ascontiguousarray(W, dt), stack.depth, stack.back, stack.count, stack.mismatch, stack.open,
-                  C.FACE_TABLE, stack.resolution, n_lin, dt(tau), 3 if faces == "three" else 1, dt(0),
-                  out.ray, out.distance, out.object, out.face, out.layer, out.texel, out.residual,
-                  out.linear_samples, out.binary_steps, out.faces_searched, out.objects_tested, out.flags,
-                  out.object_distance, out.margin, out.hit)
+    parallel_range(search_pixels, n, P, N, np.asarray(eye, dt), ortho, vd,
+                   tri if regions == "cone" else np.zeros(n, np.int64),
+                   region if regions == "cone" else np.ones((1, K), bool), regions == "cone",
+                   np.ascontiguousarray(W, dt), stack.depth, stack.back, stack.count, stack.mismatch, stack.open,
+                   C.FACE_TABLE, stack.resolution, n_lin, dt(tau), 3 if faces == "three" else 1, dt(0),
+                   out.ray, out.distance, out.object, out.face, out.layer, out.texel, out.residual,
+                   out.linear_samples, out.binary_steps, out.faces_searched, out.objects_tested, out.flags,
+                   out.object_distance, out.margin, out.hit)
     return out
 
 

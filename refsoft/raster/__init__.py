@@ -23,7 +23,7 @@ from ..scene.camera import Camera, check_image_size
 from ..errors import RefsoftError
 from ..scene.mesh import Mesh, concatenate
 from . import _kernels, _setup, _shading
-from ._threads import SERIAL_MAX_TRIANGLES, one_thread, variant
+from ._threads import SERIAL_MAX_TRIANGLES, one_thread
 
 __all__ = ["Fragments", "GBuffer", "ColorPass", "rasterize", "interpolate", "gbuffer", "color_pass", "coverage_region",
            "shade_fragments",
@@ -161,7 +161,7 @@ def rasterize(clip, faces, width: int, height: int, peel_depth=None, region=None
     small = len(faces) <= SERIAL_MAX_TRIANGLES  # the per-triangle front end on this thread (_threads)
     X, Y, Z, IW, slot, B, tri, valid, bbox, area, bias = _setup.setup_region(
         clip, faces, width, height, r0, r1, c0, c1, CULL_MODES[cull], constants.GUARD_BAND_PIXELS, small)
-    starts, items = variant(_kernels.bin_triangles, small)(valid, bbox, tile, tiles_x, tiles_y, r0, c0)
+    starts, items = _kernels.bin_triangles(valid, bbox, tile, tiles_x, tiles_y, r0, c0, serial=small)
     depth, index, triangle = limits.maps((rh, rw), np.float32, np.int32, np.int32)
     depth.fill(constants.DEPTH_CLEAR)
     index.fill(-1)

@@ -7,9 +7,9 @@ not depend on the thread count.
 """
 
 import numpy as np
-from numba import prange
 
 from .._numba import kernel, like
+from .._parallel import parallel_range
 from ..constants import SUBPIXEL_HALF, SUBPIXEL_ONE
 
 
@@ -18,38 +18,65 @@ from ..constants import SUBPIXEL_HALF, SUBPIXEL_ONE
 BIN_CHUNKS = 16
 
 
-@kernel(parallel=True, serial=True)
-def bin_triangles(valid, bbox, tile, tiles_x, tiles_y, r_org, c_org):
+def bin_triangles(valid, bbox, tile, tiles_x, tiles_y, r_org, c_org, serial=False):
     """Per-tile lists of clip triangles (in index order) whose pixel box meets the tile; tiles
     cover the rasterized region, whose first pixel is (r_org, c_org).
 
-    Returns ``(starts, items)``: tile ``k``'s triangles are ``items[starts[k]:starts[k+1]]``.
+    Parameters
+    ----------
+    valid : ndarray, shape (T,), bool
+    bbox : ndarray, shape (T, 4), int32
+        Pixel boxes (col min, col max, row min, row max), inside the region where ``valid``.
+    tile, tiles_x, tiles_y : int
+        Tile size in pixels; tiles per row and per column of the region.
+    r_org, c_org : int
+    serial : bool
+        Bin on the calling thread alone (:func:`refsoft._parallel.parallel_range`).
+
+    Returns
+    -------
+    starts : ndarray, shape (tiles_x * tiles_y + 1,), int64
+    items : ndarray, shape (starts[-1],), int32
+        Tile ``k``'s triangles are ``items[starts[k]:starts[k+1]]``.
     """
     n_tiles = tiles_x * tiles_y
+    counts = np.zeros((BIN_CHUNKS, n_tiles), dtype=np.int64)
+    parallel_range(_bin_count, BIN_CHUNKS, valid, bbox, tile, tiles_x, r_org, c_org, counts, serial=serial)
+    # exclusive prefix sum in (tile, chunk) order: chunk ch of tile k starts at fill[ch, k]
+    by_tile = counts.T.reshape(-1)
+    ends = np.cumsum(by_tile)
+    fill = np.ascontiguousarray((ends - by_tile).reshape(n_tiles, BIN_CHUNKS).T)
+    starts = np.empty(n_tiles + 1, dtype=np.int64)
+    starts[:n_tiles] = fill[0]
+    starts[n_tiles] = ends[-1]
+    items = np.empty(ends[-1], dtype=np.int32)
+    parallel_range(_bin_fill, BIN_CHUNKS, valid, bbox, tile, tiles_x, r_org, c_org, fill, items, serial=serial)
+    return starts, items
+
+
+@kernel
+def _bin_count(lo, hi, valid, bbox, tile, tiles_x, r_org, c_org, counts):
+    """Chunks ``lo .. hi - 1`` of the triangles (BIN_CHUNKS in all): ``counts[ch, k]`` (zero on
+    entry) gains one for each triangle of chunk ``ch`` whose pixel box meets tile ``k``."""
     n = valid.shape[0]
     chunk = (n + BIN_CHUNKS - 1) // BIN_CHUNKS
-    counts = np.empty((BIN_CHUNKS, n_tiles), dtype=np.int64)  # zeroed in the loop: no parallel region of its own
-    for ch in prange(BIN_CHUNKS):
-        for k in range(n_tiles):
-            counts[ch, k] = 0
+    for ch in range(lo, hi):
         for t in range(ch * chunk, min(n, (ch + 1) * chunk)):
             if not valid[t]:
                 continue
             for ty in range((bbox[t, 2] - r_org) // tile, (bbox[t, 3] - r_org) // tile + 1):
                 for tx in range((bbox[t, 0] - c_org) // tile, (bbox[t, 1] - c_org) // tile + 1):
                     counts[ch, ty * tiles_x + tx] += 1
-    # exclusive prefix sum in (tile, chunk) order: chunk ch of tile k starts at fill[ch, k]
-    starts = np.empty(n_tiles + 1, dtype=np.int64)
-    fill = np.empty((BIN_CHUNKS, n_tiles), dtype=np.int64)
-    total = 0
-    for k in range(n_tiles):
-        starts[k] = total
-        for ch in range(BIN_CHUNKS):
-            fill[ch, k] = total
-            total += counts[ch, k]
-    starts[n_tiles] = total
-    items = np.empty(total, dtype=np.int32)
-    for ch in prange(BIN_CHUNKS):
+
+
+@kernel
+def _bin_fill(lo, hi, valid, bbox, tile, tiles_x, r_org, c_org, fill, items):
+    """Chunks ``lo .. hi - 1``, as :func:`_bin_count` counted them: each triangle of chunk ``ch``
+    written at ``items[fill[ch, k]]`` for every tile ``k`` its box meets, in index order
+    (``fill[ch, k]``, the first slot of chunk ``ch`` in tile ``k``, is advanced)."""
+    n = valid.shape[0]
+    chunk = (n + BIN_CHUNKS - 1) // BIN_CHUNKS
+    for ch in range(lo, hi):
         for t in range(ch * chunk, min(n, (ch + 1) * chunk)):
             if not valid[t]:
                 continue
@@ -58,7 +85,6 @@ def bin_triangles(valid, bbox, tile, tiles_x, tiles_y, r_org, c_org):
                     k = ty * tiles_x + tx
                     items[fill[ch, k]] = t
                     fill[ch, k] += 1
-    return starts, items
 
 
 #: float32 lanes of a SIMD register (AVX2): shade_visible shades whole multiples of it.
@@ -75,8 +101,8 @@ def _span(g, f, q, ja, jb):
     2^53: ``g``, ``f``, ``q`` and the products are exact). ``ceil``/``floor`` of the rounded
     quotient equal those of the exact one where it matters (in [-1, ja, jb + 1]): a quotient of
     integers with divisor ``|f| < 2^34`` is either an integer, rounded exactly, or 2^-34 away from
-    one, farther than its rounding error. Compiled apart, not inlined at Numba's level: Numba's
-    parallel passes over raster_tiles's loop body then cost less (LLVM still inlines it)."""
+    one, farther than its rounding error. Compiled apart, not inlined at Numba's level: raster_tiles
+    then compiles faster (LLVM still inlines it)."""
     if f > 0.0:
         return max(ja, np.ceil((q - g) / f)), jb
     if f < 0.0:

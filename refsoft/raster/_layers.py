@@ -1,27 +1,26 @@
 """The depth test keeping the two nearest fragments per pixel (for the G-buffer's depth margin)."""
 
 import numpy as np
-from numba import prange
 
 from .._numba import kernel
 from ..constants import SUBPIXEL_HALF, SUBPIXEL_ONE
 
 
-@kernel(parallel=True)
-def raster_two_tiles(starts, items, X, Y, Z, tri, bbox, area, bias, height, tile, tiles_x, r_org, c_org,
+@kernel
+def raster_two_tiles(lo, hi, starts, items, X, Y, Z, tri, bbox, area, bias, height, tile, tiles_x, r_org, c_org,
                      depth, index, depth2, index2):
-    """:func:`refsoft.raster._kernels.raster_tiles` (no peeling) that also keeps, per pixel, the
-    nearest fragment other than the winner: ``depth2`` (float32, initialised to +inf) and
-    ``index2`` (clip triangle, initialised to -1).
+    """:func:`refsoft.raster._kernels.raster_tiles` (no peeling) of tiles ``lo .. hi - 1`` (run
+    over every tile by :func:`refsoft._parallel.parallel_range`, each tile's pixels written by one
+    thread) that also keeps, per pixel, the nearest fragment other than the winner: ``depth2``
+    (float32, initialised to +inf) and ``index2`` (clip triangle, initialised to -1).
 
     The winner is exactly raster_tiles's (same coverage, same float64 depth rounded to float32,
     LESS, the first drawn winning equal depths). A fragment that does not win but is LESS than
     ``depth2`` becomes the second; a winner's predecessor moves to second place. A fragment at
     the winner's depth (a tie the first drawn won) is therefore a second fragment at margin 0.
     """
-    n_tiles = starts.shape[0] - 1
     rh, rw = depth.shape
-    for k in prange(n_tiles):
+    for k in range(lo, hi):
         ty = k // tiles_x
         tx = k - ty * tiles_x
         r_lo = r_org + ty * tile

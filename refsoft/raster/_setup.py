@@ -10,10 +10,10 @@ one, so two triangles sharing a clipped edge get bit-identical new vertices.
 """
 
 import numpy as np
-from numba import prange
 
 from .._numba import kernel, readonly
-from ._threads import SERIAL_MAX_VERTICES, variant
+from .._parallel import parallel_range
+from ._threads import SERIAL_MAX_VERTICES
 from ..constants import SUBPIXEL_BITS, SUBPIXEL_HALF, SUBPIXEL_ONE
 
 # Number of clip planes: near, then x <= g w, x >= -g w, y <= g w, y >= -g w.
@@ -26,19 +26,20 @@ def transform_points(points, matrix):
 
     ``points`` (N, 3) and ``matrix`` (4, 4): C-contiguous float64 arrays, writable or not (the
     kernel sees read-only views: one specialisation)."""
+    out = np.empty((len(points), 4), dtype=np.float64)
     # microseconds of work for a few thousand points: no hand-off to other threads
-    return variant(_transform_points, len(points) <= SERIAL_MAX_VERTICES)(readonly(points), readonly(matrix))
+    parallel_range(_transform_points, len(points), readonly(points), readonly(matrix), out,
+                   serial=len(points) <= SERIAL_MAX_VERTICES)
+    return out
 
 
-@kernel(parallel=True, serial=True)
-def _transform_points(points, matrix):
-    n = points.shape[0]
-    out = np.empty((n, 4), dtype=np.float64)
-    for i in prange(n):
+@kernel
+def _transform_points(lo, hi, points, matrix, out):
+    """Rows ``lo .. hi - 1`` of :func:`transform_points` into ``out`` (N, 4) float64."""
+    for i in range(lo, hi):
         x, y, z = points[i, 0], points[i, 1], points[i, 2]
         for r in range(4):
             out[i, r] = ((matrix[r, 0] * x + matrix[r, 1] * y) + matrix[r, 2] * z) + matrix[r, 3]
-    return out
 
 
 @kernel
@@ -113,14 +114,14 @@ def _outcodes(c, gx, gy):
     return code
 
 
-@kernel(parallel=True, serial=True)
-def count_clip_triangles(clip, faces, codes, gx, gy):
-    """Per input triangle: clip triangles it produces (0 when culled by a plane) and whether it
-    was clipped (1) or passes whole (0). Two int64 (F,) arrays."""
-    nf = faces.shape[0]
-    counts = np.empty(nf, dtype=np.int64)
-    clipped = np.empty(nf, dtype=np.int64)
-    for f in prange(nf):
+@kernel
+def count_clip_triangles(lo, hi, clip, faces, codes, gx, gy, counts, clipped):
+    """Per input triangle ``f`` in ``lo .. hi - 1``: ``counts[f]``, the clip triangles it
+    produces (0 when culled by a plane), and ``clipped[f]``, the same count when it was clipped,
+    0 when it passes whole (int64 (F,) each)."""
+    poly_c = np.empty((MAX_POLY, 4))  # work arrays, once per part (each triangle sets them afresh)
+    poly_b = np.empty((MAX_POLY, 3))
+    for f in range(lo, hi):
         o0 = codes[faces[f, 0]]
         o1 = codes[faces[f, 1]]
         o2 = codes[faces[f, 2]]
@@ -130,12 +131,9 @@ def count_clip_triangles(clip, faces, codes, gx, gy):
         elif (o0 & o1 & o2) != 0:
             counts[f] = 0
         else:
-            poly_c = np.empty((MAX_POLY, 4))
-            poly_b = np.empty((MAX_POLY, 3))
             n = _clip_polygon(clip[faces[f, 0]], clip[faces[f, 1]], clip[faces[f, 2]], gx, gy, poly_c, poly_b)
             counts[f] = n - 2 if n >= 3 else 0
             clipped[f] = counts[f]
-    return counts, clipped
 
 
 @kernel
@@ -152,18 +150,14 @@ def _window(c, width, height):
             0.5 * (c[2] / c[3]) + 0.5, 1.0 / c[3])
 
 
-@kernel(parallel=True, serial=True)
-def vertex_setup(clip, gx, gy, width, height):
-    """Per vertex, in one pass: its outcode (uint8 (V,), bit p set when it is outside clip plane
-    p) and, for a vertex inside every plane, its window coordinates (others: zeros, never
-    used): snapped ``x``, ``y`` int32 (V, 2) and ``z``, ``1/w`` float64 (V, 2), as
-    :func:`_window` computes them (a vertex shared by many triangles is set up once, like a
-    GPU's post-transform cache). Every output is written in the loop: one parallel region."""
-    n = clip.shape[0]
-    codes = np.empty(n, dtype=np.uint8)
-    out_xy = np.empty((n, 2), dtype=np.int32)
-    out_zw = np.empty((n, 2), dtype=np.float64)
-    for i in prange(n):
+@kernel
+def vertex_setup(lo, hi, clip, gx, gy, width, height, codes, out_xy, out_zw):
+    """Per vertex ``i`` in ``lo .. hi - 1``, in one pass: its outcode ``codes[i]`` (uint8 (V,),
+    bit p set when it is outside clip plane p) and, for a vertex inside every plane, its window
+    coordinates (others: zeros, never used): snapped ``x``, ``y`` in ``out_xy`` int32 (V, 2) and
+    ``z``, ``1/w`` in ``out_zw`` float64 (V, 2), as :func:`_window` computes them (a vertex shared
+    by many triangles is set up once, like a GPU's post-transform cache)."""
+    for i in range(lo, hi):
         c = clip[i]
         code = _outcodes(c, gx, gy)
         codes[i] = code
@@ -178,7 +172,6 @@ def vertex_setup(clip, gx, gy, width, height):
         out_xy[i, 1] = y
         out_zw[i, 0] = z
         out_zw[i, 1] = iw
-    return codes, out_xy, out_zw
 
 
 @kernel
@@ -237,38 +230,29 @@ def _emit(t, f, x0, y0, z0, w0, x1, y1, z1, w1, x2, y2, z2, w2, width, height, r
     return swapped
 
 
-@kernel(parallel=True, serial=True)
-def emit_clip_triangles(clip, faces, codes, win_xy, win_zw, offsets, clip_offsets, gx, gy, width, height, region,
-                        cull):
-    """Clip, snap and set up every triangle.
+@kernel
+def emit_clip_triangles(lo, hi, clip, faces, codes, win_xy, win_zw, offsets, clip_offsets, gx, gy, width, height,
+                        region, cull, X, Y, Z, IW, slot, B, tri, valid, bbox, area, bias):
+    """Clip, snap and set up the input triangles ``lo .. hi - 1``.
 
     ``cull`` (0 none, 1 keep clockwise, 2 keep counter-clockwise) is decided per clip triangle
     on its snapped window coordinates (:func:`_emit`): exact integer arithmetic, as GL culls.
 
     ``offsets[f]`` is the first output slot of face f; ``clip_offsets[f]`` the first row of the
-    barycentric table ``B`` for the clip triangles of a face that was clipped. Returns the clip
+    barycentric table ``B`` for the clip triangles of a face that was clipped. Writes the clip
     triangles: snapped ``X``, ``Y`` (T, 3) int32 (1/256 px, y up); window depth ``Z`` and ``IW``
     = 1/w (T, 3) float64; ``slot`` (T,) int32, the row of ``B`` (K, 3, 3) float64 holding the
     clip vertices' barycentrics w.r.t. the input triangle, or for an unclipped triangle -1 (identity)
     or -2 (vertices 1 and 2 swapped); ``tri`` (T,) int32 input triangle; ``valid`` (T,) bool; pixel ``bbox`` (T, 4)
     int32 (col min, col max, row min, row max), clamped to ``region`` (row min, row max, col
     min, col max, inclusive: the part of the viewport rasterized); doubled ``area`` (T,) int64 > 0 when valid;
-    edge ``bias`` (T, 3) int8 (0 inclusive, -1 exclusive).
+    edge ``bias`` (T, 3) int8 (0 inclusive, -1 exclusive). ``T = offsets[-1]``, ``K =
+    clip_offsets[-1]``; the rows of input triangle ``f`` are ``offsets[f] .. offsets[f + 1] - 1``
+    (and ``clip_offsets[f] ..`` of ``B``): written by its own iteration only.
     """
-    total = offsets[-1]
-    X = np.empty((total, 3), dtype=np.int32)
-    Y = np.empty((total, 3), dtype=np.int32)
-    Z = np.empty((total, 3), dtype=np.float64)
-    IW = np.empty((total, 3), dtype=np.float64)
-    slot = np.empty(total, dtype=np.int32)
-    B = np.empty((clip_offsets[-1], 3, 3), dtype=np.float64)
-    tri = np.empty(total, dtype=np.int32)
-    valid = np.empty(total, dtype=np.bool_)
-    bbox = np.empty((total, 4), dtype=np.int32)
-    area = np.empty(total, dtype=np.int64)
-    bias = np.empty((total, 3), dtype=np.int8)
-    nf = faces.shape[0]
-    for f in prange(nf):
+    poly_c = np.empty((MAX_POLY, 4))  # work arrays, once per part (each triangle sets them afresh)
+    poly_b = np.empty((MAX_POLY, 3))
+    for f in range(lo, hi):
         start = offsets[f]
         count = offsets[f + 1] - start
         if count == 0:
@@ -282,8 +266,6 @@ def emit_clip_triangles(clip, faces, codes, win_xy, win_zw, offsets, clip_offset
                             width, height, region, cull, X, Y, Z, IW, tri, valid, bbox, area, bias)
             slot[start] = -2 if swapped else -1
             continue
-        poly_c = np.empty((MAX_POLY, 4))
-        poly_b = np.empty((MAX_POLY, 3))
         n = _clip_polygon(clip[faces[f, 0]], clip[faces[f, 1]], clip[faces[f, 2]], gx, gy, poly_c, poly_b)
         for j in range(n - 2):
             t = start + j
@@ -299,7 +281,6 @@ def emit_clip_triangles(clip, faces, codes, win_xy, win_zw, offsets, clip_offset
                 B[b, 1, k] = poly_b[i1, k]
                 B[b, 2, k] = poly_b[i2, k]
             slot[t] = b
-    return X, Y, Z, IW, slot, B, tri, valid, bbox, area, bias
 
 
 def setup_region(clip, faces, width, height, r0, r1, c0, c1, cull, guard_band, small=False):
@@ -307,18 +288,30 @@ def setup_region(clip, faces, width, height, r0, r1, c0, c1, cull, guard_band, s
     ``c0:c1`` of a ``width`` x ``height`` viewport (the calls of :func:`refsoft.raster.rasterize`,
     shared with the two-fragment pass): :func:`emit_clip_triangles`'s arrays ``X, Y, Z, IW,
     slot, B, tri, valid, bbox, area, bias``. ``cull``: 0 none, 1 clockwise, 2 counter-clockwise
-    kept; ``guard_band`` in pixels; ``small``: on the calling thread, the kernels' serial variants
-    (:func:`refsoft.raster._threads.variant`)."""
+    kept; ``guard_band`` in pixels; ``small``: every pass on the calling thread alone
+    (:func:`refsoft._parallel.parallel_range`'s ``serial``)."""
     gx, gy = 2.0 * guard_band / width, 2.0 * guard_band / height
-    codes, win_xy, win_zw = variant(vertex_setup, small)(clip, gx, gy, width, height)
+    nv, nf = len(clip), len(faces)
+    codes = np.empty(nv, dtype=np.uint8)
+    win_xy = np.empty((nv, 2), dtype=np.int32)
+    win_zw = np.empty((nv, 2), dtype=np.float64)
+    parallel_range(vertex_setup, nv, clip, gx, gy, width, height, codes, win_xy, win_zw, serial=small)
     if not codes.any():  # every vertex inside every plane: one clip triangle per face, none clipped
-        offsets = np.arange(len(faces) + 1, dtype=np.int64)
-        clip_offsets = np.zeros(len(faces) + 1, dtype=np.int64)
+        offsets = np.arange(nf + 1, dtype=np.int64)
+        clip_offsets = np.zeros(nf + 1, dtype=np.int64)
     else:
-        counts, clipped = variant(count_clip_triangles, small)(clip, faces, codes, gx, gy)
-        offsets = np.zeros(len(faces) + 1, dtype=np.int64)
+        counts = np.empty(nf, dtype=np.int64)
+        clipped = np.empty(nf, dtype=np.int64)
+        parallel_range(count_clip_triangles, nf, clip, faces, codes, gx, gy, counts, clipped, serial=small)
+        offsets = np.zeros(nf + 1, dtype=np.int64)
         np.cumsum(counts, out=offsets[1:])
-        clip_offsets = np.zeros(len(faces) + 1, dtype=np.int64)
+        clip_offsets = np.zeros(nf + 1, dtype=np.int64)
         np.cumsum(clipped, out=clip_offsets[1:])
-    return variant(emit_clip_triangles, small)(clip, faces, codes, win_xy, win_zw, offsets, clip_offsets, gx, gy,
-                                               width, height, np.array([r0, r1 - 1, c0, c1 - 1], dtype=np.int64), cull)
+    t, k = int(offsets[-1]), int(clip_offsets[-1])
+    out = (np.empty((t, 3), dtype=np.int32), np.empty((t, 3), dtype=np.int32), np.empty((t, 3), dtype=np.float64),
+           np.empty((t, 3), dtype=np.float64), np.empty(t, dtype=np.int32), np.empty((k, 3, 3), dtype=np.float64),
+           np.empty(t, dtype=np.int32), np.empty(t, dtype=np.bool_), np.empty((t, 4), dtype=np.int32),
+           np.empty(t, dtype=np.int64), np.empty((t, 3), dtype=np.int8))
+    parallel_range(emit_clip_triangles, nf, clip, faces, codes, win_xy, win_zw, offsets, clip_offsets, gx, gy, width,
+                   height, np.array([r0, r1 - 1, c0, c1 - 1], dtype=np.int64), cull, *out, serial=small)
+    return out

@@ -101,8 +101,8 @@ def depth_layers(clip, faces, width: int, height: int, region=None) -> DepthLaye
     index = np.full((rh, rw), -1, dtype=np.int32)
     depth2 = np.full((rh, rw), np.inf, dtype=np.float32)
     index2 = np.full((rh, rw), -1, dtype=np.int32)
-    _layers.raster_two_tiles(starts, items, X, Y, Z, tri, bbox, area, bias, height, tile, tiles_x, r0, c0,
-                             depth, index, depth2, index2)
+    parallel_range(_layers.raster_two_tiles, tiles_x * tiles_y, starts, items, X, Y, Z, tri, bbox, area, bias, height,
+                   tile, tiles_x, r0, c0, depth, index, depth2, index2)
     none = index < 0  # a fragment at depth 1 that no other beat: no winner, so no second either
     depth2[none] = np.inf
     index2[none] = -1

@@ -17,9 +17,9 @@ from .._parallel import parallel_range
 from ..constants import INVERSE_MODES, NEIGHBOURHOODS, SEARCH_METHODS, VIRTUAL_RULES
 from ..errors import RefsoftError
 from ..raster import GBuffer
-from ..raster._threads import SERIAL_MAX_VERTICES, variant
+from ..raster._threads import SERIAL_MAX_VERTICES
 from . import _kernels, _lanes
-from ._kernels import BORDER, CAPPED, CULLED, HIDDEN, RESTARTED
+from ._kernels import BAD_START, BORDER, CAPPED, CULLED, HIDDEN, RESTARTED
 
 __all__ = ["search", "virtual_vertices", "start_pixel", "SearchResult", "trace_search", "Trace", "scores_at",
            "HIDDEN", "BORDER", "CAPPED", "RESTARTED", "CULLED", "NEIGHBOURHOODS", "INVERSE_MODES",
@@ -134,8 +134,9 @@ def _packed(gbuffer: GBuffer, eye):
         c0, c1 = max(int(cols[0]) - 1, 0), min(int(cols[-1]) + 2, w)
     mask = np.ascontiguousarray(gbuffer.mask[r0:r1, c0:c1])
     eye_rel = (np.asarray(eye, dtype=np.float64) - gbuffer.origin).astype(dt)
-    G = _kernels.pack(np.ascontiguousarray(gbuffer.position[r0:r1, c0:c1]),
-                      np.ascontiguousarray(gbuffer.normal[r0:r1, c0:c1]), mask, eye_rel, fp)
+    G = np.zeros((r1 - r0, c1 - c0, _kernels.PACKED), dtype=dt)
+    parallel_range(_kernels.pack, r1 - r0, np.ascontiguousarray(gbuffer.position[r0:r1, c0:c1]),
+                   np.ascontiguousarray(gbuffer.normal[r0:r1, c0:c1]), mask, eye_rel, fp, G)
     return G, mask, fp, (r0, c0)
 
 
@@ -230,14 +231,15 @@ def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", invers
     keys = np.empty(n, dtype=np.int64)
     rel = np.empty((n, 3), dtype=dt)
     first = np.empty((n, 2), dtype=np.int32)
-    small = n <= SERIAL_MAX_VERTICES  # microseconds of work: on this thread, the serial variants
-    if variant(_kernels.prepare, small)(verts, gbuffer.origin, starts, mask, gbuffer.view_proj, LOCALITY_CELL, fp,
-                                        keys, rel, first):
+    small = n <= SERIAL_MAX_VERTICES  # microseconds of work: on this thread alone
+    parallel_range(_kernels.prepare, n, verts, gbuffer.origin, starts, mask, gbuffer.view_proj, LOCALITY_CELL, fp,
+                   keys, rel, first, serial=small)
+    if previous is not None and (first[:, 0] == BAD_START).any():
         _check_starts(starts, (h, w))
     order, rank = _kernels.order_by_key(keys, -(-h // LOCALITY_CELL) * -(-w // LOCALITY_CELL))
     rows = np.empty_like(rel)
     row_starts = np.empty_like(first)
-    variant(_kernels.gather, small)(rel, first, order, rows, row_starts)
+    parallel_range(_kernels.gather, n, rel, first, order, rows, row_starts, serial=small)
     sorted_out = (np.empty((n, 2), np.int32), np.empty(n, dt), np.empty(n, dt), np.empty(n, np.int32),
                   np.empty(n, np.uint8))
     # several walks per thread, their candidates scored together (the one-walk search's results);
@@ -247,7 +249,7 @@ def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", invers
     parallel_range(_lanes.SEARCH[NEIGHBOURHOODS[neighbourhood]], -(-n // _lanes.SEARCH_GROUP), P, N, mask, eye_rel,
                    rows, row_starts, start[0], start[1], int(cap), inverse == "search", fp, *sorted_out)
     pixel, score, margin, iterations, flags = (np.empty_like(a) for a in sorted_out)
-    variant(_kernels.scatter, small)(rank, *sorted_out, pixel, score, margin, iterations, flags)
+    parallel_range(_kernels.scatter, n, rank, *sorted_out, pixel, score, margin, iterations, flags, serial=small)
     return SearchResult(pixel, score, margin, iterations, flags, neighbourhood, inverse, int(cap))
 
 
@@ -264,10 +266,10 @@ def _hierarchy_search(gbuffer, eye, vertices, neighbourhood, inverse, cap, cone_
     if start is not None and n:
         G, mask, fp, (r0, c0) = _packed(gbuffer, eye)
         sph, cone, offsets, sizes = hierarchy.build(G, mask, fp)
-        _hierarchy.search_all(G, mask, sph, cone, offsets, sizes, len(sizes), np.ascontiguousarray(verts),
-                              gbuffer.origin, dt(cone_factor), dt(sphere_factor), int(break_level), int(cap),
-                              inverse == "search", start[0] - r0, start[1] - c0, fp, pixel, score, margin,
-                              iterations, flags)
+        parallel_range(_hierarchy.search_all, -(-n // _hierarchy.SEARCH_GROUP), G, mask, sph, cone, offsets, sizes,
+                       len(sizes), np.ascontiguousarray(verts), gbuffer.origin, dt(cone_factor), dt(sphere_factor),
+                       int(break_level), int(cap), inverse == "search", start[0] - r0, start[1] - c0, fp, pixel,
+                       score, margin, iterations, flags)
         pixel += np.array([r0, c0], dtype=np.int32)
     return SearchResult(pixel, score, margin, iterations, flags, neighbourhood, inverse, int(cap), "hierarchy")
 
@@ -339,13 +341,14 @@ def virtual_vertices(gbuffer: GBuffer, result: SearchResult, vertices, relative:
     if unfold and eye is None:
         raise RefsoftError("virtual_vertices(rule='unfold') needs the eye")
     e = np.zeros(3, dtype=dt) if eye is None else (validate.point(eye, "eye") - o).astype(dt)
-    small = len(verts) <= SERIAL_MAX_VERTICES  # microseconds of work: on this thread, the serial variants
+    small = len(verts) <= SERIAL_MAX_VERTICES  # microseconds of work: on this thread alone
     if surface is None:
-        variant(_virtual.virtual_from_texels, small)(gbuffer.position, gbuffer.normal, np.ascontiguousarray(result.pixel),
-                                                     verts, o, e, flags, mode, unfold, dt(0), out)
+        parallel_range(_virtual.virtual_from_texels, len(verts), gbuffer.position, gbuffer.normal,
+                       np.ascontiguousarray(result.pixel), verts, o, e, flags, mode, unfold, dt(0), out, serial=small)
     else:
         p, nrm = (np.ascontiguousarray(np.asarray(a, dtype=dt).reshape(len(verts), 3)) for a in surface)
-        variant(_virtual.virtual_from_points, small)(p, nrm, verts, o, e, flags, mode, unfold, dt(0), out)
+        parallel_range(_virtual.virtual_from_points, len(verts), p, nrm, verts, o, e, flags, mode, unfold, dt(0), out,
+                       serial=small)
     if relative:
         return out
     return (out.astype(np.float64) + o).astype(dt)
@@ -366,7 +369,8 @@ def scores_at(gbuffer: GBuffer, eye, vertices, pixels, inverse=None) -> np.ndarr
         out[:] = -3
         return out
     G, mask, fp, (r0, c0) = _packed(gbuffer, validate.point(eye, "eye"))
-    _kernels.scores_at(G, mask, np.ascontiguousarray(verts), gbuffer.origin, pix - [r0, c0], inv, fp, out)
+    parallel_range(_kernels.scores_at, len(verts), G, mask, np.ascontiguousarray(verts), gbuffer.origin, pix - [r0, c0],
+                   inv, fp, out)
     return out
 
 

@@ -13,7 +13,6 @@ by the factors (compounding), up to ``MAX_ENLARGEMENTS`` times.
 """
 
 import numpy as np
-from numba import prange
 
 from .._numba import kernel, like
 from ..constants import LONE_MARGIN, NO_SCORE
@@ -33,16 +32,15 @@ def _norm(x, y, z, fp):
     return np.sqrt((x * x + y * y) + z * z)
 
 
-@kernel(parallel=True)
-def base_level(G, mask, size, fp):
-    """Level 0 (size x size): spheres (x, y, z, r) and cones (dx, dy, dz, a) from the packed
-    G-buffer ``G`` (P, N, U = normalize(O - P)); the reflected eye ray is ``I - 2 (N.I) N`` with
-    ``I = -U``."""
-    h, w = mask.shape
-    sph = np.full((size, size, 4), like(-1.0, fp), dtype=G.dtype)
-    cone = np.full((size, size, 4), like(-1.0, fp), dtype=G.dtype)
+@kernel
+def base_level(lo, hi, G, mask, fp, sph, cone):
+    """Rows ``lo .. hi - 1`` (of the G-buffer's h) of level 0, ``sph`` and ``cone`` (size, size,
+    4), -1 on entry: spheres (x, y, z, r) and cones (dx, dy, dz, a) from the packed G-buffer ``G``
+    (P, N, U = normalize(O - P)) at its covered pixels; the reflected eye ray is ``I - 2 (N.I)
+    N`` with ``I = -U``."""
+    w = mask.shape[1]
     two = like(2.0, fp)
-    for r in prange(h):
+    for r in range(lo, hi):
         for c in range(w):
             if not mask[r, c]:
                 continue
@@ -57,7 +55,6 @@ def base_level(G, mask, size, fp):
             cone[r, c, 1] = iy - k * g[4]
             cone[r, c, 2] = iz - k * g[5]
             cone[r, c, 3] = like(0.0, fp)
-    return sph, cone
 
 
 @kernel
@@ -109,15 +106,14 @@ def _store(dst, x):
     dst[3] = x[3]
 
 
-@kernel(parallel=True)
-def next_level(sph, cone, fp):
-    """Level l+1 (half the size) from level l."""
-    size = sph.shape[0] // 2
-    s_out = np.full((size, size, 4), like(-1.0, fp), dtype=sph.dtype)
-    c_out = np.full((size, size, 4), like(-1.0, fp), dtype=sph.dtype)
-    for i in prange(size):
-        ta = np.empty(4, dtype=sph.dtype)
-        tb = np.empty(4, dtype=sph.dtype)
+@kernel
+def next_level(lo, hi, sph, cone, fp, s_out, c_out):
+    """Rows ``lo .. hi - 1`` of level l+1, ``s_out`` and ``c_out`` (size, size, 4), from level l
+    ``sph`` and ``cone`` (2 size, 2 size, 4)."""
+    size = s_out.shape[0]
+    ta = np.empty(4, dtype=sph.dtype)  # work arrays, once per part
+    tb = np.empty(4, dtype=sph.dtype)
+    for i in range(lo, hi):
         for j in range(size):
             r, c = 2 * i, 2 * j
             # (top-left, top-right), (bottom-left, bottom-right), then the two results
@@ -127,7 +123,6 @@ def next_level(sph, cone, fp):
             _store(ta, _bound_cone(cone[r, c], cone[r, c + 1], fp))
             _store(tb, _bound_cone(cone[r + 1, c], cone[r + 1, c + 1], fp))
             _store(c_out[i, j], _bound_cone(ta, tb, fp))
-    return s_out, c_out
 
 
 @kernel(inline=True)
@@ -232,17 +227,18 @@ def traverse(G, sph_levels, cone_levels, offsets, sizes, n_levels, v, kc0, ks0, 
     return -1, -1, tests, False, n_record
 
 
-@kernel(parallel=True)
-def search_all(G, mask, sph_levels, cone_levels, offsets, sizes, n_levels, vertices, origin, fc, fs, break_level, cap,
-               inverse_search, start_r, start_c, fp, pixel, best, margin, iterations, flags):
-    """Every vertex: the hierarchy traversal, then HIDDEN / BORDER as the linear search sets them
-    and, for a hidden vertex with ``inverse_search``, the inverse crosshair walk from there. A
-    traversal that fails ends at the start pixel with CAPPED."""
+@kernel
+def search_all(lo, hi, G, mask, sph_levels, cone_levels, offsets, sizes, n_levels, vertices, origin, fc, fs,
+               break_level, cap, inverse_search, start_r, start_c, fp, pixel, best, margin, iterations, flags):
+    """The vertices of groups ``lo .. hi - 1`` (SEARCH_GROUP vertices each; run over every group
+    by :func:`refsoft._parallel.parallel_range`): the hierarchy traversal, then HIDDEN / BORDER as
+    the linear search sets them and, for a hidden vertex with ``inverse_search``, the inverse
+    crosshair walk from there. A traversal that fails ends at the start pixel with CAPPED."""
     n = vertices.shape[0]
     h, w = mask.shape
     empty = np.empty((0, 5), dtype=np.float64)
     empty_walk = np.empty((0, WALK_RECORD_WIDTH), dtype=best.dtype)
-    for g in prange((n + SEARCH_GROUP - 1) // SEARCH_GROUP):
+    for g in range(lo, hi):
         stack = np.empty((3 * n_levels + 4, 3), dtype=np.int64)
         scratch = np.empty((2, 9), dtype=best.dtype)
         seen = np.zeros((2, 9), dtype=np.bool_)

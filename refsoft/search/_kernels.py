@@ -11,7 +11,6 @@ Arithmetic, in the precision of ``fp`` (float32 by default):
 """
 
 import numpy as np
-from numba import prange
 
 from .._numba import kernel, like
 from ..constants import LONE_MARGIN, NO_SCORE, NOT_A_CANDIDATE
@@ -50,12 +49,12 @@ def _normalize(x, y, z, fp):
 PACKED = 9
 
 
-@kernel(parallel=True)
-def pack(P, N, mask, eye, fp):
-    """(H, W, 9) array of P, N and U = normalize(O - P) at covered pixels (zeros elsewhere)."""
-    h, w = mask.shape
-    G = np.zeros((h, w, PACKED), dtype=P.dtype)
-    for r in prange(h):
+@kernel
+def pack(lo, hi, P, N, mask, eye, fp, G):
+    """Rows ``lo .. hi - 1`` of ``G`` (H, W, 9), zeros on entry: P, N and U = normalize(O - P)
+    at covered pixels (zeros elsewhere)."""
+    w = mask.shape[1]
+    for r in range(lo, hi):
         for c in range(w):
             if mask[r, c]:
                 for k in range(3):
@@ -65,7 +64,6 @@ def pack(P, N, mask, eye, fp):
                 G[r, c, 6] = ux
                 G[r, c, 7] = uy
                 G[r, c, 8] = uz
-    return G
 
 
 @kernel(inline=True)
@@ -251,18 +249,16 @@ RESTART = -2
 BAD_START = -3
 
 
-@kernel(parallel=True, serial=True)
-def prepare(vertices, origin, starts, mask, view_proj, cell, fp, keys, rel, first):
-    """Per vertex ``i``: the locality key ``keys[i]`` (the ``cell`` x ``cell`` G-buffer cell where
-    its search starts: its previous pixel, else its projection, clamped); ``rel[i]`` the vertex
-    relative to ``origin``, rounded to the working precision (``like(v - o, fp)``); ``first[i]``
-    the pixel its search starts from, or (DEFAULT_START, RESTART or BAD_START, -1).
-    ``starts[i]`` is the previous pixel or (-1, -1). Returns the number of bad starts."""
-    n = vertices.shape[0]
+@kernel
+def prepare(lo, hi, vertices, origin, starts, mask, view_proj, cell, fp, keys, rel, first):
+    """Per vertex ``i`` in ``lo .. hi - 1``: the locality key ``keys[i]`` (the ``cell`` x ``cell``
+    G-buffer cell where its search starts: its previous pixel, else its projection, clamped);
+    ``rel[i]`` the vertex relative to ``origin``, rounded to the working precision (``like(v - o,
+    fp)``); ``first[i]`` the pixel its search starts from, or (DEFAULT_START, RESTART or
+    BAD_START, -1). ``starts[i]`` is the previous pixel or (-1, -1)."""
     h, w = mask.shape
     cells_x = (w + cell - 1) // cell
-    n_bad = 0
-    for i in prange(n):
+    for i in range(lo, hi):
         for k in range(3):
             rel[i, k] = like(vertices[i, k] - origin[k], fp)
         r = np.int64(starts[i, 0])
@@ -272,7 +268,6 @@ def prepare(vertices, origin, starts, mask, view_proj, cell, fp, keys, rel, firs
             if r < 0 or r >= h or c < 0 or c >= w:
                 first[i, 0] = BAD_START
                 keys[i] = 0
-                n_bad += 1
                 continue
             if mask[r, c]:
                 first[i, 0] = r
@@ -293,7 +288,6 @@ def prepare(vertices, origin, starts, mask, view_proj, cell, fp, keys, rel, firs
                 c = int(min(max(fx, 0.0), w - 1.0))
                 r = int(min(max(h - 1.0 - fy, 0.0), h - 1.0))
         keys[i] = (r // cell) * cells_x + c // cell
-    return n_bad
 
 
 @kernel
@@ -318,12 +312,13 @@ def order_by_key(keys, n_keys):
     return order, rank
 
 
-@kernel(parallel=True, serial=True)
-def gather(rel, first, order, V, S):
+@kernel
+def gather(lo, hi, rel, first, order, V, S):
     """Row ``j`` of the search's inputs, ``V[j]`` and ``S[j]``, is row ``order[j]`` of
-    ``prepare``'s ``rel`` and ``first``: in search order, the walks read their inputs one after
-    another (1.5x faster than reading scattered rows on 1M vertices)."""
-    for j in prange(order.shape[0]):
+    ``prepare``'s ``rel`` and ``first``, for ``j`` in ``lo .. hi - 1``: in search order, the walks
+    read their inputs one after another (1.5x faster than reading scattered rows on 1M
+    vertices)."""
+    for j in range(lo, hi):
         i = order[j]
         for k in range(3):
             V[j, k] = rel[i, k]
@@ -331,11 +326,12 @@ def gather(rel, first, order, V, S):
         S[j, 1] = first[i, 1]
 
 
-@kernel(parallel=True, serial=True)
-def scatter(rank, pixel_s, score_s, margin_s, iterations_s, flags_s, pixel, score, margin, iterations, flags):
-    """Vertex ``i``'s results from row ``rank[i]`` of the results in search order. (Reading
-    scattered rows and writing in order is 3x faster than the converse on 1M vertices.)"""
-    for i in prange(rank.shape[0]):
+@kernel
+def scatter(lo, hi, rank, pixel_s, score_s, margin_s, iterations_s, flags_s, pixel, score, margin, iterations, flags):
+    """Vertex ``i``'s results from row ``rank[i]`` of the results in search order, for ``i`` in
+    ``lo .. hi - 1``. (Reading scattered rows and writing in order is 3x faster than the converse
+    on 1M vertices.)"""
+    for i in range(lo, hi):
         j = rank[i]
         pixel[i, 0] = pixel_s[j, 0]
         pixel[i, 1] = pixel_s[j, 1]
@@ -345,30 +341,31 @@ def scatter(rank, pixel_s, score_s, margin_s, iterations_s, flags_s, pixel, scor
         flags[i] = flags_s[j]
 
 
-@kernel(parallel=True)
-def score_field(G, mask, v, inverse, fp, out):
-    """The (inverse) score of vertex ``v`` at every covered pixel of the packed G-buffer;
-    ``out`` (H, W) stays as given elsewhere. For pictures and the exhaustive checks."""
-    h, w = mask.shape
-    for r in prange(h):
+@kernel
+def score_field(lo, hi, G, mask, v, inverse, fp, out):
+    """The (inverse) score of vertex ``v`` at every covered pixel of rows ``lo .. hi - 1`` of the
+    packed G-buffer; ``out`` (H, W) stays as given elsewhere. For pictures and the exhaustive
+    checks."""
+    w = mask.shape[1]
+    for r in range(lo, hi):
         for c in range(w):
             if mask[r, c]:
                 out[r, c] = _evaluate(G, r, c, v, inverse, fp)
 
 
-@kernel(parallel=True)
-def scores_at(G, mask, vertices, origin, pixels, inverse, fp, out):
-    """The (inverse, where ``inverse[i]``) score of vertex ``i`` at crop pixel ``pixels[i]``,
-    with the search's own arithmetic; ``NO_SCORE`` (-3) where that pixel is outside the crop or uncovered.
-    For ``refsoft check``'s tie rule."""
+@kernel
+def scores_at(lo, hi, G, mask, vertices, origin, pixels, inverse, fp, out):
+    """The (inverse, where ``inverse[i]``) score of vertex ``i`` at crop pixel ``pixels[i]``, for
+    ``i`` in ``lo .. hi - 1``, with the search's own arithmetic; ``NO_SCORE`` (-3) where that
+    pixel is outside the crop or uncovered. For ``refsoft check``'s tie rule."""
     h, w = mask.shape
-    for i in prange(vertices.shape[0]):
+    v = np.empty(3, dtype=out.dtype)  # a work array, once per part
+    for i in range(lo, hi):
         r = pixels[i, 0]
         c = pixels[i, 1]
         if r < 0 or r >= h or c < 0 or c >= w or not mask[r, c]:
             out[i] = like(NO_SCORE, fp)
             continue
-        v = np.empty(3, dtype=out.dtype)
         for k in range(3):
             v[k] = like(vertices[i, k] - origin[k], fp)
         out[i] = _evaluate(G, r, c, v, inverse[i], fp)

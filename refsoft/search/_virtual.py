@@ -11,7 +11,6 @@ projects onto R itself, with the depth of the path length.
 """
 
 import numpy as np
-from numba import prange
 
 from .._numba import kernel, like
 from ._kernels import CULLED, HIDDEN, _normalize
@@ -40,21 +39,23 @@ def _virtual_one(vx, vy, vz, px, py, pz, nx, ny, nz, ex, ey, ez, fl, mode, unfol
     return vx - k * nx, vy - k * ny, vz - k * nz
 
 
-@kernel(parallel=True, serial=True)
-def virtual_from_texels(P, N, pixel, vertices, origin, eye, flags, mode, unfold, fp, out):
-    """Virtual vertices from each vertex's reflection texel (``vertices`` world float64, made
-    relative to ``origin`` and rounded to the working precision here; ``eye`` relative)."""
-    for i in prange(vertices.shape[0]):
+@kernel
+def virtual_from_texels(lo, hi, P, N, pixel, vertices, origin, eye, flags, mode, unfold, fp, out):
+    """Virtual vertices ``lo .. hi - 1`` from each vertex's reflection texel (``vertices`` world
+    float64, made relative to ``origin`` and rounded to the working precision here; ``eye``
+    relative)."""
+    for i in range(lo, hi):
         r = pixel[i, 0] if pixel[i, 0] >= 0 else 0
         c = pixel[i, 1] if pixel[i, 1] >= 0 else 0
         _store(out, i, vertices, origin, P[r, c, 0], P[r, c, 1], P[r, c, 2], N[r, c, 0], N[r, c, 1], N[r, c, 2], eye,
                flags[i], mode, unfold, fp)
 
 
-@kernel(parallel=True, serial=True)
-def virtual_from_points(p, n, vertices, origin, eye, flags, mode, unfold, fp, out):
-    """Virtual vertices from per-vertex surface points ``p`` and normals ``n`` (relative)."""
-    for i in prange(vertices.shape[0]):
+@kernel
+def virtual_from_points(lo, hi, p, n, vertices, origin, eye, flags, mode, unfold, fp, out):
+    """Virtual vertices ``lo .. hi - 1`` from per-vertex surface points ``p`` and normals ``n``
+    (relative)."""
+    for i in range(lo, hi):
         _store(out, i, vertices, origin, p[i, 0], p[i, 1], p[i, 2], n[i, 0], n[i, 1], n[i, 2], eye, flags[i], mode,
                unfold, fp)
 

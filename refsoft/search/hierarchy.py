@@ -29,6 +29,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import validate
+from .._parallel import parallel_range
 from ..errors import RefsoftError
 from . import _hierarchy
 from ..constants import CONE_FACTOR, SPHERE_FACTOR
@@ -41,11 +42,15 @@ def build(G, mask, fp):
     size = 1
     while size < max(h, w):
         size *= 2
-    sph, cone = _hierarchy.base_level(G, mask, size, fp)
+    sph, cone = np.full((size, size, 4), -1, dtype=G.dtype), np.full((size, size, 4), -1, dtype=G.dtype)
+    parallel_range(_hierarchy.base_level, h, G, mask, fp, sph, cone)
     s_levels, c_levels = [sph.reshape(-1, 4)], [cone.reshape(-1, 4)]
     sizes = [size]
     while sph.shape[0] > 1:
-        sph, cone = _hierarchy.next_level(sph, cone, fp)
+        half = sph.shape[0] // 2
+        s_out, c_out = np.full((half, half, 4), -1, dtype=G.dtype), np.full((half, half, 4), -1, dtype=G.dtype)
+        parallel_range(_hierarchy.next_level, half, sph, cone, fp, s_out, c_out)
+        sph, cone = s_out, c_out
         s_levels.append(sph.reshape(-1, 4))
         c_levels.append(cone.reshape(-1, 4))
         sizes.append(sph.shape[0])

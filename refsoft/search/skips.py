@@ -19,9 +19,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from numba import prange
-
 from .._numba import kernel
+from .._parallel import parallel_range
 from . import BORDER, CAPPED, CULLED, HIDDEN
 from ..constants import BOX_MARGIN_PIXELS
 
@@ -111,13 +110,32 @@ def outside_box(clip, bounds) -> bool:
                 or np.all(z < -w))
 
 
-@kernel(parallel=True, serial=True)
-def triangles_outside_box(clip, faces, x_lo, x_hi, y_lo, y_hi):
-    """Per triangle, :func:`outside_box` of its three clip vertices (the same half-space tests),
-    bool (F,): those triangles cover no pixel of the box and need not be set up at all."""
-    n = faces.shape[0]
-    out = np.zeros(n, dtype=np.bool_)
-    for t in prange(n):
+def triangles_outside_box(clip, faces, x_lo, x_hi, y_lo, y_hi, serial=False):
+    """Per triangle, :func:`outside_box` of its three clip vertices (the same half-space tests):
+    those triangles cover no pixel of the box and need not be set up at all.
+
+    Parameters
+    ----------
+    clip : ndarray, shape (V, 4), float64
+    faces : ndarray, shape (F, 3), int64
+    x_lo, x_hi, y_lo, y_hi : float
+        The box's NDC bounds (:func:`box_planes`).
+    serial : bool
+        Test on the calling thread alone (:func:`refsoft._parallel.parallel_range`).
+
+    Returns
+    -------
+    ndarray, shape (F,), bool
+    """
+    out = np.zeros(len(faces), dtype=np.bool_)
+    parallel_range(_triangles_outside_box, len(faces), clip, faces, x_lo, x_hi, y_lo, y_hi, out, serial=serial)
+    return out
+
+
+@kernel
+def _triangles_outside_box(lo, hi, clip, faces, x_lo, x_hi, y_lo, y_hi, out):
+    """``out[t]`` for the triangles ``t`` in ``lo .. hi - 1`` (:func:`triangles_outside_box`)."""
+    for t in range(lo, hi):
         right = True
         left = True
         above = True
@@ -132,4 +150,3 @@ def triangles_outside_box(clip, faces, x_lo, x_hi, y_lo, y_hi):
             below = below and y < y_lo * w
             near = near and z < -w
         out[t] = right or left or above or below or near
-    return out

@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._parallel import parallel_range
 from ..errors import RefsoftError
 from . import _kernels
 
@@ -149,11 +150,13 @@ def trace_search(gbuffer, eye, vertex, neighbourhood="cross", inverse="plane", p
                       "move_to": move})
     capped_last = bool(steps) and steps[-1]["move_to"] is not None
     field_std = np.full((h, w), np.nan, dtype=dt)
-    _kernels.score_field(G, M, v_rel, False, fp, field_std[r0:r0 + M.shape[0], c0:c0 + M.shape[1]])
+    parallel_range(_kernels.score_field, M.shape[0], G, M, v_rel, False, fp,
+                   field_std[r0:r0 + M.shape[0], c0:c0 + M.shape[1]])
     field_inv = None
     if any(st["phase"] == "inverse" for st in steps):
         field_inv = np.full((h, w), np.nan, dtype=dt)
-        _kernels.score_field(G, M, v_rel, True, fp, field_inv[r0:r0 + M.shape[0], c0:c0 + M.shape[1]])
+        parallel_range(_kernels.score_field, M.shape[0], G, M, v_rel, True, fp,
+                       field_inv[r0:r0 + M.shape[0], c0:c0 + M.shape[1]])
     return Trace(v, e, neighbourhood, inverse, cap, [int(start[0]), int(start[1])], restarted, steps,
                  [int(r), int(c)], float(s), float(m), int(it), int(fl), "capped" if capped_last else "converged",
                  field_std, field_inv)

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..raster import _setup, rasterize, shade_fragments
-from ..raster._threads import SERIAL_MAX_TRIANGLES, serial_if_small, variant
+from ..raster._threads import SERIAL_MAX_TRIANGLES, serial_if_small
 from ..scene.mesh import concatenate
 from . import CULLED, HIDDEN, SearchResult, skips, virtual_vertices
 from .tessellate import tessellate
@@ -185,7 +185,9 @@ def _virtual_pass(scene, parts, camera, stencil, box, inverse, cull):
         # triangles whose vertices all have a V'
         lost = (flags & bad) != 0
         keep = ~(lost[f[:, 0]] | lost[f[:, 1]] | lost[f[:, 2]])
-        faces.append(f[keep] + offset if offset else f[keep])
+        # np.compress: NumPy's boolean indexing of (T, 3) rows takes several times as long
+        kept = np.compress(keep, f, axis=0)
+        faces.append(kept + offset if offset else kept)
         face_obj.append(fobj[keep])
         normals.append(nrm_v)
         clips.append(clip)
@@ -198,11 +200,11 @@ def _virtual_pass(scene, parts, camera, stencil, box, inverse, cull):
     face_obj = _joined(face_obj)
     clip = _joined(clips)
     if cull:  # triangles beyond one side of the box: not set up (the order of the others is kept)
-        # a per-triangle front end: on this thread (the serial variant) up to SERIAL_MAX_TRIANGLES
-        out = variant(skips.triangles_outside_box, len(faces) <= SERIAL_MAX_TRIANGLES)(
-            clip, np.ascontiguousarray(faces, dtype=np.int64), *bounds)
+        # a per-triangle front end: on this thread alone up to SERIAL_MAX_TRIANGLES
+        out = skips.triangles_outside_box(clip, np.ascontiguousarray(faces, dtype=np.int64), *bounds,
+                                          serial=len(faces) <= SERIAL_MAX_TRIANGLES)
         if out.any():
-            faces, face_obj = faces[~out], face_obj[~out]
+            faces, face_obj = np.compress(~out, faces, axis=0), face_obj[~out]
         if len(faces) == 0:
             return _nothing(h, w, n_culled)
     frags = rasterize(clip, faces, camera.width, camera.height, region=box)

@@ -1,7 +1,7 @@
 """Numba kernel of :func:`refsoft.truth.analytic.sphere_reflection_points` (float64).
 
-Each ``prange`` task solves a fixed run of points, each writing only its own output row: results
-do not depend on the thread count. The arithmetic follows the NumPy formulation term by term
+The points are split among threads (:func:`refsoft._parallel.parallel_range`), each writing only
+its own output row: results do not depend on the thread count. The arithmetic follows the NumPy formulation term by term
 (sums of three products left to right, no fused multiply-add; libm's ``cos``, ``sin`` and
 ``sqrt``, which give NumPy's float64 results, whereas its ``arccos`` may not: the arc angle comes
 from NumPy), so the arc samples, their signs and the Brent iterates are the same doubles as the
@@ -13,7 +13,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import prange
 
 from .._numba import kernel
 
@@ -167,17 +166,16 @@ def _solve_point(i, c0, c1, c2, rho, o0, o1, o2, a0, a1, a2, points, dirs, cos_p
             return
 
 
-#: Points per parallel task (each task allocates its scratch once).
-CHUNK = 256
-
-
-@kernel(parallel=True)
-def reflection_points_kernel(centre, rho, eye, eye_dir, points, dirs, cos_phi, phi, todo, samples, block, xtol,
-                             rtol, maxiter, out):
-    """Solve Alhazen's problem for ``points[todo]`` into ``out`` (rows left untouched: no root).
+@kernel
+def reflection_points_kernel(lo, hi, centre, rho, eye, eye_dir, points, dirs, cos_phi, phi, todo, samples, block,
+                             xtol, rtol, maxiter, out):
+    """Solve Alhazen's problem for ``points[todo[lo:hi]]`` into ``out`` (rows left untouched: no
+    root); run over all of ``todo`` by :func:`refsoft._parallel.parallel_range`.
 
     Parameters
     ----------
+    lo, hi : int
+        The entries of ``todo`` solved here.
     centre, eye, eye_dir : ndarray, shape (3,), float64
         Sphere centre, eye, unit direction from the centre to the eye (the arc's start).
     rho : float
@@ -200,10 +198,8 @@ def reflection_points_kernel(centre, rho, eye, eye_dir, points, dirs, cos_phi, p
     c0, c1, c2 = centre[0], centre[1], centre[2]
     o0, o1, o2 = eye[0], eye[1], eye[2]
     a0, a1, a2 = eye_dir[0], eye_dir[1], eye_dir[2]
-    m = len(todo)
-    for chunk in prange((m + CHUNK - 1) // CHUNK):
-        ts = np.empty(samples + 1)
-        fs = np.empty(samples + 1)
-        for j in range(chunk * CHUNK, min(m, (chunk + 1) * CHUNK)):
-            _solve_point(todo[j], c0, c1, c2, rho, o0, o1, o2, a0, a1, a2, points, dirs, cos_phi, phi, samples,
-                         block, xtol, rtol, maxiter, ts, fs, out)
+    ts = np.empty(samples + 1)  # work arrays, once per part
+    fs = np.empty(samples + 1)
+    for j in range(lo, hi):
+        _solve_point(todo[j], c0, c1, c2, rho, o0, o1, o2, a0, a1, a2, points, dirs, cos_phi, phi, samples, block,
+                     xtol, rtol, maxiter, ts, fs, out)

@@ -5,7 +5,6 @@ normal interpolated there and renormalised, and the reflected direction. The Num
 the references it is tested against (``tests/truth/test_truth.py``)."""
 
 import numpy as np
-from numba import prange
 
 from .._numba import kernel
 
@@ -20,13 +19,15 @@ def _unproject(inv, x, y, z):
     return px, py, pz
 
 
-@kernel(parallel=True)
-def primary_rays(rows, cols, width, height, inv, eye, perspective, vertices, normals, faces, tri, hit, ray, ok):
-    """For pixel ``i`` at (rows[i], cols[i]) with visible triangle ``tri[i]``: ``hit[i]`` the ray's
+@kernel
+def primary_rays(lo, hi, rows, cols, width, height, inv, eye, perspective, vertices, normals, faces, tri, hit, ray,
+                 ok):
+    """For pixel ``i`` in ``lo .. hi - 1`` at (rows[i], cols[i]) with visible triangle ``tri[i]``
+    (run over every pixel by :func:`refsoft._parallel.parallel_range`): ``hit[i]`` the ray's
     point on that triangle's plane, ``ray[i]`` the direction reflected about the interpolated
     normal, ``ok[i]`` False where the ray is parallel to the plane (then hit is the ray's origin
     and ray its direction)."""
-    for i in prange(rows.shape[0]):
+    for i in range(lo, hi):
         x = (cols[i] + 0.5) / width * 2.0 - 1.0
         y = (height - rows[i] - 0.5) / height * 2.0 - 1.0
         nx_, ny_, nz_ = _unproject(inv, x, y, -1.0)

@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import RefsoftError
+from .._parallel import parallel_range
 from ._analytic import reflection_points_kernel
 from ..constants import ARC_SAMPLES, MAXITER, RTOL, XTOL
 
@@ -67,8 +68,8 @@ def sphere_reflection_points(centre, radius, eye, points) -> np.ndarray:
     cos_phi = np.sum(dirs * eye_dir, axis=1)
     # NumPy's arccos, not the kernel's libm one: the two differ in the last bit for some inputs
     phi = np.arccos(np.clip(cos_phi, -1.0, 1.0))
-    reflection_points_kernel(c, rho, o, eye_dir, pts, dirs, cos_phi, phi, todo.astype(np.int64), ARC_SAMPLES,
-                             SAMPLE_BLOCK, XTOL, RTOL, MAXITER, out)
+    parallel_range(reflection_points_kernel, len(todo), c, rho, o, eye_dir, pts, dirs, cos_phi, phi,
+                   todo.astype(np.int64), ARC_SAMPLES, SAMPLE_BLOCK, XTOL, RTOL, MAXITER, out)
     return out
 
 

@@ -76,15 +76,16 @@ def primary_rays(camera, mesh, rows, cols, tri):
     ok : ndarray (P,) bool
         False where a ray is parallel to its triangle's plane.
     """
+    from .._parallel import parallel_range
     from ._primary import primary_rays as kernel
 
     n = len(rows)
     hit, ray, ok = np.empty((n, 3)), np.empty((n, 3)), np.empty(n, dtype=bool)
-    kernel(np.asarray(rows, np.int64), np.asarray(cols, np.int64), float(camera.width), float(camera.height),
-           np.ascontiguousarray(np.linalg.inv(camera.view_proj())), np.asarray(camera.eye, np.float64),
-           camera.projection == "perspective", np.ascontiguousarray(mesh.vertices, np.float64),
-           np.ascontiguousarray(mesh.normals, np.float64), np.ascontiguousarray(mesh.faces, np.int64),
-           np.asarray(tri, np.int64), hit, ray, ok)
+    parallel_range(kernel, n, np.asarray(rows, np.int64), np.asarray(cols, np.int64), float(camera.width),
+                   float(camera.height), np.ascontiguousarray(np.linalg.inv(camera.view_proj())),
+                   np.asarray(camera.eye, np.float64), camera.projection == "perspective",
+                   np.ascontiguousarray(mesh.vertices, np.float64), np.ascontiguousarray(mesh.normals, np.float64),
+                   np.ascontiguousarray(mesh.faces, np.int64), np.asarray(tri, np.int64), hit, ray, ok)
     return hit, ray, ok
 
 

@@ -1,5 +1,5 @@
 """Small passes on one thread (refsoft.raster._threads): the thread count inside and after, the
-kernels' serial variants."""
+same results on one thread and split among threads."""
 
 import numba
 
@@ -47,29 +47,51 @@ def test_openmp_threads_wait_passively_unless_the_user_says_otherwise():
     assert out.stdout.split() == ["ACTIVE", "False"]
 
 
-def test_serial_variants_are_the_same_kernels_cached_apart():
-    """Every ``kernel.serial`` is the parallel kernel's own function compiled without parallel
-    loops, under a name of its own (its cache and lock files are its own)."""
-    import refsoft.search._virtual  # noqa: F401  (their kernels)
-    import refsoft.search.skips  # noqa: F401
-    from refsoft import _numba
-    from refsoft.raster._threads import variant
+def test_no_kernel_has_a_parallel_loop():
+    """Every kernel is compiled without Numba's parallel lowering: loops run on several threads
+    are kernels over a range, called by refsoft._parallel.parallel_range."""
+    import importlib
 
-    pairs = [(d, d.serial) for d in _numba.KERNELS if hasattr(d, "serial")]
-    assert {d.py_func.__name__ for d, _ in pairs} >= {
-        "_transform_points", "vertex_setup", "count_clip_triangles", "emit_clip_triangles", "bin_triangles",
-        "prepare", "gather", "scatter", "virtual_from_texels", "virtual_from_points", "triangles_outside_box"}
-    for par, ser in pairs:
-        assert ser in _numba.KERNELS
-        assert par.targetoptions.get("parallel") and not ser.targetoptions.get("parallel")
-        assert ser.py_func.__code__ is par.py_func.__code__
-        assert ser.py_func.__qualname__ == par.py_func.__qualname__ + "_serial"
-        assert variant(par, True) is ser and variant(par, False) is par
+    from refsoft import _numba
+
+    for name in ("raster", "raster.layers", "search", "search._hierarchy", "search._virtual", "search.skips",
+                 "search.refine", "search.tessellate", "truth.analytic", "truth._primary", "ldt._search"):
+        importlib.import_module(f"refsoft.{name}")  # every module that defines kernels
+    assert len(_numba.KERNELS) > 50
+    parallel = [d.py_func.__qualname__ for d in _numba.KERNELS
+                if d.targetoptions.get("parallel") or "prange" in d.py_func.__code__.co_names]
+    assert parallel == []
+
+
+def test_binning_on_one_thread_and_split_among_threads_lists_each_tile_in_index_order():
+    """bin_triangles against a plain loop over tiles and triangles, on the calling thread alone
+    and split among threads: the same lists, each in triangle order."""
+    import numpy as np
+
+    from refsoft.raster._kernels import BIN_CHUNKS, bin_triangles
+
+    rng = np.random.default_rng(7)
+    tile, tiles_x, tiles_y, r0, c0 = 16, 5, 4, 3, 10
+    n = 40 * BIN_CHUNKS + 3  # chunks of unequal sizes
+    lo_c = rng.integers(c0, c0 + tiles_x * tile, n)
+    lo_r = rng.integers(r0, r0 + tiles_y * tile, n)
+    bbox = np.stack([lo_c, np.minimum(lo_c + rng.integers(0, 40, n), c0 + tiles_x * tile - 1),
+                     lo_r, np.minimum(lo_r + rng.integers(0, 40, n), r0 + tiles_y * tile - 1)], axis=1).astype(np.int32)
+    valid = rng.random(n) < 0.8
+    want = [[t for t in range(n) if valid[t]
+             and (bbox[t, 0] - c0) // tile <= k % tiles_x <= (bbox[t, 1] - c0) // tile
+             and (bbox[t, 2] - r0) // tile <= k // tiles_x <= (bbox[t, 3] - r0) // tile]
+            for k in range(tiles_x * tiles_y)]
+    for serial in (True, False):
+        starts, items = bin_triangles(valid, bbox, tile, tiles_x, tiles_y, r0, c0, serial=serial)
+        assert starts.dtype == np.int64 and items.dtype == np.int32
+        assert [items[starts[k]:starts[k + 1]].tolist() for k in range(tiles_x * tiles_y)] == want
+        assert starts[-1] == len(items) == sum(map(len, want))
 
 
 def test_small_passes_equal_the_parallel_kernels(monkeypatch):
-    """The raster front end and the point transform through their serial variants (small
-    inputs) and through the parallel kernels (thresholds set to 0): the same arrays, bit for bit."""
+    """The raster front end and the point transform on the calling thread alone (small inputs)
+    and split among threads (thresholds set to 0): the same arrays, bit for bit."""
     import numpy as np
 
     import refsoft

@@ -15,6 +15,7 @@ from refsoft import Camera, Mesh, Scene, SceneObject, Transform, primitives, ras
 from refsoft.truth.analytic import sphere_reflection_points
 from refsoft.search.reflect import reflect, reflector_gbuffer
 from refsoft.scene import scene_vertices
+from refsoft._parallel import parallel_range
 from refsoft.search import _kernels
 
 W, H = 320, 240
@@ -43,7 +44,7 @@ def exhaustive(gb, eye, verts, inverse=False):
     where = np.empty((len(verts), 2), dtype=np.int64)
     field = np.full(mask.shape, -np.inf, dtype=dt)
     for i, v in enumerate(verts):
-        _kernels.score_field(G, mask, (v - gb.origin).astype(dt), inverse, conv, field)
+        parallel_range(_kernels.score_field, len(mask), G, mask, (v - gb.origin).astype(dt), inverse, conv, field)
         k = int(np.argmax(field))
         best[i] = field.flat[k]
         where[i] = divmod(k, field.shape[1])
@@ -85,7 +86,8 @@ def test_score_is_float32_arithmetic_bit_for_bit(sphere_case):
         for v in verts[::400]:
             vr = (v - gb.origin).astype(np.float32)
             field = np.full(gb.mask.shape, np.nan, dtype=np.float32)
-            _kernels.score_field(G, mask, vr, inverse, conv, field[r0:r0 + mask.shape[0], c0:c0 + mask.shape[1]])
+            parallel_range(_kernels.score_field, len(mask), G, mask, vr, inverse, conv,
+                           field[r0:r0 + mask.shape[0], c0:c0 + mask.shape[1]])
             ref = naive_scores(P, N, eye, vr, np.float32, inverse)
             np.testing.assert_array_equal(field[gb.mask], ref)
             in64 = naive_scores(P.astype(np.float64), N.astype(np.float64), eye.astype(np.float64),
@@ -472,9 +474,10 @@ def test_search_bit_identical_across_thread_counts():
 
 
 def test_bookkeeping_on_one_thread_changes_nothing(sphere_case, monkeypatch):
-    """A search of at most SERIAL_MAX_VERTICES vertices orders its vertices and results with the
-    kernels' serial variants: the same results as the parallel kernels give, and the thread count
-    is left as it was, also when the search refuses its input."""
+    """A search of at most SERIAL_MAX_VERTICES vertices orders its vertices and results on the
+    calling thread alone (``parallel_range(..., serial=True)``): the same results as when those
+    passes are split among threads, and the thread count is left as it was, also when the search
+    refuses its input."""
     import numba
 
     scene, verts, gb = sphere_case

@@ -15,8 +15,8 @@ _BOUNDS = (-0.5, 0.25, -0.25, 0.5)
 
 def _check(clip, faces, bounds):
     expected = naive_triangles_outside_box(clip, faces, bounds)
-    for kernel in (skips.triangles_outside_box, skips.triangles_outside_box.serial):  # both variants
-        np.testing.assert_array_equal(kernel(clip, faces, *bounds), expected)
+    for serial in (True, False):  # on the calling thread alone, and split among threads
+        np.testing.assert_array_equal(skips.triangles_outside_box(clip, faces, *bounds, serial=serial), expected)
     # and the mesh-level test on each triangle alone
     assert [skips.outside_box(clip[f], bounds) for f in faces] == expected.tolist()
     return expected
