@@ -20,8 +20,8 @@ from contextlib import contextmanager
 
 import numba
 
-#: Passes over at most this many pixels run on one thread (a 256 x 256 box).
-SERIAL_MAX_PIXELS = 1 << 16
+#: Passes over at most this many pixels run on one thread (a 128 x 128 box).
+SERIAL_MAX_PIXELS = 1 << 14
 #: Triangle setup, binning and the virtual pass's box test of at most this many triangles run on
 #: one thread (about 10 ms).
 SERIAL_MAX_TRIANGLES = 1 << 18
