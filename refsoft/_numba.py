@@ -2,25 +2,13 @@
 
 import os
 import sys
+from contextlib import contextmanager
 
-# OpenMP threads that wait for work sleep at once instead of spinning first: on a shared machine
-# a spinning thread keeps its core from the other thread, and each parallel region then waits
-# milliseconds for the scheduler (docs/benchmarks.md, "Threads on a shared machine"). refsoft's
-# kernels have no parallel loops (refsoft._parallel runs them on threads of its own), but
-# numba.get_num_threads and numba.set_num_threads, which hold refsoft's thread count, still load
-# Numba's threading layer. OpenMP, when it is that layer, reads this once as it loads and starts
-# its threads only when a parallel Numba function runs, which none of refsoft's is: the setting
-# matters only to such a function run in the same process. A value the user set is kept. Outputs
-# do not depend on it.
-os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
-
-from contextlib import contextmanager  # noqa: E402
-
-import numba  # noqa: E402
-import numba.core.cpu as numba_cpu  # noqa: E402  (loaded by numba itself)
-import numpy as np  # noqa: E402
-from numba import types  # noqa: E402
-from numba.extending import overload  # noqa: E402
+import numba
+import numba.core.cpu as numba_cpu  # (loaded by numba itself)
+import numpy as np
+from numba import types
+from numba.extending import overload
 
 #: fastmath=False: no reassociation, no FMA contraction. error_model="numpy": inf/NaN like a GPU.
 KERNEL_OPTIONS = dict(cache=True, fastmath=False, error_model="numpy", nogil=True)

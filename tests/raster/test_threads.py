@@ -30,23 +30,6 @@ def test_one_thread_only_when_asked():
     assert numba.get_num_threads() == before
 
 
-def test_openmp_threads_wait_passively_unless_the_user_says_otherwise():
-    """refsoft sets OMP_WAIT_POLICY=PASSIVE before Numba loads its OpenMP pool (which reads it
-    once), and keeps a value the user set."""
-    import os
-    import subprocess
-    import sys
-
-    code = ("import os, sys, refsoft._numba; "
-            "print(os.environ['OMP_WAIT_POLICY'], 'numba.np.ufunc.omppool' in sys.modules)")
-    env = {k: v for k, v in os.environ.items() if k != "OMP_WAIT_POLICY"}
-    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
-    assert out.stdout.split() == ["PASSIVE", "False"]
-    env["OMP_WAIT_POLICY"] = "ACTIVE"
-    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
-    assert out.stdout.split() == ["ACTIVE", "False"]
-
-
 def test_no_kernel_has_a_parallel_loop():
     """Every kernel is compiled without Numba's parallel lowering: loops run on several threads
     are kernels over a range, called by refsoft._parallel.parallel_range."""
