@@ -105,9 +105,11 @@ def outside_box(clip, bounds) -> bool:
     if len(clip) == 0:
         return True
     x_lo, x_hi, y_lo, y_hi = bounds
-    x, y, z, w = clip[:, 0], clip[:, 1], clip[:, 2], clip[:, 3]
-    return bool(np.all(x > x_hi * w) or np.all(x < x_lo * w) or np.all(y > y_hi * w) or np.all(y < y_lo * w)
-                or np.all(z < -w))
+    sides = (lambda c: c[:, 0] > x_hi * c[:, 3], lambda c: c[:, 0] < x_lo * c[:, 3],
+             lambda c: c[:, 1] > y_hi * c[:, 3], lambda c: c[:, 1] < y_lo * c[:, 3], lambda c: c[:, 2] < -c[:, 3])
+    # a side whose test the first vertex fails holds no part: only the others are scanned (a
+    # visible part's first vertex usually rules out all five)
+    return any(bool(side(clip[:1])[0]) and bool(np.all(side(clip))) for side in sides)
 
 
 def triangles_outside_box(clip, faces, x_lo, x_hi, y_lo, y_hi, serial=False):

@@ -4,7 +4,7 @@ per-triangle version of outside_box (tests/naive.py), including points exactly o
 import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from naive import naive_triangles_outside_box
+from naive import naive_outside_box, naive_triangles_outside_box
 
 from refsoft.search import skips
 
@@ -19,6 +19,7 @@ def _check(clip, faces, bounds):
         np.testing.assert_array_equal(skips.triangles_outside_box(clip, faces, *bounds, serial=serial), expected)
     # and the mesh-level test on each triangle alone
     assert [skips.outside_box(clip[f], bounds) for f in faces] == expected.tolist()
+    assert skips.outside_box(clip, bounds) == naive_outside_box(clip, bounds)  # every point at once
     return expected
 
 
