@@ -1,8 +1,8 @@
 """Small passes run on the calling thread only.
 
-A parallel loop (:func:`refsoft._parallel.parallel_range`) hands part of its range to the other
-threads and waits for them; on a busy machine a worker may not run for several milliseconds,
-longer than a small pass takes on one thread. So, like llvmpipe, whose vertex processing,
+A parallel loop (:func:`refsoft._parallel.parallel_range`) hands part of its range to a pool
+thread: submitting the part, waking the thread and taking the part back when the thread has not
+started it cost tens of microseconds, more than a small pass takes on one thread. So, like llvmpipe, whose vertex processing,
 triangle setup and binning run on the calling thread, refsoft runs a pass's per-triangle front
 end on one thread up to ``SERIAL_MAX_TRIANGLES`` triangles, a whole pass over a small box (a
 reflector's virtual pass) on one thread, and per-vertex passes of microseconds (transforming

@@ -70,8 +70,8 @@ def _surface(P, N, mask, r, c, t0, t1, fp, out_p, out_n, i):
 @kernel
 def refine(lo, hi, P, N, mask, vertices, eye, pixel, flags, fp, out_p, out_n, out_offset):
     """For each vertex ``lo .. hi - 1`` (run over every vertex by
-    :func:`refsoft._parallel.parallel_range`): one Gauss-Newton step on ``N(x) - h(x) = 0`` from its reflection pixel,
-    with the residual's derivatives by central differences (one-sided next to uncovered texels,
+    :func:`refsoft._parallel.parallel_range`): one Gauss-Newton step on ``N(x) - h(x) = 0`` from
+    its reflection pixel, with the residual's derivatives by central differences (one-sided next to uncovered texels,
     none along an axis with no covered neighbour), then P and N at the new point by the same
     first-order model (:func:`_surface`). Arithmetic in the precision of ``fp``. Vertices
     CULLED or HIDDEN keep their texel's P and N (offset 0; zeros when CULLED)."""

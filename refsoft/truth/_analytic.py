@@ -1,10 +1,10 @@
 """Numba kernel of :func:`refsoft.truth.analytic.sphere_reflection_points` (float64).
 
 The points are split among threads (:func:`refsoft._parallel.parallel_range`), each writing only
-its own output row: results do not depend on the thread count. The arithmetic follows the NumPy formulation term by term
-(sums of three products left to right, no fused multiply-add; libm's ``cos``, ``sin`` and
-``sqrt``, which give NumPy's float64 results, whereas its ``arccos`` may not: the arc angle comes
-from NumPy), so the arc samples, their signs and the Brent iterates are the same doubles as the
+its own output row: results do not depend on the thread count. The arithmetic follows the NumPy
+formulation term by term (sums of three products left to right, no fused multiply-add; libm's
+``cos``, ``sin`` and ``sqrt``, which give NumPy's float64 results, whereas its ``arccos`` may
+not: the arc angle comes from NumPy), so the arc samples, their signs and the Brent iterates are the same doubles as the
 SciPy-based reference solver's (``tests/naive.py``).
 """
 
