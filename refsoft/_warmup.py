@@ -124,7 +124,7 @@ def warm(options: dict) -> None:
 
 def _after_refinement(opts, gb, res, verts, camera) -> None:
     """Compile, in the order a frame needs them after the refinement, the kernels these options
-    call there: the virtual vertices from sub-texel points, the virtual pass's box test, the
+    call there: the virtual vertices from sub-texel points, the virtual pass's triangle test, the
     tessellation's edge errors and the 8-bit conversion; each through the function the render
     calls it through, which fixes its argument types (``tests/test_warmup.py`` checks that the
     render then compiles none of them again)."""
@@ -136,9 +136,9 @@ def _after_refinement(opts, gb, res, verts, camera) -> None:
     if opts.refine and n:
         surface = np.zeros((len(verts), 3), gb.position.dtype)
         virtual_vertices(gb, res, verts, relative=True, surface=(surface, surface), rule=opts.virtual, eye=camera.eye)
-    if opts.cull_virtual:
-        skips.triangles_outside_box(np.zeros((3, 4)), np.zeros((1, 3), np.int64),
-                                    *skips.box_planes((0, 1, 0, 1), camera.width, camera.height), serial=True)
+    skips.triangles_skipped(np.zeros((3, 4)), np.zeros((1, 3), np.int64), np.zeros(3, np.uint8), 0,
+                            skips.box_planes((0, 1, 0, 1), camera.width, camera.height) if opts.cull_virtual else None,
+                            serial=True)
     if opts.tessellate is not None and n:
         offset = np.zeros((n, 2), gb.position.dtype) if opts.refine else None
         edge_errors(gb, camera.eye, verts[:n], verts[:n][::-1], res.pixel[:n], res.pixel[:n][::-1], offset, offset)

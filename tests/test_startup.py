@@ -115,3 +115,30 @@ def test_pngs_written_through_pillow_are_the_bytes_imageio_wrote(tmp_path):
         iio.imwrite(tmp_path / f"{name}_imageio.png", image, extension=".png")
         assert (tmp_path / f"{name}.png").read_bytes() == (tmp_path / f"{name}_imageio.png").read_bytes(), name
         assert np.array_equal(iio.imread(tmp_path / f"{name}.png"), image), name
+
+
+def test_the_garbage_collector_pause_ends_by_itself():
+    """The command's start-up runs without cyclic collections, for a bounded time only."""
+    import gc
+    import time
+
+    from refsoft._start import pause_gc
+
+    assert gc.isenabled()
+    try:
+        pause_gc(0.05)
+        assert not gc.isenabled()
+        pause_gc(10.0)  # already paused: no second timer, the first still ends the pause
+        deadline = time.monotonic() + 5.0
+        while not gc.isenabled() and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert gc.isenabled()
+    finally:
+        gc.enable()
+
+
+def test_the_command_starts_with_the_collector_paused():
+    code = ("import contextlib, gc, io\nfrom refsoft import _start\n_start.GC_PAUSE_SECONDS = 60.0\n"
+            "with contextlib.redirect_stdout(io.StringIO()):\n    _start.main(['scenes'])\nprint(gc.isenabled())")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"

@@ -42,7 +42,7 @@ def test_a_render_after_the_warm_up_calls_its_kernels_with_the_same_types(option
     # only the G-buffer's interpolation, which the warm-up's ray-cast ball does not need, may be new
     assert set(got["new"]) <= {"interpolate_pair"}, got["new"]
     # the kernels compiled ahead of the frame's order were called with the render's types only
-    primed = {"virtual_from_points", "_triangles_outside_box", "edge_errors", "to_uint8_flat"}
+    primed = {"virtual_from_points", "_triangles_skipped", "edge_errors", "to_uint8_flat"}
     calls = {name: got["types"].get(name, 0) for name in primed}
     if options["preset"] == "accurate":  # which calls all four
         assert calls == dict.fromkeys(primed, 1), calls

@@ -151,16 +151,30 @@ def rasterize(clip, faces, width: int, height: int, peel_depth=None, region=None
         if peel.shape != (rh, rw):
             raise RefsoftError(f"peel_depth must have shape {(rh, rw)}, got {peel.shape}")
     else:
-        peel = np.zeros((1, 1), dtype=np.float32)
+        peel = None
     bad = (clip[:, 3] <= 0) & (clip[:, 2] + clip[:, 3] >= 0)
     if bad.any():
         raise RefsoftError(f"clip vertex {int(np.argmax(bad))} has w <= 0 inside the near plane: the "
                            "projection must give w > 0 in front of the near plane")
+    return rasterize_trusted(clip, faces, width, height, (r0, r1, c0, c1), peel if use_peel else None,
+                             CULL_MODES[cull])
+
+
+def rasterize_trusted(clip, faces, width, height, region, peel, cull_code) -> Fragments:
+    """:func:`rasterize` of inputs it has already checked, for callers that made them so: ``clip``
+    (V, 4) float64 C-contiguous and finite, every w > 0 inside the near plane; ``faces`` (F, 3)
+    int32 read-only, in ``[0, V)``; ``region`` (r0, r1, c0, c1) Python ints inside the viewport;
+    ``peel`` (h, w) float32 or None; ``cull_code`` :data:`CULL_MODES`' value."""
+    r0, r1, c0, c1 = region
+    rh, rw = r1 - r0, c1 - c0
+    use_peel = peel is not None
+    if not use_peel:
+        peel = np.zeros((1, 1), dtype=np.float32)
     tile = constants.TILE_SIZE
     tiles_x, tiles_y = -(-rw // tile), -(-rh // tile)
     small = len(faces) <= SERIAL_MAX_TRIANGLES  # the per-triangle front end on this thread (_threads)
     X, Y, Z, IW, slot, B, tri, valid, bbox, area, bias = _setup.setup_region(
-        clip, faces, width, height, r0, r1, c0, c1, CULL_MODES[cull], constants.GUARD_BAND_PIXELS, small)
+        clip, faces, width, height, r0, r1, c0, c1, cull_code, constants.GUARD_BAND_PIXELS, small)
     starts, items = _kernels.bin_triangles(valid, bbox, tile, tiles_x, tiles_y, r0, c0, serial=small)
     depth, index, triangle = limits.maps((rh, rw), np.float32, np.int32, np.int32)
     depth.fill(constants.DEPTH_CLEAR)
@@ -205,7 +219,8 @@ def interpolate(fragments: Fragments, attributes, faces, precision="float32", no
     out = np.zeros((h, w, attr.shape[1]), dtype=dt)
     r0, c0 = fragments.origin
     parallel_range(_kernels.interpolate_rows, h, fragments.index, s["X"], s["Y"], s["IW"].astype(dt), s["slot"],
-                   s["B"].astype(dt), s["tri"], faces, attr, fragments.height, r0, c0, bool(normalize), _CONVERT[dt], out)
+                   s["B"].astype(dt), s["tri"], faces, attr, fragments.height, r0, c0, bool(normalize), _CONVERT[dt], out,
+                   work=lambda: (np.empty(attr.shape[1], dtype=dt),))
     return out
 
 
@@ -477,23 +492,33 @@ def shade_fragments(fragments: Fragments, normals, faces, face_object, face_offs
     local_triangle : ndarray, shape (h, w), int32
         ``triangle - face_offset[object_id - 1]``; -1 where nothing is drawn.
     """
+    nrm = readonly(np.ascontiguousarray(normals, dtype=np.float32))
+    faces = _check_faces(faces, len(nrm))
+    if stencil is not None:
+        stencil = readonly(np.ascontiguousarray(stencil, dtype=bool))
+    return shade_fragments_trusted(fragments, nrm, faces, readonly(np.ascontiguousarray(face_object, dtype=np.int32)),
+                                   readonly(np.ascontiguousarray(face_offset, dtype=np.int64)),
+                                   readonly(np.ascontiguousarray(table, dtype=np.float32)), stencil)
+
+
+def shade_fragments_trusted(fragments: Fragments, normals, faces, face_object, face_offset, table, stencil=None):
+    """:func:`shade_fragments` of inputs already in the kernel's types, for callers that made
+    them so: ``normals`` (V, 3) float32, ``faces`` (F, 3) int32 in ``[0, V)``, ``face_object``
+    (F,) int32, ``face_offset`` (M,) int64, ``table`` (M + 1, 3) float32, ``stencil`` (h, w)
+    bool or None; every array C-contiguous and read-only."""
     s = fragments.setup
     h, w = fragments.shape
     r0, c0 = fragments.origin
-    nrm = readonly(np.ascontiguousarray(normals, dtype=np.float32))
-    faces = _check_faces(faces, len(nrm))
     use_stencil = stencil is not None
-    stencil = readonly(np.ascontiguousarray(stencil, dtype=bool) if use_stencil else np.zeros((1, 1), dtype=bool))
+    if not use_stencil:
+        stencil = readonly(np.zeros((1, 1), dtype=bool))
     color = np.empty((h, w, 3), dtype=np.float32)
     object_id, local_tri = limits.maps((h, w), np.int32, np.int32)
     parallel_range(_kernels.shade_visible, h, fragments.index, s["X"], s["Y"], s["IW"].astype(np.float32), s["slot"],
-                   s["B"].astype(np.float32), s["tri"], faces, nrm,
-                   readonly(np.ascontiguousarray(face_object, dtype=np.int32)),
-                   readonly(np.ascontiguousarray(face_offset, dtype=np.int64)),
-                   readonly(np.ascontiguousarray(table, dtype=np.float32)),
+                   s["B"].astype(np.float32), s["tri"], faces, normals, face_object, face_offset, table,
                    readonly(constants.LIGHT_DIRECTION.astype(np.float32)), np.float32(constants.AMBIENT),
                    np.float32(constants.DIFFUSE), stencil, use_stencil, fragments.height, r0, c0, color, object_id,
-                   local_tri)
+                   local_tri, color.reshape(h * w * 3))
     return color, object_id, local_tri
 
 

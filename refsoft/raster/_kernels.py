@@ -243,7 +243,7 @@ def _barycentrics(t, r, c, height, X, Y, IW, slot, B, fp):
 
 @kernel
 def interpolate_rows(lo, hi, index, X, Y, IW, slot, B, tri, faces, attributes, height, r_org, c_org, normalize, fp,
-                     out):
+                     out, acc):
     """Perspective-correct attributes of the visible triangle at every covered pixel of rows
     ``lo .. hi - 1`` (run over every row by :func:`refsoft._parallel.parallel_range`).
 
@@ -254,12 +254,12 @@ def interpolate_rows(lo, hi, index, X, Y, IW, slot, B, tri, faces, attributes, h
     the identity for unclipped triangles) and ``out = b0 A[v0] + b1 A[v1] + b2 A[v2]``;
     with ``normalize``, ``out / |out|`` (zero stays zero). ``out`` must be zeroed: uncovered
     pixels are not written. ``index`` covers the rasterized region, whose first pixel is
-    (``r_org``, ``c_org``) of a viewport ``height`` pixels high.
+    (``r_org``, ``c_org``) of a viewport ``height`` pixels high. ``acc``: a work array of one
+    pixel's channels, (C,) like ``attributes``.
     """
     h, w = index.shape
     n_ch = attributes.shape[1]
     for r in range(lo, hi):
-        acc = np.empty(n_ch, dtype=attributes.dtype)
         irow = index[r]
         orow = out[r]
         for c in range(w):
@@ -355,14 +355,15 @@ def _shade_run(crow, orow, lrow, g0, g1, g2, f0, f1, f2, w0, w1, w2, swap, na0, 
 
 @kernel
 def shade_visible(lo, hi, index, X, Y, IW, slot, B, tri, faces, normals, face_object, face_offset, table, light,
-                  ambient, diffuse, stencil, use_stencil, height, r_org, c_org, color, object_id, local_triangle):
+                  ambient, diffuse, stencil, use_stencil, height, r_org, c_org, color, object_id, local_triangle, flat):
     """Rows ``lo .. hi - 1`` (run over every row by :func:`refsoft._parallel.parallel_range`): the visible triangle's normal (:func:`interpolate_rows` in float32, renormalised), shaded
     as :func:`refsoft.raster._shading.shade_ids` does, in one pass: per pixel of the region
     ``color`` (h, w, 3) float32 ``table[k] * (ambient + diffuse * |n . light|)``, ``object_id``
     (h, w) int32 ``k = face_object[triangle]`` and ``local_triangle`` (h, w) int32 ``triangle -
     face_offset[k - 1]``; where nothing is drawn (or, with ``use_stencil``, ``stencil`` (h, w)
     bool is False) ``table[0]``, 0 and -1. Same float32 arithmetic in the same order as the
-    two kernels it replaces, without their (h, w, 3) normal map.
+    two kernels it replaces, without their (h, w, 3) normal map. ``flat`` is ``color`` as one
+    row (h w 3,): (r, c, ch) at 3 (r w + c) + ch, a stride SIMD code can see.
 
     Each row is walked as runs of pixels of one clip triangle, whose constants are loaded once
     per run; a run of an unclipped triangle within ``EXACT_COORD`` is shaded on SIMD lanes
@@ -370,7 +371,6 @@ def shade_visible(lo, hi, index, X, Y, IW, slot, B, tri, faces, normals, face_ob
     h, w = index.shape
     fp = np.float32(0)
     lx, ly, lz = light[0], light[1], light[2]
-    flat = color.reshape(h * w * 3)  # (r, c, ch) at 3 (r w + c) + ch: a stride SIMD code can see
     for r in range(lo, hi):
         irow = index[r]
         crow = color[r]

@@ -56,10 +56,10 @@ def _plane_distance(c, plane, gx, gy):
 
 
 @kernel
-def _clip_polygon(c0, c1, c2, gx, gy, poly_c, poly_b):
-    """Sutherland-Hodgman against every plane. Returns the vertex count (0 if nothing is left)."""
-    tmp_c = np.empty((MAX_POLY, 4))
-    tmp_b = np.empty((MAX_POLY, 3))
+def _clip_polygon(c0, c1, c2, gx, gy, poly_c, poly_b, tmp_c, tmp_b):
+    """Sutherland-Hodgman against every plane. Returns the vertex count (0 if nothing is left).
+    ``poly_c`` (MAX_POLY, 4), ``poly_b`` (MAX_POLY, 3): the polygon's clip coordinates and
+    barycentrics, written; ``tmp_c``, ``tmp_b``: work arrays of the same shapes."""
     for k in range(4):
         poly_c[0, k] = c0[k]
         poly_c[1, k] = c1[k]
@@ -115,12 +115,11 @@ def _outcodes(c, gx, gy):
 
 
 @kernel
-def count_clip_triangles(lo, hi, clip, faces, codes, gx, gy, counts, clipped):
+def count_clip_triangles(lo, hi, clip, faces, codes, gx, gy, counts, clipped, poly_c, poly_b, tmp_c, tmp_b):
     """Per input triangle ``f`` in ``lo .. hi - 1``: ``counts[f]``, the clip triangles it
     produces (0 when culled by a plane), and ``clipped[f]``, the same count when it was clipped,
-    0 when it passes whole (int64 (F,) each)."""
-    poly_c = np.empty((MAX_POLY, 4))  # work arrays, once per part (each triangle sets them afresh)
-    poly_b = np.empty((MAX_POLY, 3))
+    0 when it passes whole (int64 (F,) each). The last four: :func:`clip_work` (each triangle
+    sets them afresh)."""
     for f in range(lo, hi):
         o0 = codes[faces[f, 0]]
         o1 = codes[faces[f, 1]]
@@ -131,7 +130,8 @@ def count_clip_triangles(lo, hi, clip, faces, codes, gx, gy, counts, clipped):
         elif (o0 & o1 & o2) != 0:
             counts[f] = 0
         else:
-            n = _clip_polygon(clip[faces[f, 0]], clip[faces[f, 1]], clip[faces[f, 2]], gx, gy, poly_c, poly_b)
+            n = _clip_polygon(clip[faces[f, 0]], clip[faces[f, 1]], clip[faces[f, 2]], gx, gy, poly_c, poly_b, tmp_c,
+                              tmp_b)
             counts[f] = n - 2 if n >= 3 else 0
             clipped[f] = counts[f]
 
@@ -232,7 +232,7 @@ def _emit(t, f, x0, y0, z0, w0, x1, y1, z1, w1, x2, y2, z2, w2, width, height, r
 
 @kernel
 def emit_clip_triangles(lo, hi, clip, faces, codes, win_xy, win_zw, offsets, clip_offsets, gx, gy, width, height,
-                        region, cull, X, Y, Z, IW, slot, B, tri, valid, bbox, area, bias):
+                        region, cull, X, Y, Z, IW, slot, B, tri, valid, bbox, area, bias, poly_c, poly_b, tmp_c, tmp_b):
     """Clip, snap and set up the input triangles ``lo .. hi - 1``.
 
     ``cull`` (0 none, 1 keep clockwise, 2 keep counter-clockwise) is decided per clip triangle
@@ -248,10 +248,9 @@ def emit_clip_triangles(lo, hi, clip, faces, codes, win_xy, win_zw, offsets, cli
     min, col max, inclusive: the part of the viewport rasterized); doubled ``area`` (T,) int64 > 0 when valid;
     edge ``bias`` (T, 3) int8 (0 inclusive, -1 exclusive). ``T = offsets[-1]``, ``K =
     clip_offsets[-1]``; the rows of input triangle ``f`` are ``offsets[f] .. offsets[f + 1] - 1``
-    (and ``clip_offsets[f] ..`` of ``B``): written by its own iteration only.
+    (and ``clip_offsets[f] ..`` of ``B``): written by its own iteration only. The last four:
+    :func:`clip_work` (each triangle sets them afresh).
     """
-    poly_c = np.empty((MAX_POLY, 4))  # work arrays, once per part (each triangle sets them afresh)
-    poly_b = np.empty((MAX_POLY, 3))
     for f in range(lo, hi):
         start = offsets[f]
         count = offsets[f + 1] - start
@@ -266,7 +265,7 @@ def emit_clip_triangles(lo, hi, clip, faces, codes, win_xy, win_zw, offsets, cli
                             width, height, region, cull, X, Y, Z, IW, tri, valid, bbox, area, bias)
             slot[start] = -2 if swapped else -1
             continue
-        n = _clip_polygon(clip[faces[f, 0]], clip[faces[f, 1]], clip[faces[f, 2]], gx, gy, poly_c, poly_b)
+        n = _clip_polygon(clip[faces[f, 0]], clip[faces[f, 1]], clip[faces[f, 2]], gx, gy, poly_c, poly_b, tmp_c, tmp_b)
         for j in range(n - 2):
             t = start + j
             b = clip_offsets[f] + j
@@ -281,6 +280,13 @@ def emit_clip_triangles(lo, hi, clip, faces, codes, win_xy, win_zw, offsets, cli
                 B[b, 1, k] = poly_b[i1, k]
                 B[b, 2, k] = poly_b[i2, k]
             slot[t] = b
+
+
+def clip_work():
+    """Work arrays of one part of the clipping kernels: the polygon's clip coordinates
+    (MAX_POLY, 4) and barycentrics (MAX_POLY, 3) float64, and the same again for each plane's
+    pass."""
+    return (np.empty((MAX_POLY, 4)), np.empty((MAX_POLY, 3)), np.empty((MAX_POLY, 4)), np.empty((MAX_POLY, 3)))
 
 
 def setup_region(clip, faces, width, height, r0, r1, c0, c1, cull, guard_band, small=False):
@@ -302,7 +308,8 @@ def setup_region(clip, faces, width, height, r0, r1, c0, c1, cull, guard_band, s
     else:
         counts = np.empty(nf, dtype=np.int64)
         clipped = np.empty(nf, dtype=np.int64)
-        parallel_range(count_clip_triangles, nf, clip, faces, codes, gx, gy, counts, clipped, serial=small)
+        parallel_range(count_clip_triangles, nf, clip, faces, codes, gx, gy, counts, clipped, serial=small,
+                       work=clip_work)
         offsets = np.zeros(nf + 1, dtype=np.int64)
         np.cumsum(counts, out=offsets[1:])
         clip_offsets = np.zeros(nf + 1, dtype=np.int64)
@@ -313,5 +320,6 @@ def setup_region(clip, faces, width, height, r0, r1, c0, c1, cull, guard_band, s
            np.empty(t, dtype=np.int32), np.empty(t, dtype=np.bool_), np.empty((t, 4), dtype=np.int32),
            np.empty(t, dtype=np.int64), np.empty((t, 3), dtype=np.int8))
     parallel_range(emit_clip_triangles, nf, clip, faces, codes, win_xy, win_zw, offsets, clip_offsets, gx, gy, width,
-                   height, np.array([r0, r1 - 1, c0, c1 - 1], dtype=np.int64), cull, *out, serial=small)
+                   height, np.array([r0, r1 - 1, c0, c1 - 1], dtype=np.int64), cull, *out, serial=small,
+                   work=clip_work)
     return out

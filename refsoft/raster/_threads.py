@@ -23,8 +23,8 @@ import numba
 #: Passes over at most this many pixels run on one thread (a 128 x 128 box).
 SERIAL_MAX_PIXELS = 1 << 14
 #: Triangle setup, binning and the virtual pass's box test of at most this many triangles run on
-#: one thread (about 10 ms).
-SERIAL_MAX_TRIANGLES = 1 << 18
+#: one thread (under a millisecond; a pass of more is split, which is faster from here on).
+SERIAL_MAX_TRIANGLES = 1 << 14
 #: Per-vertex passes (transforms, a search's bookkeeping, virtual vertices) run on one thread up
 #: to this many vertices (under a millisecond; the walks themselves stay parallel).
 SERIAL_MAX_VERTICES = 1 << 16

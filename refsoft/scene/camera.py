@@ -18,7 +18,10 @@ from ..errors import CameraError, LimitError
 
 
 def _vec3(value, name: str) -> np.ndarray:
-    arr = np.asarray(value, dtype=np.float64)
+    if isinstance(value, np.ndarray) and value.dtype == np.float64 and not value.flags.writeable:
+        arr = value  # already frozen (another camera's, through dataclasses.replace): shared as it is
+    else:
+        arr = np.array(value, dtype=np.float64)  # a copy: the camera's own, made read-only below
     if arr.shape != (3,):
         raise CameraError(f"camera {name} must be 3 numbers, got shape {arr.shape}")
     if not np.all(np.isfinite(arr)):
@@ -55,7 +58,8 @@ class Camera:
     Parameters
     ----------
     eye, target, up : array_like, shape (3,)
-        Position, look-at point and up hint in world space.
+        Position, look-at point and up hint in world space (kept as read-only float64 copies:
+        a camera does not change; :func:`dataclasses.replace` or :meth:`widened` make another).
     fov_y : float
         Vertical field of view in degrees, in (0, 180) (perspective only).
     width, height : int
@@ -83,9 +87,9 @@ class Camera:
         eye = _vec3(self.eye, "eye")
         target = _vec3(self.target, "target")
         up = _vec3(self.up, "up")
-        object.__setattr__(self, "eye", eye)
-        object.__setattr__(self, "target", target)
-        object.__setattr__(self, "up", up)
+        for name, arr in (("eye", eye), ("target", target), ("up", up)):
+            arr.flags.writeable = False  # frozen like the camera: its matrices are computed once
+            object.__setattr__(self, name, arr)
         forward = target - eye
         if np.linalg.norm(forward) == 0.0:
             raise CameraError(f"camera eye equals target {eye.tolist()}")
@@ -163,8 +167,13 @@ class Camera:
         return m
 
     def view_proj(self) -> np.ndarray:
-        """World-to-clip matrix ``projection @ view``, shape (4, 4), float64."""
-        return self.projection_matrix() @ self.view_matrix()
+        """World-to-clip matrix ``projection @ view``, shape (4, 4), float64 (a new array each
+        call; computed once per camera)."""
+        m = self.__dict__.get("_view_proj")
+        if m is None:
+            m = self.projection_matrix() @ self.view_matrix()
+            object.__setattr__(self, "_view_proj", m)
+        return m.copy()
 
     def pixel_rays(self) -> tuple[np.ndarray, np.ndarray]:
         """World-space rays through every pixel centre (spec section 2 pixel convention).

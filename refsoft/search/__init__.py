@@ -236,7 +236,8 @@ def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", invers
                    keys, rel, first, serial=small)
     if previous is not None and (first[:, 0] == BAD_START).any():
         _check_starts(starts, (h, w))
-    order, rank = _kernels.order_by_key(keys, -(-h // LOCALITY_CELL) * -(-w // LOCALITY_CELL))
+    order, rank = np.empty(n, np.int64), np.empty(n, np.int64)
+    _kernels.order_by_key(keys, np.zeros(-(-h // LOCALITY_CELL) * -(-w // LOCALITY_CELL) + 1, np.int64), order, rank)
     rows = np.empty_like(rel)
     row_starts = np.empty_like(first)
     parallel_range(_kernels.gather, n, rel, first, order, rows, row_starts, serial=small)
@@ -246,8 +247,9 @@ def search(gbuffer: GBuffer, eye, vertices, neighbourhood: str = "cross", invers
     # the eye direction of a pixel is computed with its score (as ``_packed`` computes it: the
     # same values), which costs less than packing the whole G-buffer for a few steps per vertex
     eye_rel = (eye - gbuffer.origin).astype(dt)
-    parallel_range(_lanes.SEARCH[NEIGHBOURHOODS[neighbourhood]], -(-n // _lanes.SEARCH_GROUP), P, N, mask, eye_rel,
-                   rows, row_starts, start[0], start[1], int(cap), inverse == "search", fp, *sorted_out)
+    nb = NEIGHBOURHOODS[neighbourhood]
+    parallel_range(_lanes.SEARCH[nb], -(-n // _lanes.SEARCH_GROUP), P, N, mask, eye_rel, rows, row_starts, start[0],
+                   start[1], int(cap), inverse == "search", fp, *sorted_out, work=lambda: _lanes.search_work(nb - 1, dt))
     pixel, score, margin, iterations, flags = (np.empty_like(a) for a in sorted_out)
     parallel_range(_kernels.scatter, n, rank, *sorted_out, pixel, score, margin, iterations, flags, serial=small)
     return SearchResult(pixel, score, margin, iterations, flags, neighbourhood, inverse, int(cap))
@@ -370,7 +372,7 @@ def scores_at(gbuffer: GBuffer, eye, vertices, pixels, inverse=None) -> np.ndarr
         return out
     G, mask, fp, (r0, c0) = _packed(gbuffer, validate.point(eye, "eye"))
     parallel_range(_kernels.scores_at, len(verts), G, mask, np.ascontiguousarray(verts), gbuffer.origin, pix - [r0, c0],
-                   inv, fp, out)
+                   inv, fp, out, work=lambda: (np.empty(3, dtype=dt),))
     return out
 
 

@@ -291,25 +291,23 @@ def prepare(lo, hi, vertices, origin, starts, mask, view_proj, cell, fp, keys, r
 
 
 @kernel
-def order_by_key(keys, n_keys):
+def order_by_key(keys, first, order, rank):
     """The stable order of ``keys`` (ints in [0, n_keys)), as ``np.argsort(keys,
-    kind="stable")``, and each element's place in it (``rank[order[j]] = j``): one pass to count,
-    one to place (NumPy's radix argsort of 16-bit keys is slower on 1M vertices:
-    docs/benchmarks.md)."""
+    kind="stable")``, into ``order``, and each element's place in it (``rank[order[j]] = j``):
+    one pass to count, one to place (NumPy's radix argsort of 16-bit keys is slower on 1M
+    vertices: docs/benchmarks.md). ``first``: a zeroed work array of n_keys + 1 int64;
+    ``order`` and ``rank``: (n,) int64, written."""
     n = keys.shape[0]
-    first = np.zeros(n_keys + 1, np.int64)
+    n_keys = first.shape[0] - 1
     for i in range(n):
         first[keys[i] + 1] += 1
     for k in range(n_keys):
         first[k + 1] += first[k]
-    order = np.empty(n, np.int64)
-    rank = np.empty(n, np.int64)
     for i in range(n):
         k = keys[i]
         order[first[k]] = i
         rank[i] = first[k]
         first[k] += 1
-    return order, rank
 
 
 @kernel
@@ -354,12 +352,12 @@ def score_field(lo, hi, G, mask, v, inverse, fp, out):
 
 
 @kernel
-def scores_at(lo, hi, G, mask, vertices, origin, pixels, inverse, fp, out):
+def scores_at(lo, hi, G, mask, vertices, origin, pixels, inverse, fp, out, v):
     """The (inverse, where ``inverse[i]``) score of vertex ``i`` at crop pixel ``pixels[i]``, for
     ``i`` in ``lo .. hi - 1``, with the search's own arithmetic; ``NO_SCORE`` (-3) where that
-    pixel is outside the crop or uncovered. For ``refsoft check``'s tie rule."""
+    pixel is outside the crop or uncovered. For ``refsoft check``'s tie rule. ``v``: a work
+    array (3,) like ``out``."""
     h, w = mask.shape
-    v = np.empty(3, dtype=out.dtype)  # a work array, once per part
     for i in range(lo, hi):
         r = pixels[i, 0]
         c = pixels[i, 1]

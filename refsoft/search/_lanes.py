@@ -241,15 +241,31 @@ def _end(inverse_search, fp, s, it, best_k, best, second, border, W, SV, px, py,
 
 @kernel
 def search_group(P, N, mask, eye, vertices, starts, default_r, default_c, cap, inverse_search, fp, pixel, best_out,
-                 margin_out, iterations, flags_out, NB, lo, hi):
+                 margin_out, iterations, flags_out, NB, lo, hi, cand, INV, OUT, IDX, CUR, W, SV, PREV):
     """The searches of rows ``lo`` to ``hi - 1``, ``LANES`` walks at a time, each of ``NB``
     neighbours around its current pixel. ``NB`` is a constant of the compiled code (``literally``:
-    one specialisation per neighbourhood)."""
+    one specialisation per neighbourhood). The last eight: :func:`search_work`'s arrays, set
+    here as zeros (no walk in ``W``'s slots) before the group starts."""
     literally(NB)
-    dt = best_out.dtype
     # per candidate of a round: P, N of its pixel and its vertex (one row per channel), whether
-    # its walk is in the inverse phase, its score; where each walk's candidates are (_gather)
-    cand = np.zeros((9, NB * LANES), dt)
+    # its walk is in the inverse phase, its score; where each walk's candidates are (_gather);
+    # per walk slot: its state (W, SV) and the previous neighbourhood's scores
+    for j in range(NB * LANES):
+        for k in range(9):
+            cand[k, j] = 0
+        INV[j] = False
+        OUT[j] = 0
+        IDX[j] = 0
+    for j in range(NB + 1):
+        CUR[j] = 0
+    for s in range(LANES):
+        for k in range(8):
+            W[s, k] = 0
+        W[s, VI] = -1
+        for k in range(4):
+            SV[s, k] = 0
+        for j in range(NB + 1):
+            PREV[s, j] = 0
     P0 = cand[0]
     P1 = cand[1]
     P2 = cand[2]
@@ -259,15 +275,6 @@ def search_group(P, N, mask, eye, vertices, starts, default_r, default_c, cap, i
     VX = cand[6]
     VY = cand[7]
     VZ = cand[8]
-    INV = np.zeros(NB * LANES, np.bool_)
-    OUT = np.zeros(NB * LANES, dt)
-    IDX = np.zeros(NB * LANES, np.int64)
-    CUR = np.zeros(NB + 1, dt)
-    # per walk slot: its state (W, SV) and the previous neighbourhood's scores
-    W = np.zeros((LANES, 8), np.int64)
-    W[:, VI] = -1
-    SV = np.zeros((LANES, 4), dt)
-    PREV = np.zeros((LANES, NB + 1), dt)
     nxt = lo
     active = 0
     for s in range(LANES):
@@ -319,14 +326,27 @@ def _make_search(n_neighbours):
 
     @kernel
     def search_lanes(lo, hi, P, N, mask, eye, vertices, starts, default_r, default_c, cap, inverse_search, fp, pixel,
-                     best_out, margin_out, iterations, flags_out):
+                     best_out, margin_out, iterations, flags_out, cand, INV, OUT, IDX, CUR, W, SV, PREV):
         n = vertices.shape[0]
         for g in range(lo, hi):
             search_group(P, N, mask, eye, vertices, starts, default_r, default_c, cap, inverse_search, fp, pixel,
                          best_out, margin_out, iterations, flags_out, NB, g * SEARCH_GROUP,
-                         min(n, (g + 1) * SEARCH_GROUP))
+                         min(n, (g + 1) * SEARCH_GROUP), cand, INV, OUT, IDX, CUR, W, SV, PREV)
 
     return search_lanes
+
+
+def search_work(n_neighbours, dtype):
+    """The work arrays of one part of a lanes kernel (``n_neighbours`` around the current pixel,
+    ``dtype`` the G-buffer's float type): per candidate of a round ``cand`` (9, NB LANES) (P, N
+    of its pixel, its vertex), ``INV`` (NB LANES,) bool, ``OUT`` (NB LANES,) scores, ``IDX``
+    (NB LANES,) int64; ``CUR`` (NB + 1,); per walk slot ``W`` (LANES, 8) int64, ``SV``
+    (LANES, 4) and ``PREV`` (LANES, NB + 1). Made by the caller (:func:`search_group` sets
+    them) so that the kernel allocates nothing."""
+    nb, dt = n_neighbours, np.dtype(dtype)
+    return (np.empty((9, nb * LANES), dt), np.empty(nb * LANES, np.bool_), np.empty(nb * LANES, dt),
+            np.empty(nb * LANES, np.int64), np.empty(nb + 1, dt), np.empty((LANES, 8), np.int64),
+            np.empty((LANES, 4), dt), np.empty((LANES, nb + 1), dt))
 
 
 #: The lanes kernel by candidates per step (current pixel included), as ``search.NEIGHBOURHOODS``.

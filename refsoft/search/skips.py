@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._numba import kernel
+from .._numba import kernel, readonly
 from .._parallel import parallel_range
 from . import BORDER, CAPPED, CULLED, HIDDEN
 from ..constants import BOX_MARGIN_PIXELS
@@ -112,16 +112,22 @@ def outside_box(clip, bounds) -> bool:
     return any(bool(side(clip[:1])[0]) and bool(np.all(side(clip))) for side in sides)
 
 
-def triangles_outside_box(clip, faces, x_lo, x_hi, y_lo, y_hi, serial=False):
-    """Per triangle, :func:`outside_box` of its three clip vertices (the same half-space tests):
-    those triangles cover no pixel of the box and need not be set up at all.
+def triangles_skipped(clip, faces, flags, lost, bounds=None, serial=False):
+    """Per triangle, whether the virtual pass leaves it out: one of its vertices has a flag in
+    ``lost`` (it has no virtual vertex to be drawn with), or, given ``bounds``, :func:`outside_box`
+    of its three clip vertices (the same half-space tests: it covers no pixel of the box and need
+    not be set up at all).
 
     Parameters
     ----------
     clip : ndarray, shape (V, 4), float64
     faces : ndarray, shape (F, 3), int64
-    x_lo, x_hi, y_lo, y_hi : float
-        The box's NDC bounds (:func:`box_planes`).
+    flags : ndarray, shape (V,), uint8
+        The vertices' search flags.
+    lost : int
+        The flags that leave a vertex's triangles out (0: none).
+    bounds : (x_lo, x_hi, y_lo, y_hi), optional
+        The box's NDC bounds (:func:`box_planes`); None: no box test.
     serial : bool
         Test on the calling thread alone (:func:`refsoft._parallel.parallel_range`).
 
@@ -129,15 +135,32 @@ def triangles_outside_box(clip, faces, x_lo, x_hi, y_lo, y_hi, serial=False):
     -------
     ndarray, shape (F,), bool
     """
-    out = np.zeros(len(faces), dtype=np.bool_)
-    parallel_range(_triangles_outside_box, len(faces), clip, faces, x_lo, x_hi, y_lo, y_hi, out, serial=serial)
+    box = bounds is not None
+    x_lo, x_hi, y_lo, y_hi = (float(b) for b in bounds) if box else (0.0, 0.0, 0.0, 0.0)
+    out = np.empty(len(faces), dtype=np.bool_)
+    parallel_range(_triangles_skipped, len(faces), readonly(np.ascontiguousarray(clip, dtype=np.float64)),
+                   readonly(np.ascontiguousarray(faces, dtype=np.int64)),
+                   readonly(np.ascontiguousarray(flags, dtype=np.uint8)), np.uint8(lost), box, x_lo, x_hi, y_lo, y_hi,
+                   out, serial=serial)
     return out
 
 
+def triangles_outside_box(clip, faces, x_lo, x_hi, y_lo, y_hi, serial=False):
+    """Per triangle, :func:`outside_box` of its three clip vertices: :func:`triangles_skipped`
+    with no flag lost. ``clip`` (V, 4) float64, ``faces`` (F, 3) int64; returns (F,) bool."""
+    return triangles_skipped(clip, faces, np.zeros(len(clip), np.uint8), 0, (x_lo, x_hi, y_lo, y_hi), serial)
+
+
 @kernel
-def _triangles_outside_box(lo, hi, clip, faces, x_lo, x_hi, y_lo, y_hi, out):
-    """``out[t]`` for the triangles ``t`` in ``lo .. hi - 1`` (:func:`triangles_outside_box`)."""
+def _triangles_skipped(lo, hi, clip, faces, flags, lost, box, x_lo, x_hi, y_lo, y_hi, out):
+    """``out[t]`` for the triangles ``t`` in ``lo .. hi - 1`` (:func:`triangles_skipped`)."""
     for t in range(lo, hi):
+        if ((flags[faces[t, 0]] | flags[faces[t, 1]] | flags[faces[t, 2]]) & lost) != 0:
+            out[t] = True
+            continue
+        if not box:
+            out[t] = False
+            continue
         right = True
         left = True
         above = True

@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..raster import _setup, rasterize, shade_fragments
+from .._numba import readonly
+from ..raster import _setup, rasterize_trusted, shade_fragments_trusted
 from ..raster._threads import SERIAL_MAX_TRIANGLES, serial_if_small
 from ..scene.mesh import concatenate
 from . import CULLED, HIDDEN, SearchResult, skips, virtual_vertices
@@ -174,44 +175,45 @@ def _virtual_pass(scene, parts, camera, stencil, box, inverse, cull):
     vp = camera.view_proj()
     bounds = skips.box_planes(box, camera.width, camera.height)
     bad = CULLED | (HIDDEN if inverse == "discard" else 0)
-    faces, face_obj, normals, clips = [], [], [], []
+    faces, face_obj, normals, clips, flags = [], [], [], [], []
     n_culled = 0
     offset = 0
-    for virtual, nrm_v, f, fobj, flags in parts:
+    for virtual, nrm_v, f, fobj, fl in parts:
         clip = _setup.transform_points(virtual, vp)
         if cull and skips.outside_box(clip, bounds):
             n_culled += 1
             continue
-        # triangles whose vertices all have a V'
-        lost = (flags & bad) != 0
-        keep = ~(lost[f[:, 0]] | lost[f[:, 1]] | lost[f[:, 2]])
-        # np.compress: NumPy's boolean indexing of (T, 3) rows takes several times as long
-        kept = np.compress(keep, f, axis=0)
-        faces.append(kept + offset if offset else kept)
-        face_obj.append(fobj[keep])
+        faces.append(f + offset if offset else f)
+        face_obj.append(fobj)
         normals.append(nrm_v)
         clips.append(clip)
+        flags.append(fl)
         offset += len(clip)
     r0, r1, c0, c1 = box
     h, w = r1 - r0, c1 - c0
-    faces = _joined(faces) if faces else np.zeros((0, 3), np.int64)
+    if not faces:
+        return _nothing(h, w, n_culled)
+    faces, face_obj, clip = _joined(faces), _joined(face_obj), _joined(clips)
+    # triangles with a vertex without V' and (cull) those beyond one side of the box: neither is
+    # set up (the order of the others is kept); a per-triangle front end, on this thread alone up
+    # to SERIAL_MAX_TRIANGLES
+    skip = skips.triangles_skipped(clip, faces, _joined(flags), bad, bounds if cull else None,
+                                   serial=len(faces) <= SERIAL_MAX_TRIANGLES)
+    if skip.any():
+        keep = ~skip
+        # np.compress: NumPy's boolean indexing of (T, 3) rows takes several times as long
+        faces, face_obj = np.compress(keep, faces, axis=0), np.compress(keep, face_obj)
     if len(faces) == 0:
         return _nothing(h, w, n_culled)
-    face_obj = _joined(face_obj)
-    clip = _joined(clips)
-    if cull:  # triangles beyond one side of the box: not set up (the order of the others is kept)
-        # a per-triangle front end: on this thread alone up to SERIAL_MAX_TRIANGLES
-        out = skips.triangles_outside_box(clip, np.ascontiguousarray(faces, dtype=np.int64), *bounds,
-                                          serial=len(faces) <= SERIAL_MAX_TRIANGLES)
-        if out.any():
-            faces, face_obj = np.compress(~out, faces, axis=0), face_obj[~out]
-        if len(faces) == 0:
-            return _nothing(h, w, n_culled)
-    frags = rasterize(clip, faces, camera.width, camera.height, region=box)
-    table = np.vstack([np.zeros(3), [o.color for o in scene.objects]]).astype(np.float32)
+    # the raster's own types once (its public entry points check and convert every call)
+    faces = readonly(faces.astype(np.int32))
+    frags = rasterize_trusted(clip, faces, camera.width, camera.height, (int(r0), int(r1), int(c0), int(c1)), None, 0)
+    table = readonly(np.vstack([np.zeros(3), [o.color for o in scene.objects]]).astype(np.float32))
     # shade() of the covered stencil pixels, 0 elsewhere, in one pass
-    colour, rid, _ = shade_fragments(frags, _joined(normals), faces, face_obj,
-                                     np.zeros(len(table), dtype=np.int64), table, stencil[r0:r1, c0:c1])
+    colour, rid, _ = shade_fragments_trusted(
+        frags, readonly(np.ascontiguousarray(_joined(normals), dtype=np.float32)), faces,
+        readonly(np.ascontiguousarray(face_obj, dtype=np.int32)), readonly(np.zeros(len(table), dtype=np.int64)), table,
+        readonly(np.ascontiguousarray(stencil[r0:r1, c0:c1], dtype=bool)))
     return colour, rid, rid > 0, n_culled
 
 

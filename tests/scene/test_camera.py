@@ -1,4 +1,5 @@
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -98,3 +99,18 @@ def test_widen_factor_validated():
     for bad in (0.5, float("nan"), float("inf"), "2"):
         with pytest.raises(CameraError, match="widen"):
             cam.widened(bad)
+
+
+def test_camera_keeps_its_own_frozen_vectors_and_computes_its_matrix_once():
+    eye = np.array([0.0, 1.0, 5.0])
+    cam = Camera(eye=eye, target=(0, 0, 0))
+    assert eye.flags.writeable and cam.eye is not eye  # the caller's array is copied, not frozen
+    with pytest.raises(ValueError):
+        cam.eye[0] = 3.0
+    m = cam.view_proj()
+    np.testing.assert_array_equal(m, cam.projection_matrix() @ cam.view_matrix())
+    m[0, 0] = 99.0  # each call returns a new array
+    assert cam.view_proj()[0, 0] != 99.0
+    moved = replace(cam, eye=(0.0, 2.0, 5.0))  # another camera, its own matrix
+    np.testing.assert_array_equal(moved.view_proj(), moved.projection_matrix() @ moved.view_matrix())
+    assert not np.array_equal(moved.view_proj(), cam.view_proj())

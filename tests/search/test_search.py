@@ -299,7 +299,8 @@ def test_previous_pixels_of_every_kind_and_dtype(sphere_case, dtype):
 @given(st.integers(1, 3000), st.integers(0, 2000), st.integers(0, 2**32 - 1))
 def test_search_order_is_the_stable_argsort(n_keys, n, seed):
     keys = np.random.default_rng(seed).integers(0, n_keys, n)
-    order, rank = _kernels.order_by_key(keys, n_keys)
+    order, rank = np.full(n, -1, np.int64), np.full(n, -1, np.int64)
+    _kernels.order_by_key(keys, np.zeros(n_keys + 1, np.int64), order, rank)
     np.testing.assert_array_equal(order, np.argsort(keys, kind="stable"))
     np.testing.assert_array_equal(rank[order], np.arange(n))
 
