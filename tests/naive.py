@@ -1067,3 +1067,17 @@ def naive_gl_interpolate(clip, faces, triangle, attributes, width, height, norma
     out = np.zeros(triangle.shape + (attr.shape[2],), dtype=f32)
     out[rows, cols] = val
     return out
+
+
+# ------------------------------------------------------------------------------------ meshes
+def naive_boundary_edges(vertices, faces):
+    """Edges used by exactly one triangle after welding vertices whose positions round to the
+    same point at 1e-9 of the extent, degenerate edges ignored: np.unique of rows, axis=0."""
+    v = np.asarray(vertices, dtype=np.float64)
+    extent = float(np.max(v.max(axis=0) - v.min(axis=0))) or 1.0
+    _, weld = np.unique(np.round((v - v.min(axis=0)) / (extent * 1e-9)), axis=0, return_inverse=True)
+    f = weld.reshape(-1)[np.asarray(faces, dtype=np.int64)]
+    e = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
+    e = e[e[:, 0] != e[:, 1]]
+    _, counts = np.unique(e, axis=0, return_counts=True)
+    return int(np.sum(counts == 1))

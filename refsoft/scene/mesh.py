@@ -120,12 +120,23 @@ class Mesh:
         (within 1e-9 of the mesh's extent: seams and hard-normal copies count as joined); 0 for
         a closed surface. Degenerate edges (both ends welded together) are ignored."""
         v = self.vertices
-        extent = float(np.max(v.max(axis=0) - v.min(axis=0))) or 1.0
-        _, weld = np.unique(np.round((v - v.min(axis=0)) / (extent * 1e-9)), axis=0, return_inverse=True)
-        f = weld.reshape(-1)[self.faces.astype(np.int64)]
-        e = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
-        e = e[e[:, 0] != e[:, 1]]
-        _, counts = np.unique(e, axis=0, return_counts=True)
+        lo = v.min(axis=0)
+        extent = float(np.max(v.max(axis=0) - lo)) or 1.0
+        key = np.round((v - lo) / (extent * 1e-9))
+        # weld: rows sorted lexicographically, one label per run of equal rows (np.unique of rows,
+        # axis=0, sorts them as records: ten times as slow)
+        order = np.lexsort(key.T[::-1])
+        ordered = key[order]
+        first = np.ones(len(v), dtype=bool)
+        first[1:] = np.any(ordered[1:] != ordered[:-1], axis=1)
+        weld = np.empty(len(v), dtype=np.int64)
+        weld[order] = np.cumsum(first) - 1
+        f = weld[self.faces]
+        a, b = f.T.reshape(-1), f[:, [1, 2, 0]].T.reshape(-1)  # every edge of every triangle
+        lo_end, hi_end = np.minimum(a, b), np.maximum(a, b)
+        keep = lo_end != hi_end
+        # an undirected edge as one int64 (labels < MAX_VERTICES = 2^26: the key stays below 2^52)
+        _, counts = np.unique(lo_end[keep] * int(np.count_nonzero(first)) + hi_end[keep], return_counts=True)
         return int(np.sum(counts == 1))
 
     def bounds(self) -> np.ndarray:

@@ -37,3 +37,29 @@ def test_long_edges_are_split_until_short():
     e = np.linalg.norm(m.vertices[m.faces[:, [1, 2, 0]]] - m.vertices[m.faces], axis=2)
     assert e.max() <= 1.1 and m.n_faces == 4 ** 2
     np.testing.assert_array_equal(m.vertices[:3], v)  # the original vertices keep their indices
+
+
+def _boundary_cases():
+    """Closed, open, seamed (duplicated vertices), degenerate and soup meshes."""
+    rng = np.random.default_rng(5)
+    ball = icosphere(2, 1.0)
+    sphere = uv_sphere(12, 8, 0.5)  # a seam of copies
+    box = trimesh.creation.box()
+    soup = trimesh.Trimesh(box.vertices[box.faces].reshape(-1, 3), np.arange(36).reshape(-1, 3), process=False)
+    open_half = Mesh(ball.vertices, ball.faces[ball.vertices[ball.faces].mean(axis=1)[:, 2] > 0])
+    faces = rng.integers(0, 40, (120, 3))
+    faces[::9, 1] = faces[::9, 0]  # degenerate triangles
+    random = Mesh(np.round(rng.uniform(-1, 1, (40, 3)), 1), faces)  # coincident vertices among them
+    return [ball, sphere, Mesh(box.vertices, box.faces), Mesh(soup.vertices, soup.faces), open_half, random]
+
+
+@pytest.mark.parametrize("case", range(6))
+def test_boundary_edges_equal_the_reference(case):
+    from naive import naive_boundary_edges
+
+    mesh = _boundary_cases()[case]
+    assert mesh.boundary_edges() == naive_boundary_edges(mesh.vertices, mesh.faces)
+    if case in (0, 1, 2, 3):  # closed once welded
+        assert mesh.boundary_edges() == 0
+    if case == 4:
+        assert mesh.boundary_edges() > 0
