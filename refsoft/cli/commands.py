@@ -180,7 +180,7 @@ def cmd_render(args) -> int:
     from ..frame import render
 
     options = render_kwargs(args)
-    notice = _FirstRunNotice("render", 25, warm=options)
+    notice = _FirstRunNotice("render", 20, warm=options)
     notice.start()  # a first run's warm-up process starts before the scene is loaded
     try:
         scene = _scene(args)

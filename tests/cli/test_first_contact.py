@@ -71,7 +71,7 @@ def test_a_first_run_says_it_compiles_once_its_inputs_are_checked(monkeypatch, c
     assert main(["render", "sphere", "--frames", "1", "--width", "32", "--height", "24", "--preset", "paper",
                  "--out", str(tmp_path / "o")]) == 0
     captured = capsys.readouterr()
-    assert captured.err.strip().splitlines()[0] == ("refsoft: first run: compiling the render kernels (about 25 s "
+    assert captured.err.strip().splitlines()[0] == ("refsoft: first run: compiling the render kernels (about 20 s "
                                                     "on 2 cores; cached for later runs)")
     assert "s for the frame, compiling included" in captured.out
 
