@@ -457,10 +457,16 @@ def color_pass(meshes, colors, camera: Camera) -> ColorPass:
     scene = concatenate(meshes)
     with one_thread(len(scene.faces) <= SERIAL_MAX_TRIANGLES):
         clip = _setup.transform_points(scene.vertices, camera.view_proj())
-    frags = rasterize(clip, scene.faces, camera.width, camera.height)
-    table = np.vstack([constants.BACKGROUND_COLOR, colors]).astype(np.float32)
-    color, object_id, local_tri = shade_fragments(frags, scene.normals, scene.faces, scene.face_object,
-                                                  scene.face_offsets, table)
+    # checked meshes under a checked camera: finite clip coordinates, w > 0 inside the near
+    # plane, face indices in range (below MAX_VERTICES: int32 holds them), so the raster's own
+    # types are made once here rather than checked and converted by each public entry point
+    faces = readonly(scene.faces.astype(np.int32))
+    frags = rasterize_trusted(clip, faces, camera.width, camera.height, (0, camera.height, 0, camera.width), None,
+                              CULL_MODES[None])
+    table = readonly(np.vstack([constants.BACKGROUND_COLOR, colors]).astype(np.float32))
+    color, object_id, local_tri = shade_fragments_trusted(
+        frags, readonly(scene.normals.astype(np.float32)), faces, readonly(scene.face_object),
+        readonly(scene.face_offsets), table)
     return ColorPass(color, object_id, frags.depth, local_tri)
 
 
