@@ -11,19 +11,22 @@ thread, bit for bit.
 Why not ``prange``: Numba compiles a parallel loop's body a second time, as a function of its own
 with a wrapper for each array it reads, which costs 0.5-5 s of CPU per kernel on a first run
 (0.05 s for each array the loop uses, more for a large body); the same kernel without the parallel
-loop compiles in a fraction of that. The thread count is Numba's (``numba.get_num_threads()``:
-``NUMBA_NUM_THREADS``, ``numba.set_num_threads`` and :func:`refsoft.raster._threads.one_thread`
-apply); the pool's threads wait for work without spinning, and on a busy machine, where the pool's
-thread may not run for milliseconds, the calling thread does not wait for it to start.
+loop compiles in a fraction of that. The thread count is Numba's (:func:`thread_count`:
+``NUMBA_NUM_THREADS`` and ``numba.set_num_threads`` apply), or 1 inside :func:`one_thread`; the
+pool's threads wait for work without spinning, and on a busy machine, where the pool's thread may
+not run for milliseconds, the calling thread does not wait for it to start.
 """
 
 import threading
 from concurrent.futures import ThreadPoolExecutor
+from contextlib import contextmanager
 
 import numba
 
 _pool = None
 _pool_lock = threading.Lock()
+#: Per calling thread: ``single`` is True inside :func:`one_thread`.
+_local = threading.local()
 
 
 def _executor() -> ThreadPoolExecutor:
@@ -33,6 +36,37 @@ def _executor() -> ThreadPoolExecutor:
             _pool = ThreadPoolExecutor(max(1, numba.config.NUMBA_NUM_THREADS - 1),
                                        thread_name_prefix="refsoft-parallel")
         return _pool
+
+
+def thread_count() -> int:
+    """The parts a parallel loop of the calling thread splits into: 1 inside :func:`one_thread`,
+    else Numba's thread count (``NUMBA_NUM_THREADS``, or what ``numba.set_num_threads`` set for
+    this thread). While nothing in the process has asked Numba for it, that is
+    ``NUMBA_NUM_THREADS``, read without ``numba.get_num_threads()``, which loads Numba's
+    threading layer (its OpenMP or workqueue library, about 8 ms of a command's start) for
+    parallel regions refsoft never runs."""
+    if getattr(_local, "single", False):
+        return 1
+    from numba.np.ufunc import parallel
+
+    if not getattr(parallel, "_is_initialized", True):  # no set_num_threads in this process yet
+        return numba.config.NUMBA_NUM_THREADS
+    return numba.get_num_threads()
+
+
+@contextmanager
+def one_thread(when: bool = True):
+    """Run the parallel loops called inside on the calling thread alone when ``when`` is true
+    (:func:`thread_count` is 1 there; other threads are not affected)."""
+    if not when:
+        yield
+        return
+    before = getattr(_local, "single", False)
+    _local.single = True
+    try:
+        yield
+    finally:
+        _local.single = before
 
 
 def parts(n: int, threads: int) -> list:
@@ -53,7 +87,7 @@ def parallel_range(fn, n: int, *args, serial: bool = False, work=None) -> None:
     memory, made here so that no kernel allocates (a kernel that allocates makes every process
     that loads it import Numba's array implementation, 0.05-0.07 s)."""
     n = int(n)
-    threads = 1 if serial else min(numba.get_num_threads(), n)
+    threads = 1 if serial else min(thread_count(), n)
     extra = work if work is not None else tuple
     if threads <= 1:
         fn(0, n, *args, *extra())

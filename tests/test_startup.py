@@ -50,7 +50,9 @@ import json, sys
 from refsoft._start import SkipScipyProbes, main
 code = main(sys.argv[1:])
 registries = "numba.np.arraymath" in sys.modules
-loaded = sorted(m for m in sys.modules if m.split(".")[0] in ("scipy", "imageio", "PIL"))
+loaded = sorted(m for m in sys.modules if m.split(".")[0] in ("scipy", "imageio", "PIL")
+                or m in ("numba.np.arrayobj", "numba.np.ufunc.omppool", "numba.np.ufunc.workqueue",
+                         "numba.np.ufunc.tbbpool"))
 from numba.np import arraymath, linalg
 linalg.ensure_blas()
 print(json.dumps([code, loaded, arraymath._HAVE_BLAS, "scipy.linalg" in sys.modules, SkipScipyProbes in sys.meta_path,
@@ -85,7 +87,7 @@ def test_a_float32_frame_loads_each_of_its_kernels_once_in_float32():
     assert len(rows) <= LOADED_KERNELS, names
 
 
-def test_the_commands_render_loads_neither_scipy_nor_imageio(tmp_path):
+def test_the_commands_render_loads_neither_scipy_nor_imageio_nor_numbas_array_module(tmp_path):
     args = ["render", "sphere", "--frames", "1", "--width", "160", "--height", "120", "--out"]
     _run(COMMAND_RENDER, *args, str(tmp_path / "first"))  # compiles whatever is not cached yet
     code, loaded, have_blas, linalg_after, finder, registries = _run(COMMAND_RENDER, *args, str(tmp_path / "s"))
@@ -95,6 +97,9 @@ def test_the_commands_render_loads_neither_scipy_nor_imageio(tmp_path):
         assert (tmp_path / "s" / name).read_bytes() == (tmp_path / "first" / name).read_bytes(), name
     assert code == 0 and (tmp_path / "s" / "frame_0000.png").is_file()
     assert [m for m in loaded if m.startswith(("scipy", "imageio"))] == []
+    # no kernel it loaded allocates (Numba's array module stays unloaded), and Numba's threading
+    # layer was never started (refsoft's pool runs the parallel loops)
+    assert [m for m in loaded if m.startswith("numba")] == []
     assert "PIL.PngImagePlugin" in loaded  # the PNG went through Pillow itself
     assert have_blas is False  # Numba's probes were refused ...
     assert linalg_after is True and finder is False  # ... and only they: the finder is gone, SciPy imports again

@@ -70,16 +70,18 @@ def machine() -> dict:
 
     import numba
 
+    from .._parallel import thread_count
+
     return {"cpu": platform.processor() or platform.machine(), "cores": os.cpu_count(),
             "python": platform.python_version(), "numpy": np.__version__, "numba": numba.__version__,
-            "threads": numba.get_num_threads()}
+            "threads": thread_count()}
 
 
 def numba_threads() -> int:
-    """Numba's thread count in this thread (what a timed task ran with)."""
-    import numba
+    """The thread count of this thread's parallel loops (what a timed task ran with)."""
+    from .._parallel import thread_count
 
-    return int(numba.get_num_threads())
+    return int(thread_count())
 
 
 def run_bench(tasks, out, desc, progress, scheduler, workers, fresh, connect_timeout):

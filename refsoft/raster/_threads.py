@@ -13,12 +13,11 @@ writes disjoint outputs), so the choice changes only the time.
 Under these thresholds the per-triangle front end and the per-vertex passes call
 :func:`refsoft._parallel.parallel_range` with ``serial=True``; a whole pass over a small box runs
 inside :func:`one_thread` (:func:`serial_if_small`), which sets the thread count that
-``parallel_range`` reads. Either way the same kernel runs, compiled once for both.
+``parallel_range`` reads (:func:`refsoft._parallel.thread_count`). Either way the same kernel
+runs, compiled once for both.
 """
 
-from contextlib import contextmanager
-
-import numba
+from .._parallel import one_thread  # noqa: F401  (the passes' import of it)
 
 #: Passes over at most this many pixels run on one thread (a 128 x 128 box).
 SERIAL_MAX_PIXELS = 1 << 14
@@ -28,22 +27,6 @@ SERIAL_MAX_TRIANGLES = 1 << 14
 #: Per-vertex passes (transforms, a search's bookkeeping, virtual vertices) run on one thread up
 #: to this many vertices (under a millisecond; the walks themselves stay parallel).
 SERIAL_MAX_VERTICES = 1 << 16
-
-
-@contextmanager
-def one_thread(when: bool = True):
-    """Run the parallel loops (:func:`refsoft._parallel.parallel_range`) called inside on one
-    thread when ``when`` is true: Numba's thread count, which they read, is set to 1 (it is per
-    calling thread: other threads are not affected)."""
-    if not when:
-        yield
-        return
-    n = numba.get_num_threads()
-    numba.set_num_threads(1)
-    try:
-        yield
-    finally:
-        numba.set_num_threads(n)
 
 
 def serial_if_small(pixels: int):

@@ -114,17 +114,18 @@ class _Targets:
     def _trace(self, origins, directions):
         """Embree's first hit per ray, the rays split over Numba's thread count (embreex releases
         the GIL; each ray's answer is independent of the split, so the result is too)."""
-        import numba
         from concurrent.futures import ThreadPoolExecutor
 
         from trimesh import util
+
+        from .._parallel import thread_count
         from trimesh.ray.ray_pyembree import _embree_dtype
 
         # the arrays exactly as trimesh's intersects_first prepares them
         o = np.array(origins, dtype=_embree_dtype)
         d = np.ascontiguousarray(util.unitize(np.array(directions, dtype=_embree_dtype)))
         n = len(o)
-        parts = max(1, min(numba.get_num_threads(), n // constants.TRUTH_RAYS_PER_THREAD))
+        parts = max(1, min(thread_count(), n // constants.TRUTH_RAYS_PER_THREAD))
         if parts == 1:
             return self.intersector._scene.run(o, d)
         bounds = np.linspace(0, n, parts + 1).astype(np.int64)

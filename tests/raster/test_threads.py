@@ -1,33 +1,50 @@
 """Small passes on one thread (refsoft.raster._threads): the thread count inside and after, the
 same results on one thread and split among threads."""
 
-import numba
+import os
+import subprocess
+import sys
 
+from refsoft._parallel import thread_count
 from refsoft.raster._threads import SERIAL_MAX_PIXELS, one_thread, serial_if_small
 
 
 def test_serial_if_small_sets_one_thread_inside_and_restores_the_count():
-    before = numba.get_num_threads()
+    before = thread_count()
     with serial_if_small(SERIAL_MAX_PIXELS):
-        assert numba.get_num_threads() == 1
-    assert numba.get_num_threads() == before
+        assert thread_count() == 1
+        with serial_if_small(SERIAL_MAX_PIXELS + 1):  # nested: still one thread inside
+            assert thread_count() == 1
+        assert thread_count() == 1
+    assert thread_count() == before
     with serial_if_small(SERIAL_MAX_PIXELS + 1):
-        assert numba.get_num_threads() == before
+        assert thread_count() == before
     try:
         with serial_if_small(10):
             raise ValueError("inside")
     except ValueError:
         pass
-    assert numba.get_num_threads() == before
+    assert thread_count() == before
 
 
 def test_one_thread_only_when_asked():
-    before = numba.get_num_threads()
+    before = thread_count()
     with one_thread(False):
-        assert numba.get_num_threads() == before
+        assert thread_count() == before
     with one_thread():
-        assert numba.get_num_threads() == 1
-    assert numba.get_num_threads() == before
+        assert thread_count() == 1
+    assert thread_count() == before
+
+
+def test_the_thread_count_is_numbas_without_starting_its_threading_layer():
+    """NUMBA_NUM_THREADS while nothing asked Numba (its threading layer stays unloaded), then
+    what numba.set_num_threads sets for the calling thread."""
+    code = ("import numba\nfrom numba.np.ufunc import parallel\nfrom refsoft._parallel import thread_count\n"
+            "a = thread_count()\nloaded = parallel._is_initialized\nnumba.set_num_threads(1)\n"
+            "print(a, loaded, thread_count())")
+    env = {**os.environ, "NUMBA_NUM_THREADS": "2"}
+    out = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ["2", "False", "1"]
 
 
 def test_no_kernel_has_a_parallel_loop():

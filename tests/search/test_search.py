@@ -479,13 +479,13 @@ def test_bookkeeping_on_one_thread_changes_nothing(sphere_case, monkeypatch):
     calling thread alone (``parallel_range(..., serial=True)``): the same results as when those
     passes are split among threads, and the thread count is left as it was, also when the search
     refuses its input."""
-    import numba
+    from refsoft._parallel import thread_count
 
     scene, verts, gb = sphere_case
-    before = numba.get_num_threads()
+    before = thread_count()
     prev = np.tile([[H // 2, W // 2]], (len(verts), 1))
     serial = [search.search(gb, scene.camera.eye, verts, "box", "search", p) for p in (None, prev)]
-    assert numba.get_num_threads() == before
+    assert thread_count() == before
     monkeypatch.setattr(search, "SERIAL_MAX_VERTICES", 0)
     for p, one in zip((None, prev), serial):
         both = search.search(gb, scene.camera.eye, verts, "box", "search", p)
@@ -494,7 +494,7 @@ def test_bookkeeping_on_one_thread_changes_nothing(sphere_case, monkeypatch):
     monkeypatch.undo()
     with pytest.raises(refsoft.RefsoftError):
         search.search(gb, scene.camera.eye, verts, previous=np.full((len(verts), 2), H + 5))
-    assert numba.get_num_threads() == before
+    assert thread_count() == before
 
 
 def astuple_arrays(res):
