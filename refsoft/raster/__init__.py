@@ -145,19 +145,16 @@ def rasterize(clip, faces, width: int, height: int, peel_depth=None, region=None
     if not (0 <= r0 < r1 <= height and 0 <= c0 < c1 <= width):
         raise RefsoftError(f"region {region!r} is empty or outside the {width}x{height} viewport")
     rh, rw = r1 - r0, c1 - c0
-    use_peel = peel_depth is not None
-    if use_peel:
+    peel = None
+    if peel_depth is not None:
         peel = np.ascontiguousarray(peel_depth, dtype=np.float32)
         if peel.shape != (rh, rw):
             raise RefsoftError(f"peel_depth must have shape {(rh, rw)}, got {peel.shape}")
-    else:
-        peel = None
     bad = (clip[:, 3] <= 0) & (clip[:, 2] + clip[:, 3] >= 0)
     if bad.any():
         raise RefsoftError(f"clip vertex {int(np.argmax(bad))} has w <= 0 inside the near plane: the "
                            "projection must give w > 0 in front of the near plane")
-    return rasterize_trusted(clip, faces, width, height, (r0, r1, c0, c1), peel if use_peel else None,
-                             CULL_MODES[cull])
+    return rasterize_trusted(clip, faces, width, height, (r0, r1, c0, c1), peel, CULL_MODES[cull])
 
 
 def rasterize_trusted(clip, faces, width, height, region, peel, cull_code) -> Fragments:

@@ -2,12 +2,11 @@
 
 A parallel loop (:func:`refsoft._parallel.parallel_range`) hands part of its range to a pool
 thread: submitting the part, waking the thread and taking the part back when the thread has not
-started it cost tens of microseconds, more than a small pass takes on one thread. So, like llvmpipe, whose vertex processing,
-triangle setup and binning run on the calling thread, refsoft runs a pass's per-triangle front
-end on one thread up to ``SERIAL_MAX_TRIANGLES`` triangles, a whole pass over a small box (a
-reflector's virtual pass) on one thread, and per-vertex passes of microseconds (transforming
-points, a search's bookkeeping around its walks, virtual vertices) on one thread up to
-``SERIAL_MAX_VERTICES`` vertices. Outputs do not depend on the thread count (each parallel loop
+started it cost tens of microseconds, more than a small pass takes on one thread. So refsoft runs
+a pass's per-triangle front end on one thread up to ``SERIAL_MAX_TRIANGLES`` triangles, a whole
+pass over a small box (a reflector's virtual pass) on one thread, and per-vertex passes of
+microseconds (transforming points, a search's bookkeeping around its walks, virtual vertices) on
+one thread up to ``SERIAL_MAX_VERTICES`` vertices. Outputs do not depend on the thread count (each parallel loop
 writes disjoint outputs), so the choice changes only the time.
 
 Under these thresholds the per-triangle front end and the per-vertex passes call
@@ -21,7 +20,7 @@ from .._parallel import one_thread  # noqa: F401  (the passes' import of it)
 
 #: Passes over at most this many pixels run on one thread (a 128 x 128 box).
 SERIAL_MAX_PIXELS = 1 << 14
-#: Triangle setup, binning and the virtual pass's box test of at most this many triangles run on
+#: Triangle setup, binning and the virtual pass's triangle test of at most this many triangles run on
 #: one thread (under a millisecond; a pass of more is split, which is faster from here on).
 SERIAL_MAX_TRIANGLES = 1 << 14
 #: Per-vertex passes (transforms, a search's bookkeeping, virtual vertices) run on one thread up

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._numba import readonly
-from ..raster import _setup, rasterize_trusted, shade_fragments_trusted
+from ..raster import CULL_MODES, _setup, rasterize_trusted, shade_fragments_trusted
 from ..raster._threads import SERIAL_MAX_TRIANGLES, serial_if_small
 from ..scene.mesh import concatenate
 from . import CULLED, HIDDEN, SearchResult, skips, virtual_vertices
@@ -207,7 +207,8 @@ def _virtual_pass(scene, parts, camera, stencil, box, inverse, cull):
         return _nothing(h, w, n_culled)
     # the raster's own types once (its public entry points check and convert every call)
     faces = readonly(faces.astype(np.int32))
-    frags = rasterize_trusted(clip, faces, camera.width, camera.height, (int(r0), int(r1), int(c0), int(c1)), None, 0)
+    frags = rasterize_trusted(clip, faces, camera.width, camera.height, (int(r0), int(r1), int(c0), int(c1)), None,
+                              CULL_MODES[None])
     table = readonly(np.vstack([np.zeros(3), [o.color for o in scene.objects]]).astype(np.float32))
     # shade() of the covered stencil pixels, 0 elsewhere, in one pass
     colour, rid, _ = shade_fragments_trusted(
