@@ -34,7 +34,7 @@ MAX_TRIANGLES = 1 << 26
 
 # --- Shading (spec section 5) -----------------------------------------------------------
 #: Fixed world-space direction *towards* the light (normalised at import).
-LIGHT_DIRECTION = np.array([0.3, 0.8, 0.5]) / np.linalg.norm([0.3, 0.8, 0.5])
+LIGHT_DIRECTION = np.array([0.3, 0.8, 0.5]) / np.sqrt((0.3 * 0.3 + 0.8 * 0.8) + 0.5 * 0.5)  # no BLAS (refsoft.linalg)
 #: colour * (AMBIENT + DIFFUSE * |dot(n, L)|): two-sided, so a surface's colour does not
 #: depend on the side it is seen from (a reflection and the truth see the same colour).
 AMBIENT = 0.3

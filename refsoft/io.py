@@ -72,7 +72,7 @@ def write_npz(path, **arrays):
 
 def write_png(path, image):
     """Write an (H, W, 3) or (H, W) uint8 image as PNG atomically (Pillow's encoder with its
-    defaults: the bytes imageio writes through Pillow, without loading imageio's plugin machinery)."""
+    defaults, which imageio also writes through, without loading imageio's plugin machinery)."""
     from PIL import Image
 
     with atomic_path(path, ".png") as tmp:

@@ -531,17 +531,28 @@ def naive_split(faces, midpoints, only=None):
     return np.array(out, dtype=np.int64).reshape(-1, 3), np.array(parent, dtype=np.int64)
 
 
+def _dot3(x, y):
+    """``(x0 y0 + x1 y1) + x2 y2`` in that order: ``x @ y`` goes through the BLAS NumPy was built
+    with, whose ``ddot`` may fuse or reorder the products (its bits are not NumPy's promise)."""
+    return (float(x[0]) * float(y[0]) + float(x[1]) * float(y[1])) + float(x[2]) * float(y[2])
+
+
+def _norm3(x):
+    """``sqrt(_dot3(x, x))`` (a 1-D ``np.linalg.norm`` is BLAS's too)."""
+    return float(np.sqrt(_dot3(x, x)))
+
+
 def _naive_arc(eye_dir, point_dir):
     """Orthonormal (a, b) spanning the arc from eye_dir towards point_dir, and its angle."""
     a = eye_dir
-    b = point_dir - (point_dir @ a) * a
-    nb = np.linalg.norm(b)
-    phi = float(np.arccos(np.clip(point_dir @ a, -1.0, 1.0)))
+    b = point_dir - _dot3(point_dir, a) * a
+    nb = _norm3(b)
+    phi = float(np.arccos(np.clip(_dot3(point_dir, a), -1.0, 1.0)))
     if nb < 1e-15:
         b = np.cross(a, [1.0, 0.0, 0.0])
-        if np.linalg.norm(b) < 1e-6:
+        if _norm3(b) < 1e-6:
             b = np.cross(a, [0.0, 1.0, 0.0])
-        b /= np.linalg.norm(b)
+        b /= _norm3(b)
     else:
         b = b / nb
     return a, b, phi
@@ -553,30 +564,98 @@ def _naive_arc_function(t, a, b, c, rho, o, v):
     r = c + rho * n
     u = o - r
     w = v - r
-    s = u / np.linalg.norm(u, axis=-1, keepdims=True) + w / np.linalg.norm(w, axis=-1, keepdims=True)
-    return np.sum(s * (-np.sin(t) * a + np.cos(t) * b), axis=-1)
+    s = u / np.sqrt(_dot_last(u, u))[..., None] + w / np.sqrt(_dot_last(w, w))[..., None]
+    return _dot_last(s, -np.sin(t) * a + np.cos(t) * b)
 
 
-def naive_sphere_reflection_points(centre, radius, eye, points, samples=64):
-    """refsoft.truth.analytic.sphere_reflection_points with SciPy: the arc from the eye's
-    direction to the point's sampled at ``samples`` + 1 angles, each sign change solved by
-    ``scipy.optimize.brentq`` (xtol 1e-15, rtol 4 eps, 200 iterations), the first root with the
-    eye and the point outside the tangent plane kept; NaN rows where there is none."""
+def _dot_last(x, y):
+    """:func:`_dot3` over the last axis of arrays (elementwise, so in that order too)."""
+    return (x[..., 0] * y[..., 0] + x[..., 1] * y[..., 1]) + x[..., 2] * y[..., 2]
+
+
+def naive_brent(f, lo, hi, f_lo, f_hi, xtol=1e-15, rtol=4 * np.finfo(float).eps, maxiter=200):
+    """A root of ``f`` in ``[lo, hi]`` (``f_lo = f(lo)`` and ``f_hi = f(hi)`` of opposite signs)
+    by Brent's method (R. P. Brent, "Algorithms for Minimization without Derivatives", 1973,
+    chapter 4), written out plainly in Python floats.
+
+    ``b`` is the best estimate, ``a`` the previous one and ``c`` the other end of the bracket
+    ``[b, c]``. Each step tries inverse quadratic interpolation through ``a, b, c`` (the secant
+    through ``a, b`` when ``a == c``) and takes it when it lands well inside the bracket and the
+    step before last was large enough; otherwise it bisects. A step smaller than the tolerance
+    ``(xtol + rtol |b|) / 2`` is made the tolerance itself. The stopping rule and the step rule
+    are those ``scipy.optimize.brentq`` documents, so the result meets its guarantee
+    ``|x - root| <= xtol + rtol |root|``.
+    """
+    a, b = float(lo), float(hi)
+    fa, fb = float(f_lo), float(f_hi)
+    c, fc = 0.0, 0.0
+    d = e = 0.0  # the last step and the one before it
+    for _ in range(maxiter):
+        if fa != 0.0 and fb != 0.0 and (fa < 0.0) != (fb < 0.0):
+            c, fc = a, fa  # the root lies between b and c
+            d = e = b - a
+        if abs(fc) < abs(fb):  # make b the end with the smaller residual
+            a, b, c = b, c, b
+            fa, fb, fc = fb, fc, fb
+        tol = (xtol + rtol * abs(b)) / 2.0
+        m = (c - b) / 2.0
+        if fb == 0.0 or abs(m) < tol:
+            return b
+        interpolate = None
+        if abs(e) > tol and abs(fb) < abs(fa):
+            if a == c:
+                p = -fb * (b - a) / (fb - fa)
+            else:
+                slope_a = (fa - fb) / (a - b)
+                slope_c = (fc - fb) / (c - b)
+                p = -fb * (fc * slope_c - fa * slope_a) / (slope_c * slope_a * (fc - fa))
+            if 2.0 * abs(p) < min(abs(e), 3.0 * abs(m) - tol):
+                interpolate = p
+        if interpolate is None:
+            e = d = m
+        else:
+            e, d = d, interpolate
+        a, fa = b, fb
+        if abs(d) > tol:
+            b += d
+        elif m > 0.0:
+            b += tol
+        else:
+            b -= tol
+        fb = f(b)
+    return b
+
+
+def scipy_brent(f, lo, hi, f_lo, f_hi, xtol=1e-15, rtol=4 * np.finfo(float).eps, maxiter=200):
+    """:func:`naive_brent`'s interface on ``scipy.optimize.brentq`` (same xtol, rtol, maxiter)."""
     from scipy.optimize import brentq
 
+    return brentq(f, lo, hi, xtol=xtol, rtol=rtol, maxiter=maxiter)
+
+
+def naive_sphere_reflection_points(centre, radius, eye, points, samples=64, solver=naive_brent, angles=False):
+    """refsoft.truth.analytic.sphere_reflection_points in plain NumPy: the arc from the eye's
+    direction to the point's sampled at ``samples`` + 1 angles, each sign change solved by
+    ``solver`` (:func:`naive_brent`, or :func:`scipy_brent`), the first root with the eye and the
+    point outside the tangent plane kept; NaN rows where there is none. With ``angles``, also
+    each point's root angle on its arc and the arc's angle (NaN where none)."""
     c = np.asarray(centre, dtype=np.float64).reshape(3)
     rho = float(radius)
     o = np.asarray(eye, dtype=np.float64).reshape(3)
     pts = np.asarray(points, dtype=np.float64).reshape(-1, 3)
     out = np.full((len(pts), 3), np.nan)
-    eye_dir = (o - c) / np.linalg.norm(o - c)
-    outside = np.flatnonzero(np.linalg.norm(pts - c, axis=1) > rho)
+    root_angle = np.full(len(pts), np.nan)
+    arc_angle = np.full(len(pts), np.nan)
+    eye_dir = (o - c) / _norm3(o - c)
+    dist = np.array([_norm3(p - c) for p in pts])
+    outside = np.flatnonzero(dist > rho)
     if len(outside) == 0:
-        return out
-    arcs = [_naive_arc(eye_dir, (pts[i] - c) / np.linalg.norm(pts[i] - c)) for i in outside]
+        return (out, root_angle, arc_angle) if angles else out
+    arcs = [_naive_arc(eye_dir, (pts[i] - c) / dist[i]) for i in outside]
     A = np.array([a for a, _, _ in arcs])
     B = np.array([b for _, b, _ in arcs])
     phi = np.array([p for _, _, p in arcs])
+    arc_angle[outside] = phi
     # bracket the roots of every point at once: f on samples + 1 points of each arc
     ts = phi[:, None] * np.linspace(0.0, 1.0, samples + 1)[None, :]
     fs = _naive_arc_function(ts[..., None], A[:, None], B[:, None], c, rho, o, pts[outside][:, None])
@@ -586,19 +665,18 @@ def naive_sphere_reflection_points(centre, radius, eye, points, samples=64):
         def f(t):
             return float(_naive_arc_function(t, a, b, c, rho, o, v))
 
-        candidates = [ts[j, k] if fs[j, k] == 0.0 else (ts[j, k], ts[j, k + 1])
-                      for k in range(samples) if fs[j, k] == 0.0 or fs[j, k] * fs[j, k + 1] < 0.0]
+        candidates = [k for k in range(samples) if fs[j, k] == 0.0 or fs[j, k] * fs[j, k + 1] < 0.0]
         if fs[j, -1] == 0.0 and phi[j] > 0:
-            candidates.append(ts[j, -1])
-        for cand in candidates:
-            t = cand if np.isscalar(cand) else brentq(f, cand[0], cand[1], xtol=1e-15,
-                                                       rtol=4 * np.finfo(float).eps, maxiter=200)
+            candidates.append(samples)
+        for k in candidates:
+            t = ts[j, k] if fs[j, k] == 0.0 else solver(f, ts[j, k], ts[j, k + 1], fs[j, k], fs[j, k + 1])
             n = np.cos(t) * a + np.sin(t) * b
             r = c + rho * n
-            if (o - r) @ n > 0.0 and (v - r) @ n > 0.0:
+            if _dot3(o - r, n) > 0.0 and _dot3(v - r, n) > 0.0:
                 out[i] = r
+                root_angle[i] = t
                 break
-    return out
+    return (out, root_angle, arc_angle) if angles else out
 
 
 # ------------------------------------------------------------------------------------ face culling

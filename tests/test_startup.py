@@ -105,7 +105,7 @@ def test_the_commands_render_loads_neither_scipy_nor_imageio_nor_numbas_array_mo
     assert linalg_after is True and finder is False  # ... and only they: the finder is gone, SciPy imports again
 
 
-def test_pngs_written_through_pillow_are_the_bytes_imageio_wrote(tmp_path):
+def test_pngs_written_through_pillow_decode_to_the_image_as_imageio_reads_it(tmp_path):
     import imageio.v3 as iio
     import numpy as np
 
@@ -117,8 +117,7 @@ def test_pngs_written_through_pillow_are_the_bytes_imageio_wrote(tmp_path):
               "view": rng.integers(0, 256, (40, 60, 3), dtype=np.uint8)[::2, ::3]}  # not contiguous
     for name, image in images.items():
         write_png(tmp_path / f"{name}.png", image)
-        iio.imwrite(tmp_path / f"{name}_imageio.png", image, extension=".png")
-        assert (tmp_path / f"{name}.png").read_bytes() == (tmp_path / f"{name}_imageio.png").read_bytes(), name
+        # the pixels, not the bytes: Pillow's and imageio's encoders may choose other compressions
         assert np.array_equal(iio.imread(tmp_path / f"{name}.png"), image), name
 
 

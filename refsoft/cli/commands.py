@@ -263,6 +263,8 @@ def cmd_check(args) -> int:
     summary = check(args.golden, args.candidate, loose=args.loose, out=args.out, cases=args.case, progress=True,
                     kinds=args.kinds, profile=args.profile)
     findings = summary.pop("_findings")
+    if summary["versions"]["note"]:
+        print(f"note: {summary['versions']['note']}")
     for f in findings:
         if f.status != "pass" or args.verbose:
             print(f.line())

@@ -922,6 +922,23 @@ def by_kind(findings) -> dict:
     return dict(sorted(out.items()))
 
 
+def version_note(manifest) -> dict:
+    """The NumPy and Numba versions that made a golden set and those of this checker, and a
+    one-line ``note`` when they differ (None when they agree): the set's references were
+    computed by other library versions than the ones ``check`` recomputes with (ties, virtual
+    vertices), which the constraints file of ``docs/ports.md`` pins."""
+    import numba
+
+    golden = {"numpy": manifest.get("numpy"), "numba": manifest.get("numba")}
+    here = {"numpy": np.__version__, "numba": numba.__version__}
+    differ = [f"{lib} {golden[lib]} (this checker: {here[lib]})" for lib in ("numpy", "numba") if golden[lib] != here[lib]]
+    note = None
+    if differ:
+        note = ("the golden set was made with " + " and ".join(differ)
+                + ": install the versions it records (pip install . -c constraints.txt) for a like-for-like check")
+    return {"golden": golden, "checker": here, "note": note}
+
+
 def check(golden, candidate, loose=False, out=None, cases=None, progress=False, kinds=None, profile="default") -> dict:
     """Compare a candidate folder with a golden set; returns the summary (also written to
     ``out/summary.json`` when ``out`` is given).
@@ -1015,6 +1032,7 @@ def check(golden, candidate, loose=False, out=None, cases=None, progress=False, 
     summary = {"golden": os.path.abspath(golden), "candidate": os.path.abspath(candidate), "loose": bool(loose),
                "profile": prof.name,
                "golden_refsoft": manifest.get("refsoft"), "golden_git": manifest.get("git"),
+               "versions": version_note(manifest),
                "cases": [e["name"] for e in entries], "kinds": list(kinds),
                "passed": counts["fail"] == 0 and counts["missing"] == 0, "counts": counts, "by_kind": by_kind(findings),
                "missing_files": missing_cases, "pictures": pictures, "findings": [f.to_dict() for f in findings]}

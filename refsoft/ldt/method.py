@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import validate
+from .. import linalg, validate
 from ..errors import RefsoftError
 from .. import keys
 from ..raster import PRECISIONS, _setup, interpolate, rasterize, shade
@@ -192,7 +192,7 @@ class LayeredDepthTextures:
         view_dir = None
         if cam.projection == "orthographic":
             d = np.asarray(cam.target, np.float64) - cam.eye
-            view_dir = d / np.linalg.norm(d)
+            view_dir = d / linalg.norm3(d)
         W = cube_matrices(self.stack, view.transforms)
         tri = view.view.triangle[rows, cols]
         res = search(P, N, cam.eye, tri, table, W, self.stack, view_dir, self.linear, self.tau, self.faces,
@@ -264,7 +264,7 @@ class LayeredDepthTextures:
         radii = np.zeros(len(self.targets))
         for i, j in enumerate(self.targets):
             M = view.transforms[j].matrix()
-            centres[i] = M[:3, :3] @ self.ldts[j].cube_center + M[:3, 3]
+            centres[i] = linalg.matvec(M[:3, :3], self.ldts[j].cube_center) + M[:3, 3]
             radii[i] = bounding_sphere(view.meshes[j - 1], centres[i])
         return centres, radii
 
@@ -287,9 +287,9 @@ class LayeredDepthTextures:
         n_world = np.zeros_like(n_model)
         for j in np.unique(ids[ids > 0]):
             sel = ids == j
-            minv = np.linalg.inv(view.transforms[int(j)].matrix()[:3, :3])
-            n_world[sel] = n_model[sel] @ minv              # rows: (M^-T n)^T = n^T M^-1
-        length = np.linalg.norm(n_world, axis=1, keepdims=True)
+            minv = linalg.inv3(view.transforms[int(j)].matrix()[:3, :3])
+            n_world[sel] = linalg.rows_times(n_model[sel], minv.T)  # rows: (M^-T n)^T = n^T M^-1
+        length = linalg.norm3(n_world)[:, None]
         n_world = np.divide(n_world, length, out=np.zeros_like(n_world), where=length > 0)
         colour = shade(n_world, self._colors[np.maximum(ids - 1, 0)])
         colour[ids == 0] = 0.0

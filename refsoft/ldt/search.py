@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import validate
+from .. import linalg, validate
 from ..errors import RefsoftError
 from ..raster import PRECISIONS
 from . import constants as C
@@ -155,7 +155,7 @@ def cube_matrices(stack: Stack, transforms: dict) -> np.ndarray:
         S = np.eye(4)
         S[:3, :3] /= stack.half[i]
         S[:3, 3] = -stack.centre[i] / stack.half[i]
-        out[i] = S @ np.linalg.inv(transforms[int(k)].matrix())
+        out[i] = linalg.matmul(S, linalg.inv_affine(transforms[int(k)].matrix()))
     return out
 
 

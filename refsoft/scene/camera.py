@@ -14,6 +14,7 @@ import numpy as np
 
 from .. import validate
 from .. import constants
+from .. import linalg
 from ..errors import CameraError, LimitError
 
 
@@ -95,8 +96,8 @@ class Camera:
             raise CameraError(f"camera eye equals target {eye.tolist()}")
         if np.linalg.norm(up) == 0.0:
             raise CameraError("camera up is the zero vector")
-        f = forward / np.linalg.norm(forward)
-        u = up / np.linalg.norm(up)
+        f = forward / linalg.norm3(forward)
+        u = up / linalg.norm3(up)
         if np.linalg.norm(np.cross(f, u)) < constants.CAMERA_PARALLEL_TOL:
             raise CameraError(f"camera up {up.tolist()} is parallel to the view direction")
         if self.projection not in ("perspective", "orthographic"):
@@ -130,19 +131,19 @@ class Camera:
     def forward(self) -> np.ndarray:
         """Unit view direction, shape (3,)."""
         d = self.target - self.eye
-        return d / np.linalg.norm(d)
+        return d / linalg.norm3(d)
 
     def view_matrix(self) -> np.ndarray:
         """World-to-view matrix (``gluLookAt``), shape (4, 4), float64."""
         f = self.forward
         s = np.cross(f, self.up)
-        s /= np.linalg.norm(s)
+        s /= linalg.norm3(s)
         u = np.cross(s, f)
         m = np.eye(4)
         m[0, :3] = s
         m[1, :3] = u
         m[2, :3] = -f
-        m[:3, 3] = -m[:3, :3] @ self.eye
+        m[:3, 3] = -linalg.matvec(m[:3, :3], self.eye)
         return m
 
     def projection_matrix(self) -> np.ndarray:
@@ -171,7 +172,7 @@ class Camera:
         call; computed once per camera)."""
         m = self.__dict__.get("_view_proj")
         if m is None:
-            m = self.projection_matrix() @ self.view_matrix()
+            m = linalg.matmul(self.projection_matrix(), self.view_matrix())
             object.__setattr__(self, "_view_proj", m)
         return m.copy()
 
@@ -203,14 +204,15 @@ class Camera:
         cols = np.asarray(cols, dtype=np.float64)
         x_ndc = (cols + 0.5) / self.width * 2.0 - 1.0
         y_ndc = (self.height - rows - 0.5) / self.height * 2.0 - 1.0
-        inv = np.linalg.inv(self.view_proj())
+        inv = linalg.inv(self.view_proj())
         ones = np.ones_like(x_ndc)
-        near_pts = np.stack([x_ndc, y_ndc, -ones, ones], axis=-1) @ inv.T
-        far_pts = np.stack([x_ndc, y_ndc, ones, ones], axis=-1) @ inv.T
+        shape = x_ndc.shape + (4,)
+        near_pts = linalg.rows_times(np.stack([x_ndc, y_ndc, -ones, ones], axis=-1).reshape(-1, 4), inv).reshape(shape)
+        far_pts = linalg.rows_times(np.stack([x_ndc, y_ndc, ones, ones], axis=-1).reshape(-1, 4), inv).reshape(shape)
         near_pts = near_pts[..., :3] / near_pts[..., 3:]
         far_pts = far_pts[..., :3] / far_pts[..., 3:]
         d = far_pts - near_pts
-        d /= np.linalg.norm(d, axis=-1, keepdims=True)
+        d /= linalg.norm3(d)[..., None]
         if self.projection == "perspective":
             origins = np.broadcast_to(self.eye, d.shape).copy()
         else:
@@ -230,7 +232,7 @@ class Camera:
             ``x_w, y_w, z_w`` (window depth in [0, 1] inside the frustum).
         """
         p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
-        clip = np.c_[p, np.ones(len(p))] @ self.view_proj().T
+        clip = linalg.homogeneous(p, self.view_proj())
         ndc = clip[:, :3] / clip[:, 3:]
         return np.c_[(ndc[:, 0] + 1.0) * 0.5 * self.width, (ndc[:, 1] + 1.0) * 0.5 * self.height,
                      0.5 * ndc[:, 2] + 0.5]

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import constants
+from .. import constants, linalg
 from ..errors import MeshError, LimitError
 
 
@@ -40,7 +40,8 @@ def area_weighted_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray
 
 def normalize_rows(a: np.ndarray) -> np.ndarray:
     """Rows divided by their length; zero rows stay zero (no NaN)."""
-    n = np.linalg.norm(a, axis=-1, keepdims=True)
+    a = np.asarray(a)
+    n = linalg.norm3(a)[..., None] if a.shape[-1] == 3 else np.linalg.norm(a, axis=-1, keepdims=True)
     return np.divide(a, n, out=np.zeros_like(a, dtype=np.float64), where=n > 0)
 
 
@@ -146,9 +147,9 @@ class Mesh:
     def transformed(self, matrix: np.ndarray) -> "Mesh":
         """The mesh under an affine 4x4 transform (normals by the inverse transpose)."""
         m = np.asarray(matrix, dtype=np.float64)
-        v = self.vertices @ m[:3, :3].T + m[:3, 3]
-        normal_matrix = np.linalg.inv(m[:3, :3]).T
-        n = normalize_rows(self.normals @ normal_matrix.T)
+        v = linalg.affine_points(self.vertices, m)
+        normal_matrix = linalg.inv3(m[:3, :3]).T
+        n = normalize_rows(linalg.rows_times(self.normals, normal_matrix))
         return Mesh(v, self.faces, n, name=self.name)
 
     def to_trimesh(self):

@@ -12,7 +12,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from .camera import Camera
-from .. import validate
+from .. import linalg, validate
 from ..errors import SceneError
 from .mesh import Mesh
 
@@ -24,7 +24,7 @@ def euler_xyz_matrix(rotate_deg) -> np.ndarray:
     rx = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
     ry = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
     rz = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
-    return rz @ ry @ rx
+    return linalg.matmul(linalg.matmul(rz, ry), rx)
 
 
 @dataclass(frozen=True)
@@ -51,7 +51,7 @@ class Transform:
     def matrix(self) -> np.ndarray:
         """The 4x4 affine matrix ``T @ R @ S``, float64."""
         m = np.eye(4)
-        m[:3, :3] = euler_xyz_matrix(self.rotate_deg) @ np.diag(self.scale)
+        m[:3, :3] = linalg.matmul(euler_xyz_matrix(self.rotate_deg), np.diag(self.scale))
         m[:3, 3] = self.translate
         return m
 

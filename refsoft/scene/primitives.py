@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import validate
+from .. import linalg, validate
 from ..errors import SceneError
 from .mesh import Mesh, normalize_rows
 
@@ -105,7 +105,7 @@ def icosphere(subdivisions: int = 3, radius: float = 1.0) -> Mesh:
     for _ in range(max(subdivisions, 1)):
         if subdivisions > 0:
             v, f = split_in_four(v, f)
-        scalar = np.sqrt(np.dot(v ** 2, [1, 1, 1]))
+        scalar = linalg.norm3(v)
         v = v + (v / scalar.reshape((-1, 1))) * (radius - scalar).reshape((-1, 1))
     return Mesh(v, f, normalize_rows(v), name="icosphere")
 

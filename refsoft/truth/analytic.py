@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .. import linalg
 from ..errors import RefsoftError
 from .._parallel import parallel_range
 from ._analytic import reflection_points_kernel
@@ -36,6 +37,11 @@ def _inputs(centre, radius, eye, points):
     return c, float(radius), o, p
 
 
+def _dot3(x, y):
+    """``(x0 y0 + x1 y1) + x2 y2`` over the last axis, in that order."""
+    return (x[..., 0] * y[..., 0] + x[..., 1] * y[..., 1]) + x[..., 2] * y[..., 2]
+
+
 def sphere_reflection_points(centre, radius, eye, points) -> np.ndarray:
     """Exact reflection points of ``points`` seen from ``eye`` in a mirror sphere.
 
@@ -56,16 +62,18 @@ def sphere_reflection_points(centre, radius, eye, points) -> np.ndarray:
     c, rho, o, pts = _inputs(centre, radius, eye, points)
     c, o, pts = np.ascontiguousarray(c), np.ascontiguousarray(o), np.ascontiguousarray(pts)
     out = np.full((len(pts), 3), np.nan)
-    eye_dir = (o - c) / np.linalg.norm(o - c)
-    # per-point arc setup in NumPy (norms and dot products summed left to right, like the kernel)
+    # per-point arc setup in NumPy, norms and dot products summed left to right like the kernel
+    # (elementwise, not np.linalg.norm or @: those go through BLAS, whose ddot may fuse or
+    # reorder the products)
+    eye_dir = (o - c) / np.sqrt(_dot3(o - c, o - c))
     d = pts - c
-    dist = np.linalg.norm(d, axis=1)
+    dist = np.sqrt(_dot3(d, d))
     todo = np.flatnonzero(dist > rho)
     if len(todo) == 0:
         return out
     with np.errstate(divide="ignore", invalid="ignore"):
         dirs = d / dist[:, None]
-    cos_phi = np.sum(dirs * eye_dir, axis=1)
+    cos_phi = _dot3(dirs, eye_dir)
     # NumPy's arccos, not the kernel's libm one: the two differ in the last bit for some inputs
     phi = np.arccos(np.clip(cos_phi, -1.0, 1.0))
     parallel_range(reflection_points_kernel, len(todo), c, rho, o, eye_dir, pts, dirs, cos_phi, phi,
@@ -90,16 +98,26 @@ def fit_sphere(vertices, rtol=1e-9):
     if len(x) < 4:
         return None
     shift = x.mean(axis=0)
-    y = x - shift
-    # |y|^2 = 2 c.y + k  (k = r^2 - |c|^2): linear least squares in (c, k)
+    scale = float(np.sqrt(np.mean(_dot3(x - shift, x - shift))))
+    if not (np.isfinite(scale) and scale > 0):
+        return None
+    y = (x - shift) / scale  # of size 1, so the normal equations below stay well conditioned
+    # |y|^2 = 2 c.y + k  (k = r^2 - |c|^2): linear least squares in (c, k), by the normal
+    # equations summed in NumPy and solved by refsoft.linalg.inv (no LAPACK: its bits depend on
+    # the machine's CPU)
     lhs = np.c_[2.0 * y, np.ones(len(y))]
-    sol, *_ = np.linalg.lstsq(lhs, np.sum(y * y, axis=1), rcond=None)
-    centre = sol[:3]
-    r2 = sol[3] + centre @ centre
+    rhs = _dot3(y, y)
+    normal = np.array([[np.sum(lhs[:, i] * lhs[:, j]) for j in range(4)] for i in range(4)])
+    try:
+        sol = linalg.matvec(linalg.inv(normal), [np.sum(lhs[:, i] * rhs) for i in range(4)])
+    except ValueError:  # singular: the points span no sphere
+        return None
+    centre = sol[:3] * scale
+    r2 = (sol[3] + float(_dot3(sol[:3], sol[:3]))) * scale * scale
     if not np.isfinite(r2) or r2 <= 0:
         return None
     radius = float(np.sqrt(r2))
-    dev = np.abs(np.linalg.norm(y - centre, axis=1) - radius)
+    dev = np.abs(np.sqrt(_dot3(x - shift - centre, x - shift - centre)) - radius)
     if dev.max() > rtol * radius:
         return None
     return centre + shift, radius

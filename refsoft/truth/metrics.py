@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import keys
+from .. import keys, linalg
 from ..constants import RIM_PIXELS
 from ..errors import RefsoftError
 
@@ -37,7 +37,7 @@ def window_to_pixel(points, view_proj, shape) -> np.ndarray:
     ndarray, shape (N, 2), float64
     """
     p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
-    clip = np.c_[p, np.ones(len(p))] @ np.asarray(view_proj, dtype=np.float64).T
+    clip = linalg.homogeneous(p, view_proj)
     with np.errstate(divide="ignore", invalid="ignore"):
         ndc = clip[:, :2] / clip[:, 3:]
     h, w = shape

@@ -24,7 +24,7 @@ import time
 
 import numpy as np
 
-from .. import constants, keys
+from .. import constants, keys, linalg
 from ..errors import RefsoftError
 from ..frame.driver import FrameDriver, frame_indices, resolve_scene, run_to_folder
 from ..options import RenderOptions
@@ -82,7 +82,7 @@ def primary_rays(camera, mesh, rows, cols, tri):
     n = len(rows)
     hit, ray, ok = np.empty((n, 3)), np.empty((n, 3)), np.empty(n, dtype=bool)
     parallel_range(kernel, n, np.asarray(rows, np.int64), np.asarray(cols, np.int64), float(camera.width),
-                   float(camera.height), np.ascontiguousarray(np.linalg.inv(camera.view_proj())),
+                   float(camera.height), np.ascontiguousarray(linalg.inv(camera.view_proj())),
                    np.asarray(camera.eye, np.float64), camera.projection == "perspective",
                    np.ascontiguousarray(mesh.vertices, np.float64), np.ascontiguousarray(mesh.normals, np.float64),
                    np.ascontiguousarray(mesh.faces, np.int64), np.asarray(tri, np.int64), hit, ray, ok)

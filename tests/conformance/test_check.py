@@ -303,6 +303,24 @@ def test_cli_exit_codes(golden, tmp_path, capsys, monkeypatch):
     assert cli.main(["golden", "--list"]) == 0 and "pixel_grid" in capsys.readouterr().out
 
 
+def test_check_says_in_one_line_when_the_set_was_made_with_other_versions(golden, tmp_path, capsys):
+    import numba
+
+    assert cli.main(["check", str(golden), str(golden), "--case", "sphere", "--out", str(tmp_path / "r")]) == 0
+    assert "note:" not in capsys.readouterr().out  # the same versions: nothing said
+    gold = tmp_path / "golden"
+    shutil.copytree(golden, gold)
+    manifest = json.loads((gold / "manifest.json").read_text())
+    manifest["numpy"], manifest["numba"] = "1.26.4", numba.__version__
+    (gold / "manifest.json").write_text(json.dumps(manifest))
+    assert cli.main(["check", str(gold), str(golden), "--case", "sphere", "--out", str(tmp_path / "r")]) == 0
+    notes = [line for line in capsys.readouterr().out.splitlines() if line.startswith("note:")]
+    assert len(notes) == 1 and f"numpy 1.26.4 (this checker: {np.__version__})" in notes[0]
+    assert "numba" not in notes[0] and "constraints.txt" in notes[0]
+    summary = json.loads((tmp_path / "r" / "summary.json").read_text())
+    assert summary["versions"]["golden"]["numpy"] == "1.26.4" and summary["versions"]["checker"]["numpy"] == np.__version__
+
+
 def test_hierarchy_traces_are_replayed(golden, tmp_path):
     traces = json.loads((golden / "sphere_hierarchy" / "traces_0000.json").read_text())
     cand = _candidate(golden, tmp_path, "sphere_hierarchy", 0, lambda a: None, traces=traces)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ... import linalg
 from ..camera import Camera
 from ..primitives import box, capsule, cylinder, icosphere, plane_grid
 from ..model import Animation, Scene, SceneObject, Transform
@@ -134,9 +135,9 @@ def _eye_centre(side):
     0.6 side), ``EYE_RADIUS + EYE_GAP`` off its surface."""
     c, radii = np.array([0.55, 0.55, 0.0]), np.array([0.3, 0.25, 0.27])
     d = np.array([0.6, 0.3, 0.6 * side])
-    u = d / np.linalg.norm(d / radii)  # on the ellipsoid: |u / radii| = 1
+    u = d / linalg.norm3(d / radii)  # on the ellipsoid: |u / radii| = 1
     n = u / radii ** 2
-    return tuple(c + u + (EYE_RADIUS + EYE_GAP) * n / np.linalg.norm(n))
+    return tuple(c + u + (EYE_RADIUS + EYE_GAP) * n / linalg.norm3(n))
 
 
 def ants_scene() -> Scene:
