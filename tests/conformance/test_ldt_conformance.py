@@ -11,7 +11,7 @@ import pytest
 
 from refsoft import constants, keys
 from refsoft.conformance.check import check
-from refsoft.conformance.comparison import lookup_tie
+from refsoft.conformance.rules.envmap import lookup_tie
 from refsoft.conformance.cubes import segment_distance
 from refsoft.conformance.golden import CASES, case_by_name, write_golden
 from refsoft.frame import FrameDriver
