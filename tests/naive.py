@@ -933,21 +933,26 @@ def naive_ldt_pixel(P, N, eye, tri, region, use_regions, W, depth, back, count, 
         D = (s_out - s_in) / dt(n)
         margin = one
         found = None
+        was_front = False  # an open sheet is entered only from in front of it (the crossing rule)
         for m in range(n + 1):
             row, col, h, mt = texel(q0, u, s_in + dt(m) * D, f)
             margin = min(margin, mt)
+            front = False
             for j in range(int(count[k, f, row, col])):
                 z = dt(depth[k, f, j, row, col])
                 margin = min(margin, abs(h - z))
                 if h < z:
+                    front = True
                     break
                 dd = back[k, f, j, row, col]
                 margin = min(margin, abs(h - dd))
                 if h <= dd:
-                    found = j
+                    if was_front or not is_open[k]:
+                        found = j
                     break
             if found is not None:
                 break
+            was_front = front
         samples = m + 1
         if found is None:
             return None, samples, 0, margin

@@ -110,7 +110,7 @@ def _port_commands(sub):
     ck.add_argument("--kinds", action="append", default=None, metavar="KIND[,KIND...]",
                     help="only these kinds of output, the others neither judged nor required (repeatable or "
                          "comma-separated): " + ", ".join(constants.CHECK_KINDS) + "; default all: a case or an "
-                         "output the candidate lacks fails")
+                         "output the candidate lacks fails, unless its ported.json declares it not ported")
     ck.add_argument("--verbose", action="store_true", help="also print the outputs that pass")
     ck.set_defaults(func=commands.cmd_check)
 

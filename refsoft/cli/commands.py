@@ -266,19 +266,27 @@ def cmd_check(args) -> int:
     if summary["versions"]["note"]:
         print(f"note: {summary['versions']['note']}")
     for f in findings:
-        if f.status != "pass" or args.verbose:
+        if f.status not in ("pass", "not_ported") or args.verbose:
             print(f.line())
             for d in f.details[:5]:
                 print(f"           {d}")
-    print(f"{'kind':<16}" + "".join(f"{s:>9}" for s in STATUSES))
+    print(f"{'kind':<16}" + "".join(f"{s:>11}" for s in STATUSES))
     for kind, n in summary["by_kind"].items():
-        print(f"{kind:<16}" + "".join(f"{n[s]:>9}" for s in STATUSES))
+        print(f"{kind:<16}" + "".join(f"{n[s]:>11}" for s in STATUSES))
     c, n_pics = summary["counts"], len(summary["pictures"])
+    gaps = summary["not_ported"]
+    if gaps["cases"]:
+        print(f"not ported: {len(gaps['cases'])} case(s), declared in {os.path.join(args.candidate, 'ported.json')}:")
+        for case, why in gaps["cases"].items():
+            print(f"  {case}: {why.split(': ', 1)[-1]}")
+    if gaps["outputs"]:
+        print("not ported: " + ", ".join(f"{n} output(s) of kind {k}" for k, n in gaps["outputs"].items()))
     verdict = "PASSED" if summary["passed"] else "FAILED"
     if c["missing"]:
-        print(f"{c['missing']} output(s) missing: a port providing a subset says so with --case and --kinds")
-    print(f"{verdict}: {c['pass']} pass, {c['accepted']} accepted (yellow), {c['fail']} fail, {c['missing']} missing "
-          f"({summary['profile']} profile); "
+        print(f"{c['missing']} output(s) missing: a port providing a subset says so with --case and --kinds, or "
+              "declares what it does not port in the candidate's ported.json (docs/ports.md)")
+    print(f"{verdict}: {c['pass']} pass, {c['accepted']} accepted (yellow), {c['fail']} fail, {c['missing']} missing, "
+          f"{c['not_ported']} not ported ({summary['profile']} profile); "
           f"summary.json and {n_pics} picture{'' if n_pics == 1 else 's'} ({MAGNIFY}x) of what did not pass in "
           f"{args.out}")
     return 0 if summary["passed"] else 1

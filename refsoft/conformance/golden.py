@@ -149,7 +149,7 @@ PER_PIXEL_METHODS = ("ldt", "envmap")
 #: each animation), both neighbourhoods, every hidden-vertex mode, the wider frustum, float64,
 #: cold searches, the pixel-grid conformance scene, Szabo's hierarchy search, and the accurate
 #: preset; then the comparison methods at a small resolution R = 64: the layered depth textures
-#: (two coherent frames, a hollow object's two layers, float64, the tie scene) and the
+#: (two coherent frames, a hollow object's two layers, float64, the tie scene, open sheets) and the
 #: environment map (an object touching the mirror, the tie scene). Each case names its preset,
 #: so a change of the default preset never changes a case.
 CASES = (
@@ -180,6 +180,7 @@ CASES = (
     Case("genus3_ldt_float64", "genus3", (0,), {"preset": "paper", "method": "ldt", "ldt_resolution": 64,
                                                 "precision": "float64"}),
     Case("cube_edge_ldt", "cube_edge", (0,), {"preset": "paper", "method": "ldt", "ldt_resolution": 64}),
+    Case("quad_ldt", "quad", (0,), {"preset": "paper", "method": "ldt", "ldt_resolution": 64}),
     Case("touching_envmap", "touching", (0,), {"preset": "paper", "method": "envmap", "envmap_resolution": 64}),
     Case("cube_edge_envmap", "cube_edge", (0,), {"preset": "paper", "method": "envmap", "envmap_resolution": 64}),
 )

@@ -60,8 +60,15 @@ def _texel(q0x, q0y, q0z, ux, uy, uz, s, f, table, R, fp):
 
 
 @kernel
-def _face_search(q0x, q0y, q0z, ux, uy, uz, s_in, s_out, umax, n_lin, f, k, depth, back, count, table, R, fp):
+def _face_search(q0x, q0y, q0z, ux, uy, uz, s_in, s_out, umax, n_lin, f, k, depth, back, count, is_open, table, R,
+                 fp):
     """Linear search then bisection of one face (Algorithm 1 with the full interval test).
+
+    An open object (``is_open``: one layer, ``back = 1``) is searched by the crossing rule: a
+    sample at or behind the sheet (``h >= z``) is inside only when the sample before it lay in
+    front of the sheet (``h < z`` at that sample's own texel, which holds the sheet); so the
+    first sample is never inside, and a ray that starts behind the sheet is outside until it
+    comes in front of it and crosses again.
 
     Returns (found, s_hit, layer, row, col, residual in texels, samples, bisection steps, margin,
     started inside)."""
@@ -79,22 +86,28 @@ def _face_search(q0x, q0y, q0z, ux, uy, uz, s_in, s_out, umax, n_lin, f, k, dept
     m = 0
     row = col = 0
     h = like(0.0, fp)
+    sheet = is_open[k]
+    in_front = False  # an open object: the previous sample lay in front of the sheet
     for m in range(n + 1):
         sm = s_in + like(m, fp) * D
         row, col, h, mt = _texel(q0x, q0y, q0z, ux, uy, uz, sm, f, table, R, fp)
         margin = min(margin, mt)
+        front = False
         for j in range(np.int64(count[k, f, row, col])):  # int64: uint8 and int64 would unify to float
             z = like(depth[k, f, j, row, col], fp)
             margin = min(margin, abs(h - z))
             if h < z:
+                front = True
                 break
             d = back[k, f, j, row, col]
             margin = min(margin, abs(h - d))
             if h <= d:
-                found_j = j
+                if in_front or not sheet:
+                    found_j = j
                 break
         if found_j >= 0:
             break
+        in_front = front
     samples = m + 1
     if found_j < 0:
         return False, like(0.0, fp), -1, 0, 0, like(0.0, fp), samples, 0, margin, False
@@ -237,7 +250,7 @@ def search_pixels(lo, hi, P, N, eye, ortho, view_dir, tri, region, use_regions, 
                 ua = _pick(ux, uy, uz, a)
                 f = 2 * a + (1 if ua > zero else 0)
                 res = _face_search(q0x, q0y, q0z, ux, uy, uz, s_in, s_out, umax, n_lin, f, k, depth, back, count,
-                                   table, R, fp)
+                                   is_open, table, R, fp)
                 faces += 1
                 samples += res[6]
                 steps += res[7]

@@ -53,7 +53,7 @@ NO_FACE_WITHIN_TAU = 2
 LAYER_MISMATCH = 4
 #: An object whose cube the ray meets was skipped by the cone test.
 REGION_CULLED = 8
-#: The hit object is an open mesh (single layer, height-field semantics).
+#: The hit object is an open mesh (single layer, searched by the crossing rule).
 OPEN_OBJECT = 16
 #: The ray starts inside the cube of an object it searched.
 ORIGIN_IN_CUBE = 32

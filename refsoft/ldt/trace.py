@@ -67,27 +67,33 @@ def _face(q0, u, s_in, s_out, umax, n_lin, f, k, stack, dt):
     rec = {"face": f, "name": FACE_NAMES[f], "axis": f // 2, "steps": n, "step": float(D), "samples": [],
            "bisection": None}
     margin, found, h, row, col = one, -1, zero, 0, 0
+    sheet, in_front = bool(stack.open[k]), False  # an open sheet: the crossing rule
     for m in range(n + 1):
         sm = s_in + dt(m) * D
         row, col, h, mt = _texel(q0, u, sm, f, R, dt)
         margin = min(margin, mt)
         layers = []
+        front = False
         for j in range(int(count[row, col])):
             z = dt(depth[j, row, col])
             margin = min(margin, abs(h - z))
             if h < z:
                 layers.append({"layer": j, "z": float(z), "d": None, "test": "front"})
+                front = True
                 break
             d = back[j, row, col]
             margin = min(margin, abs(h - d))
-            layers.append({"layer": j, "z": float(z), "d": float(d), "test": "inside" if h <= d else "behind"})
+            crossed = in_front or not sheet
+            test = "behind" if h > d else ("inside" if crossed else "not crossed")
+            layers.append({"layer": j, "z": float(z), "d": float(d), "test": test})
             if h <= d:
-                found = j
+                found = j if crossed else -1
                 break
         rec["samples"].append({"m": m, "s": float(sm), "texel": [row, col], "h": float(h),
                                "count": int(count[row, col]), "layers": layers, "inside": found >= 0})
         if found >= 0:
             break
+        in_front = front
     rec.update(found=found >= 0, start_inside=False, s_hit=None, h_hit=None, layer=None, texel=None, residual=None)
     if found < 0:
         return rec, None, len(rec["samples"]), 0, margin
@@ -291,6 +297,8 @@ def _decision(sample) -> str:
         return f"inside layer {last['layer']}"
     if last["test"] == "front":
         return f"outside (in front of layer {last['layer']})"
+    if last["test"] == "not crossed":
+        return "outside (behind the sheet, not crossed from in front)"
     return f"outside (behind layer {last['layer']})"
 
 
@@ -318,7 +326,8 @@ class PixelTrace:
         without), ``status`` ("misses the cube", "region culled", "searched"), ``entry_axis``,
         ``origin_in_cube``, ``face_order`` and ``faces``: per face searched its ``steps`` N and
         ``step`` D, the ``samples`` (``m``, ``s``, ``texel``, ``h``, ``count``, the ``layers``
-        visited with ``z``, ``d`` and their ``test`` "front", "behind" or "inside"), the
+        visited with ``z``, ``d`` and their ``test`` "front", "behind", "inside" or, for an open
+        sheet the ray lies behind without having crossed it, "not crossed"), the
         ``bisection`` (``lo``, ``hi``, the step's ``texels``, its ``points``), ``s_hit``,
         ``layer``, ``texel``, ``residual`` and ``verdict`` ("miss", "accepted", "rejected");
         then the object's ``chosen_face``, ``distance`` and ``accepted``.

@@ -110,9 +110,10 @@ def test_check_report_goes_to_out_check_never_into_the_inputs(golden, tmp_path):
     assert os.listdir(tmp_path / "out" / "check") == ["summary.json"]  # no pictures of passes
     n = summary["counts"]["pass"]
     assert n == sum(k["pass"] for k in summary["by_kind"].values()) and n > 0
-    assert summary["by_kind"]["pixel"] == {"pass": 1, "accepted": 0, "fail": 0, "missing": 0}
+    assert summary["by_kind"]["pixel"] == {"pass": 1, "accepted": 0, "fail": 0, "missing": 0, "not_ported": 0}
     table = [line.split() for line in out.splitlines()]
-    assert ["kind", "pass", "accepted", "fail", "missing"] in table and ["pixel", "1", "0", "0", "0"] in table
+    assert ["kind", "pass", "accepted", "fail", "missing", "not_ported"] in table
+    assert ["pixel", "1", "0", "0", "0", "0"] in table
     assert f"PASSED: {n} pass" in out
     for inside in (gold / "report", gold / "pixel_grid"):
         rc, _, err = run_cli("check", gold, gold, "--out", inside, cwd=tmp_path)

@@ -11,7 +11,7 @@ import pytest
 
 from refsoft import constants, keys
 from refsoft.conformance.check import check
-from refsoft.conformance.comparison import lookup_tie
+from refsoft.conformance.rules.envmap import lookup_tie
 from refsoft.conformance.cubes import segment_distance
 from refsoft.conformance.golden import CASES, case_by_name, write_golden
 from refsoft.frame import FrameDriver
@@ -104,6 +104,14 @@ def test_golden_cases_hold_textures_inputs_and_options(golden):
     assert entries["genus3_ldt_float64"]["options"]["precision"] == "float64"
     assert entries["hollow_box_ldt"]["options"]["ldt_layers"] == "all"
     assert read_npz(golden / "hollow_box_ldt" / "ldt_2.npz")["depth"].shape[1] >= 2  # a hollow object: 2 layers
+    # open sheets (the quad and the floor), hit from in front and never where a ray starts behind them
+    assert all(bool(read_npz(golden / "quad_ldt" / f"ldt_{j}.npz")["open"]) for j in (2, 3))
+    z = read_npz(golden / "quad_ldt" / "frame_0000.npz")
+    on = z[keys.REFLECTED_ID] >= 0
+    hits = on & ((z[keys.LDT_FLAGS] & 16) != 0)
+    up = on & (z[keys.LDT_RAY_DIR][..., 1] > 0)
+    assert hits.sum() > 100 and up.sum() > 100 and not np.any(z[keys.REFLECTED_ID][up] == 3)  # 3: the floor
+    assert not np.any(z[keys.LDT_FLAGS][on] & 1)  # START_INSIDE: never on a sheet
 
 
 def test_the_inputs_alone_give_the_textures_and_the_cube_matrices(golden):

@@ -335,26 +335,74 @@ def measure_sheets():
     arrays, method = ldt(scene, ldt_resolution=128)
     a = arrays["reflected_id"]
     refl = b >= 0
-    si = flag(arrays, C.START_INSIDE) & refl
+    up = (arrays["ldt_ray_dir"][..., 1] > 0) & refl  # behind the floor as the face looking up sees it
     return {"open": {j: (l.open, l.n_layers) for j, l in method.ldts.items()},
             "open_flag": bool(np.all(flag(arrays, C.OPEN_OBJECT)[a > 0])),
-            "disagreement": disagreement(a, b, refl), "start_inside": int(si.sum()),
-            "start_inside_at_zero": bool(np.all(arrays["ldt_hit_distance"][si] == 0)),
-            "start_inside_right": float(np.mean(a[si] == b[si])),
-            "others_right": float(np.mean(a[refl & ~si] == b[refl & ~si])), "reflector_pixels": int(refl.sum())}
+            "start_inside": int((flag(arrays, C.START_INSIDE) & refl).sum()),
+            "disagreement": disagreement(a, b, refl), "reflector_pixels": int(refl.sum()),
+            "upward": int(up.sum()), "upward_right": float(np.mean(a[up] == b[up])),
+            "upward_at_zero": int((up & (arrays["ldt_hit_distance"] == 0)).sum()),
+            "others_right": float(np.mean(a[refl & ~up] == b[refl & ~up]))}
 
 
-def test_open_sheets_are_right_from_the_front_and_wrong_from_behind():
-    """The quad scene (a quad and a floor, both open sheets; R = 128): where the search does not
-    start inside, 99.6% of 676 pixels agree with the truth. A ray that starts behind a sheet (as
-    a face sees it) is inside the sheet's height field at its first sample, so the pinned
-    single-layer rule (inside when h >= z) reports the sheet at distance 0: 696 of the 1372
-    reflector pixels (every upward ray over the floor), none of them right."""
+def test_open_sheets_are_right_from_either_side_by_the_crossing_rule():
+    """The quad scene (a quad and a floor, both open sheets; R = 128): 1369 of the 1372 reflector
+    pixels (99.8%) agree with the truth. 696 of them reflect upward rays over the floor, which
+    start behind it as the face looking up sees it: the crossing rule (a hit needs a sample in
+    front of the sheet before one behind it) finds no floor at distance 0 there, and all 696
+    agree (the height-field rule, inside when h >= z from the first sample, put the floor at
+    distance 0 at every one of them)."""
     m = measure_sheets()
     assert m["open"] == {2: (True, 1), 3: (True, 1)} and m["open_flag"]
-    assert m["others_right"] > 0.99
-    assert m["start_inside"] > 0.3 * m["reflector_pixels"] and m["start_inside_at_zero"]
-    assert m["start_inside_right"] < 0.1
+    assert m["start_inside"] == 0  # an open sheet is never inside at a face's first sample
+    assert m["upward"] > 0.3 * m["reflector_pixels"] and m["upward_at_zero"] == 0
+    assert m["upward_right"] > 0.99 and m["others_right"] > 0.99
+    assert m["disagreement"] < 0.005
+
+
+def with_floor(scene):
+    """``scene`` with the `sphere` scene's floor (12 x 12) under its lowest vertex at frame 0."""
+    lo = min(float(scene.world_mesh(k, 0).vertices[:, 1].min()) for k in range(1, len(scene.objects) + 1))
+    floor = SceneObject("floor", P.plane_grid((12.0, 12.0), (24, 24)), (0.35, 0.55, 0.35), Transform((0.0, lo, 0.0)))
+    return replace(scene, objects=tuple(scene.objects) + (floor,))
+
+
+FLOOR_SCENES = ("quad", "balls", "hollow_box", "genus3", "cup", "touching", "cylinder")
+
+
+def measure_floors(width=160, height=120):
+    """Reflected-id agreement with the truth over a floor (R = 256, frame 0): `quad` and the LDT
+    paper's scenes with a floor added; `sphere` (a floor and a thin back wall) with 32 and 64
+    linear steps."""
+    out = {}
+    for name in FLOOR_SCENES + ("sphere",):
+        scene = refsoft.load_scene(name, width=width, height=height)
+        if name not in ("quad", "sphere"):
+            scene = with_floor(scene)
+        b = truth(scene)["reflected_id"]
+        refl = b >= 0
+        for steps in ((32, 64) if name == "sphere" else (32,)):
+            a = ldt(scene, ldt_linear=steps)[0]["reflected_id"]
+            wrong = refl & (a != b)
+            key = name if steps == 32 else f"{name}, 64 steps"
+            out[key] = {"agreement": 1.0 - float(wrong.sum()) / float(refl.sum()), "reflector_pixels": int(refl.sum())}
+            if name == "sphere":
+                wall = 1 + [o.name for o in scene.objects].index("back_wall")
+                out[key]["back_wall_missed"] = int((wrong & (b == wall) & (a == 0)).sum())
+                out[key]["wrong"] = int(wrong.sum())
+    return out
+
+
+def test_over_a_floor_the_ldt_agrees_with_the_truth():
+    """Measured (160 x 120, R = 256): `quad` 99.66% of 3804 reflector pixels, the paper's scenes
+    with a floor 99.71-99.97%; `sphere` 98.08% with 32 linear steps, 42 of its 50 wrong pixels
+    the back wall missed (0.2 thick in a cube 10.1 wide, 5 texels: the thin-feature limitation,
+    test 1), and 99.77% with 64 steps."""
+    m = measure_floors()
+    for name in FLOOR_SCENES + ("sphere, 64 steps",):
+        assert m[name]["agreement"] >= 0.995, (name, m[name])
+    s = m["sphere"]
+    assert s["agreement"] < 0.995 and s["back_wall_missed"] >= 0.8 * s["wrong"]
 
 
 # --- 8. the cone test ---------------------------------------------------------------------------
@@ -597,6 +645,6 @@ if __name__ == "__main__":  # print every figure the tests assert on
     import pprint
 
     for fn in (measure_thin, measure_resolution, measure_concavity, measure_faces, measure_touching, measure_overlap,
-               measure_sheets, measure_regions, measure_mismatch, measure_precision, lambda: measure_degenerate()[0]):
+               measure_sheets, measure_floors, measure_regions, measure_mismatch, measure_precision, lambda: measure_degenerate()[0]):
         print(getattr(fn, "__name__", "measure_degenerate"))
         pprint.pprint(fn(), width=120)

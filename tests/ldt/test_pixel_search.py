@@ -16,14 +16,14 @@ from refsoft.scene import primitives as P
 
 def small_scene(width=48, height=36):
     """A mirror ball reflecting a tilted torus (two layers), a box whose cube overlaps the torus's,
-    an open sheet cutting into the mirror (rays start behind it: START_INSIDE), and a ball sunk
-    into the mirror (rays start inside its cube)."""
+    an open sheet cutting into the mirror (rays start behind it: the crossing rule), and a ball
+    sunk into the mirror (rays start inside its cube, a few within a texel of it: START_INSIDE)."""
     objs = [SceneObject("mirror", P.icosphere(3), (0.9, 0.9, 0.9), reflector=True),
             SceneObject("torus", P.torus(0.6, 0.2, 24, 12), (0.9, 0.3, 0.2), Transform((1.4, 0.3, 0.9), (0, 30, 60))),
             SceneObject("box", P.box((0.5, 0.7, 0.4)), (0.2, 0.3, 0.9), Transform((1.3, -0.5, 1.5), (10, 30, 0))),
             SceneObject("sheet", P.plane_grid((1.2, 0.8), (2, 2)), (0.8, 0.8, 0.2),
                         Transform((-0.8, 0.0, 0.9), (20, 30, 60))),
-            SceneObject("sunk", P.icosphere(2, 0.4), (0.2, 0.9, 0.4), Transform((-0.4, -0.9, 0.6)))]
+            SceneObject("sunk", P.icosphere(2, 0.5), (0.2, 0.9, 0.4), Transform((-0.4, -0.9, 0.6)))]
     cam = Camera(eye=(0.0, 0.3, 4.0), target=(0, 0, 0), width=width, height=height, fov_y=34)
     return Scene(objs, cam, name="ldt-small")
 

@@ -54,7 +54,7 @@ def test_the_replay_ends_where_the_kernel_ends_at_every_reflector_pixel(name):
     st = frame.reflectors[scene.reflector_ids[0]].state
     res = st.result
     assert len(st.rows) > 300
-    flags = 0
+    flags = uncrossed = 0
     for i in range(len(st.rows)):
         tr = T.trace_pixel(scene, int(st.rows[i]), int(st.cols[i]), 0, method=method, rendered=frame)
         r = tr.result
@@ -65,19 +65,27 @@ def test_the_replay_ends_where_the_kernel_ends_at_every_reflector_pixel(name):
                 res.margin[i], res.flags[i], res.linear_samples[i], res.binary_steps[i], res.faces_searched[i],
                 res.objects_tested[i], res.object_distance[i].tolist(), res.hit[i].tolist(), res.ray[i].tolist())
         assert got == want, f"pixel ({st.rows[i]}, {st.cols[i]})"
-        # the record adds up to the totals, and each sample's decision is Algorithm 1's
-        faces = [fc for o in tr.objects for fc in o["faces"]]
-        assert sum(len(fc["samples"]) for fc in faces) == r["linear_samples"]
-        assert sum(len(fc["bisection"]["points"]) for fc in faces if fc["bisection"]) == r["binary_steps"]
-        for fc in faces:
+        # the record adds up to the totals, and each sample's decision is Algorithm 1's (an open
+        # sheet's: the crossing rule, behind it is inside only right after a sample in front)
+        faces = [(bool(method.stack.open[j]), fc) for j, o in enumerate(tr.objects) for fc in o["faces"]]
+        assert sum(len(fc["samples"]) for _, fc in faces) == r["linear_samples"]
+        assert sum(len(fc["bisection"]["points"]) for _, fc in faces if fc["bisection"]) == r["binary_steps"]
+        for sheet, fc in faces:
+            before = None
             for s in fc["samples"]:
                 for v in s["layers"][:-1]:
                     assert v["test"] == "behind" and v["z"] <= s["h"] and s["h"] > v["d"]
                 if s["layers"]:
                     v = s["layers"][-1]
                     assert (v["test"] == "front") == (s["h"] < v["z"])
-                    assert (v["test"] == "inside") == (v["d"] is not None and v["z"] <= s["h"] <= v["d"])
+                    crossed = not sheet or (before is not None and before["layers"] != []
+                                            and before["layers"][-1]["test"] == "front")
+                    within = v["d"] is not None and v["z"] <= s["h"] <= v["d"]
+                    assert (v["test"] == "inside") == (within and crossed)
+                    assert (v["test"] == "not crossed") == (within and not crossed)
                 assert s["inside"] == (bool(s["layers"]) and s["layers"][-1]["test"] == "inside")
+                uncrossed += bool(s["layers"]) and s["layers"][-1]["test"] == "not crossed"
+                before = s
         if r["object"] >= 0:
             o = tr.objects[r["object"]]
             assert o["chosen_face"] == r["face"] and o["distance"] == r["distance"]
@@ -92,10 +100,12 @@ def test_the_replay_ends_where_the_kernel_ends_at_every_reflector_pixel(name):
         flags |= r["flags"]
     hit = res.object >= 0
     assert hit.sum() >= 20 and res.binary_steps.max() > 0
-    if name.startswith("small"):  # layers beyond the first, open sheets, starts inside, no face within tau
+    if name.startswith("small"):  # layers beyond the first, open sheets seen from both sides, no face within tau
         assert (res.layer[hit] == 1).any()
-        assert flags & C.OPEN_OBJECT and flags & C.START_INSIDE and flags & C.ORIGIN_IN_CUBE
+        assert flags & C.OPEN_OBJECT and flags & C.ORIGIN_IN_CUBE and uncrossed > 0
         assert flags & C.NO_FACE_WITHIN_TAU
+    if name == "small float32 none three 5":  # a ray starting within a texel of the sunk ball
+        assert flags & C.START_INSIDE
     if name.startswith("balls"):  # the cone test skips objects the ray's line meets
         assert flags & C.REGION_CULLED
 

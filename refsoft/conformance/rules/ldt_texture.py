@@ -1,19 +1,53 @@
-"""``refsoft check``'s rules for the layered depth textures (kind ``ldt_texture``; DESIGN-ldt
-2.9): each reflected object's ``CASE/ldt_J.npz``, written once per case, against the golden
-set's. The rules are listed in :mod:`refsoft.conformance.comparison`; the oracle's geometry of
-the faces (edge distances, rates) comes from :mod:`refsoft.conformance.cubes`.
+"""``refsoft check``'s rules of the layered depth textures themselves (kind ``ldt_texture``;
+DESIGN-ldt 2.9): each reflected object's ``CASE/ldt_J.npz``, written once per case, against the
+golden set's.
+
+- ``triangle`` (coverage and triangle ids) identical except texels whose centre lies within the
+  profile's edge distance of an edge of the object's triangles projected on that face (float64,
+  unsnapped; 1e-4 texel by default);
+- ``depth`` within 4 float32 ULP and ``normal`` by the G-buffer rule (4 ULP or 1e-4 rad) where
+  the triangle ids agree (the ``gpu`` profile: also within 1/256 texel times the value's rate of
+  change across the face);
+- ``count_raw``, ``count`` and ``mismatch`` identical except at those ambiguous texels;
+- ``back`` the pairing of the candidate's own depths and counts (docs/ldt.md, "Back depths", in
+  float32) within 4 ULP of the larger of the back depth and its partner depth;
+- ``cube_center`` and ``cube_half`` within 4 float32 ULP or 1e-6 of the cube's side; ``open``
+  and ``layers_capped`` identical.
+
+The oracle's geometry of the faces (edge distances, rates) comes from
+:mod:`refsoft.conformance.cubes`.
 """
 
 from __future__ import annotations
 
 import os
+import re
 
 import numpy as np
 
-from .. import keys
-from ..constants import EXTENT_TOL, F32_ULP_TOL, NORMAL_ANGLE_TOL
-from ..errors import InputFileError
-from .comparison import TEXTURE_FILE, _REACH, _angle, _edge_note, _float_ok, _status, _ulp, texture_key
+from ... import keys
+from ...constants import EXTENT_TOL, F32_ULP_TOL, NORMAL_ANGLE_TOL
+from ...errors import InputFileError
+from .common import REACH, angle, edge_note, f32_ulp, float_ok, status_of
+
+KINDS = ("ldt_texture",)
+#: ``ldt_J.npz`` of a golden case, and the key of one of its arrays in findings (``ldt_J.NAME``).
+TEXTURE_FILE = re.compile(r"^ldt_(\d+)\.npz$")
+TEXTURE_KEY = re.compile(r"^ldt_(\d+)\.(npz|\w+)$")
+
+
+def texture_key(j: int, name: str) -> str:
+    """The key of array ``name`` of object ``j``'s ``ldt_J.npz`` in findings (``"ldt_2.depth"``;
+    ``"ldt_2.npz"`` for the whole file)."""
+    return f"{keys.ldt_file(j)}.{name}"
+
+
+def kind_of(key: str):
+    return "ldt_texture" if TEXTURE_KEY.match(key) else None
+
+
+def judge(ctx, G, C, usable) -> None:
+    """Nothing per frame: the textures are judged once per case (:func:`judge_case`)."""
 
 
 def texture_files(manifest, case: str) -> list:
@@ -27,11 +61,11 @@ def texture_files(manifest, case: str) -> list:
     return [rel for _, rel in sorted(out)]
 
 
-def judge_textures(ctx, golden, candidate, manifest) -> None:
+def judge_case(ctx, golden, candidate, manifest) -> None:
     """Judge the candidate's ``ldt_J.npz`` of the case ``ctx`` is about against the golden set's
     (kind ``ldt_texture``); appends to ``ctx.findings``."""
-    from ..io import read_npz
-    from .golden import sha256
+    from ...io import read_npz
+    from ..golden import sha256
 
     if "ldt_texture" not in ctx.kinds:
         return
@@ -43,19 +77,19 @@ def judge_textures(ctx, golden, candidate, manifest) -> None:
             ctx.finding(whole, "reference", "fail", f"golden file {rel} is missing or altered (SHA-256)")
             continue
         if not os.path.isfile(cpath):
-            ctx.finding(whole, "presence", "missing", f"{rel} not in the candidate")
+            ctx.lacks(whole, f"{rel} not in the candidate", kind="ldt_texture")
             continue
-        _judge_texture(ctx, j, read_npz(gpath), read_npz(cpath))
+        judge_texture(ctx, j, read_npz(gpath), read_npz(cpath))
 
 
-def _judge_texture(ctx, j, G, C):
+def judge_texture(ctx, j, G, C):
     usable = []
     for name in keys.LDT_TEXTURE_ARRAYS:
         key = texture_key(j, name)
         if name not in G:
             raise InputFileError(f"golden {keys.ldt_file(j)}.npz lacks {name!r}")
         if name not in C:
-            ctx.finding(key, "presence", "missing", "not in the candidate's texture")
+            ctx.lacks(key, "not in the candidate's texture", kind="ldt_texture")
         elif C[name].shape != G[name].shape or C[name].dtype != G[name].dtype:
             ctx.finding(key, "shape/dtype", "fail",
                         f"expected {G[name].dtype}{list(G[name].shape)} / observed {C[name].dtype}{list(C[name].shape)}")
@@ -66,7 +100,7 @@ def _judge_texture(ctx, j, G, C):
     mesh = ctx.oracle().scene.object_by_id(j).mesh
     centre, half = G["cube_center"].astype(np.float64), float(G["cube_half"])
     R = G["depth"].shape[-1]
-    tex = _Texture(ctx, j, mesh, centre, half, R)
+    tex = Texture(ctx, j, mesh, centre, half, R)
     for name in ("open", "layers_capped"):
         if name in usable:
             same = bool(G[name] == C[name])
@@ -75,9 +109,9 @@ def _judge_texture(ctx, j, G, C):
     for name in ("cube_center", "cube_half"):
         if name in usable:
             g, c = np.atleast_1d(G[name]), np.atleast_1d(C[name])
-            ok = _float_ok(g, c, 2.0 * half)
+            ok = float_ok(g, c, 2.0 * half)
             same = np.array_equal(g, c)
-            ctx.finding(texture_key(j, name), "float", "fail" if not ok.all() else _status(0, not same),
+            ctx.finding(texture_key(j, name), "float", "fail" if not ok.all() else status_of(0, not same),
                         "identical" if same else f"within {F32_ULP_TOL} float32 ULP or {EXTENT_TOL} x the cube side"
                         if ok.all() else f"beyond {F32_ULP_TOL} float32 ULP and {EXTENT_TOL} x the cube side",
                         worst="" if same else f"expected {g.tolist()} / observed {c.tolist()}")
@@ -95,7 +129,7 @@ def _judge_texture(ctx, j, G, C):
         tex.back(C["back"], C["depth"], C["count_raw"], bool(C["open"]))
 
 
-class _Texture:
+class Texture:
     """The rules of one object's texture, with the oracle's geometry of its faces."""
 
     def __init__(self, ctx, j, mesh, centre, half, R):
@@ -105,13 +139,13 @@ class _Texture:
 
     def distance(self, faces, rows, cols):
         """Distance (texels) of each texel centre from the nearest projected edge of its face."""
-        from .cubes import ldt_edge_distance
+        from ..cubes import ldt_edge_distance
 
         out = np.full(len(faces), np.inf)
         for f in np.unique(faces):
             on = faces == f
             out[on] = ldt_edge_distance(self.mesh, self.centre, self.half, self.R, int(f), np.c_[rows[on], cols[on]],
-                                        max(self.prof.edge_px, _REACH))
+                                        max(self.prof.edge_px, REACH))
         return out
 
     def coverage(self, g, c):
@@ -130,7 +164,7 @@ class _Texture:
         if (~amb).any():
             f, layer, r, cc = diff[~amb][0]
             worst = (f"at face {f} layer {layer} texel ({r}, {cc}): expected {g[f, layer, r, cc]} / observed "
-                     f"{c[f, layer, r, cc]} ({_edge_note(dist[~amb][0], self.prof.edge_px)})")
+                     f"{c[f, layer, r, cc]} ({edge_note(dist[~amb][0], self.prof.edge_px)})")
             self.ctx.finding(key, "coverage", "fail", f"{int((~amb).sum())} texels differ away from edges ({n_amb} "
                              f"ambiguous within {self.prof.edge_px:.3g} texels)", int((~amb).sum()), g.size, worst)
         else:
@@ -147,21 +181,21 @@ class _Texture:
         n = len(idx)
         if name == "depth":
             err = np.abs(gg.astype(np.float64) - cc.astype(np.float64))
-            ok = err <= F32_ULP_TOL * _ulp(gg)
+            ok = err <= F32_ULP_TOL * f32_ulp(gg)
         else:
-            err = _angle(gg, cc) if n else np.zeros(0)
-            ok = _float_ok(gg, cc, 0.0, normals=True) if n else np.zeros(0, bool)
+            err = angle(gg, cc) if n else np.zeros(0)
+            ok = float_ok(gg, cc, 0.0, normals=True) if n else np.zeros(0, bool)
         same = np.all(gg == cc, axis=-1) if gg.ndim > 1 else gg == cc
         slack = 0
         if self.prof.subpixel_px and (~ok).any():
-            from .cubes import ldt_fragments
+            from ..cubes import ldt_fragments
 
             for f in np.unique(idx[~ok, 0]):
                 i = np.flatnonzero(~ok & (idx[:, 0] == f))
                 fr = ldt_fragments(self.mesh, self.centre, self.half, self.R, int(f), idx[i][:, 2:],
                                    triangle[tuple(idx[i].T)])
                 if name == "depth":
-                    fine = err[i] <= F32_ULP_TOL * _ulp(gg[i]) + self.prof.subpixel_px * fr.depth_rate
+                    fine = err[i] <= F32_ULP_TOL * f32_ulp(gg[i]) + self.prof.subpixel_px * fr.depth_rate
                 else:
                     fine = err[i] <= NORMAL_ANGLE_TOL + self.prof.subpixel_px * fr.normal_rate
                 ok[i[fine]] = True
@@ -192,18 +226,18 @@ class _Texture:
         bad = diff[~amb]
         worst = "" if not len(bad) else (f"at face {bad[0][0]} texel ({bad[0][1]}, {bad[0][2]}): expected "
                                           f"{g[tuple(bad[0])]} / observed {c[tuple(bad[0])]}")
-        self.ctx.finding(key, "identical", _status(len(bad), len(diff)),
+        self.ctx.finding(key, "identical", status_of(len(bad), len(diff)),
                          f"{len(bad)} texels differ away from edges ({int(amb.sum())} ambiguous)" if len(bad) else
                          "only ambiguous texels differ", len(bad) if len(bad) else int(amb.sum()), g.size, worst)
 
     def back(self, c_back, c_depth, c_count_raw, is_open):
         """``back``: the pairing of the candidate's own depths and counts."""
-        from ..ldt.build import pair_back_depths
+        from ...ldt.build import pair_back_depths
 
         key = texture_key(self.j, "back")
         want = pair_back_depths(c_depth, c_count_raw, is_open, np.float32)[0]
         err = np.abs(c_back.astype(np.float64) - want.astype(np.float64))
-        tol = F32_ULP_TOL * _ulp(np.maximum(want, np.float32(1) - want))
+        tol = F32_ULP_TOL * f32_ulp(np.maximum(want, np.float32(1) - want))
         bad = np.argwhere(err > tol)
         n = c_back.size
         if len(bad):
