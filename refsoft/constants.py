@@ -207,3 +207,8 @@ SUBPIXEL_HALF = SUBPIXEL_ONE >> 1
 #: Embree traces the reflected rays split over the threads in parts of at least this many rays
 #: (fewer rays: one call; the split does not change any ray's answer).
 TRUTH_RAYS_PER_THREAD = 20000
+
+# --- The trace viewer (trace.html) -------------------------------------------------------------
+#: A heat map embedded in trace.html holds at most this many pixels (about 10 bytes each in the
+#: page); a larger reflector is traced at a smaller --width/--height.
+VIEWER_MAX_GRID_PIXELS = 400_000

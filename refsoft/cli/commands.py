@@ -58,6 +58,7 @@ def cmd_gbuffer(args) -> int:
 def _trace_ldt_pixel(args, scene) -> int:
     from ..ldt.trace import trace_pixel, write_pixel_trace
     from ..options import RenderOptions
+    from ..viewer import write_trace_page
 
     given = [flag for flag, v in (("--vertex", args.vertex), ("--reflector", args.reflector),
                                   ("--neighbourhood", args.neighbourhood), ("--inverse", args.inverse),
@@ -73,8 +74,8 @@ def _trace_ldt_pixel(args, scene) -> int:
     tr = trace_pixel(scene, args.pixel[0], args.pixel[1], args.frame, options=RenderOptions(**kwargs))
     print(tr.describe())
     print(tr.table(bisection=args.bisection))
-    written = write_pixel_trace(args.out, tr)
-    print(f"wrote {args.out}/" + " and ".join(written)
+    written = write_pixel_trace(args.out, tr) + [write_trace_page(args.out, tr)]
+    print(f"wrote {args.out}/" + ", ".join(written) + " (open trace.html in a browser to step through the search)"
           + ("" if "trace.png" in written else " (no picture: pip install '.[plot]' for matplotlib)"))
     return 0
 
@@ -82,6 +83,7 @@ def _trace_ldt_pixel(args, scene) -> int:
 def cmd_trace(args) -> int:
     from ..search.pictures import write_trace
     from ..search.trace import trace_vertex
+    from ..viewer import write_trace_page
 
     scene = _scene(args)
     from ..options import RenderOptions
@@ -110,16 +112,17 @@ def cmd_trace(args) -> int:
             if st["event"] in ("popped", "chosen"):
                 print(f"{n:>4} {st['attempt']:>7} {st['level']:>5} {str(tuple(st['texel'])):>12}  {st['event']}")
         print(f"result: pixel {tr.pixel} after {tr.tests} texel tests")
-        written = write_trace(args.out, rp)
-        print(f"wrote {args.out}/{' and '.join(written)}")
+        written = write_trace(args.out, rp) + [write_trace_page(args.out, rp)]
+        print(f"wrote {args.out}/{', '.join(written)} (open trace.html in a browser to step through the traversal)")
         return 0
     print(f"vertex {rp.vertex} (object {rp.vertex_object} {name(rp.vertex_object)!r}, its vertex {rp.local_index}) "
           f"in reflector {rp.reflector} ({name(rp.reflector)!r}), frame {rp.frame}, {neighbourhood}, start "
           f"({tr.start[0]}, {tr.start[1]}){' after a restart' if tr.restarted else ''}")
     print(tr.table())
     write_trace(args.out, rp)
-    print(f"wrote {args.out}/trace.json, trace.png (score field -log10(1 - s), path, start green, end red) "
-          f"and trace.gif ({len(tr.steps)} steps)")
+    write_trace_page(args.out, rp)
+    print(f"wrote {args.out}/trace.json, trace.png (score field -log10(1 - s), path, start green, end red), "
+          f"trace.gif ({len(tr.steps)} steps) and trace.html (open it in a browser to step through the search)")
     return 0
 
 

@@ -106,6 +106,8 @@ def test_trace_command_writes_table_json_png_gif(tmp_path, capsys):
     gif = iio.imread(out / "trace.gif", index=None)
     assert len(gif) == min(len(data["steps"]), 150) + 1
     assert oct(os.stat(out / "trace.png").st_mode & 0o777) != "0o600"
+    page = (out / "trace.html").read_text()
+    assert page.startswith("<!DOCTYPE html>") and '"kind":"walk"' in page and "trace.html" in text
 
 
 
