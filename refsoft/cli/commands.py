@@ -80,6 +80,34 @@ def _trace_ldt_pixel(args, scene) -> int:
     return 0
 
 
+def _suggest_vertices(args, scene) -> int:
+    """``refsoft trace SCENE`` without ``--vertex``: list vertices worth tracing."""
+    import shlex
+
+    from ..search import flag_names
+    from ..search.suggest import interesting_vertices
+
+    opts = search_kwargs(args)
+    opts.pop("coherence", None)
+    found = interesting_vertices(scene, args.reflector, args.frame, **opts)
+    k = args.reflector or scene.reflector_ids[0]
+    print(f"no --vertex given: vertices worth tracing in reflector {k} ({scene.object_by_id(k).name!r}), frame "
+          f"{args.frame} (each searched from the reflector's centre, without coherence):")
+    print(f"{'what':<34} {'vertex':>7} {'iterations':>10}  {'pixel':<12} flags")
+    for f in found:
+        pix = f"({f['pixel'][0]}, {f['pixel'][1]})"
+        print(f"{f['kind']:<34} {f['vertex']:>7} {f['iterations']:>10}  {pix:<12} "
+              f"{', '.join(flag_names(f['flags'])) or 'none'}")
+    if found:
+        extra = [] if args.frame == 0 else ["--frame", str(args.frame), "--no-coherence"]
+        for flag, v in (("--width", args.width), ("--height", args.height), ("--subdivide", args.subdivide),
+                        ("--reflector", args.reflector)):
+            extra += [] if v is None else [flag, str(v)]
+        print("trace one with: refsoft trace " + shlex.join([args.scene, "--vertex", str(found[0]["vertex"]), *extra])
+              + " (and the search options given here); the LDT: --method ldt --pixel ROW COL")
+    return 0
+
+
 def cmd_trace(args) -> int:
     from ..search.pictures import write_trace
     from ..search.trace import trace_vertex
@@ -96,7 +124,7 @@ def cmd_trace(args) -> int:
     if args.pixel is not None or args.bisection or ldt_kwargs(args):
         raise RefsoftError("--pixel, --bisection and the --ldt-* options trace the LDT search: add --method ldt")
     if args.vertex is None:
-        raise RefsoftError("give --vertex I (the vertex search) or --method ldt --pixel ROW COL")
+        return _suggest_vertices(args, scene)
 
     opts = search_kwargs(args)
     coherence = opts.pop("coherence", True)

@@ -111,8 +111,7 @@ def test_cli_trace_replays_one_pixel(tmp_path, capsys):
                         (["--method", "ldt", "--pixel", "0", "0"], "not a reflector"),
                         (["--method", "ldt", "--pixel", "1", "1", "--vertex", "3"], "--vertex is an option"),
                         (["--pixel", "1", "1"], "add --method ldt"),
-                        (["--method", "envmap", "--pixel", "1", "1"], "no search to trace"),
-                        ([], "give --vertex I")):
+                        (["--method", "envmap", "--pixel", "1", "1"], "no search to trace")):
         assert cli.main(base + argv) == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and match in err[0], (argv, err)
