@@ -339,9 +339,19 @@ def cmd_export(args) -> int:
 
 
 def cmd_bench(args) -> int:
-    from .. import bench
-    from ..bench.report import file_link
+    import shlex
 
+    from .. import bench
+    from ..bench.report import COMMAND, file_link
+
+    token = COMMAND.set(shlex.join(["refsoft", *getattr(args, "argv", ["bench", args.what])]))
+    try:
+        return _bench(args, bench, file_link)
+    finally:
+        COMMAND.reset(token)
+
+
+def _bench(args, bench, file_link) -> int:
     out = args.out or os.path.join("out", "bench", args.what)
     t0 = time.perf_counter()
     unused = {"accuracy": ("knob", "width", "height", "repeats", "max_vertices", "max_subdivisions", "max_width"),
