@@ -220,7 +220,12 @@ def cmd_render(args) -> int:
         if args.frame is not None:
             if args.frame < 0 or (scene.animation is not None and args.frame >= scene.n_frames):
                 raise RefsoftError(f"--frame must be in [0, {scene.n_frames - 1}], got {args.frame}")
-            frames = list(range(args.frame + 1)) if not args.no_coherence else [args.frame]
+            if args.no_coherence or args.frame == 0:
+                frames = [args.frame]
+            elif scene.animation is None:  # every frame of a static scene is frame 1: its coherent start is frame 0's
+                frames = [0, args.frame]
+            else:
+                frames = list(range(args.frame + 1))
             write = {args.frame}
         out = args.out or os.path.join("out", scene.name)
         t0 = time.perf_counter()
