@@ -120,3 +120,18 @@ def test_page_data_cannot_close_its_script_block(walk_replay):
 def test_trace_data_refuses_other_objects():
     with pytest.raises(RefsoftError, match="VertexReplay or a PixelTrace"):
         trace_data(object())
+
+
+def test_page_is_the_same_bytes_on_every_run_and_thread_count(walk_replay, tmp_path):
+    import numba
+
+    from refsoft.search.trace import trace_vertex
+
+    write_trace_page(tmp_path / "a", walk_replay)
+    scene = __import__("refsoft").load_scene("sphere", width=160, height=120)
+    numba.set_num_threads(1)
+    try:
+        write_trace_page(tmp_path / "b", trace_vertex(scene, 1500, neighbourhood="box"))
+    finally:
+        numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+    assert (tmp_path / "a" / "trace.html").read_bytes() == (tmp_path / "b" / "trace.html").read_bytes()
