@@ -109,7 +109,8 @@ def table1_task(name, spec, width, height, n, timing, gbuffer_scale=1.0, slowdow
     ref = PAPER_TABLE1.get(name, (None, None, None))
     ms = round(float(np.median([f.time_ms["total"] for f in done[1:] or done])), 1) if timing else None
     gb = "x".join(str(v) for v in (size or (width, height)))
-    return {"row": {"scene": name, "gbuffer": gb, "slowdown": slowdown, "frames": n, "max_frame_mean": round(s["max_frame_mean_iterations"], 2),
+    return {"row": {"scene": name, "gbuffer": gb, "slowdown": slowdown, "frames": n,
+                    "max_frame_mean": round(s["max_frame_mean_iterations"], 2),
                     "paper_max_frame_mean": ref[0], "total_mean": round(s["total_mean_iterations"], 2),
                     "paper_total_mean": ref[1], "ms_per_frame": ms, "paper_ms_per_frame": ref[2]}}
 

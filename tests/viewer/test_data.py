@@ -94,7 +94,8 @@ def test_ldt_data_holds_every_sample_and_bisection_point(ldt_trace):
     want = []
     for fc in faces:
         want += [("linear", s["texel"], len(s["layers"])) for s in fc["samples"]]
-        want += [("bisection", p["texel"], 0 if p["z"] is None else 1) for p in (fc["bisection"] or {"points": []})["points"]]
+        points = (fc["bisection"] or {"points": []})["points"]
+        want += [("bisection", p["texel"], 0 if p["z"] is None else 1) for p in points]
     assert [(s["phase"], s["pixel"], len(s["cells"])) for s in d["steps"]] == want
     assert len(d["grids"]) == len(faces)
     assert d["steps"][-1]["pixel"] == tr.result["texel"] or tr.result["binary_steps"] == 0
