@@ -16,8 +16,9 @@ The shape (every field plain lists, numbers, strings, ``None``):
   "text"}``), the index of the cell moved to (or ``None``), and the pixel's point in the side
   view (or ``None``);
 - ``start``, ``end``: pixels; ``images``: every reflection pixel found (several images), or [];
-- ``side``: the side view, ``{"caption", "points": [{"name", "xy"}], "arrows": [{"name", "from",
-  "dir"}], "line": [[x, y], [x, y]] or None}`` in the plane of the eye ray and the vertex;
+- ``side``: the side view, ``{"caption", "points": [{"name", "xy", "far"}], "arrows": [{"name",
+  "from", "dir"}], "rays": [[a, b], ...], "line": [[x, y], [x, y]] or None}`` in the plane of the
+  eye ray and the vertex (a ``far`` point is drawn at the view's edge, in its direction from P);
 - ``stop``: the stop reason in words; ``result``: lines of text.
 """
 
@@ -286,13 +287,15 @@ def ldt_data(trace) -> dict:
     I = np.asarray(ray["incident"], np.float64)
     pl = _Plane(P, -I, N, N)
     E = np.asarray(ray["eye"], np.float64) if ray["eye"] is not None else P - I * 2.0
-    pts = [{"name": "eye O" if ray["eye"] is not None else "towards the eye", "xy": pl.xy(E)},
+    reach = res["distance"] if res["object"] >= 0 else 2.0
+    # an eye much farther than the reflected ray reaches is drawn at the view's edge, in its direction
+    far = bool(np.linalg.norm(E - P) > 4.0 * reach)
+    pts = [{"name": "eye O" if ray["eye"] is not None else "towards the eye", "xy": pl.xy(E), "far": far},
            {"name": "reflector point P", "xy": pl.xy(P)}]
     if res["object"] >= 0:
         pts.append({"name": f"hit on object {res['object_id']}", "xy": pl.xy(np.asarray(res["hit"], np.float64))})
     for st in steps:
         st["side"] = {"xy": pl.xy(P + st.pop("s") * r), "normal": None}
-    reach = res["distance"] if res["object"] >= 0 else 2.0
     side = {"caption": "The plane of the eye ray and the normal at the reflector pixel: the reflected ray r leaves "
                        "P; each step's dot is its sample's point P + s r.",
             "points": pts, "arrows": [{"name": "normal N", "from": pl.xy(P), "dir": pl.dir(N)},

@@ -102,12 +102,16 @@
     for (const k in attrs) e.setAttribute(k, attrs[k]); parent.appendChild(e); return e; }
   function drawSide() {
     const sv = $("side"); sv.innerHTML = "";
-    const S = D.side, pts = S.points.map((p) => p.xy);
+    const S = D.side, pts = S.points.filter((p) => !p.far).map((p) => p.xy);
     D.steps.forEach((s) => { if (s.side) pts.push(s.side.xy); });
+    // a far point (an eye much farther than the rest) sits at the edge, in its direction from P
+    const near = Math.max(...pts.map((p) => Math.hypot(p[0], p[1])), 1e-9);
+    const at = (p) => p.far ? p.xy.map((v) => v * 1.1 * near / Math.hypot(p.xy[0], p.xy[1])) : p.xy;
+    S.points.forEach((p) => { if (p.far) pts.push(at(p)); });
     const xs = pts.map((p) => p[0]), ys = pts.map((p) => p[1]);
     let x0 = Math.min(...xs), x1 = Math.max(...xs), y0 = Math.min(...ys), y1 = Math.max(...ys);
     const ext = Math.max(x1 - x0, y1 - y0, 1e-9), pad = 0.12 * ext;
-    x0 -= pad; x1 += pad; y0 -= pad; y1 += pad;
+    x0 -= pad; x1 += pad + 0.3 * ext; y0 -= pad; y1 += pad;  // room on the right for the labels
     const W = 420, sc = W / Math.max(x1 - x0, y1 - y0);
     const H = Math.max(160, (y1 - y0) * sc);
     sv.setAttribute("viewBox", `0 0 ${W} ${H}`); sv.setAttribute("width", W); sv.setAttribute("height", H);
@@ -116,14 +120,17 @@
       'markerHeight="7" orient="auto-start-reverse"><path d="M0,0L10,5L0,10z" fill="context-stroke"/></marker>';
     if (S.line) el("line", {x1: X(S.line[0]), y1: Y(S.line[0]), x2: X(S.line[1]), y2: Y(S.line[1]),
                             stroke: "#999", "stroke-dasharray": "4 3"}, sv);
-    S.rays.forEach((r) => el("line", {x1: X(r[0]), y1: Y(r[0]), x2: X(r[1]), y2: Y(r[1]), stroke: "#555"}, sv));
+    const farOf = (xy) => { const p = S.points.find((q) => q.far && q.xy[0] === xy[0] && q.xy[1] === xy[1]);
+      return p ? at(p) : xy; };
+    S.rays.forEach((r) => { const a = farOf(r[0]), b = farOf(r[1]);
+      el("line", {x1: X(a), y1: Y(a), x2: X(b), y2: Y(b), stroke: "#555"}, sv); });
     const colours = ["#1f77b4", "#d62728"];
     S.arrows.forEach((a, i) => { const e = [a.from[0] + len * a.dir[0], a.from[1] + len * a.dir[1]];
       el("line", {x1: X(a.from), y1: Y(a.from), x2: X(e), y2: Y(e), stroke: colours[i % 2], "stroke-width": 2,
                   "marker-end": "url(#ah)"}, sv);
       el("text", {x: X(e) + 6, y: Y(e) + 14 * i, fill: colours[i % 2], "font-size": 13}, sv).textContent = a.name; });
-    S.points.forEach((p) => { el("circle", {cx: X(p.xy), cy: Y(p.xy), r: 4, fill: "#222"}, sv);
-      el("text", {x: X(p.xy) + 6, y: Y(p.xy) - 6, "font-size": 13}, sv).textContent = p.name; });
+    S.points.forEach((p) => { const xy = at(p); el("circle", {cx: X(xy), cy: Y(xy), r: 4, fill: "#222"}, sv);
+      el("text", {x: X(xy) + 6, y: Y(xy) - 6, "font-size": 13}, sv).textContent = p.name + (p.far ? " (far off)" : ""); });
     const s = n ? D.steps[cur].side : null;
     if (s) {
       el("circle", {cx: X(s.xy), cy: Y(s.xy), r: 5, fill: "none", stroke: "#ff8c00", "stroke-width": 2, id: "side-step"}, sv);
