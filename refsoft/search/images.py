@@ -11,6 +11,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import validate
+from .._parallel import parallel_range
+from ..constants import IMAGE_MERGE, IMAGE_REACH, MAX_IMAGES
+from ..errors import RefsoftError
+
 #: Flag bit (spec section 4.7): the vertex has more than one reflection point on this reflector.
 SEVERAL = 32
 
@@ -50,3 +55,105 @@ class Images:
 
     def __len__(self) -> int:
         return len(self.offset) - 1
+
+
+def _check_result(result, n):
+    from . import SearchResult
+
+    if not isinstance(result, SearchResult):
+        raise RefsoftError(f"result must be a refsoft.search.SearchResult, got {type(result).__name__}")
+    if len(result) != n:
+        raise RefsoftError(f"result has {len(result)} vertices, vertices has {n}")
+
+
+def _prepared(gbuffer, eye):
+    """The packed, cropped G-buffer and its dilated pyramid: ``(G, mask, fp, (r0, c0), pyramid)``."""
+    from . import _images, _packed, hierarchy
+
+    G, mask, fp, crop = _packed(gbuffer, eye)
+    return G, mask, fp, crop, hierarchy.build(G, mask, fp, base=_images.dilated_base)
+
+
+def find_images(gbuffer, eye, vertices, result, reach: float = IMAGE_REACH, merge: float = IMAGE_MERGE) -> Images:
+    """Every reflection point of every vertex on one reflector's G-buffer (spec section 4.8).
+
+    A texel is an image of vertex ``V`` when its score (spec section 4.1) is a maximum of its
+    covered 3x3 neighbourhood, ``V`` lies in front of its tangent plane (``dot(V - P, N) > 0``)
+    and one Newton step solving "normal = bisector" from it moves at most ``reach`` texels (a
+    maximum of a score that no solution is near, at the rim or on a part that does not reflect
+    ``V``, is not an image). Texels whose Newton points lie closer than ``merge`` texels are one
+    image: the one of highest score is kept (ties to the smaller row, then col). The cells of a
+    ray-cone pyramid whose bounds cannot hold a solution are pruned
+    (:mod:`refsoft.search._images`), so a vertex costs a few descents, at most every cell once.
+
+    The walk's pixel (``result.pixel``) comes first when it is an image (covered, ``V`` in
+    front, its Newton step within ``reach``; its own walk made it a maximum), so that the
+    single-image arrays of spec section 7 keep it; the others follow in row-major order.
+
+    Parameters
+    ----------
+    gbuffer : GBuffer
+        The reflector's G-buffer (float32 or float64; scores in its precision, Newton steps in
+        float64).
+    eye : array_like, shape (3,)
+        The eye, world space.
+    vertices : array_like, shape (N, 3)
+        Vertices, world space.
+    result : SearchResult
+        The walk's result for these vertices (its pixel is the first image).
+    reach, merge : float
+        Texels (defaults :data:`~refsoft.constants.IMAGE_REACH`,
+        :data:`~refsoft.constants.IMAGE_MERGE`).
+
+    Returns
+    -------
+    Images
+        Sheets -1 (made by the drawing of every image).
+    """
+    from . import _check_gbuffer, _images
+
+    dt = _check_gbuffer(gbuffer)
+    e = validate.point(eye, "eye")
+    verts = validate.points(vertices, "vertices")
+    _check_result(result, len(verts))
+    validate.number(reach, "reach", minimum=0.0)
+    validate.number(merge, "merge", minimum=0.0)
+    n = len(verts)
+    count = np.zeros(n, dtype=np.int32)
+    pixel = np.full((n, MAX_IMAGES, 2), -1, dtype=np.int32)
+    if n and gbuffer.mask.any():
+        G, mask, fp, (r0, c0), (sph, cone, offsets, sizes) = _prepared(gbuffer, e)
+        first = np.ascontiguousarray(np.asarray(result.pixel, dtype=np.int64) - [r0, c0])
+        first[np.asarray(result.pixel)[:, 0] < 0] = -1
+        stats = np.zeros((n, 4), dtype=np.int64)
+        parallel_range(_images.enumerate_all, n, G, mask, sph, cone, offsets, sizes, len(sizes),
+                       np.ascontiguousarray(verts), np.asarray(gbuffer.origin, dtype=np.float64), first, float(reach),
+                       float(merge), fp, count, pixel, stats)
+        pixel[:, :, 0] += r0
+        pixel[:, :, 1] += c0
+    return _record(gbuffer, verts, count, pixel)
+
+
+def _record(gbuffer, verts, count, pixel) -> Images:
+    """The :class:`Images` of per-vertex ``count`` (N,) and ``pixel`` (N, MAX_IMAGES, 2) (G-buffer
+    coordinates): rows compressed, virtual vertices mirrored in float64 (spec section 4.6)."""
+    offset = np.zeros(len(count) + 1, dtype=np.int64)
+    np.cumsum(count, out=offset[1:])
+    take = np.arange(MAX_IMAGES)[None, :] < count[:, None]
+    pix = np.ascontiguousarray(pixel[take], dtype=np.int32)
+    vert = np.repeat(np.arange(len(count)), count)
+    return Images(offset, pix, mirrored(gbuffer, verts[vert], pix), np.full(len(pix), -1, dtype=np.int32))
+
+
+def mirrored(gbuffer, vertices, pixels) -> np.ndarray:
+    """``V - 2 dot(V - P, N) N`` (spec section 4.6) per row, float64 world space, with P and N the
+    G-buffer's at ``pixels`` (M, 2); shape (M, 3)."""
+    v = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
+    if not len(v):
+        return np.zeros((0, 3), dtype=np.float64)
+    r, c = pixels[:, 0], pixels[:, 1]
+    p = gbuffer.position[r, c].astype(np.float64) + np.asarray(gbuffer.origin, dtype=np.float64)
+    nrm = gbuffer.normal[r, c].astype(np.float64)
+    d = v - p
+    k = 2.0 * ((d[:, 0] * nrm[:, 0] + d[:, 1] * nrm[:, 1]) + d[:, 2] * nrm[:, 2])
+    return v - k[:, None] * nrm
