@@ -225,3 +225,6 @@ IMAGE_BOUND_FACTOR = 2.5
 #: examined per vertex before merging.
 MAX_IMAGES = 16
 IMAGE_CANDIDATES = 64
+#: The convex skip (refsoft.search.convex): a one-ring vertex counts as on a triangle's plane
+#: within this fraction of the mesh's extent (the weld's 1e-9: rounding of coplanar points).
+CONVEX_TOLERANCE = 1e-9
