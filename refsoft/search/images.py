@@ -17,7 +17,7 @@ from ..constants import IMAGE_MERGE, IMAGE_REACH, MAX_IMAGES
 from ..errors import RefsoftError
 
 #: Flag bit (spec section 4.7): the vertex has more than one reflection point on this reflector.
-SEVERAL = 32
+from ._kernels import SEVERAL  # noqa: E402  (defined beside the other flags)
 
 
 @dataclass(frozen=True, eq=False)
