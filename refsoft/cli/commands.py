@@ -120,7 +120,24 @@ def cmd_trace(args) -> int:
     write_trace(args.out, rp)
     print(f"wrote {args.out}/trace.json, trace.png (score field -log10(1 - s), path, start green, end red) "
           f"and trace.gif ({len(tr.steps)} steps)")
+    _trace_images(args, scene, rp, RenderOptions(**opts).images)
     return 0
+
+
+def _trace_images(args, scene, rp, mode):
+    """With ``images="all"``, print how every image of the vertex was found and write images.json."""
+    from ..io import write_json
+    from ..search.trace import trace_vertex_images
+
+    if mode != "all":
+        return
+    it = trace_vertex_images(scene, rp)
+    if it is None:
+        print(f"every image: reflector {rp.reflector} is convex (at most one reflection point): nothing enumerated")
+        return
+    print(it.table())
+    write_json(os.path.join(args.out, "images.json"), it.to_dict())
+    print(f"wrote {args.out}/images.json")
 
 
 class _FirstRunNotice:

@@ -135,3 +135,18 @@ def test_bad_inputs(case):
     with pytest.raises(RefsoftError, match="reach"):
         find_images(gb, eye, verts, res, reach=-1.0)
     assert SEVERAL == 32
+
+
+def test_trace_replays_the_kernel(case):
+    from refsoft.search.images import VERDICTS, trace_images
+
+    kind, gb, eye, verts, res = case
+    im = find_images(gb, eye, verts, res)
+    for i in range(0, len(verts), 4):
+        tr = trace_images(gb, eye, verts[i], res.pixel[i])
+        assert [tuple(p) for p in tr.images] == _rows(im, i)
+        assert tr.visited + tr.pruned >= 1 and tr.judged >= sum(m["verdict"] == "accepted" for m in tr.maxima)
+        assert all(m["verdict"] in VERDICTS for m in tr.maxima)
+        accepted = {tuple(m["texel"]) for m in tr.maxima if m["verdict"] == "accepted"}
+        assert set(_rows(im, i)) - {tuple(res.pixel[i])} <= accepted
+        assert "every image" in tr.table() and tr.to_dict()["images"] == tr.images

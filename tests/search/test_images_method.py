@@ -103,3 +103,17 @@ def test_several_lines():
     assert several_lines([{"frame": 0}]) == []
     two = frames + [{"frame": 1, "images": {"1": {"0": 0, "1": 10, "2": 30, "3+": 0}}}]
     assert several_lines(two) == ["reflector 1: 30 vertices with several images (30 two, 0 three or more), frame 1"]
+
+
+def test_trace_cli_lists_the_images(tmp_path, capsys):
+    from refsoft.cli import main
+
+    scene = refsoft.load_scene("concave", width=W, height=H)
+    fr = FrameDriver(scene, RenderOptions()).render_frame(0)
+    i = int(np.flatnonzero(fr.arrays[keys.IMAGE_COUNT(1)] >= 2)[0])
+    assert main(["trace", "concave", "--vertex", str(i), "--width", str(W), "--height", str(H), "--out",
+                 str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    assert "every image: " in out and "pyramid cells visited" in out and (tmp_path / "images.json").exists()
+    assert main(["trace", "sphere", "--vertex", "0", "--width", "32", "--height", "24", "--out", str(tmp_path / "s")]) == 0
+    assert "convex" in capsys.readouterr().out
