@@ -207,3 +207,24 @@ SUBPIXEL_HALF = SUBPIXEL_ONE >> 1
 #: Embree traces the reflected rays split over the threads in parts of at least this many rays
 #: (fewer rays: one call; the split does not change any ray's answer).
 TRUTH_RAYS_PER_THREAD = 20000
+
+# --- Every reflection point of a vertex (spec section 4.8) ------------------------------------
+#: ``images`` option: every reflection point (``all``) or the walk's one (``one``, the papers).
+IMAGE_MODES = ("all", "one")
+#: A texel that is a local maximum of the score is an image when one Newton step solving
+#: "normal = bisector" from it moves at most this many texels (Euclidean, in the texel grid).
+IMAGE_REACH = 1.5
+#: Accepted maxima whose Newton points lie closer than this many texels are one solution (a
+#: plateau or a tie): the best score is kept.
+IMAGE_MERGE = 1.0
+#: The enumeration's per-texel bounds cover this many times the largest step (position and
+#: reflected direction) to a 3x3 neighbour: more than the IMAGE_REACH texels (up to sqrt(2) IMAGE_REACH
+#: along a diagonal) a solution may lie from its texel.
+IMAGE_BOUND_FACTOR = 2.5
+#: Images kept per vertex and reflector (a concave sphere gives at most 4); accepted maxima
+#: examined per vertex before merging.
+MAX_IMAGES = 16
+IMAGE_CANDIDATES = 64
+#: The convex skip (refsoft.search.convex): a one-ring vertex counts as on a triangle's plane
+#: within this fraction of the mesh's extent (the weld's 1e-9: rounding of coplanar points).
+CONVEX_TOLERANCE = 1e-9

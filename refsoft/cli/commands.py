@@ -120,7 +120,24 @@ def cmd_trace(args) -> int:
     write_trace(args.out, rp)
     print(f"wrote {args.out}/trace.json, trace.png (score field -log10(1 - s), path, start green, end red) "
           f"and trace.gif ({len(tr.steps)} steps)")
+    _trace_images(args, scene, rp, RenderOptions(**opts).images)
     return 0
+
+
+def _trace_images(args, scene, rp, mode):
+    """With ``images="all"``, print how every image of the vertex was found and write images.json."""
+    from ..io import write_json
+    from ..search.trace import trace_vertex_images
+
+    if mode != "all":
+        return
+    it = trace_vertex_images(scene, rp)
+    if it is None:
+        print(f"every image: reflector {rp.reflector} is convex (at most one reflection point): nothing enumerated")
+        return
+    print(it.table())
+    write_json(os.path.join(args.out, "images.json"), it.to_dict())
+    print(f"wrote {args.out}/images.json")
 
 
 class _FirstRunNotice:
@@ -212,7 +229,28 @@ def cmd_render(args) -> int:
                 f"({_timing(done, notice.compiling)}); search iterations: max frame mean "
                 f"{summ['max_frame_mean_iterations']:.1f}, total mean {summ['total_mean_iterations']:.1f}")
     print(f"{scene.name}: {len(keep)} frame(s), {what}")
+    for line in several_lines(stats["frames"], lambda k: scene.object_by_id(k).name):
+        print(line)
     return 0
+
+
+def several_lines(frames, name=None) -> list[str]:
+    """One line per reflector that showed vertices with several images in ``frames`` (the
+    ``stats.json`` frame records): how many, in the frame with the most (``name(k)``, optional,
+    names reflector k)."""
+    most = {}
+    for f in frames:
+        for k, c in (f.get("images") or {}).items():
+            n = c["2"] + c["3+"]
+            if n and (k not in most or n > most[k][0]):
+                most[k] = (n, c, f["frame"])
+    lines = []
+    for k in sorted(most, key=int):
+        n, c, frame = most[k]
+        who = f"reflector {k}" + (f" ({name(int(k))})" if name is not None else "")
+        when = f", frame {frame}" if len(frames) > 1 else ""
+        lines.append(f"{who}: {n} vertices with several images ({c['2']} two, {c['3+']} three or more){when}")
+    return lines
 
 
 def cmd_truth(args) -> int:
@@ -406,4 +444,17 @@ def cmd_compare(args) -> int:
     print(f"{s['frames']} frame(s): reflected_id differs on {100 * s['reflected_id_disagreement']:.2f}% of reflector "
           f"pixels{extra}; wrote {out}/metrics.json, agreement_NNNN.png (green agree, red differ) and side_NNNN.png "
           f"(render | truth | 4x difference)")
+    for line in several_lines(_render_stats(args.render_dir)):
+        print(line)
     return 0
+
+
+def _render_stats(folder) -> list:
+    """The frame records of a render folder's ``stats.json`` ([] when it has none)."""
+    import json
+
+    try:
+        with open(os.path.join(folder, "stats.json"), encoding="utf-8") as fh:
+            return list(json.load(fh).get("frames", []))
+    except (OSError, ValueError):
+        return []
