@@ -189,6 +189,13 @@ ARC_SAMPLES = 64
 XTOL = 1e-15
 RTOL = 4 * np.finfo(np.float64).eps
 MAXITER = 200
+#: Samples around the whole great circle that bracket the reflection points seen from inside a
+#: sphere (roots closer than ``2 pi / INSIDE_ARC_SAMPLES`` radians may share a sample interval).
+INSIDE_ARC_SAMPLES = 1024
+#: Most reflection points of one point seen from inside a sphere (Alhazen's quartic).
+MAX_SPHERE_IMAGES = 4
+#: Relative length below which the arc's plane is degenerate (eye, point and centre collinear).
+COLLINEAR_TOL = 1e-12
 
 # --- Kernel sentinels ---
 #: The score of "no candidate" (a missing second-best) and of an uncovered or outside pixel:
