@@ -167,6 +167,11 @@ ENVMAP_TIE_ULP = 8
 #: The rim of a reflector's stencil, in 8-neighbour steps: "interior" and "rim" agreement split
 #: there.
 RIM_PIXELS = 2
+#: A speck: a mirror pixel more than SPECK_LEVELS (8-bit levels, the largest channel difference)
+#: off the truth whose two neighbours along a row or along a column are within
+#: SPECK_NEIGHBOUR_LEVELS of it.
+SPECK_LEVELS = 30
+SPECK_NEIGHBOUR_LEVELS = 8
 
 # --- Search and its options beyond the papers ---------------------------------------------
 #: Edge, in pixels, of the cells vertices are grouped by before searching (cache locality).
