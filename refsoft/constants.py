@@ -167,6 +167,11 @@ ENVMAP_TIE_ULP = 8
 #: The rim of a reflector's stencil, in 8-neighbour steps: "interior" and "rim" agreement split
 #: there.
 RIM_PIXELS = 2
+#: A speck: a mirror pixel more than SPECK_LEVELS (8-bit levels, the largest channel difference)
+#: off the truth whose two neighbours along a row or along a column are within
+#: SPECK_NEIGHBOUR_LEVELS of it.
+SPECK_LEVELS = 30
+SPECK_NEIGHBOUR_LEVELS = 8
 
 # --- Search and its options beyond the papers ---------------------------------------------
 #: Edge, in pixels, of the cells vertices are grouped by before searching (cache locality).
@@ -189,6 +194,13 @@ ARC_SAMPLES = 64
 XTOL = 1e-15
 RTOL = 4 * np.finfo(np.float64).eps
 MAXITER = 200
+#: Samples around the whole great circle that bracket the reflection points seen from inside a
+#: sphere (roots closer than ``2 pi / INSIDE_ARC_SAMPLES`` radians may share a sample interval).
+INSIDE_ARC_SAMPLES = 1024
+#: Most reflection points of one point seen from inside a sphere (Alhazen's quartic).
+MAX_SPHERE_IMAGES = 4
+#: Relative length below which the arc's plane is degenerate (eye, point and centre collinear).
+COLLINEAR_TOL = 1e-12
 
 # --- Kernel sentinels ---
 #: The score of "no candidate" (a missing second-best) and of an uncovered or outside pixel:

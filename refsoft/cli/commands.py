@@ -421,7 +421,7 @@ def cmd_compare(args) -> int:
     from ..truth.compare import compare_runs
 
     header = [f"{'frame':>5} {'refl px':>8} {'id disagree':>11} {'interior':>9} {'colour mean':>11} {'colour p99':>10}"
-              f"  per-vertex (reflector: px mean/max, |V'-V'*| mean) or per-pixel hit |X-X*| median/max"]
+              f" {'specks':>6} {'holes':>6}  per-vertex (reflector: px mean/max, |V'-V'*| mean) or per-pixel hit |X-X*| median/max"]
 
     def row(m):
         while header:  # printed with the first row: a refused comparison prints only its error
@@ -433,7 +433,7 @@ def cmd_compare(args) -> int:
             verts = f"hit {m['hit_distance']['median']:.2e}/{m['hit_distance']['max']:.2e}"
         print(f"{m['frame']:>5} {m['reflector_pixels']:>8} {100 * m['reflected_id_disagreement']:>10.2f}% "
               f"{100 * m['interior_disagreement']:>8.2f}% {m['color_error']['mean']:>11.4f} "
-              f"{m['color_error']['p99']:>10.4f}  {verts}")
+              f"{m['color_error']['p99']:>10.4f} {m['specks']:>6} {m['holes']:>6}  {verts}")
 
     out = args.out
     report = compare_runs(args.render_dir, args.truth_dir, out, on_frame=row)
@@ -442,7 +442,8 @@ def cmd_compare(args) -> int:
     if s["only_in_render"] or s["only_in_truth"]:
         extra = f" (not compared: {len(s['only_in_render'])} render-only, {len(s['only_in_truth'])} truth-only frames)"
     print(f"{s['frames']} frame(s): reflected_id differs on {100 * s['reflected_id_disagreement']:.2f}% of reflector "
-          f"pixels{extra}; wrote {out}/metrics.json, agreement_NNNN.png (green agree, red differ) and side_NNNN.png "
+          f"pixels; {s['specks']} specks ({100 * s['speck_fraction']:.3f}%), {s['holes']} holes "
+          f"({100 * s['hole_fraction']:.3f}%){extra}; wrote {out}/metrics.json, agreement_NNNN.png (green agree, red differ) and side_NNNN.png "
           f"(render | truth | 4x difference)")
     for line in several_lines(_render_stats(args.render_dir)):
         print(line)
