@@ -240,3 +240,7 @@ IMAGE_CANDIDATES = 64
 #: The convex skip (refsoft.search.convex): a one-ring vertex counts as on a triangle's plane
 #: within this fraction of the mesh's extent (the weld's 1e-9: rounding of coplanar points).
 CONVEX_TOLERANCE = 1e-9
+# --- The trace viewer (trace.html) -------------------------------------------------------------
+#: A heat map embedded in trace.html holds at most this many pixels (about 10 bytes each in the
+#: page); a larger reflector is traced at a smaller --width/--height.
+VIEWER_MAX_GRID_PIXELS = 400_000

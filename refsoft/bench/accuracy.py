@@ -248,20 +248,21 @@ def _plot(plt, out, summary):
     from ..io import atomic_path
 
     scenes = list(dict.fromkeys(r["scene"] for r in summary))
-    fig, axes = plt.subplots(1, len(scenes), figsize=(3.4 * len(scenes), 3.2), squeeze=False)
+    fig, axes = plt.subplots(1, len(scenes), figsize=(5.0 * len(scenes), 4.4), squeeze=False)
     for ax, name in zip(axes[0], scenes):
         for size, marker in zip(sorted({r["size"] for r in summary}), "os^"):
             sel = [r for r in summary if r["scene"] == name and r["size"] == size and r["ms"] is not None]
             ax.scatter([r["ms"] for r in sel], [100 * r["median"] for r in sel], marker=marker, s=16, label=size)
             for r in sel:
                 if r["setting"] in ("paper", "accurate"):
-                    ax.annotate(r["setting"], (r["ms"], 100 * r["median"]), fontsize=6, xytext=(3, 2),
+                    ax.annotate(r["setting"], (r["ms"], 100 * r["median"]), fontsize=9, xytext=(3, 2),
                                 textcoords="offset points")
-        ax.set_title(name)
-        ax.set_xlabel("ms per frame")
-        ax.set_ylabel("agreement %")
-        ax.legend(fontsize=6)
+        ax.set_title(name, fontsize=12)
+        ax.set_xlabel("ms per frame", fontsize=11)
+        ax.set_ylabel("agreement with the truth (%)", fontsize=11)
+        ax.tick_params(labelsize=10)
+        ax.legend(fontsize=9)
     fig.tight_layout()
-    with atomic_path(os.path.join(out, "accuracy.png"), ".png") as tmp:
-        fig.savefig(tmp, dpi=110, format="png")
+    with atomic_path(os.path.join(out, "accuracy.png"), ".png") as tmp:  # "tight": no label clipped at an edge
+        fig.savefig(tmp, dpi=110, format="png", bbox_inches="tight")
     plt.close(fig)

@@ -58,6 +58,7 @@ def cmd_gbuffer(args) -> int:
 def _trace_ldt_pixel(args, scene) -> int:
     from ..ldt.trace import trace_pixel, write_pixel_trace
     from ..options import RenderOptions
+    from ..viewer import write_trace_page
 
     given = [flag for flag, v in (("--vertex", args.vertex), ("--reflector", args.reflector),
                                   ("--neighbourhood", args.neighbourhood), ("--inverse", args.inverse),
@@ -73,15 +74,44 @@ def _trace_ldt_pixel(args, scene) -> int:
     tr = trace_pixel(scene, args.pixel[0], args.pixel[1], args.frame, options=RenderOptions(**kwargs))
     print(tr.describe())
     print(tr.table(bisection=args.bisection))
-    written = write_pixel_trace(args.out, tr)
-    print(f"wrote {args.out}/" + " and ".join(written)
+    written = write_pixel_trace(args.out, tr) + [write_trace_page(args.out, tr)]
+    print(f"wrote {args.out}/" + ", ".join(written) + " (open trace.html in a browser to step through the search)"
           + ("" if "trace.png" in written else " (no picture: pip install '.[plot]' for matplotlib)"))
+    return 0
+
+
+def _suggest_vertices(args, scene) -> int:
+    """``refsoft trace SCENE`` without ``--vertex``: list vertices worth tracing."""
+    import shlex
+
+    from ..search import flag_names
+    from ..search.suggest import interesting_vertices
+
+    opts = search_kwargs(args)
+    opts.pop("coherence", None)
+    found = interesting_vertices(scene, args.reflector, args.frame, **opts)
+    k = args.reflector or scene.reflector_ids[0]
+    print(f"no --vertex given: vertices worth tracing in reflector {k} ({scene.object_by_id(k).name!r}), frame "
+          f"{args.frame} (each searched from the reflector's centre, without coherence):")
+    print(f"{'what':<34} {'vertex':>7} {'iterations':>10}  {'pixel':<12} flags")
+    for f in found:
+        pix = f"({f['pixel'][0]}, {f['pixel'][1]})"
+        print(f"{f['kind']:<34} {f['vertex']:>7} {f['iterations']:>10}  {pix:<12} "
+              f"{', '.join(flag_names(f['flags'])) or 'none'}")
+    if found:
+        extra = [] if args.frame == 0 else ["--frame", str(args.frame), "--no-coherence"]
+        for flag, v in (("--width", args.width), ("--height", args.height), ("--subdivide", args.subdivide),
+                        ("--reflector", args.reflector)):
+            extra += [] if v is None else [flag, str(v)]
+        print("trace one with: refsoft trace " + shlex.join([args.scene, "--vertex", str(found[0]["vertex"]), *extra])
+              + " (and the search options given here); the LDT: --method ldt --pixel ROW COL")
     return 0
 
 
 def cmd_trace(args) -> int:
     from ..search.pictures import write_trace
     from ..search.trace import trace_vertex
+    from ..viewer import write_trace_page
 
     scene = _scene(args)
     from ..options import RenderOptions
@@ -94,7 +124,7 @@ def cmd_trace(args) -> int:
     if args.pixel is not None or args.bisection or ldt_kwargs(args):
         raise RefsoftError("--pixel, --bisection and the --ldt-* options trace the LDT search: add --method ldt")
     if args.vertex is None:
-        raise RefsoftError("give --vertex I (the vertex search) or --method ldt --pixel ROW COL")
+        return _suggest_vertices(args, scene)
 
     opts = search_kwargs(args)
     coherence = opts.pop("coherence", True)
@@ -110,16 +140,17 @@ def cmd_trace(args) -> int:
             if st["event"] in ("popped", "chosen"):
                 print(f"{n:>4} {st['attempt']:>7} {st['level']:>5} {str(tuple(st['texel'])):>12}  {st['event']}")
         print(f"result: pixel {tr.pixel} after {tr.tests} texel tests")
-        written = write_trace(args.out, rp)
-        print(f"wrote {args.out}/{' and '.join(written)}")
+        written = write_trace(args.out, rp) + [write_trace_page(args.out, rp)]
+        print(f"wrote {args.out}/{', '.join(written)} (open trace.html in a browser to step through the traversal)")
         return 0
     print(f"vertex {rp.vertex} (object {rp.vertex_object} {name(rp.vertex_object)!r}, its vertex {rp.local_index}) "
           f"in reflector {rp.reflector} ({name(rp.reflector)!r}), frame {rp.frame}, {neighbourhood}, start "
           f"({tr.start[0]}, {tr.start[1]}){' after a restart' if tr.restarted else ''}")
     print(tr.table())
     write_trace(args.out, rp)
-    print(f"wrote {args.out}/trace.json, trace.png (score field -log10(1 - s), path, start green, end red) "
-          f"and trace.gif ({len(tr.steps)} steps)")
+    write_trace_page(args.out, rp)
+    print(f"wrote {args.out}/trace.json, trace.png (score field -log10(1 - s), path, start green, end red), "
+          f"trace.gif ({len(tr.steps)} steps) and trace.html (open it in a browser to step through the search)")
     _trace_images(args, scene, rp, RenderOptions(**opts).images)
     return 0
 
@@ -206,7 +237,12 @@ def cmd_render(args) -> int:
         if args.frame is not None:
             if args.frame < 0 or (scene.animation is not None and args.frame >= scene.n_frames):
                 raise RefsoftError(f"--frame must be in [0, {scene.n_frames - 1}], got {args.frame}")
-            frames = list(range(args.frame + 1)) if not args.no_coherence else [args.frame]
+            if args.no_coherence or args.frame == 0:
+                frames = [args.frame]
+            elif scene.animation is None:  # every frame of a static scene is frame 1: its coherent start is frame 0's
+                frames = [0, args.frame]
+            else:
+                frames = list(range(args.frame + 1))
             write = {args.frame}
         out = args.out or os.path.join("out", scene.name)
         t0 = time.perf_counter()
@@ -346,9 +382,19 @@ def cmd_export(args) -> int:
 
 
 def cmd_bench(args) -> int:
-    from .. import bench
-    from ..bench.report import file_link
+    import shlex
 
+    from .. import bench
+    from ..bench.report import COMMAND, file_link
+
+    token = COMMAND.set(shlex.join(["refsoft", *getattr(args, "argv", ["bench", args.what])]))
+    try:
+        return _bench(args, bench, file_link)
+    finally:
+        COMMAND.reset(token)
+
+
+def _bench(args, bench, file_link) -> int:
     out = args.out or os.path.join("out", "bench", args.what)
     t0 = time.perf_counter()
     unused = {"accuracy": ("knob", "width", "height", "repeats", "max_vertices", "max_subdivisions", "max_width"),

@@ -109,12 +109,16 @@ RUN_FILES = ("frame_[0-9]*.npz", "frame_[0-9]*.png", "stats.json", "run.json", "
 
 def run_manifest(kind: str, scene, frames, options=None) -> dict:
     """``run.json``: what a run into a folder is (``kind``: "render" or "truth"), so that
-    ``compare`` and later runs can tell whose frames a folder holds."""
+    ``compare`` and later runs can tell whose frames a folder holds. ``vertices`` counts the
+    vertices searched (the non-reflector objects'), ``vertices_all`` every object's (what
+    ``refsoft scenes`` lists)."""
     from .. import __version__
 
     return {"format": RUN_FORMAT, "kind": kind, "scene": scene.name, "width": int(scene.camera.width),
             "height": int(scene.camera.height), "frames": [int(f) for f in frames],
+            # searched: the non-reflector objects' vertices; all: every object's, as `refsoft scenes` counts
             "vertices": int(sum(o.mesh.n_vertices for o in scene.objects if not o.reflector)),
+            "vertices_all": int(sum(o.mesh.n_vertices for o in scene.objects)),
             "reflectors": list(scene.reflector_ids), "options": None if options is None else options.as_dict(),
             "refsoft": __version__}
 

@@ -68,7 +68,11 @@ def load_scene(name_or_path, subdivide=None, **overrides) -> Scene:
     elif key.endswith(".toml") or os.path.sep in key or os.path.exists(key):
         scene = load_scene_file(key, subdivide)
     else:
-        raise SceneError(f"unknown scene {key!r}: not a built-in ({', '.join(BUILTIN_SCENES)}) nor a .toml file")
+        import difflib
+
+        near = difflib.get_close_matches(key.lower(), list(BUILTIN_SCENES), n=1, cutoff=0.6)
+        hint = f" (did you mean {near[0]!r}?)" if near else ""
+        raise SceneError(f"unknown scene {key!r}{hint}: not a built-in ({', '.join(BUILTIN_SCENES)}) nor a .toml file")
     if overrides:
         overrides = {k: v for k, v in overrides.items() if v is not None}
         scene = replace(scene, camera=replace(scene.camera, **overrides))
