@@ -1,4 +1,5 @@
-"""Regenerate the figures under docs/figures/ from the code: ``python docs/make_figures.py``.
+"""Regenerate the figures under docs/figures/ from the code: ``python docs/make_figures.py``
+(``python docs/make_figures.py teaching``: docs/teaching.md's only).
 
 Needs the ``plot`` extra (matplotlib) for the fill-rule diagram.
 """
@@ -228,8 +229,54 @@ def check_figure():
     write_png(os.path.join(FIG, "check_report.png"), side_by_side(*pics))
 
 
-if __name__ == "__main__":
+def teaching_figures():
+    """docs/teaching.md's figures: one vertex's walk on the sphere as the trace command draws it
+    (trace.png, three GIF frames), its trace.html, and a screenshot of that page in headless
+    chromium (when Playwright and chromium are installed)."""
+    from refsoft.search.pictures import trace_frames, trace_picture
+    from refsoft.search.trace import trace_vertex
+    from refsoft.viewer import write_page, walk_data
+
+    scene = refsoft.load_scene("sphere", width=320, height=240)
+    rp = trace_vertex(scene, TEACHING_VERTEX, neighbourhood="cross", inverse="search")
+    mask = rp.gbuffer.mask
+    write_png(os.path.join(FIG, "teaching_trace.png"), trace_picture(rp.trace, mask, labelled=True, replay=rp))
+    frames = trace_frames(rp.trace, mask, size=300, labelled=True)
+    n = len(rp.trace.steps)
+    write_png(os.path.join(FIG, "teaching_steps.png"), side_by_side(frames[0], frames[n // 2], frames[n - 1]))
+    page = os.path.join(FIG, "teaching_trace.html")
+    write_page(page, walk_data(rp))
+    with open(os.path.join(FIG, "teaching_trace.txt"), "w") as fh:
+        fh.write(rp.trace.table() + "\n")
+    try:
+        import tempfile
+
+        from playwright.sync_api import sync_playwright
+    except ImportError:
+        print("playwright missing: teaching_viewer.png not made", file=sys.stderr)
+        return
+    args = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+            "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+    with sync_playwright() as p, tempfile.TemporaryDirectory() as profile:
+        ctx = p.chromium.launch_persistent_context(profile, executable_path="/usr/bin/chromium", args=args,
+                                                   headless=True, viewport={"width": 1320, "height": 940})
+        pg = ctx.new_page()
+        pg.goto("file://" + page)
+        pg.evaluate(f"window.refsoftViewer.go({n // 2})")
+        pg.screenshot(path=os.path.join(FIG, "teaching_viewer.png"))
+        ctx.close()
+
+
+#: The vertex of docs/teaching.md's lesson (the sphere scene at 320x240).
+TEACHING_VERTEX = 1500
+
+
+if __name__ == "__main__" and sys.argv[1:] == ["teaching"]:
     os.makedirs(FIG, exist_ok=True)
+    teaching_figures()
+elif __name__ == "__main__":
+    os.makedirs(FIG, exist_ok=True)
+    teaching_figures()
     gbuffer_figure()
     trace_figure()
     frame_figure()

@@ -176,6 +176,12 @@ _BENCH_OPTIONS = [
     (("--max-subdivisions",), dict(type=int, default=8, metavar="N", help="largest icosphere subdivision"),
      ("scaling",)),
     (("--max-width",), dict(type=int, default=2048, metavar="W", help="largest image width"), ("scaling",)),
+    (("--gbuffer-scales",), dict(nargs="+", type=float, default=None, metavar="S",
+                                 help="G-buffer pixel densities against the view's, one table per value (default 1)"),
+     ("table1",)),
+    (("--slowdowns",), dict(nargs="+", type=int, default=None, metavar="M",
+                            help="render each animation with M times the frames (each moving 1/M as far), one table "
+                                 "per value (default 1)"), ("table1",)),
     (("--scheduler",), dict(default=None, metavar="WHERE",
                             help="where the tasks run: 'local' (a Dask cluster on this machine; the default when Dask "
                                  "is installed), 'serial' (one after another in this process) or tcp://HOST:PORT (a "

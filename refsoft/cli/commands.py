@@ -397,9 +397,11 @@ def cmd_bench(args) -> int:
 def _bench(args, bench, file_link) -> int:
     out = args.out or os.path.join("out", "bench", args.what)
     t0 = time.perf_counter()
-    unused = {"accuracy": ("knob", "width", "height", "repeats", "max_vertices", "max_subdivisions", "max_width"),
-              "sweep": ("sizes", "setting", "max_vertices", "max_subdivisions", "max_width"),
-              "scaling": ("scenes", "knob", "frames", "sizes", "setting", "no_timing"),
+    only_table1 = ("gbuffer_scales", "slowdowns")
+    unused = {"accuracy": ("knob", "width", "height", "repeats", "max_vertices", "max_subdivisions", "max_width",
+                           *only_table1),
+              "sweep": ("sizes", "setting", "max_vertices", "max_subdivisions", "max_width", *only_table1),
+              "scaling": ("scenes", "knob", "frames", "sizes", "setting", "no_timing", *only_table1),
               "table1": ("knob", "repeats", "sizes", "setting", "max_vertices", "max_subdivisions", "max_width")}
     given = [name for name in unused[args.what] if getattr(args, name) not in (None, False, [])
              and getattr(args, name) != BENCH_DEFAULTS.get(name)]
@@ -440,11 +442,13 @@ def _bench(args, bench, file_link) -> int:
               f"{out}/scaling.csv, .md{plot}")
     else:
         rows = bench.table1(args.scenes or ["kitchen", "ufo", "ants"], out, args.width or 1024, args.height or 768,
-                            args.frames, progress_bar=True, run_info=info, **timing, **run)
+                            args.frames, progress_bar=True, run_info=info, gbuffer_scales=args.gbuffer_scales or (1.0,),
+                            slowdowns=args.slowdowns or (1,), **timing, **run)
         for r in rows:
             ms = f", {r['ms_per_frame']} ms/frame (paper {r['paper_ms_per_frame']})" if r["ms_per_frame"] is not None \
                 else ""
-            print(f"{r['scene']:<8} max frame mean {r['max_frame_mean']:6.2f} (paper {r['paper_max_frame_mean']}), "
+            print(f"{r['scene']:<8} G-buffer {r['gbuffer']:>9} slowdown {r['slowdown']} ({r['frames']} frames): "
+                  f"max frame mean {r['max_frame_mean']:6.2f} (paper {r['paper_max_frame_mean']}), "
                   f"total mean {r['total_mean']:5.2f} (paper {r['paper_total_mean']}){ms}")
         print(f"table1 in {time.perf_counter() - t0:.0f} s ({info['run'].line()}); {out}/table1.csv, table1.md")
     print(f"report: {file_link(os.path.join(out, 'report.html'))}")

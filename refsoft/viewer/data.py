@@ -124,7 +124,8 @@ def _vertex_side(gbuffer, eye, vertex, end, rule_note=""):
                         f"leaves this plane by {pl.out_deg:.2f}°; at the reflection point N and the bisector B "
                         f"coincide. V' is V mirrored across the tangent plane at P{rule_note}."),
             "points": [{"name": "eye O", "xy": pl.xy(E)}, {"name": "vertex V", "xy": pl.xy(V)},
-                       {"name": "reflection point P", "xy": pl.xy(P)}, {"name": "virtual vertex V'", "xy": pl.xy(virtual)}],
+                       {"name": "reflection point P", "xy": pl.xy(P)},
+                       {"name": "virtual vertex V'", "xy": pl.xy(virtual)}],
             "arrows": [{"name": "normal N", "from": pl.xy(P), "dir": pl.dir(N)},
                        {"name": "bisector B", "from": pl.xy(P), "dir": pl.dir(B)}],
             "rays": [[pl.xy(E), pl.xy(P)], [pl.xy(P), pl.xy(V)], [pl.xy(P), pl.xy(virtual)]],
@@ -263,8 +264,8 @@ def ldt_data(trace) -> dict:
                                f"{fc['name']}: layer 0's z", "z_0 (0 at the face's plane)", LDT_FORMULA, "linear"))
             for smp in fc["samples"]:
                 cells = [{"name": f"layer {v['layer']}", "pixel": smp["texel"], "status": v["test"], "value": v["z"],
-                          "text": f"z {v['z']:.6f}" + ("" if v["d"] is None else f", d {v['d']:.6f}") + f": {v['test']}"}
-                         for v in smp["layers"]]
+                          "text": f"z {v['z']:.6f}" + ("" if v["d"] is None else f", d {v['d']:.6f}")
+                          + f": {v['test']}"} for v in smp["layers"]]
                 width = max(width, len(cells))
                 hit = [i for i, v in enumerate(smp["layers"]) if v["test"] == "inside"]
                 steps.append({"grid": g, "label": f"{fc['name']} m{smp['m']}", "phase": "linear",
@@ -277,7 +278,8 @@ def ldt_data(trace) -> dict:
                                                          "value": pt["z"], "text": f"z {pt['z']:.6f}, d {pt['d']:.6f}"}]
                     steps.append({"grid": g, "label": f"{fc['name']} b{b}", "phase": "bisection",
                                   "pixel": list(pt["texel"]), "rect": None, "cells": cells,
-                                  "chosen": 0 if pt["inside"] else None, "note": "inside" if pt["inside"] else "outside",
+                                  "chosen": 0 if pt["inside"] else None,
+                                  "note": "inside" if pt["inside"] else "outside",
                                   "s": pt["s"]})
     ray, res = trace.ray, trace.result
     P, N, r = (np.asarray(ray[k], np.float64) for k in ("origin", "normal", "direction"))
@@ -313,4 +315,5 @@ def ldt_data(trace) -> dict:
             "grids": grids, "columns": [f"layer {j}" for j in range(width)], "n_candidates": width, "steps": steps,
             "start": steps[0]["pixel"] if steps else [0, 0], "end": steps[-1]["pixel"] if steps else [0, 0],
             "images": [], "side": side, "stop": stop,
-            "result": [f"{res['linear_samples']} linear samples, {res['binary_steps']} bisection steps, flags: {named}"]}
+            "result": [f"{res['linear_samples']} linear samples, {res['binary_steps']} bisection steps, "
+                       f"flags: {named}"]}

@@ -186,7 +186,9 @@
     document.querySelectorAll("#steps tr.current").forEach((e) => e.classList.remove("current"));
     const row = document.querySelector(`#steps tr[data-step="${cur}"]`);
     row.classList.add("current");
-    if (row.scrollIntoView && !timer) row.scrollIntoView({block: "nearest"});
+    // keep the current row in view inside the table's box, without scrolling the page
+    const box = $("table-box"), b = box.getBoundingClientRect(), r = row.getBoundingClientRect();
+    if (r.top < b.top || r.bottom > b.bottom) box.scrollTop += r.top - b.top - b.height / 2;
     drawHeat(); drawSide();
   }
   function play() {

@@ -127,3 +127,10 @@ def test_heat_map_and_side_view_are_drawn(which, request, browser, tmp_path):
     assert page.locator("#side circle").count() >= 3 and page.locator("#side line").count() >= 4
     assert errors == []
     page.close()
+
+
+def test_without_chromium_the_browser_tests_fail_naming_the_packages(monkeypatch):
+    monkeypatch.setattr(shutil, "which", lambda name: None)
+    monkeypatch.setattr(os.path, "exists", lambda path: False)
+    with pytest.raises(pytest.fail.Exception, match="apt-get install chromium chromium-driver"):
+        _chromium()

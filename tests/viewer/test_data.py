@@ -94,7 +94,8 @@ def test_ldt_data_holds_every_sample_and_bisection_point(ldt_trace):
     want = []
     for fc in faces:
         want += [("linear", s["texel"], len(s["layers"])) for s in fc["samples"]]
-        want += [("bisection", p["texel"], 0 if p["z"] is None else 1) for p in (fc["bisection"] or {"points": []})["points"]]
+        points = (fc["bisection"] or {"points": []})["points"]
+        want += [("bisection", p["texel"], 0 if p["z"] is None else 1) for p in points]
     assert [(s["phase"], s["pixel"], len(s["cells"])) for s in d["steps"]] == want
     assert len(d["grids"]) == len(faces)
     assert d["steps"][-1]["pixel"] == tr.result["texel"] or tr.result["binary_steps"] == 0
@@ -120,3 +121,18 @@ def test_page_data_cannot_close_its_script_block(walk_replay):
 def test_trace_data_refuses_other_objects():
     with pytest.raises(RefsoftError, match="VertexReplay or a PixelTrace"):
         trace_data(object())
+
+
+def test_page_is_the_same_bytes_on_every_run_and_thread_count(walk_replay, tmp_path):
+    import numba
+
+    from refsoft.search.trace import trace_vertex
+
+    write_trace_page(tmp_path / "a", walk_replay)
+    scene = __import__("refsoft").load_scene("sphere", width=160, height=120)
+    numba.set_num_threads(1)
+    try:
+        write_trace_page(tmp_path / "b", trace_vertex(scene, 1500, neighbourhood="box"))
+    finally:
+        numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+    assert (tmp_path / "a" / "trace.html").read_bytes() == (tmp_path / "b" / "trace.html").read_bytes()
