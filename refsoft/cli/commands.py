@@ -151,7 +151,24 @@ def cmd_trace(args) -> int:
     write_trace_page(args.out, rp)
     print(f"wrote {args.out}/trace.json, trace.png (score field -log10(1 - s), path, start green, end red), "
           f"trace.gif ({len(tr.steps)} steps) and trace.html (open it in a browser to step through the search)")
+    _trace_images(args, scene, rp, RenderOptions(**opts).images)
     return 0
+
+
+def _trace_images(args, scene, rp, mode):
+    """With ``images="all"``, print how every image of the vertex was found and write images.json."""
+    from ..io import write_json
+    from ..search.trace import trace_vertex_images
+
+    if mode != "all":
+        return
+    it = trace_vertex_images(scene, rp)
+    if it is None:
+        print(f"every image: reflector {rp.reflector} is convex (at most one reflection point): nothing enumerated")
+        return
+    print(it.table())
+    write_json(os.path.join(args.out, "images.json"), it.to_dict())
+    print(f"wrote {args.out}/images.json")
 
 
 class _FirstRunNotice:
@@ -248,7 +265,28 @@ def cmd_render(args) -> int:
                 f"({_timing(done, notice.compiling)}); search iterations: max frame mean "
                 f"{summ['max_frame_mean_iterations']:.1f}, total mean {summ['total_mean_iterations']:.1f}")
     print(f"{scene.name}: {len(keep)} frame(s), {what}")
+    for line in several_lines(stats["frames"], lambda k: scene.object_by_id(k).name):
+        print(line)
     return 0
+
+
+def several_lines(frames, name=None) -> list[str]:
+    """One line per reflector that showed vertices with several images in ``frames`` (the
+    ``stats.json`` frame records): how many, in the frame with the most (``name(k)``, optional,
+    names reflector k)."""
+    most = {}
+    for f in frames:
+        for k, c in (f.get("images") or {}).items():
+            n = c["2"] + c["3+"]
+            if n and (k not in most or n > most[k][0]):
+                most[k] = (n, c, f["frame"])
+    lines = []
+    for k in sorted(most, key=int):
+        n, c, frame = most[k]
+        who = f"reflector {k}" + (f" ({name(int(k))})" if name is not None else "")
+        when = f", frame {frame}" if len(frames) > 1 else ""
+        lines.append(f"{who}: {n} vertices with several images ({c['2']} two, {c['3+']} three or more){when}")
+    return lines
 
 
 def cmd_truth(args) -> int:
@@ -433,7 +471,7 @@ def cmd_compare(args) -> int:
     from ..truth.compare import compare_runs
 
     header = [f"{'frame':>5} {'refl px':>8} {'id disagree':>11} {'interior':>9} {'colour mean':>11} {'colour p99':>10}"
-              f"  per-vertex (reflector: px mean/max, |V'-V'*| mean) or per-pixel hit |X-X*| median/max"]
+              f" {'specks':>6} {'holes':>6}  per-vertex (reflector: px mean/max, |V'-V'*| mean) or per-pixel hit |X-X*| median/max"]
 
     def row(m):
         while header:  # printed with the first row: a refused comparison prints only its error
@@ -445,7 +483,7 @@ def cmd_compare(args) -> int:
             verts = f"hit {m['hit_distance']['median']:.2e}/{m['hit_distance']['max']:.2e}"
         print(f"{m['frame']:>5} {m['reflector_pixels']:>8} {100 * m['reflected_id_disagreement']:>10.2f}% "
               f"{100 * m['interior_disagreement']:>8.2f}% {m['color_error']['mean']:>11.4f} "
-              f"{m['color_error']['p99']:>10.4f}  {verts}")
+              f"{m['color_error']['p99']:>10.4f} {m['specks']:>6} {m['holes']:>6}  {verts}")
 
     out = args.out
     report = compare_runs(args.render_dir, args.truth_dir, out, on_frame=row)
@@ -454,6 +492,20 @@ def cmd_compare(args) -> int:
     if s["only_in_render"] or s["only_in_truth"]:
         extra = f" (not compared: {len(s['only_in_render'])} render-only, {len(s['only_in_truth'])} truth-only frames)"
     print(f"{s['frames']} frame(s): reflected_id differs on {100 * s['reflected_id_disagreement']:.2f}% of reflector "
-          f"pixels{extra}; wrote {out}/metrics.json, agreement_NNNN.png (green agree, red differ) and side_NNNN.png "
+          f"pixels; {s['specks']} specks ({100 * s['speck_fraction']:.3f}%), {s['holes']} holes "
+          f"({100 * s['hole_fraction']:.3f}%){extra}; wrote {out}/metrics.json, agreement_NNNN.png (green agree, red differ) and side_NNNN.png "
           f"(render | truth | 4x difference)")
+    for line in several_lines(_render_stats(args.render_dir)):
+        print(line)
     return 0
+
+
+def _render_stats(folder) -> list:
+    """The frame records of a render folder's ``stats.json`` ([] when it has none)."""
+    import json
+
+    try:
+        with open(os.path.join(folder, "stats.json"), encoding="utf-8") as fh:
+            return list(json.load(fh).get("frames", []))
+    except (OSError, ValueError):
+        return []

@@ -28,7 +28,8 @@ def frame_stats(frames, options=None) -> dict:
     """The ``stats.json`` content of rendered frames: the options (their preset and every
     resolved value, when given), per frame its stage milliseconds and what its reflection method
     reports (the vertex search: mean and max iterations per reflector, the skips taken; the
-    truth: reflector pixels and hits); a summary over the frames."""
+    truth: reflector pixels and hits); a summary over the frames (with the median write of a
+    frame's files, wall and CPU milliseconds, when they were written)."""
     out = {} if options is None else {"options": options.as_dict()}
     out["frames"] = [{"frame": f.index, "time_ms": {k: round(v, 3) for k, v in f.time_ms.items()}, **f.report}
                      for f in frames]
@@ -49,6 +50,11 @@ def frame_stats(frames, options=None) -> dict:
         summary["envmap_hits"] = int(sum(f.report["hits"] for f in frames))
     summary["frames"] = len(frames)
     summary["median_total_ms"] = float(np.median([f.time_ms["total"] for f in frames])) if frames else 0.0
+    writes = [f.time_ms["write"] for f in frames if "write" in f.time_ms]
+    if writes:  # written by the background thread (run_frames): its own stage
+        summary["median_write_ms"] = float(np.median(writes))
+        summary["median_write_cpu_ms"] = float(np.median([f.time_ms["write_cpu"] for f in frames
+                                                           if "write_cpu" in f.time_ms]))
     out["summary"] = summary
     return out
 

@@ -298,3 +298,17 @@ def trace_vertex(scene, vertex: int, reflector=None, frame: int = 0, coherence: 
             previous = res.pixel[0]
     tr = trace_search(gb, eye, verts[vertex], previous=previous, **walk)
     return VertexReplay(scene.name, k, frame, vertex, obj, local, "walk", tr, gb, eye, verts[vertex])
+
+
+def trace_vertex_images(scene, replay: VertexReplay):
+    """How the enumeration of every image (spec section 4.8) finds the replayed vertex's images
+    in its reflector: an :class:`refsoft.search.images.ImagesTrace`, or None when the
+    reflector cannot give two reflection points (:mod:`refsoft.search.convex`: nothing is
+    enumerated there)."""
+    from .convex import several_possible
+    from .images import trace_images
+
+    obj = scene.objects[replay.reflector - 1]
+    if not several_possible(obj.closed_proxy if obj.closed_proxy is not None else obj.mesh):
+        return None
+    return trace_images(replay.gbuffer, replay.eye, replay.position, replay.trace.pixel)

@@ -8,6 +8,7 @@ from ...errors import SceneError
 from ..model import Scene
 from .basic import concave_scene, ellipsoid_scene, planar_scene, quad_scene, sphere_scene, torus_scene
 from .ldt import balls_scene, cup_scene, cylinder_scene, genus3_scene, hollow_box_scene, touching_scene
+from .nonconvex import shaving_scene, wavy_scene
 from .papers import ants_scene, kitchen_scene, ufo_scene
 
 #: name -> (builder, one-line description)
@@ -20,6 +21,8 @@ BUILTIN_SCENES = {
     "planar": (planar_scene, "a flat mirror wall; the camera slides sideways"),
     "concave": (concave_scene, "the inside of a mirror bowl seen from above"),
     "torus": (torus_scene, "half a mirror torus: mixed curvature"),
+    "shaving": (shaving_scene, "a concave spherical shaving mirror, objects inside f, near C and beyond C"),
+    "wavy": (wavy_scene, "a sinusoidal mirror sheet (four waves) with objects in front"),
     "quad": (quad_scene, "a two-triangle quad reflected in a mirror ball"),
     "balls": (balls_scene, "two balls (1 depth layer) moving in front of a mirror ball"),
     "hollow_box": (hollow_box_scene, "an open-top hollow box (2 depth layers) beside a mirror ball (static)"),

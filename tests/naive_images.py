@@ -1,0 +1,148 @@
+"""Plain NumPy reference of every reflection point of a vertex (spec section 4.8): every covered
+texel of the G-buffer judged by the definition, no pruning. Slow; for small G-buffers in tests."""
+
+import numpy as np
+
+
+def _normalize(x):
+    """refsoft's normalize in x's precision: ``x * (1 / sqrt((x.x x.x + x.y x.y) + x.z x.z))``, 0 for 0."""
+    length = np.sqrt((x[..., 0] * x[..., 0] + x[..., 1] * x[..., 1]) + x[..., 2] * x[..., 2])
+    one = x.dtype.type(1)
+    inv = np.where(length > 0, one / np.where(length > 0, length, one), x.dtype.type(0)).astype(x.dtype)
+    return x * inv[..., None]
+
+
+def scores(P, N, mask, eye_rel, v_rel):
+    """The score of spec section 4.1 at every texel (H, W), in P's precision; -3 where uncovered."""
+    u = _normalize((eye_rel - P).astype(P.dtype))
+    b = _normalize((v_rel - P).astype(P.dtype))
+    h = _normalize(u + b)
+    s = (N[..., 0] * h[..., 0] + N[..., 1] * h[..., 1]) + N[..., 2] * h[..., 2]
+    return np.where(mask, s, P.dtype.type(-3)), u
+
+
+def _unit64(x):
+    n = np.sqrt((x[..., 0] * x[..., 0] + x[..., 1] * x[..., 1]) + x[..., 2] * x[..., 2])
+    return np.where(n[..., None] > 0, x / np.where(n > 0, n, 1.0)[..., None], x)
+
+
+def newton_step(P, N, U, mask, v_rel, r, c):
+    """One Newton step on ``h - N = 0`` from texel (r, c) (float64, as the kernel's): (d_row,
+    d_col), or None when an axis has no covered neighbour or the Jacobian is singular."""
+    h_, w_ = mask.shape
+    n = N[r, c].astype(np.float64)
+    a = np.abs(n)
+    e = np.eye(3)[0 if (a[0] <= a[1] and a[0] <= a[2]) else (1 if a[1] <= a[2] else 2)]
+    t0 = np.cross(n, e)
+    t0 = t0 / np.sqrt((t0[0] * t0[0] + t0[1] * t0[1]) + t0[2] * t0[2])
+    t1 = np.cross(n, t0)
+    t = np.stack([t0, t1])
+
+    def res(rr, cc):
+        p = P[rr, cc].astype(np.float64)
+        b = _unit64(np.asarray(v_rel, dtype=np.float64) - p)
+        hh = _unit64(U[rr, cc].astype(np.float64) + b)
+        d = hh - N[rr, cc].astype(np.float64)
+        return np.array([(d[0] * t[k, 0] + d[1] * t[k, 1]) + d[2] * t[k, 2] for k in range(2)])
+
+    def cov(rr, cc):
+        return 0 <= rr < h_ and 0 <= cc < w_ and mask[rr, cc]
+
+    r0 = res(r, c)
+    cols = []
+    for dr, dc in ((0, 1), (1, 0)):
+        fa, fb = cov(r + dr, c + dc), cov(r - dr, c - dc)
+        if fa and fb:
+            cols.append((res(r + dr, c + dc) - res(r - dr, c - dc)) * 0.5)
+        elif fa:
+            cols.append(res(r + dr, c + dc) - r0)
+        elif fb:
+            cols.append(r0 - res(r - dr, c - dc))
+        else:
+            return None
+    (jc0, jc1), (jr0, jr1) = cols
+    det = jc0 * jr1 - jr0 * jc1
+    if det == 0.0 or not np.isfinite(det):
+        return None
+    d_col = (-r0[0] * jr1 + r0[1] * jr0) / det
+    d_row = (-r0[1] * jc0 + r0[0] * jc1) / det
+    if not (np.isfinite(d_col) and np.isfinite(d_row)):
+        return None
+    return d_row, d_col
+
+
+def _reflected(U, N):
+    """The reflected eye ray ``I - 2 (N.I) N``, ``I = -U``, float64."""
+    i = -U.astype(np.float64)
+    n = N.astype(np.float64)
+    return i - 2.0 * np.sum(n * i, axis=-1, keepdims=True) * n
+
+
+def reaches(P, N, U, mask, v_rel, r, c, factor=2.5):
+    """Texel (r, c)'s reflected ray can reach the vertex (float64): within ``factor`` times the
+    largest angle to a covered 3x3 neighbour's reflected ray, its apex anywhere within
+    ``factor`` times the largest distance to a neighbour's point."""
+    h, w = mask.shape
+    p, a = P[r, c].astype(np.float64), _reflected(U[r, c], N[r, c])
+    rad = ang = 0.0
+    for dr in (-1, 0, 1):
+        for dc in (-1, 0, 1):
+            rr, cc = r + dr, c + dc
+            if (dr, dc) == (0, 0) or not (0 <= rr < h and 0 <= cc < w and mask[rr, cc]):
+                continue
+            rad = max(rad, np.linalg.norm(P[rr, cc].astype(np.float64) - p))
+            b = _reflected(U[rr, cc], N[rr, cc])
+            ang = max(ang, np.arctan2(np.linalg.norm(np.cross(a, b)), a @ b))
+    rad, ang = factor * rad, factor * ang
+    d = np.asarray(v_rel, dtype=np.float64) - p
+    dist = np.linalg.norm(d)
+    if dist <= rad:
+        return True
+    off = np.arctan2(np.linalg.norm(np.cross(d, a)), d @ a)
+    return off <= min(ang, np.pi) + np.arcsin(min(rad / dist, 1.0))
+
+
+def images_of(P, N, mask, eye_rel, v_rel, first=(-1, -1), reach=1.5, merge=1.0):
+    """Every image of one vertex, by judging every covered texel: a list of (row, col), the walk's
+    texel ``first`` first when it is an image (covered, in front, its reflected ray reaching the
+    vertex, Newton within reach), then the others in row-major order after merging (best score
+    first, ties to row then col)."""
+    dt = P.dtype.type
+    s, U = scores(P, N, mask, eye_rel, v_rel)
+    h, w = mask.shape
+    pad = np.full((h + 2, w + 2), dt(-3))
+    pad[1:-1, 1:-1] = s
+    nbr = np.max([pad[1 + dr:h + 1 + dr, 1 + dc:w + 1 + dc] for dr in (-1, 0, 1) for dc in (-1, 0, 1)
+                  if (dr, dc) != (0, 0)], axis=0)
+    d = (v_rel - P).astype(P.dtype)
+    front = ((d[..., 0] * N[..., 0] + d[..., 1] * N[..., 1]) + d[..., 2] * N[..., 2]) > 0
+    cand = []
+    for r, c in zip(*np.nonzero(mask & (s >= nbr) & front)):
+        if not reaches(P, N, U, mask, v_rel, r, c):
+            continue
+        step = newton_step(P, N, U, mask, v_rel, r, c)
+        if step is not None and step[0] ** 2 + step[1] ** 2 <= reach * reach:
+            cand.append((float(s[r, c]), int(r), int(c), r + step[0], c + step[1]))
+    kept = []
+    fr, fc = first
+    if fr >= 0 and mask[fr, fc] and front[fr, fc] and reaches(P, N, U, mask, v_rel, fr, fc):
+        step = newton_step(P, N, U, mask, v_rel, fr, fc)
+        if step is not None and step[0] ** 2 + step[1] ** 2 <= reach * reach:
+            kept.append((None, fr, fc, fr + step[0], fc + step[1]))
+    for sc, r, c, lr, lc in sorted(cand, key=lambda x: (-x[0], x[1], x[2])):
+        if any((k[0] is None and (r, c) == (k[1], k[2])) or (lr - k[3]) ** 2 + (lc - k[4]) ** 2 < merge * merge
+               for k in kept):
+            continue
+        kept.append((sc, r, c, lr, lc))
+    head = [k for k in kept if k[0] is None]
+    rest = sorted((k for k in kept if k[0] is not None), key=lambda x: (x[1], x[2]))
+    return [(k[1], k[2]) for k in head + rest]
+
+
+def count_images(P, N, mask, eye_rel, vertices_rel, firsts=None):
+    """:func:`images_of` for each vertex: a list of lists of (row, col)."""
+    out = []
+    for i, v in enumerate(vertices_rel):
+        first = (-1, -1) if firsts is None else tuple(int(x) for x in firsts[i])
+        out.append(images_of(P, N, mask, eye_rel, np.asarray(v, dtype=P.dtype), first))
+    return out
