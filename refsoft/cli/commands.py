@@ -148,27 +148,30 @@ def cmd_trace(args) -> int:
           f"({tr.start[0]}, {tr.start[1]}){' after a restart' if tr.restarted else ''}")
     print(tr.table())
     write_trace(args.out, rp)
-    write_trace_page(args.out, rp)
+    found = _trace_images(args, scene, rp, RenderOptions(**opts).images)
+    write_trace_page(args.out, rp, None if found is None else found.images)
     print(f"wrote {args.out}/trace.json, trace.png (score field -log10(1 - s), path, start green, end red), "
-          f"trace.gif ({len(tr.steps)} steps) and trace.html (open it in a browser to step through the search)")
-    _trace_images(args, scene, rp, RenderOptions(**opts).images)
+          f"trace.gif ({len(tr.steps)} steps) and trace.html (open it in a browser to step through the search"
+          + ("" if found is None else "; every image circled") + ")")
     return 0
 
 
 def _trace_images(args, scene, rp, mode):
-    """With ``images="all"``, print how every image of the vertex was found and write images.json."""
+    """With ``images="all"``, print how every image of the vertex was found and write images.json;
+    returns the :class:`~refsoft.search.images.ImagesTrace` (None otherwise or on a convex reflector)."""
     from ..io import write_json
     from ..search.trace import trace_vertex_images
 
     if mode != "all":
-        return
+        return None
     it = trace_vertex_images(scene, rp)
     if it is None:
         print(f"every image: reflector {rp.reflector} is convex (at most one reflection point): nothing enumerated")
-        return
+        return None
     print(it.table())
     write_json(os.path.join(args.out, "images.json"), it.to_dict())
     print(f"wrote {args.out}/images.json")
+    return it
 
 
 class _FirstRunNotice:

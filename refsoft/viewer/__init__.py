@@ -29,6 +29,7 @@ h1 { font-size: 1.35em; margin: 0.2em 0; }
 #formula, #bar-label, #hover, #side-caption, .legend { font-size: 0.9em; color: #444; max-width: 520px; }
 table { border-collapse: collapse; font: 12px monospace; margin-top: 1em; }
 th, td { border: 1px solid #ddd; padding: 2px 5px; text-align: right; }
+th { position: sticky; top: 0; background: #f2f2f2; }
 tr.current { background: #ffe9b3; }
 tr.linked, td.linked { outline: 2px solid #ff00ff; }
 td.chosen { font-weight: bold; color: #c25400; }

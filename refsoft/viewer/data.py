@@ -172,6 +172,9 @@ def walk_data(replay, images=None) -> dict:
                       "chosen": chosen, "side": {"xy": pl.xy(P), "normal": pl.dir(N)}})
     from ..search import flag_names
 
+    every = [] if images is None else [[int(a), int(b)] for a, b in np.asarray(images).reshape(-1, 2)]
+    found = [] if images is None else [f"every image: {len(every)} found" + (": " if every else "")
+                                       + ", ".join(f"({r}, {c})" for r, c in every) + " (circled in pink)"]
     return {"kind": "walk", "title": f"Vertex {replay.vertex} in reflector {replay.reflector}, {replay.scene} frame "
                                      f"{replay.frame}: the walk",
             "meta": [["scene", replay.scene], ["frame", replay.frame], ["reflector", replay.reflector],
@@ -180,10 +183,9 @@ def walk_data(replay, images=None) -> dict:
                      ["start", f"({tr.start[0]}, {tr.start[1]})" + (" after a restart" if tr.restarted else "")]],
             "grids": grids, "columns": [c["name"] for c in tr.steps[0]["candidates"]] if tr.steps else [],
             "n_candidates": n_cand, "steps": steps, "start": list(tr.start), "end": list(tr.pixel),
-            "images": [] if images is None else [[int(a), int(b)] for a, b in np.asarray(images).reshape(-1, 2)],
-            "side": side, "stop": _stop_walk(tr),
+            "images": every, "side": side, "stop": _stop_walk(tr),
             "result": [f"pixel ({tr.pixel[0]}, {tr.pixel[1]}), score {tr.score:.8f}, margin {tr.margin:.3g}, "
-                       f"{tr.iterations} iterations, flags: {', '.join(flag_names(tr.flags)) or 'none'}"]}
+                       f"{tr.iterations} iterations, flags: {', '.join(flag_names(tr.flags)) or 'none'}"] + found}
 
 
 def _score_field(gbuffer, eye, vertex):

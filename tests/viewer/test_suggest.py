@@ -37,3 +37,22 @@ def test_trace_without_vertex_lists_instead_of_refusing(capsys):
     out = capsys.readouterr().out
     assert "vertices worth tracing" in out and "longest search" in out and "typical (median length)" in out
     assert "refsoft trace sphere --vertex " in out and "--width 96 --height 72" in out
+
+
+def test_several_images_are_suggested_and_circled_in_the_page(tmp_path, capsys):
+    import json
+    import re
+
+    scene = refsoft.load_scene("concave", width=160, height=120)
+    found = {f["kind"]: f for f in interesting_vertices(scene)}
+    several = found["several images"]
+    assert several["flags"] & 32  # SEVERAL
+    v = several["vertex"]
+    assert cli.main(["trace", "concave", "--vertex", str(v), "--width", "160", "--height", "120",
+                     "--out", str(tmp_path)]) == 0
+    assert "every image circled" in capsys.readouterr().out
+    listed = json.loads((tmp_path / "images.json").read_text())["images"]
+    page = (tmp_path / "trace.html").read_text()
+    data = json.loads(re.search(r'id="trace-data">(.*?)</script>', page, re.S).group(1))
+    assert len(listed) >= 2 and data["images"] == listed
+    assert f"every image: {len(listed)} found" in data["result"][-1]
