@@ -120,7 +120,11 @@ class VertexSearch:
         if stencil.any():
             t = time.perf_counter()
             box = stencil_box(stencil) if opt.crop_virtual else (0, view.camera.height, 0, view.camera.width)
-            if opt.tessellate is None and opt.silhouette != "clip":
+            drawn = self._several(view, k, refl, stencil, box)
+            if drawn is not None:  # every image, drawn by exact acceptance (search/several.py)
+                out.colour, out.reflected_id, out.covered, extra = drawn
+                report.update(extra)
+            elif opt.tessellate is None and opt.silhouette != "clip":
                 parts = virtual_parts(self.scene, view.meshes, refl)
             else:
                 self._reflected = reflected_mesh(self.scene, view.meshes, self._reflected)
@@ -129,12 +133,23 @@ class VertexSearch:
                 report.update(counts)
                 times["tessellate"] = 1000 * (time.perf_counter() - t)
                 t = time.perf_counter()
-            out.colour, out.reflected_id, out.covered, report["virtual_objects_culled"] = virtual_pass(
-                self.scene, parts, view.camera, stencil, box, opt.inverse, opt.cull_virtual)
+            if drawn is None:
+                out.colour, out.reflected_id, out.covered, report["virtual_objects_culled"] = virtual_pass(
+                    self.scene, parts, view.camera, stencil, box, opt.inverse, opt.cull_virtual)
             out.box = box
             times["virtual"] = 1000 * (time.perf_counter() - t)
         out.arrays = {**gbuffer_outputs(refl.gbuffer, k), **vertex_outputs(refl, view.vertex_object, k)}
         return out
+
+    def _several(self, view, k, refl, stencil, box):
+        """Every image of reflector ``k`` drawn (:func:`refsoft.search.several.several_pass`), or
+        None: the virtual pass."""
+        from . import several
+
+        if several.FIND is None:
+            return None
+        self._reflected = reflected_mesh(self.scene, view.meshes, self._reflected)
+        return several.several_pass(self.scene, view, k, refl, stencil, box, self._reflected[1], self.options)
 
     def frame_report(self, results) -> dict:
         """``stats.json``'s per-frame ``iterations`` (mean and max per reflector, CULLED vertices
