@@ -2,10 +2,10 @@
 (spec section 4.8): every reflection point of a vertex by brute force over the G-buffer, and a
 per-pixel ray tracer of what a reflector shows, in NumPy.
 
-``enumerate_images`` takes every covered texel whose 3x3 neighbourhood is covered, where the score
-of spec section 4.1 is a local maximum (>= its 8 neighbours), the vertex lies in front of the
-tangent plane and a Newton step on the misalignment ``bisector - normal`` (central differences)
-is at most 1.5 texels long: a point where the bisector equals the normal lies within it.
+``enumerate_images`` takes every covered texel where the score of spec section 4.1 is a local
+maximum (>= its covered neighbours among the 8), the vertex lies in front of the tangent plane and
+a Newton step on the misalignment ``bisector - normal`` (central differences, one-sided at the
+rim) is at most 1.5 texels long: a point where the bisector equals the normal lies within it.
 """
 
 from __future__ import annotations
@@ -27,21 +27,18 @@ def enumerate_images(gb, eye, verts) -> Images:
     P = np.asarray(gb.position, np.float64)
     N = np.asarray(gb.normal, np.float64)
     m = np.asarray(gb.mask, bool)
-    h, w = m.shape
-    inner = m.copy()
-    inner[0, :] = inner[-1, :] = False
-    inner[:, 0] = inner[:, -1] = False
-    for dr in (-1, 0, 1):
-        for dc in (-1, 0, 1):
-            inner[1:-1, 1:-1] &= m[1 + dr:h - 1 + dr, 1 + dc:w - 1 + dc]
-    rr, cc = np.nonzero(inner)
+    # pad by one texel: neighbours outside the buffer are uncovered
+    P = np.pad(P, ((1, 1), (1, 1), (0, 0)))
+    N = np.pad(N, ((1, 1), (1, 1), (0, 0)))
+    mp = np.pad(m, 1)
+    rr, cc = np.nonzero(mp)
     eye_rel = np.asarray(eye, np.float64) - gb.origin
     to_eye = _unit(eye_rel - P)
     offset, pixel, virtual = [0], [], []
     for v in np.asarray(verts, np.float64):
         v_rel = v - gb.origin
         bis = _unit(to_eye + _unit(v_rel - P))
-        s = np.where(m, np.sum(bis * N, axis=-1), -np.inf)
+        s = np.where(mp, np.sum(bis * N, axis=-1), -np.inf)  # uncovered: never above a covered texel
         g = bis - N  # zero at a reflection point
         sc = s[rr, cc]
         ok = np.sum((v_rel - P[rr, cc]) * N[rr, cc], axis=1) > 0
@@ -49,20 +46,34 @@ def enumerate_images(gb, eye, verts) -> Images:
             for dc in (-1, 0, 1):
                 ok &= sc >= s[rr + dr, cc + dc]
         r, c = rr[ok], cc[ok]
-        gx = (g[r, c + 1] - g[r, c - 1]) / 2
-        gy = (g[r + 1, c] - g[r - 1, c]) / 2
+        gx = _difference(g, mp, r, c, 0, 1)
+        gy = _difference(g, mp, r, c, 1, 0)
         J = np.stack([gx, gy], axis=2)  # (K, 3, 2)
         step = np.array([np.linalg.lstsq(Jk, -gk, rcond=None)[0] for Jk, gk in zip(J, g[r, c])]).reshape(-1, 2)
         good = np.all(np.abs(step) <= NEWTON_TEXELS, axis=1)
         r, c = r[good], c[good]
         for ri, ci in zip(r, c):
             p, n = P[ri, ci], N[ri, ci]
-            pixel.append((ri, ci))
+            pixel.append((ri - 1, ci - 1))
             virtual.append(v - 2.0 * np.dot(v_rel - p, n) * n)
         offset.append(offset[-1] + len(r))
     M = len(pixel)
     return Images(np.asarray(offset, np.int64), np.asarray(pixel, np.int32).reshape(M, 2),
                   np.asarray(virtual, np.float64).reshape(M, 3), np.full(M, -1, np.int32))
+
+
+def _difference(g, m, r, c, dr, dc):
+    """Derivative of ``g`` per texel at (r, c) along (dr, dc): central where both neighbours are
+    covered, one-sided where one is, zero where neither."""
+    fwd, back = m[r + dr, c + dc], m[r - dr, c - dc]
+    d = np.zeros((len(r), 3))
+    both = fwd & back
+    d[both] = (g[r + dr, c + dc][both] - g[r - dr, c - dc][both]) / 2
+    f = fwd & ~back
+    d[f] = g[r + dr, c + dc][f] - g[r, c][f]
+    b = back & ~fwd
+    d[b] = g[r, c][b] - g[r - dr, c - dc][b]
+    return d
 
 
 def trace_reflections(scene, frame, meshes, camera, stencil, reflector_mesh, triangle):

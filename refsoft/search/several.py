@@ -176,15 +176,14 @@ def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, n
     subdivided = set()
     for level in range(max_level + 1):
         last = level == max_level
-        split = []
+        split, bare = [], []
         for f, src in zip(todo_faces, todo_src):
             triples = pool.triples(f, linked=True)
-            if not triples and last:
-                triples = pool.triples(f, linked=False)
-            if triples or last:
-                out.extend((t, f, src) for t in triples)
-            else:
-                split.append((f, src))
+            out.extend((t, f, src) for t in triples)
+            if not pool.matched(f, triples):  # a part of it may reflect where no linked triple draws it
+                (bare if last else split).append((f, src))
+        if last and bare:
+            out.extend(pool.rim_triples(bare, gb, eye, neighbourhood, cap))
         if not split:
             break
         subdivided.update(int(s) for _, s in split)
@@ -233,6 +232,53 @@ class _Pool:
                     out.append((i, j, k))
                     if len(out) >= constants.SEVERAL_MAX_TRIPLES:
                         return out
+        return out
+
+    def matched(self, f, triples):
+        """Every image of every corner of face ``f`` belongs to one of its linked ``triples``."""
+        used = {i for t in triples for i in t}
+        return all(self.count[int(v)] > 0 and all(i in used for i in self._images(int(v))) for v in f)
+
+    def rim_triples(self, bare, gb, eye, neighbourhood, cap):
+        """Triples for last-level parts with an image in no linked triple: every image of each corner,
+        and for a corner without one the pixels where its walks from the other corners' images
+        end (at the rim or a fold), as points of the reflector (a virtual vertex projects where
+        its reflection point does: these serve only to rasterize; the acceptance is exact)."""
+        verts = np.concatenate(self.verts)
+        starts, targets, keys = [], [], []
+        for f, _ in bare:
+            for v in f:
+                if self.count[int(v)] == 0:
+                    for u in f:
+                        for i in self._images(int(u)):
+                            starts.append(i)
+                            targets.append(int(v))
+                            keys.append((int(v), i))
+        ends = {}
+        if starts:
+            pixel = np.concatenate(self.pixel)
+            res = search(gb, eye, verts[targets], neighbourhood, "plane", pixel[starts], cap)
+            world = np.asarray(gb.position, np.float64)[res.pixel[:, 0], res.pixel[:, 1]] + gb.origin
+            ok = np.asarray(gb.mask)[res.pixel[:, 0], res.pixel[:, 1]]
+            new = []
+            for key, p, good in zip(keys, world, ok):
+                if good:
+                    ends.setdefault(key[0], []).append(self.m + len(new))
+                    new.append(p)
+            if new:
+                self.virtual.append(np.asarray(new, np.float64))
+                self.pixel.append(np.zeros((len(new), 2), np.int32))
+                self.m += len(new)
+        out = []
+        for f, src in bare:
+            choices = [list(self._images(int(v))) or sorted(set(ends.get(int(v), []))) for v in f]
+            triples = []
+            for i in choices[0]:
+                for j in choices[1]:
+                    for k in choices[2]:
+                        if len(triples) < constants.SEVERAL_MAX_TRIPLES:
+                            triples.append((i, j, k))
+            out.extend((t, f, src) for t in triples)
         return out
 
     def split(self, split, gb, eye, find, neighbourhood, cap):
