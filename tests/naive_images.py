@@ -76,29 +76,19 @@ def _difference(g, m, r, c, dr, dc):
     return d
 
 
-def trace_reflections(scene, frame, meshes, camera, stencil, reflector_mesh, triangle):
-    """What reflector pixels show: per stencil pixel, the eye ray through the pixel centre meets
-    the visible reflector triangle, is reflected about the interpolated normal and intersected with
-    every triangle of every non-reflector object (float64, nearest t > 0 inside the triangle).
+def reflected_rays(camera, stencil, reflector_mesh, triangle):
+    """Per stencil pixel (row-major): the eye ray through the pixel centre meets the visible
+    reflector triangle and is reflected about the interpolated normal there.
 
     Returns
     -------
-    reflected_id : ndarray (H, W) int32
-        Object id seen, 0 none (also off the stencil).
+    rows, cols : (P,) int
+    origin, direction : (P, 3) float64
     """
     H, W = stencil.shape
-    out = np.zeros((H, W), np.int32)
     inv = np.linalg.inv(camera.view_proj())
     eye = np.asarray(camera.eye, np.float64)
-    tris, ids = [], []
-    for k, obj in enumerate(scene.objects, start=1):
-        if obj.reflector:
-            continue
-        mesh = meshes[k - 1]
-        tris.append(mesh.vertices[mesh.faces])
-        ids.append(np.full(mesh.n_faces, k, np.int32))
-    tris, ids = np.concatenate(tris), np.concatenate(ids)
-    A, B, C = tris[:, 0], tris[:, 1], tris[:, 2]
+    rows, cols, origin, direction = [], [], [], []
     for r, c in zip(*np.nonzero(stencil)):
         x = (c + 0.5) / W * 2 - 1
         y = (H - r - 0.5) / H * 2 - 1
@@ -110,11 +100,22 @@ def trace_reflections(scene, frame, meshes, camera, stencil, reflector_mesh, tri
         t, u, v = _moller(eye, d, a, b, cc)
         if not np.isfinite(t):
             continue
-        p = eye + t * d
         n = _unit((1 - u - v) * reflector_mesh.normals[f[0]] + u * reflector_mesh.normals[f[1]]
                   + v * reflector_mesh.normals[f[2]])
-        rd = d - 2 * np.dot(d, n) * n
-        e1, e2 = B - A, C - A
+        rows.append(r)
+        cols.append(c)
+        origin.append(eye + t * d)
+        direction.append(d - 2 * np.dot(d, n) * n)
+    return np.asarray(rows, int), np.asarray(cols, int), np.asarray(origin).reshape(-1, 3), \
+        np.asarray(direction).reshape(-1, 3)
+
+
+def first_hits(origin, direction, tris):
+    """Per ray, the index of the nearest triangle of ``tris`` (T, 3, 3) hit with t > 0 (-1 none)."""
+    A, B, C = tris[:, 0], tris[:, 1], tris[:, 2]
+    e1, e2 = B - A, C - A
+    out = np.full(len(origin), -1)
+    for i, (p, rd) in enumerate(zip(origin, direction)):
         pv = np.cross(rd, e2)
         det = np.sum(e1 * pv, axis=1)
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -125,8 +126,29 @@ def trace_reflections(scene, frame, meshes, camera, stencil, reflector_mesh, tri
             tt = np.sum(e2 * q, axis=1) / det
         hit = (tt > 0) & (uu >= 0) & (vv >= 0) & (uu + vv <= 1)
         if hit.any():
-            j = np.flatnonzero(hit)[np.argmin(tt[hit])]
-            out[r, c] = ids[j]
+            out[i] = np.flatnonzero(hit)[np.argmin(tt[hit])]
+    return out
+
+
+def trace_reflections(scene, meshes, camera, stencil, reflector_mesh, triangle):
+    """What reflector pixels show: :func:`reflected_rays` intersected with every triangle of every
+    non-reflector object (float64, nearest t > 0 inside the triangle).
+
+    Returns
+    -------
+    reflected_id : ndarray (H, W) int32
+        Object id seen, 0 none (also off the stencil).
+    """
+    tris, ids = [], []
+    for k, obj in enumerate(scene.objects, start=1):
+        if not obj.reflector:
+            tris.append(meshes[k - 1].vertices[meshes[k - 1].faces])
+            ids.append(np.full(meshes[k - 1].n_faces, k, np.int32))
+    tris, ids = np.concatenate(tris), np.concatenate(ids)
+    rows, cols, origin, direction = reflected_rays(camera, stencil, reflector_mesh, triangle)
+    hit = first_hits(origin, direction, tris)
+    out = np.zeros(stencil.shape, np.int32)
+    out[rows, cols] = np.where(hit >= 0, ids[hit], 0)
     return out
 
 

@@ -120,7 +120,7 @@ class VertexSearch:
         if stencil.any():
             t = time.perf_counter()
             box = stencil_box(stencil) if opt.crop_virtual else (0, view.camera.height, 0, view.camera.width)
-            drawn = self._several(view, k, refl, stencil, box)
+            drawn = self._draw_images(view, k, refl, stencil, box)
             if drawn is not None:  # every image, drawn by exact acceptance (search/several.py)
                 out.colour, out.reflected_id, out.covered, extra = drawn
                 report.update(extra)
@@ -141,15 +141,16 @@ class VertexSearch:
         out.arrays = {**gbuffer_outputs(refl.gbuffer, k), **vertex_outputs(refl, view.vertex_object, k)}
         return out
 
-    def _several(self, view, k, refl, stencil, box):
+    def _draw_images(self, view, k, refl, stencil, box):
         """Every image of reflector ``k`` drawn (:func:`refsoft.search.several.several_pass`), or
         None: the virtual pass."""
         from . import several
 
-        if several.FIND is None:
+        source = several.image_source(self.scene, view, k, refl, self.options)
+        if source is None:
             return None
         self._reflected = reflected_mesh(self.scene, view.meshes, self._reflected)
-        return several.several_pass(self.scene, view, k, refl, stencil, box, self._reflected[1], self.options)
+        return several.several_pass(self.scene, view, k, stencil, box, self._reflected[1], self.options, *source)
 
     def frame_report(self, results) -> dict:
         """``stats.json``'s per-frame ``iterations`` (mean and max per reflector, CULLED vertices
@@ -157,7 +158,7 @@ class VertexSearch:
         iterations = {}
         skipped = {"reflectors_outside_view": [], "gbuffers_reused": [], "searches_reused": {},
                    "virtual_objects_culled": {}, "widen_off": []}
-        tessellation, silhouette = {}, {}
+        tessellation, silhouette, drawn = {}, {}, {}
         for k, r in results.items():
             rep = r.report
             for flag, name in (("outside_view", "reflectors_outside_view"), ("gbuffer_reused", "gbuffers_reused")):
@@ -172,6 +173,8 @@ class VertexSearch:
                 tessellation[str(k)] = rep["tessellation"]
             if "silhouette" in rep:
                 silhouette[str(k)] = rep["silhouette"]
+            if "several" in rep:
+                drawn[str(k)] = rep["several"]
             res = r.state.result
             it = res.iterations[(res.flags & CULLED) == 0]
             iterations[str(k)] = {"mean": float(it.mean()) if len(it) else 0.0, "max": int(it.max()) if len(it) else 0}
@@ -179,7 +182,10 @@ class VertexSearch:
             skipped["tessellation"] = tessellation  # reported beside the skips (what was added, not skipped)
         if self.options.silhouette == "clip":
             skipped["silhouette"] = silhouette
-        return {"iterations": iterations, "skipped": skipped}
+        out = {"iterations": iterations, "skipped": skipped}
+        if drawn:  # every image drawn (search/several.py): candidates, subdivisions, pixels per reflector
+            out["several"] = drawn
+        return out
 
     # --- the stages --------------------------------------------------------------------------
     def reflection(self, view, k: int, report=None):

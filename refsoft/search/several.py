@@ -433,33 +433,52 @@ def _screen(virtual, camera, box):
 
 
 # --- the method's branch ----------------------------------------------------------------------
-#: ``find(gbuffer, eye, points (K, 3) float64) -> Images``: every image of points on a reflector,
-#: used when set (the drawing of this module replaces the virtual pass on reflectors that are not
-#: convex); None: the virtual pass.
+#: ``find(gbuffer, eye, points (K, 3) float64) -> Images``: every image of points on a reflector.
+#: When set, open reflectors are drawn by this module (the tests set it to their brute-force
+#: enumeration); None: only where the method enumerated every image.
 FIND = None
 
 
-def several_pass(scene, view, k, refl, stencil, box, reflected, opt):
-    """The drawing of every image on reflector ``k`` (steps 1-3), or None where it does not apply
-    (no image finder, or a closed reflector: only open mirrors are drawn this way).
+def image_source(scene, view, k, refl, opt):
+    """Where reflector ``k``'s images come from, or None (the virtual pass draws it).
 
     Returns
     -------
-    (colour, reflected_id, covered, report) or None
-        As :func:`draw`; ``report`` holds ``several``: candidate triangles, subdivided triangles,
-        pixels accepted and rejected.
+    (gbuffer, eye, Images of the view's vertices, find) or None
+        ``find(points)`` gives the images of new points (subdivision midpoints).
     """
     find = FIND
     if find is None or not scene.objects[k - 1].open:
         return None
     gb, eye = refl.gbuffer, np.asarray(view.camera.eye, np.float64)
-    verts = view.vertices
-    images = find(gb, eye, verts)
-    cand, _ = candidates(gb, eye, verts, reflected.normals, reflected.faces, reflected.face_object, images,
-                         lambda p: find(gb, eye, p), opt.neighbourhood, opt.cap)
+    return gb, eye, find(gb, eye, view.vertices), (lambda p: find(gb, eye, p))
+
+
+def several_pass(scene, view, k, stencil, box, reflected, opt, gb, eye, images, find):
+    """The drawing of every image on reflector ``k`` (steps 1-3).
+
+    Parameters
+    ----------
+    scene, view, k, stencil, box
+        As the seam's ``reflect``; ``box`` the pixels drawn.
+    reflected : Combined
+        The non-reflector meshes concatenated (:func:`refsoft.search.virtual.reflected_mesh`).
+    opt : RenderOptions
+        Read: ``neighbourhood``, ``cap``.
+    gb, eye, images, find
+        From :func:`image_source`.
+
+    Returns
+    -------
+    colour, reflected_id, covered, report
+        As :func:`draw`; ``report`` holds ``several``: images, candidate triangles, subdivided
+        triangles, pixels accepted and rejected.
+    """
+    cand, _ = candidates(gb, eye, view.vertices, reflected.normals, reflected.faces, reflected.face_object, images,
+                         find, opt.neighbourhood, opt.cap)
     colors = np.vstack([np.zeros(3), [o.color for o in scene.objects]]).astype(np.float32)
     colour, rid, covered, counts = draw(cand, view.camera, view.meshes[k - 1], view.view.triangle, stencil, box,
                                         colors)
-    report = {"candidates": int(len(cand.object_id)), "subdivided": int(cand.subdivided), **counts,
-              "images": int(len(images.pixel))}
+    report = {"images": int(len(images.pixel)), "candidates": int(len(cand.object_id)),
+              "subdivided": int(cand.subdivided), **counts}
     return colour, rid, covered, {"several": report}
