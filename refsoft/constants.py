@@ -167,6 +167,11 @@ ENVMAP_TIE_ULP = 8
 #: The rim of a reflector's stencil, in 8-neighbour steps: "interior" and "rim" agreement split
 #: there.
 RIM_PIXELS = 2
+#: A speck: a mirror pixel more than SPECK_LEVELS (8-bit levels, the largest channel difference)
+#: off the truth whose two neighbours along a row or along a column are within
+#: SPECK_NEIGHBOUR_LEVELS of it.
+SPECK_LEVELS = 30
+SPECK_NEIGHBOUR_LEVELS = 8
 
 # --- Search and its options beyond the papers ---------------------------------------------
 #: Edge, in pixels, of the cells vertices are grouped by before searching (cache locality).
@@ -189,6 +194,13 @@ ARC_SAMPLES = 64
 XTOL = 1e-15
 RTOL = 4 * np.finfo(np.float64).eps
 MAXITER = 200
+#: Samples around the whole great circle that bracket the reflection points seen from inside a
+#: sphere (roots closer than ``2 pi / INSIDE_ARC_SAMPLES`` radians may share a sample interval).
+INSIDE_ARC_SAMPLES = 1024
+#: Most reflection points of one point seen from inside a sphere (Alhazen's quartic).
+MAX_SPHERE_IMAGES = 4
+#: Relative length below which the arc's plane is degenerate (eye, point and centre collinear).
+COLLINEAR_TOL = 1e-12
 
 # --- Kernel sentinels ---
 #: The score of "no candidate" (a missing second-best) and of an uncovered or outside pixel:
@@ -207,6 +219,31 @@ SUBPIXEL_HALF = SUBPIXEL_ONE >> 1
 #: Embree traces the reflected rays split over the threads in parts of at least this many rays
 #: (fewer rays: one call; the split does not change any ray's answer).
 TRUTH_RAYS_PER_THREAD = 20000
+
+# --- Every reflection point of a vertex (spec section 4.8) ------------------------------------
+#: ``images`` option: every reflection point (``all``) or the walk's one (``one``, the papers).
+IMAGE_MODES = ("all", "one")
+#: A texel that is a local maximum of the score is an image when one Newton step solving
+#: "normal = bisector" from it moves at most this many texels (Euclidean, in the texel grid).
+IMAGE_REACH = 1.5
+#: Accepted maxima whose Newton points lie closer than this many texels are one solution (a
+#: plateau or a tie): the best score is kept.
+IMAGE_MERGE = 1.0
+#: The enumeration's per-texel bounds cover this many times the largest step (position and
+#: reflected direction) to a 3x3 neighbour: more than the IMAGE_REACH texels (up to sqrt(2) IMAGE_REACH
+#: along a diagonal) a solution may lie from its texel.
+IMAGE_BOUND_FACTOR = 2.5
+#: Images kept per vertex and reflector (a concave sphere gives at most 4); accepted maxima
+#: examined per vertex before merging.
+MAX_IMAGES = 16
+IMAGE_CANDIDATES = 64
+#: The convex skip (refsoft.search.convex): a one-ring vertex counts as on a triangle's plane
+#: within this fraction of the mesh's extent (the weld's 1e-9: rounding of coplanar points).
+CONVEX_TOLERANCE = 1e-9
+# --- The trace viewer (trace.html) -------------------------------------------------------------
+#: A heat map embedded in trace.html holds at most this many pixels (about 10 bytes each in the
+#: page); a larger reflector is traced at a smaller --width/--height.
+VIEWER_MAX_GRID_PIXELS = 400_000
 
 # --- every image drawn on mirrors that are not convex (refsoft/search/several.py) ---
 #: Candidate virtual triangles per scene triangle: image triples of its vertices beyond this are

@@ -84,12 +84,26 @@ def ldt_file(j: int) -> str:
     return f"ldt_{int(j)}"
 
 
+# --- per reflector: every image of every vertex (spec section 4.8; only where the enumeration ran)
+#: (N,) int32: the number of images of each vertex.
+IMAGE_COUNT = PerReflector("image_count")
+#: (M,) int32: the vertex of each image (vertex i's images are consecutive, its walk's first).
+IMAGE_VERTEX = PerReflector("image_vertex")
+#: (M, 2) int32: the reflection pixel (row, col) of each image in the G-buffer.
+IMAGE_PIXEL = PerReflector("image_pixel")
+#: (M, 3) float32: the virtual vertex of each image (spec section 4.6's mirror), world space.
+IMAGE_VIRTUAL = PerReflector("image_virtual")
+#: (M,) int32: the sheet of each image (-1: no sheets made).
+IMAGE_SHEET = PerReflector("image_sheet")
+#: The per-image arrays, judged together by ``refsoft check``.
+IMAGE_ARRAYS = (IMAGE_COUNT, IMAGE_VERTEX, IMAGE_PIXEL, IMAGE_VIRTUAL, IMAGE_SHEET)
+
 #: Every per-reflector name, longest first (so that :func:`parse` matches ``gbuffer_view_proj``
 #: before a shorter name could).
 PER_REFLECTOR = tuple(sorted((GBUFFER_POSITION, GBUFFER_NORMAL, GBUFFER_MASK, GBUFFER_VIEW_PROJ, REFLECTION_PIXEL,
                               VIRTUAL_VERTEX, ITERATIONS, FLAGS, VERTEX_OBJECT, SCORE, MARGIN,
                               EXACT_REFLECTION_POINT, EXACT_VIRTUAL_VERTEX, LDT_REGION, ENVMAP_COLOR, ENVMAP_ID,
-                              ENVMAP_CENTER), key=len, reverse=True))
+                              ENVMAP_CENTER) + IMAGE_ARRAYS, key=len, reverse=True))
 #: The per-vertex arrays of the vertex search, judged together by ``refsoft check``.
 VERTEX_ARRAYS = (REFLECTION_PIXEL, VIRTUAL_VERTEX, FLAGS, ITERATIONS, SCORE, VERTEX_OBJECT, MARGIN)
 

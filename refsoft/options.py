@@ -37,9 +37,9 @@ FROM_PRESET = _FromPreset()
 #: The presets: every option each one sets (the others keep their defaults).
 PRESETS = {
     "paper": dict(method="walk", neighbourhood="cross", inverse="plane", refine=False, tessellate=None,
-                  tessellate_span=0, virtual="mirror", silhouette="texel"),
+                  tessellate_span=0, virtual="mirror", silhouette="texel", images="one"),
     "accurate": dict(method="walk", neighbourhood="box", inverse="discard", refine=True, tessellate=1e-4,
-                     tessellate_span=1, virtual="unfold", silhouette="clip"),
+                     tessellate_span=1, virtual="unfold", silhouette="clip", images="all"),
 }
 
 #: The layered depth textures' options (``method="ldt"`` only) and their defaults.
@@ -105,6 +105,10 @@ class RenderOptions:
         Triangles with visible and hidden vertices: handled by ``inverse`` (the papers), or cut
         where their reflection reaches the reflector's silhouette and their visible part drawn
         (:mod:`refsoft.search.silhouette`, beyond the papers).
+    images : {"all", "one"}
+        Every reflection point of every vertex (spec section 4.8, :func:`refsoft.search.images.find_images`:
+        flag SEVERAL and the per-image arrays, on reflectors that can give two points:
+        :func:`refsoft.search.convex.several_possible`), or the walk's one (the papers; ``paper``).
     ldt_resolution, ldt_layers, ldt_faces, ldt_linear, ldt_tau, ldt_regions : optional
         ``method="ldt"`` only (default :data:`LDT_DEFAULTS`): texels per cube face edge (4 ..
         4096, a power of two keeps mirrored texels bit-exact); layers built ("all" or 1, the
@@ -136,6 +140,7 @@ class RenderOptions:
     refine: bool = FROM_PRESET
     virtual: str = FROM_PRESET
     silhouette: str = FROM_PRESET
+    images: str = FROM_PRESET
     ldt_resolution: int | None = None
     ldt_layers: object = None
     ldt_faces: str | None = None
@@ -158,6 +163,7 @@ class RenderOptions:
         validate.choice(self.precision, PRECISIONS, "precision")
         validate.choice(self.virtual, VIRTUAL_RULES, "virtual")
         validate.choice(self.silhouette, SILHOUETTE_RULES, "silhouette")
+        validate.choice(self.images, constants.IMAGE_MODES, "images")
         validate.number(self.widen, "widen", minimum=1.0)
         if self.tessellate is not None:
             validate.number(self.tessellate, "tessellate", minimum=0.0, what="a threshold >= 0 (or None)")

@@ -1,164 +1,114 @@
-"""Slow, plainly correct references for drawing every image on mirrors that are not convex
-(spec section 4.8): every reflection point of a vertex by brute force over the G-buffer, and a
-per-pixel ray tracer of what a reflector shows, in NumPy.
-
-``enumerate_images`` takes every covered texel where the score of spec section 4.1 is a local
-maximum (>= its covered neighbours among the 8), the vertex lies in front of the tangent plane and
-a Newton step on the misalignment ``bisector - normal`` (central differences, one-sided at the
-rim) is at most 1.5 texels long: a point where the bisector equals the normal lies within it.
-"""
-
-from __future__ import annotations
+"""Plain NumPy reference of every reflection point of a vertex (spec section 4.8): every covered
+texel of the G-buffer judged by the definition, no pruning. Slow; for small G-buffers in tests."""
 
 import numpy as np
 
-from refsoft.search.images import Images
 
-NEWTON_TEXELS = 1.5
-
-
-def _unit(x):
-    n = np.linalg.norm(x, axis=-1, keepdims=True)
-    return np.divide(x, n, out=np.zeros_like(x), where=n > 0)
-
-
-def enumerate_images(gb, eye, verts) -> Images:
-    """Every image of every vertex in G-buffer ``gb`` (float64 arithmetic), sheet -1."""
-    P = np.asarray(gb.position, np.float64)
-    N = np.asarray(gb.normal, np.float64)
-    m = np.asarray(gb.mask, bool)
-    # pad by one texel: neighbours outside the buffer are uncovered
-    P = np.pad(P, ((1, 1), (1, 1), (0, 0)))
-    N = np.pad(N, ((1, 1), (1, 1), (0, 0)))
-    mp = np.pad(m, 1)
-    rr, cc = np.nonzero(mp)
-    eye_rel = np.asarray(eye, np.float64) - gb.origin
-    to_eye = _unit(eye_rel - P)
-    offset, pixel, virtual = [0], [], []
-    for v in np.asarray(verts, np.float64):
-        v_rel = v - gb.origin
-        bis = _unit(to_eye + _unit(v_rel - P))
-        s = np.where(mp, np.sum(bis * N, axis=-1), -np.inf)  # uncovered: never above a covered texel
-        g = bis - N  # zero at a reflection point
-        sc = s[rr, cc]
-        ok = np.sum((v_rel - P[rr, cc]) * N[rr, cc], axis=1) > 0
-        for dr in (-1, 0, 1):
-            for dc in (-1, 0, 1):
-                ok &= sc >= s[rr + dr, cc + dc]
-        r, c = rr[ok], cc[ok]
-        gx = _difference(g, mp, r, c, 0, 1)
-        gy = _difference(g, mp, r, c, 1, 0)
-        J = np.stack([gx, gy], axis=2)  # (K, 3, 2)
-        step = np.array([np.linalg.lstsq(Jk, -gk, rcond=None)[0] for Jk, gk in zip(J, g[r, c])]).reshape(-1, 2)
-        good = np.all(np.abs(step) <= NEWTON_TEXELS, axis=1)
-        r, c = r[good], c[good]
-        for ri, ci in zip(r, c):
-            p, n = P[ri, ci], N[ri, ci]
-            pixel.append((ri - 1, ci - 1))
-            virtual.append(v - 2.0 * np.dot(v_rel - p, n) * n)
-        offset.append(offset[-1] + len(r))
-    M = len(pixel)
-    return Images(np.asarray(offset, np.int64), np.asarray(pixel, np.int32).reshape(M, 2),
-                  np.asarray(virtual, np.float64).reshape(M, 3), np.full(M, -1, np.int32))
+def _normalize(x):
+    """refsoft's normalize in x's precision: ``x * (1 / sqrt((x.x x.x + x.y x.y) + x.z x.z))``, 0 for 0."""
+    length = np.sqrt((x[..., 0] * x[..., 0] + x[..., 1] * x[..., 1]) + x[..., 2] * x[..., 2])
+    one = x.dtype.type(1)
+    inv = np.where(length > 0, one / np.where(length > 0, length, one), x.dtype.type(0)).astype(x.dtype)
+    return x * inv[..., None]
 
 
-def _difference(g, m, r, c, dr, dc):
-    """Derivative of ``g`` per texel at (r, c) along (dr, dc): central where both neighbours are
-    covered, one-sided where one is, zero where neither."""
-    fwd, back = m[r + dr, c + dc], m[r - dr, c - dc]
-    d = np.zeros((len(r), 3))
-    both = fwd & back
-    d[both] = (g[r + dr, c + dc][both] - g[r - dr, c - dc][both]) / 2
-    f = fwd & ~back
-    d[f] = g[r + dr, c + dc][f] - g[r, c][f]
-    b = back & ~fwd
-    d[b] = g[r, c][b] - g[r - dr, c - dc][b]
-    return d
+def scores(P, N, mask, eye_rel, v_rel):
+    """The score of spec section 4.1 at every texel (H, W), in P's precision; -3 where uncovered."""
+    u = _normalize((eye_rel - P).astype(P.dtype))
+    b = _normalize((v_rel - P).astype(P.dtype))
+    h = _normalize(u + b)
+    s = (N[..., 0] * h[..., 0] + N[..., 1] * h[..., 1]) + N[..., 2] * h[..., 2]
+    return np.where(mask, s, P.dtype.type(-3)), u
 
 
-def reflected_rays(camera, stencil, reflector_mesh, triangle):
-    """Per stencil pixel (row-major): the eye ray through the pixel centre meets the visible
-    reflector triangle and is reflected about the interpolated normal there.
+def _unit64(x):
+    n = np.sqrt((x[..., 0] * x[..., 0] + x[..., 1] * x[..., 1]) + x[..., 2] * x[..., 2])
+    return np.where(n[..., None] > 0, x / np.where(n > 0, n, 1.0)[..., None], x)
 
-    Returns
-    -------
-    rows, cols : (P,) int
-    origin, direction : (P, 3) float64
-    """
-    H, W = stencil.shape
-    inv = np.linalg.inv(camera.view_proj())
-    eye = np.asarray(camera.eye, np.float64)
-    rows, cols, origin, direction = [], [], [], []
-    for r, c in zip(*np.nonzero(stencil)):
-        x = (c + 0.5) / W * 2 - 1
-        y = (H - r - 0.5) / H * 2 - 1
-        far = inv @ np.array([x, y, 1.0, 1.0])
-        near = inv @ np.array([x, y, -1.0, 1.0])
-        d = _unit(far[:3] / far[3] - near[:3] / near[3])
-        f = reflector_mesh.faces[triangle[r, c]]
-        a, b, cc = reflector_mesh.vertices[f]
-        t, u, v = _moller(eye, d, a, b, cc)
-        if not np.isfinite(t):
+
+def newton_step(P, N, U, mask, v_rel, r, c):
+    """One Newton step on ``h - N = 0`` from texel (r, c) (float64, as the kernel's): (d_row,
+    d_col), or None when an axis has no covered neighbour or the Jacobian is singular."""
+    h_, w_ = mask.shape
+    n = N[r, c].astype(np.float64)
+    a = np.abs(n)
+    e = np.eye(3)[0 if (a[0] <= a[1] and a[0] <= a[2]) else (1 if a[1] <= a[2] else 2)]
+    t0 = np.cross(n, e)
+    t0 = t0 / np.sqrt((t0[0] * t0[0] + t0[1] * t0[1]) + t0[2] * t0[2])
+    t1 = np.cross(n, t0)
+    t = np.stack([t0, t1])
+
+    def res(rr, cc):
+        p = P[rr, cc].astype(np.float64)
+        b = _unit64(np.asarray(v_rel, dtype=np.float64) - p)
+        hh = _unit64(U[rr, cc].astype(np.float64) + b)
+        d = hh - N[rr, cc].astype(np.float64)
+        return np.array([(d[0] * t[k, 0] + d[1] * t[k, 1]) + d[2] * t[k, 2] for k in range(2)])
+
+    def cov(rr, cc):
+        return 0 <= rr < h_ and 0 <= cc < w_ and mask[rr, cc]
+
+    r0 = res(r, c)
+    cols = []
+    for dr, dc in ((0, 1), (1, 0)):
+        fa, fb = cov(r + dr, c + dc), cov(r - dr, c - dc)
+        if fa and fb:
+            cols.append((res(r + dr, c + dc) - res(r - dr, c - dc)) * 0.5)
+        elif fa:
+            cols.append(res(r + dr, c + dc) - r0)
+        elif fb:
+            cols.append(r0 - res(r - dr, c - dc))
+        else:
+            return None
+    (jc0, jc1), (jr0, jr1) = cols
+    det = jc0 * jr1 - jr0 * jc1
+    if det == 0.0 or not np.isfinite(det):
+        return None
+    d_col = (-r0[0] * jr1 + r0[1] * jr0) / det
+    d_row = (-r0[1] * jc0 + r0[0] * jc1) / det
+    if not (np.isfinite(d_col) and np.isfinite(d_row)):
+        return None
+    return d_row, d_col
+
+
+def images_of(P, N, mask, eye_rel, v_rel, first=(-1, -1), reach=1.5, merge=1.0):
+    """Every image of one vertex, by judging every covered texel: a list of (row, col), the walk's
+    texel ``first`` first when it is an image (covered, in front, Newton within reach), then the
+    others in row-major order after merging (best score first, ties to row then col)."""
+    dt = P.dtype.type
+    s, U = scores(P, N, mask, eye_rel, v_rel)
+    h, w = mask.shape
+    pad = np.full((h + 2, w + 2), dt(-3))
+    pad[1:-1, 1:-1] = s
+    nbr = np.max([pad[1 + dr:h + 1 + dr, 1 + dc:w + 1 + dc] for dr in (-1, 0, 1) for dc in (-1, 0, 1)
+                  if (dr, dc) != (0, 0)], axis=0)
+    d = (v_rel - P).astype(P.dtype)
+    front = ((d[..., 0] * N[..., 0] + d[..., 1] * N[..., 1]) + d[..., 2] * N[..., 2]) > 0
+    cand = []
+    for r, c in zip(*np.nonzero(mask & (s >= nbr) & front)):
+        step = newton_step(P, N, U, mask, v_rel, r, c)
+        if step is not None and step[0] ** 2 + step[1] ** 2 <= reach * reach:
+            cand.append((float(s[r, c]), int(r), int(c), r + step[0], c + step[1]))
+    kept = []
+    fr, fc = first
+    if fr >= 0 and mask[fr, fc] and front[fr, fc]:
+        step = newton_step(P, N, U, mask, v_rel, fr, fc)
+        if step is not None and step[0] ** 2 + step[1] ** 2 <= reach * reach:
+            kept.append((None, fr, fc, fr + step[0], fc + step[1]))
+    for sc, r, c, lr, lc in sorted(cand, key=lambda x: (-x[0], x[1], x[2])):
+        if any((k[0] is None and (r, c) == (k[1], k[2])) or (lr - k[3]) ** 2 + (lc - k[4]) ** 2 < merge * merge
+               for k in kept):
             continue
-        n = _unit((1 - u - v) * reflector_mesh.normals[f[0]] + u * reflector_mesh.normals[f[1]]
-                  + v * reflector_mesh.normals[f[2]])
-        rows.append(r)
-        cols.append(c)
-        origin.append(eye + t * d)
-        direction.append(d - 2 * np.dot(d, n) * n)
-    return np.asarray(rows, int), np.asarray(cols, int), np.asarray(origin).reshape(-1, 3), \
-        np.asarray(direction).reshape(-1, 3)
+        kept.append((sc, r, c, lr, lc))
+    head = [k for k in kept if k[0] is None]
+    rest = sorted((k for k in kept if k[0] is not None), key=lambda x: (x[1], x[2]))
+    return [(k[1], k[2]) for k in head + rest]
 
 
-def first_hits(origin, direction, tris):
-    """Per ray, the index of the nearest triangle of ``tris`` (T, 3, 3) hit with t > 0 (-1 none)."""
-    A, B, C = tris[:, 0], tris[:, 1], tris[:, 2]
-    e1, e2 = B - A, C - A
-    out = np.full(len(origin), -1)
-    for i, (p, rd) in enumerate(zip(origin, direction)):
-        pv = np.cross(rd, e2)
-        det = np.sum(e1 * pv, axis=1)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            s = p - A
-            uu = np.sum(s * pv, axis=1) / det
-            q = np.cross(s, e1)
-            vv = (q @ rd) / det
-            tt = np.sum(e2 * q, axis=1) / det
-        hit = (tt > 0) & (uu >= 0) & (vv >= 0) & (uu + vv <= 1)
-        if hit.any():
-            out[i] = np.flatnonzero(hit)[np.argmin(tt[hit])]
+def count_images(P, N, mask, eye_rel, vertices_rel, firsts=None):
+    """:func:`images_of` for each vertex: a list of lists of (row, col)."""
+    out = []
+    for i, v in enumerate(vertices_rel):
+        first = (-1, -1) if firsts is None else tuple(int(x) for x in firsts[i])
+        out.append(images_of(P, N, mask, eye_rel, np.asarray(v, dtype=P.dtype), first))
     return out
-
-
-def trace_reflections(scene, meshes, camera, stencil, reflector_mesh, triangle):
-    """What reflector pixels show: :func:`reflected_rays` intersected with every triangle of every
-    non-reflector object (float64, nearest t > 0 inside the triangle).
-
-    Returns
-    -------
-    reflected_id : ndarray (H, W) int32
-        Object id seen, 0 none (also off the stencil).
-    """
-    tris, ids = [], []
-    for k, obj in enumerate(scene.objects, start=1):
-        if not obj.reflector:
-            tris.append(meshes[k - 1].vertices[meshes[k - 1].faces])
-            ids.append(np.full(meshes[k - 1].n_faces, k, np.int32))
-    tris, ids = np.concatenate(tris), np.concatenate(ids)
-    rows, cols, origin, direction = reflected_rays(camera, stencil, reflector_mesh, triangle)
-    hit = first_hits(origin, direction, tris)
-    out = np.zeros(stencil.shape, np.int32)
-    out[rows, cols] = np.where(hit >= 0, ids[hit], 0)
-    return out
-
-
-def _moller(o, d, a, b, c):
-    e1, e2 = b - a, c - a
-    p = np.cross(d, e2)
-    det = np.dot(e1, p)
-    if det == 0:
-        return np.nan, 0.0, 0.0
-    s = o - a
-    u = np.dot(s, p) / det
-    q = np.cross(s, e1)
-    return np.dot(e2, q) / det, u, np.dot(d, q) / det

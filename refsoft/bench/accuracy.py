@@ -4,8 +4,9 @@ and the accurate preset with one of its parts taken back (which says what each p
 For each scene, size and setting: frames spread evenly over the animation (rendered in order, each
 coherent with the previous one rendered), and per frame the share of reflector pixels whose
 reflected object agrees with the truth (all, interior, within :data:`RIM` pixels of a reflector's
-rim), the mean colour error, for spherical reflectors the mean pixel distance of the reflection
-points from the exact ones, and the frame time (the frames after the first, warm). Writes
+rim), the mean colour error, the specks and holes (one-pixel defects of colour and of reflected
+object, :func:`refsoft.truth.metrics.defect_counts`), for spherical reflectors the mean pixel
+distance of the reflection points from the exact ones, and the frame time (the frames after the first, warm). Writes
 ``accuracy.csv`` (a row per scene, size, setting and frame), ``accuracy.md`` (median and worst
 frame per scene, size and setting), ``agreement_SCENE_WxH.png`` (the accurate preset's worst
 frame: render | truth | agreement map), ``tasks.csv``, ``report.html`` and, with matplotlib,
@@ -40,9 +41,10 @@ SETTINGS = {
     "accurate, tessellate 1e-3": {"preset": "accurate", "tessellate": 1e-3},
     "accurate, hierarchy": {"preset": "accurate", "method": "hierarchy"},
 }
-COLUMNS = ["scene", "size", "setting", "frame", "agreement", "interior", "rim", "color_error", "pixel_distance",
-           "ms"]
-SUMMARY = ["scene", "size", "setting", "frames", "median", "worst", "interior", "rim", "color_error", "ms"]
+COLUMNS = ["scene", "size", "setting", "frame", "agreement", "interior", "rim", "color_error", "specks",
+           "speck_fraction", "holes", "hole_fraction", "pixel_distance", "ms"]
+SUMMARY = ["scene", "size", "setting", "frames", "median", "worst", "interior", "rim", "color_error", "specks",
+           "holes", "ms"]
 
 
 def frames_of(scene, n: int) -> list:
@@ -161,7 +163,7 @@ def accuracy(scenes=None, out=None, sizes=((640, 480), (1024, 768)), frames: int
 
 
 def _frame_errors(render, truth) -> dict:
-    from ..truth.metrics import color_error, disagreement, pixel_distance, reflector_pixels, rim
+    from ..truth.metrics import color_error, defect_counts, disagreement, pixel_distance, reflector_pixels, rim
 
     rid, tid, obj = render["reflected_id"], truth["reflected_id"], truth["object_id"]
     edge = np.zeros(tid.shape, dtype=bool)
@@ -169,7 +171,8 @@ def _frame_errors(render, truth) -> dict:
         edge |= rim(obj == k, RIM)
     out = {"agreement": 1.0 - disagreement(rid, tid), "interior": 1.0 - disagreement(rid, tid, ~edge),
            "rim": 1.0 - disagreement(rid, tid, edge),
-           "color_error": color_error(render["image"], truth["image"], reflector_pixels(tid))["mean"]}
+           "color_error": color_error(render["image"], truth["image"], reflector_pixels(tid))["mean"],
+           **defect_counts(render, truth)}
     dists = []
     for key in truth:
         if key.startswith("exact_reflection_point_"):
@@ -186,7 +189,7 @@ def _frame_errors(render, truth) -> dict:
 
 def summarize(rows) -> list:
     """Per scene, size and setting: the median and worst frame's agreement, the median interior
-    and rim agreement, colour error and warm ms per frame."""
+    and rim agreement, colour error, specks and holes per frame, and warm ms per frame."""
     out = []
     keys = sorted({(r["scene"], r["size"], r["setting"]) for r in rows},
                   key=lambda k: ([r["scene"] for r in rows].index(k[0]), k[1], list(SETTINGS).index(k[2])))
@@ -199,6 +202,8 @@ def summarize(rows) -> list:
                     "interior": float(np.median([r["interior"] for r in sel])),
                     "rim": float(np.median([r["rim"] for r in sel])),
                     "color_error": float(np.median([r["color_error"] for r in sel])),
+                    "specks": float(np.median([r["specks"] for r in sel])),
+                    "holes": float(np.median([r["holes"] for r in sel])),
                     "ms": float(np.median(ms)) if ms else None})
     return out
 
@@ -215,11 +220,12 @@ def _write(out, rows, worst_pictures, frames, timing, run):
     pct = [dict(r, **{k: 100 * r[k] for k in ("median", "worst", "interior", "rim")}) for r in summary]
     intro = (f"Up to {frames} frames spread over each animation; agreement is the share (%) of reflector pixels whose "
              f"reflected object is the truth's (median and worst frame; interior and rim: more and less than {RIM} "
-             f"pixels from a reflector's rim, median); "
+             f"pixels from a reflector's rim, median); specks and holes: one-pixel defects of colour and of "
+             f"reflected object per frame (median); "
              + ("ms per warm frame" if timing else "no timing (--no-timing)")
              + f"; {m['cpu']}, {m['cores']} cores, numpy {m['numpy']}, numba {m['numba']}.")
     headers = ["scene", "size", "setting", "frames", "median %", "worst %", "interior %", "rim %", "colour error",
-               "ms/frame"]
+               "specks", "holes", "ms/frame"]
     write_text(os.path.join(out, "accuracy.md"), f"# Accuracy against the ray-traced truth\n\n{intro}\n\n"
                + markdown_table(pct, SUMMARY, headers))
     blocks = [("p", intro), ("table", pct, SUMMARY, headers)]
@@ -242,20 +248,21 @@ def _plot(plt, out, summary):
     from ..io import atomic_path
 
     scenes = list(dict.fromkeys(r["scene"] for r in summary))
-    fig, axes = plt.subplots(1, len(scenes), figsize=(3.4 * len(scenes), 3.2), squeeze=False)
+    fig, axes = plt.subplots(1, len(scenes), figsize=(5.0 * len(scenes), 4.4), squeeze=False)
     for ax, name in zip(axes[0], scenes):
         for size, marker in zip(sorted({r["size"] for r in summary}), "os^"):
             sel = [r for r in summary if r["scene"] == name and r["size"] == size and r["ms"] is not None]
             ax.scatter([r["ms"] for r in sel], [100 * r["median"] for r in sel], marker=marker, s=16, label=size)
             for r in sel:
                 if r["setting"] in ("paper", "accurate"):
-                    ax.annotate(r["setting"], (r["ms"], 100 * r["median"]), fontsize=6, xytext=(3, 2),
+                    ax.annotate(r["setting"], (r["ms"], 100 * r["median"]), fontsize=9, xytext=(3, 2),
                                 textcoords="offset points")
-        ax.set_title(name)
-        ax.set_xlabel("ms per frame")
-        ax.set_ylabel("agreement %")
-        ax.legend(fontsize=6)
+        ax.set_title(name, fontsize=12)
+        ax.set_xlabel("ms per frame", fontsize=11)
+        ax.set_ylabel("agreement with the truth (%)", fontsize=11)
+        ax.tick_params(labelsize=10)
+        ax.legend(fontsize=9)
     fig.tight_layout()
-    with atomic_path(os.path.join(out, "accuracy.png"), ".png") as tmp:
-        fig.savefig(tmp, dpi=110, format="png")
+    with atomic_path(os.path.join(out, "accuracy.png"), ".png") as tmp:  # "tight": no label clipped at an edge
+        fig.savefig(tmp, dpi=110, format="png", bbox_inches="tight")
     plt.close(fig)

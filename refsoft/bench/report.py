@@ -11,6 +11,7 @@ cluster").
 from __future__ import annotations
 
 import base64
+import contextvars
 import html
 import os
 
@@ -19,13 +20,16 @@ import numpy as np
 from ._common import _cell, write_csv, write_text
 
 TASK_COLUMNS = ["task", "seconds", "host", "threads", "reused"]
+#: The command line that is making the report (set by ``refsoft bench``; unset from Python).
+COMMAND = contextvars.ContextVar("refsoft_bench_command", default=None)
 #: Worker counts the estimate is tabulated for.
 ESTIMATE_WORKERS = (1, 2, 4, 8, 16, 32, 64)
 
 _STYLE = """body{font:14px/1.45 system-ui,sans-serif;margin:2em auto;max-width:80em;padding:0 1em;color:#222}
 table{border-collapse:collapse;margin:0.6em 0 1.2em}th,td{border:1px solid #ccc;padding:2px 8px}
 td.n{text-align:right;font-variant-numeric:tabular-nums}th{background:#f2f2f2}
-img{max-width:100%;border:1px solid #ddd;margin:0.4em 0}.note{color:#a50}code{background:#f4f4f4}"""
+img{max-width:100%;border:1px solid #ddd;margin:0.4em 0}.note{color:#a50}code{background:#f4f4f4}
+.prov{color:#444;background:#f8f8f8;border-left:4px solid #bbb;padding:0.4em 0.8em}"""
 
 
 def task_rows(run) -> list:
@@ -87,6 +91,46 @@ def run_section(run) -> str:
     return "".join(parts)
 
 
+def _cpu_model() -> str:
+    """The CPU's model name (Linux's /proc/cpuinfo), else what the platform module says."""
+    import platform
+
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8", errors="replace") as fh:
+            for line in fh:
+                if line.lower().startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+
+def provenance(command=None) -> dict:
+    """What made a report: ``refsoft`` (its version), ``date`` (UTC, ISO 8601), ``machine``
+    (host, CPU model, cores, operating system), ``software`` (Python, NumPy, Numba) and the
+    ``command`` (``command``, else :data:`COMMAND`, else a note that it ran from Python)."""
+    import datetime
+    import platform
+
+    from .. import __version__
+    from ._common import machine
+
+    m = machine()
+    cmd = command or COMMAND.get() or "(called from Python, not from the refsoft command)"
+    return {"refsoft": __version__,
+            "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
+            "machine": f"{platform.node()}: {_cpu_model()}, {m['cores']} cores, {platform.platform()}",
+            "software": f"Python {m['python']}, NumPy {m['numpy']}, Numba {m['numba']}, {m['threads']} Numba threads",
+            "command": cmd}
+
+
+def provenance_html(p) -> str:
+    """:func:`provenance` as the report's opening lines."""
+    lines = [f"<b>{html.escape(k)}</b>: " + (f"<code>{html.escape(v)}</code>" if k == "command" else html.escape(str(v)))
+             for k, v in p.items()]
+    return "<p class=prov>" + "<br>".join(lines) + "</p>\n"
+
+
 def write_report(out, title, blocks, run=None, plots=True) -> str:
     """Write ``out/report.html``; returns its path.
 
@@ -99,11 +143,14 @@ def write_report(out, title, blocks, run=None, plots=True) -> str:
         ``("image", path, alt)`` (a PNG file, inlined; skipped when missing).
     run : RunReport, optional
         Adds the tasks' section.
+
+    The page opens with :func:`provenance`: refsoft's version, the date, the machine and the
+    command.
     plots : bool
         False: a note that the plots need matplotlib.
     """
     parts = [f"<!DOCTYPE html>\n<html><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
-             f"<style>{_STYLE}</style></head><body>\n<h1>{html.escape(title)}</h1>\n"]
+             f"<style>{_STYLE}</style></head><body>\n<h1>{html.escape(title)}</h1>\n", provenance_html(provenance())]
     if not plots:
         parts.append("<p class=note>No plots: matplotlib is not installed (pip install 'refsoft[plot]'); the tables "
                      "are complete.</p>\n")

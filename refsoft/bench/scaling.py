@@ -246,7 +246,8 @@ def _write(out, result, width, height, repeats, run):
 
 
 def _plot(plt, out, rows, slopes, top):
-    fig, axes = plt.subplots(1, 4, figsize=(17, 3.9))
+    fig, axes = plt.subplots(2, 2, figsize=(14, 9.5))
+    axes = axes.ravel()
     panels = ((("search_cold", "search_coherent"), "vertices"), (("raster_triangles",), "triangles"),
               (("raster_resolution",), "pixels"), (("frame_triangles",), "scene triangles (whole frame, by stage)"))
     for ax, (series, xlabel) in zip(axes, panels):
@@ -260,13 +261,14 @@ def _plot(plt, out, rows, slopes, top):
                 for k, v in stage_slopes(rows).items():
                     ax.loglog([r["size"] for r in sel], [r["stages"][k] for r in sel], ".--", lw=0.8,
                               label=f"{k} ({v:.2f}, top {stage_top[k]:.2f})")
-        ax.set_xlabel(xlabel)
-        ax.set_ylabel("ms")
-        ax.legend(fontsize=7)
+        ax.set_xlabel(xlabel, fontsize=11)
+        ax.set_ylabel("ms", fontsize=11)
+        ax.tick_params(labelsize=10)
+        ax.legend(fontsize=9)
         ax.grid(True, which="both", alpha=0.3)
     fig.tight_layout()
     from ..io import atomic_path
 
-    with atomic_path(os.path.join(out, "scaling.png"), ".png") as tmp:
-        fig.savefig(tmp, dpi=110, format="png")
+    with atomic_path(os.path.join(out, "scaling.png"), ".png") as tmp:  # "tight": no label clipped at an edge
+        fig.savefig(tmp, dpi=110, format="png", bbox_inches="tight")
     plt.close(fig)

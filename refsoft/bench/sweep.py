@@ -48,13 +48,20 @@ COLUMNS = ["scene", "setting", "knob", "value", "time_ms", "threads", "disagreem
 
 
 def settings(knobs=None) -> list:
-    """``[(name, knob, value, options)]``: the paper preset ("default"), then each knob's other
-    values."""
+    """``[(name, knob, value, options)]``: the paper preset ("paper"), then each knob's other
+    values, named by their preset ("paper, KNOB=VALUE"; the preset knob's rows by the preset's name;
+    the per-pixel methods, which read no preset, "method=NAME")."""
     knobs = KNOBS if knobs is None else {k: v for k, v in KNOBS.items() if k in knobs}
-    out = [("default", "", "", {})]
+    out = [("paper", "", "", {})]
     for knob, values in knobs.items():
         for v in values[1:]:
-            out.append((f"{knob}={v}", knob, v, {knob: v}))
+            if knob == "preset":
+                name = str(v)
+            elif knob == "method" and v in ("ldt", "envmap", "truth"):  # per-pixel methods: no preset read
+                name = f"method={v}"
+            else:
+                name = f"paper, {knob}={v}"
+            out.append((name, knob, v, {knob: v}))
     return out
 
 
@@ -202,45 +209,50 @@ def _write(out, rows, scenes, width, height, frames, repeats, timing, run):
     how = (f"median of {repeats} runs per setting" if timing else "errors only (no timing)")
     intro = (f"{width}x{height}, frames 0-{frames - 1} (coherent), {how}; {m['cpu']}, {m['cores']} cores, numpy "
              f"{m['numpy']}, numba {m['numba']}.")
-    legend = ("Time is per frame; disagreement is the share of reflector pixels whose reflected object differs "
-              "from the ray-traced truth; * marks the Pareto front (no setting is both faster and closer).")
+    legend = ("Every row is the paper preset (the sweep's baseline; refsoft render's default is the accurate preset) "
+              "with at most the one knob its name gives changed (the rows method=ldt, envmap and truth read no preset). Time is per frame; agreement is the share (%) of "
+              "reflector pixels whose reflected object is the ray-traced truth's, as in refsoft bench accuracy "
+              "(sweep.csv keeps the disagreement, 1 - agreement, as a fraction); * marks the Pareto front (no "
+              "setting is both faster and closer).")
     text = [f"# Sweep: run time against error\n\n{intro}\n{legend}\n"]
-    cols = ["setting", "time_ms", "disagreement", "interior_disagreement", "color_error_mean", "virtual_distance_mean",
+    cols = ["setting", "time_ms", "agreement", "interior_agreement", "color_error_mean", "virtual_distance_mean",
             "iterations_mean"]
-    headers = ["setting", "ms/frame", "disagreement", "interior", "colour error", "V' distance", "iterations"]
+    headers = ["setting", "ms/frame", "agreement %", "interior %", "colour error", "V' distance", "iterations"]
     blocks = [("p", intro), ("p", legend)]
     for name in scenes:
-        sel = [dict(r, setting=("* " if r["pareto"] else "") + r["setting"]) for r in rows if r["scene"] == name]
+        sel = [dict(r, setting=("* " if r["pareto"] else "") + r["setting"], agreement=100 * (1 - r["disagreement"]),
+                    interior_agreement=100 * (1 - r["interior_disagreement"])) for r in rows if r["scene"] == name]
         text.append(f"\n## {name}\n\n" + markdown_table(sel, cols, headers))
         blocks += [("h2", name), ("table", sel, cols, headers)]
     write_text(os.path.join(out, "sweep.md"), "".join(text))
     plt = plt_or_none()
     if plt is not None and timing:
         _plot(plt, out, rows, scenes)
-        blocks.insert(2, ("image", os.path.join(out, "pareto.png"), "time against disagreement per setting"))
+        blocks.insert(2, ("image", os.path.join(out, "pareto.png"), "agreement against time per setting"))
     elif not timing:
         blocks.insert(2, ("p", "No Pareto plot: the run took no times (--no-timing)."))
     write_report(out, "Sweep: run time against error", blocks, run, plots=plt is not None)
 
 
 def _plot(plt, out, rows, scenes):
-    fig, axes = plt.subplots(1, len(scenes), figsize=(4.2 * len(scenes), 3.6), squeeze=False)
+    fig, axes = plt.subplots(1, len(scenes), figsize=(6.0 * len(scenes), 5.0), squeeze=False)
     for ax, name in zip(axes[0], scenes):
         sel = [r for r in rows if r["scene"] == name]
         t = np.array([r["time_ms"] for r in sel])
-        e = np.array([r["disagreement"] for r in sel])
+        e = np.array([100 * (1 - r["disagreement"]) for r in sel])
         f = np.array([r["pareto"] for r in sel])
         ax.scatter(t[~f], e[~f], c="0.6", s=18)
         order = np.argsort(t[f])
         ax.plot(t[f][order], e[f][order], "o-", c="tab:red", ms=4)
         for r, x, y in zip(sel, t, e):
-            ax.annotate(r["setting"], (x, y), fontsize=6, xytext=(3, 2), textcoords="offset points")
-        ax.set_title(name)
-        ax.set_xlabel("ms per frame")
-        ax.set_ylabel("reflected-id disagreement")
+            ax.annotate(r["setting"], (x, y), fontsize=8, xytext=(3, 2), textcoords="offset points")
+        ax.set_title(name, fontsize=12)
+        ax.set_xlabel("ms per frame", fontsize=11)
+        ax.set_ylabel("agreement with the truth (%)", fontsize=11)
+        ax.tick_params(labelsize=10)
     fig.tight_layout()
     from ..io import atomic_path
 
-    with atomic_path(os.path.join(out, "pareto.png"), ".png") as tmp:
-        fig.savefig(tmp, dpi=110, format="png")
+    with atomic_path(os.path.join(out, "pareto.png"), ".png") as tmp:  # "tight": no label clipped at an edge
+        fig.savefig(tmp, dpi=110, format="png", bbox_inches="tight")
     plt.close(fig)

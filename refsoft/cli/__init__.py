@@ -131,46 +131,84 @@ def _export_command(sub, scene, methods):
     e.set_defaults(func=commands.cmd_export)
 
 
-def _bench_command(sub):
-    """``bench``."""
-    b = sub.add_parser("bench", help="run time against error: accuracy, sweep, scaling, table1 (docs/benchmarks.md, "
-                                     "docs/accuracy.md)")
-    b.add_argument("what", choices=["accuracy", "sweep", "scaling", "table1"], help="which benchmark")
-    b.add_argument("--scenes", nargs="+", default=None, metavar="SCENE",
-                   help="built-in scenes (accuracy: all; sweep: sphere quad kitchen; table1: kitchen ufo ants)")
-    b.add_argument("--sizes", nargs="+", default=None, metavar="WxH",
-                   help="accuracy: image sizes (default 640x480 1024x768)")
-    b.add_argument("--setting", action="append", default=None, metavar="NAME",
-                   help="accuracy: only these settings (repeatable; default all: paper, accurate, and the accurate "
-                        "preset with one part changed)")
-    b.add_argument("--out", default=None, metavar="DIR", help="output folder (default: out/bench/WHAT)")
-    b.add_argument("--width", type=int, default=None, help="image width (sweep 320, others 1024)")
-    b.add_argument("--height", type=int, default=None, help="image height (sweep 240, others 768)")
-    b.add_argument("--frames", type=int, default=None, metavar="N",
-                   help="frames per scene (accuracy: 5 spread over each animation; sweep: 3; table1: all)")
-    b.add_argument("--repeats", type=int, default=None, metavar="N",
-                   help="sweep and scaling: timed runs per setting, the median kept (default 3)")
-    b.add_argument("--knob", action="append", default=None, metavar="NAME",
-                   help="sweep only these knobs (repeatable): preset, gbuffer_scale, widen, neighbourhood, method, "
-                        "precision, inverse, tessellate, refine, virtual, silhouette")
-    b.add_argument("--max-vertices", type=int, default=1 << 20, metavar="N", help="scaling: largest vertex count")
-    b.add_argument("--max-subdivisions", type=int, default=8, metavar="N",
-                   help="scaling: largest icosphere subdivision")
-    b.add_argument("--max-width", type=int, default=2048, metavar="W", help="scaling: largest image width")
-    b.add_argument("--scheduler", default=None, metavar="WHERE",
-                   help="where the tasks run: 'local' (a Dask cluster on this machine; the default when Dask is "
-                        "installed), 'serial' (one after another in this process) or tcp://HOST:PORT (a running Dask "
-                        "scheduler); docs/benchmarks.md, 'Sweeps on a cluster'")
-    b.add_argument("--workers", type=int, default=None, metavar="N",
-                   help="--scheduler local: worker processes (default: the cores; timed runs at most the cores)")
-    b.add_argument("--no-timing", action="store_true",
-                   help="accuracy, sweep, table1: error figures only, no times (then workers may share cores)")
-    b.add_argument("--fresh", action="store_true",
-                   help="compute every task again instead of reusing the results stored in the output folder's tasks/")
-    b.add_argument("--connect-timeout", type=float, default=None, metavar="S",
-                   help="--scheduler tcp://...: seconds to wait for the scheduler and its first worker (default 10)")
-    b.set_defaults(func=commands.cmd_bench)
+#: ``bench``'s subcommands: a line of help and the benchmark's description.
+_BENCH = {
+    "accuracy": ("agreement with the ray-traced truth per scene, size and setting (docs/accuracy.md)",
+                 "Render each scene with each setting (the paper and accurate presets, and the accurate preset with "
+                 "one part changed) at each size, ray-trace the same frames, and report the agreement of the "
+                 "reflected object per reflector pixel (in %) and the time per frame."),
+    "sweep": ("run time against error, one knob at a time from the paper preset (docs/benchmarks.md)",
+              "Time each setting (the paper preset, then the paper preset with one knob changed) on each scene and "
+              "measure its agreement with the ray-traced truth (in %); the Pareto front marks the settings no other "
+              "is both faster and closer than."),
+    "scaling": ("run time against vertex count and image size, with fitted slopes (docs/benchmarks.md)",
+                "Time the search and the frame on icospheres of growing vertex count and on growing image sizes, "
+                "and fit the slopes of log time against log size."),
+    "table1": ("the paper's Table 1: search iterations per animation (docs/benchmarks.md)",
+               "Render each animation with the paper preset and count the search's iterations per vertex, as "
+               "Estalella et al.'s Table 1 (mean of the worst frame, mean over all frames), beside the paper's."),
+}
+#: Which bench subcommands each option belongs to (shown in their --help; refused by the others).
+_BENCH_OPTIONS = [
+    (("--scenes",), dict(nargs="+", default=None, metavar="SCENE",
+                         help="built-in scenes (accuracy: all; sweep: sphere quad kitchen; table1: kitchen ufo ants)"),
+     ("accuracy", "sweep", "table1")),
+    (("--sizes",), dict(nargs="+", default=None, metavar="WxH", help="image sizes (default 640x480 1024x768)"),
+     ("accuracy",)),
+    (("--setting",), dict(action="append", default=None, metavar="NAME",
+                          help="only these settings (repeatable; default all: paper, accurate, and the accurate "
+                               "preset with one part changed)"), ("accuracy",)),
+    (("--out",), dict(default=None, metavar="DIR", help="output folder (default: out/bench/WHAT)"),
+     ("accuracy", "sweep", "scaling", "table1")),
+    (("--width",), dict(type=int, default=None, help="image width (sweep 320, others 1024)"),
+     ("sweep", "scaling", "table1")),
+    (("--height",), dict(type=int, default=None, help="image height (sweep 240, others 768)"),
+     ("sweep", "scaling", "table1")),
+    (("--frames",), dict(type=int, default=None, metavar="N",
+                         help="frames per scene (accuracy: 5 spread over each animation; sweep: 3; table1: all)"),
+     ("accuracy", "sweep", "table1")),
+    (("--repeats",), dict(type=int, default=None, metavar="N", help="timed runs per setting, the median kept "
+                                                                    "(default 3)"), ("sweep", "scaling")),
+    (("--knob",), dict(action="append", default=None, metavar="NAME",
+                       help="sweep only these knobs (repeatable): preset, gbuffer_scale, widen, neighbourhood, method, "
+                            "precision, inverse, tessellate, refine, virtual, silhouette"), ("sweep",)),
+    (("--max-vertices",), dict(type=int, default=1 << 20, metavar="N", help="largest vertex count"), ("scaling",)),
+    (("--max-subdivisions",), dict(type=int, default=8, metavar="N", help="largest icosphere subdivision"),
+     ("scaling",)),
+    (("--max-width",), dict(type=int, default=2048, metavar="W", help="largest image width"), ("scaling",)),
+    (("--scheduler",), dict(default=None, metavar="WHERE",
+                            help="where the tasks run: 'local' (a Dask cluster on this machine; the default when Dask "
+                                 "is installed), 'serial' (one after another in this process) or tcp://HOST:PORT (a "
+                                 "running Dask scheduler); docs/benchmarks.md, 'Sweeps on a cluster'"),
+     ("accuracy", "sweep", "scaling", "table1")),
+    (("--workers",), dict(type=int, default=None, metavar="N",
+                          help="--scheduler local: worker processes (default: the cores; timed runs at most the "
+                               "cores)"), ("accuracy", "sweep", "scaling", "table1")),
+    (("--no-timing",), dict(action="store_true",
+                            help="error figures only, no times (then workers may share cores)"),
+     ("accuracy", "sweep", "table1")),
+    (("--fresh",), dict(action="store_true", help="compute every task again instead of reusing the results stored "
+                                                  "in the output folder's tasks/"),
+     ("accuracy", "sweep", "scaling", "table1")),
+    (("--connect-timeout",), dict(type=float, default=None, metavar="S",
+                                  help="--scheduler tcp://...: seconds to wait for the scheduler and its first worker "
+                                       "(default 10)"), ("accuracy", "sweep", "scaling", "table1")),
+]
 
+
+def _bench_command(sub):
+    """``bench`` and its four subcommands, each with the help of its own options only (the
+    others are accepted, hidden, so that ``cmd_bench`` names them in its refusal)."""
+    b = sub.add_parser("bench", help="run time against error: accuracy, sweep, scaling, table1 (docs/benchmarks.md, "
+                                     "docs/accuracy.md)",
+                       description="Benchmarks of run time against error; each writes its tables, plots and a "
+                                   "self-contained report.html. 'refsoft bench WHAT --help' for one's options.")
+    what = b.add_subparsers(dest="what", required=True, metavar="WHAT", help="which benchmark")
+    for name, (short, long) in _BENCH.items():
+        w = what.add_parser(name, help=short, description=long)
+        for flags, kw, owners in _BENCH_OPTIONS:
+            w.add_argument(*flags, **(kw if name in owners else dict(kw, help=argparse.SUPPRESS)))
+        w.set_defaults(func=commands.cmd_bench)
 
 
 def main(argv=None, installed=False) -> int:
@@ -185,6 +223,7 @@ def main(argv=None, installed=False) -> int:
     try:
         parser = build_parser()
         args = parser.parse_args(argv)
+        args.argv = list(sys.argv[1:] if argv is None else argv)  # what reports say made them
         code = args.func(args)
         interrupt.check()  # an interrupt a library swallowed
         return code

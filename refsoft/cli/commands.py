@@ -58,6 +58,7 @@ def cmd_gbuffer(args) -> int:
 def _trace_ldt_pixel(args, scene) -> int:
     from ..ldt.trace import trace_pixel, write_pixel_trace
     from ..options import RenderOptions
+    from ..viewer import write_trace_page
 
     given = [flag for flag, v in (("--vertex", args.vertex), ("--reflector", args.reflector),
                                   ("--neighbourhood", args.neighbourhood), ("--inverse", args.inverse),
@@ -73,15 +74,44 @@ def _trace_ldt_pixel(args, scene) -> int:
     tr = trace_pixel(scene, args.pixel[0], args.pixel[1], args.frame, options=RenderOptions(**kwargs))
     print(tr.describe())
     print(tr.table(bisection=args.bisection))
-    written = write_pixel_trace(args.out, tr)
-    print(f"wrote {args.out}/" + " and ".join(written)
+    written = write_pixel_trace(args.out, tr) + [write_trace_page(args.out, tr)]
+    print(f"wrote {args.out}/" + ", ".join(written) + " (open trace.html in a browser to step through the search)"
           + ("" if "trace.png" in written else " (no picture: pip install '.[plot]' for matplotlib)"))
+    return 0
+
+
+def _suggest_vertices(args, scene) -> int:
+    """``refsoft trace SCENE`` without ``--vertex``: list vertices worth tracing."""
+    import shlex
+
+    from ..search import flag_names
+    from ..search.suggest import interesting_vertices
+
+    opts = search_kwargs(args)
+    opts.pop("coherence", None)
+    found = interesting_vertices(scene, args.reflector, args.frame, **opts)
+    k = args.reflector or scene.reflector_ids[0]
+    print(f"no --vertex given: vertices worth tracing in reflector {k} ({scene.object_by_id(k).name!r}), frame "
+          f"{args.frame} (each searched from the reflector's centre, without coherence):")
+    print(f"{'what':<34} {'vertex':>7} {'iterations':>10}  {'pixel':<12} flags")
+    for f in found:
+        pix = f"({f['pixel'][0]}, {f['pixel'][1]})"
+        print(f"{f['kind']:<34} {f['vertex']:>7} {f['iterations']:>10}  {pix:<12} "
+              f"{', '.join(flag_names(f['flags'])) or 'none'}")
+    if found:
+        extra = [] if args.frame == 0 else ["--frame", str(args.frame), "--no-coherence"]
+        for flag, v in (("--width", args.width), ("--height", args.height), ("--subdivide", args.subdivide),
+                        ("--reflector", args.reflector)):
+            extra += [] if v is None else [flag, str(v)]
+        print("trace one with: refsoft trace " + shlex.join([args.scene, "--vertex", str(found[0]["vertex"]), *extra])
+              + " (and the search options given here); the LDT: --method ldt --pixel ROW COL")
     return 0
 
 
 def cmd_trace(args) -> int:
     from ..search.pictures import write_trace
     from ..search.trace import trace_vertex
+    from ..viewer import write_trace_page
 
     scene = _scene(args)
     from ..options import RenderOptions
@@ -94,7 +124,7 @@ def cmd_trace(args) -> int:
     if args.pixel is not None or args.bisection or ldt_kwargs(args):
         raise RefsoftError("--pixel, --bisection and the --ldt-* options trace the LDT search: add --method ldt")
     if args.vertex is None:
-        raise RefsoftError("give --vertex I (the vertex search) or --method ldt --pixel ROW COL")
+        return _suggest_vertices(args, scene)
 
     opts = search_kwargs(args)
     coherence = opts.pop("coherence", True)
@@ -110,17 +140,35 @@ def cmd_trace(args) -> int:
             if st["event"] in ("popped", "chosen"):
                 print(f"{n:>4} {st['attempt']:>7} {st['level']:>5} {str(tuple(st['texel'])):>12}  {st['event']}")
         print(f"result: pixel {tr.pixel} after {tr.tests} texel tests")
-        written = write_trace(args.out, rp)
-        print(f"wrote {args.out}/{' and '.join(written)}")
+        written = write_trace(args.out, rp) + [write_trace_page(args.out, rp)]
+        print(f"wrote {args.out}/{', '.join(written)} (open trace.html in a browser to step through the traversal)")
         return 0
     print(f"vertex {rp.vertex} (object {rp.vertex_object} {name(rp.vertex_object)!r}, its vertex {rp.local_index}) "
           f"in reflector {rp.reflector} ({name(rp.reflector)!r}), frame {rp.frame}, {neighbourhood}, start "
           f"({tr.start[0]}, {tr.start[1]}){' after a restart' if tr.restarted else ''}")
     print(tr.table())
     write_trace(args.out, rp)
-    print(f"wrote {args.out}/trace.json, trace.png (score field -log10(1 - s), path, start green, end red) "
-          f"and trace.gif ({len(tr.steps)} steps)")
+    write_trace_page(args.out, rp)
+    print(f"wrote {args.out}/trace.json, trace.png (score field -log10(1 - s), path, start green, end red), "
+          f"trace.gif ({len(tr.steps)} steps) and trace.html (open it in a browser to step through the search)")
+    _trace_images(args, scene, rp, RenderOptions(**opts).images)
     return 0
+
+
+def _trace_images(args, scene, rp, mode):
+    """With ``images="all"``, print how every image of the vertex was found and write images.json."""
+    from ..io import write_json
+    from ..search.trace import trace_vertex_images
+
+    if mode != "all":
+        return
+    it = trace_vertex_images(scene, rp)
+    if it is None:
+        print(f"every image: reflector {rp.reflector} is convex (at most one reflection point): nothing enumerated")
+        return
+    print(it.table())
+    write_json(os.path.join(args.out, "images.json"), it.to_dict())
+    print(f"wrote {args.out}/images.json")
 
 
 class _FirstRunNotice:
@@ -189,7 +237,12 @@ def cmd_render(args) -> int:
         if args.frame is not None:
             if args.frame < 0 or (scene.animation is not None and args.frame >= scene.n_frames):
                 raise RefsoftError(f"--frame must be in [0, {scene.n_frames - 1}], got {args.frame}")
-            frames = list(range(args.frame + 1)) if not args.no_coherence else [args.frame]
+            if args.no_coherence or args.frame == 0:
+                frames = [args.frame]
+            elif scene.animation is None:  # every frame of a static scene is frame 1: its coherent start is frame 0's
+                frames = [0, args.frame]
+            else:
+                frames = list(range(args.frame + 1))
             write = {args.frame}
         out = args.out or os.path.join("out", scene.name)
         t0 = time.perf_counter()
@@ -212,7 +265,28 @@ def cmd_render(args) -> int:
                 f"({_timing(done, notice.compiling)}); search iterations: max frame mean "
                 f"{summ['max_frame_mean_iterations']:.1f}, total mean {summ['total_mean_iterations']:.1f}")
     print(f"{scene.name}: {len(keep)} frame(s), {what}")
+    for line in several_lines(stats["frames"], lambda k: scene.object_by_id(k).name):
+        print(line)
     return 0
+
+
+def several_lines(frames, name=None) -> list[str]:
+    """One line per reflector that showed vertices with several images in ``frames`` (the
+    ``stats.json`` frame records): how many, in the frame with the most (``name(k)``, optional,
+    names reflector k)."""
+    most = {}
+    for f in frames:
+        for k, c in (f.get("images") or {}).items():
+            n = c["2"] + c["3+"]
+            if n and (k not in most or n > most[k][0]):
+                most[k] = (n, c, f["frame"])
+    lines = []
+    for k in sorted(most, key=int):
+        n, c, frame = most[k]
+        who = f"reflector {k}" + (f" ({name(int(k))})" if name is not None else "")
+        when = f", frame {frame}" if len(frames) > 1 else ""
+        lines.append(f"{who}: {n} vertices with several images ({c['2']} two, {c['3+']} three or more){when}")
+    return lines
 
 
 def cmd_truth(args) -> int:
@@ -308,9 +382,19 @@ def cmd_export(args) -> int:
 
 
 def cmd_bench(args) -> int:
-    from .. import bench
-    from ..bench.report import file_link
+    import shlex
 
+    from .. import bench
+    from ..bench.report import COMMAND, file_link
+
+    token = COMMAND.set(shlex.join(["refsoft", *getattr(args, "argv", ["bench", args.what])]))
+    try:
+        return _bench(args, bench, file_link)
+    finally:
+        COMMAND.reset(token)
+
+
+def _bench(args, bench, file_link) -> int:
     out = args.out or os.path.join("out", "bench", args.what)
     t0 = time.perf_counter()
     unused = {"accuracy": ("knob", "width", "height", "repeats", "max_vertices", "max_subdivisions", "max_width"),
@@ -383,7 +467,7 @@ def cmd_compare(args) -> int:
     from ..truth.compare import compare_runs
 
     header = [f"{'frame':>5} {'refl px':>8} {'id disagree':>11} {'interior':>9} {'colour mean':>11} {'colour p99':>10}"
-              f"  per-vertex (reflector: px mean/max, |V'-V'*| mean) or per-pixel hit |X-X*| median/max"]
+              f" {'specks':>6} {'holes':>6}  per-vertex (reflector: px mean/max, |V'-V'*| mean) or per-pixel hit |X-X*| median/max"]
 
     def row(m):
         while header:  # printed with the first row: a refused comparison prints only its error
@@ -395,7 +479,7 @@ def cmd_compare(args) -> int:
             verts = f"hit {m['hit_distance']['median']:.2e}/{m['hit_distance']['max']:.2e}"
         print(f"{m['frame']:>5} {m['reflector_pixels']:>8} {100 * m['reflected_id_disagreement']:>10.2f}% "
               f"{100 * m['interior_disagreement']:>8.2f}% {m['color_error']['mean']:>11.4f} "
-              f"{m['color_error']['p99']:>10.4f}  {verts}")
+              f"{m['color_error']['p99']:>10.4f} {m['specks']:>6} {m['holes']:>6}  {verts}")
 
     out = args.out
     report = compare_runs(args.render_dir, args.truth_dir, out, on_frame=row)
@@ -404,6 +488,20 @@ def cmd_compare(args) -> int:
     if s["only_in_render"] or s["only_in_truth"]:
         extra = f" (not compared: {len(s['only_in_render'])} render-only, {len(s['only_in_truth'])} truth-only frames)"
     print(f"{s['frames']} frame(s): reflected_id differs on {100 * s['reflected_id_disagreement']:.2f}% of reflector "
-          f"pixels{extra}; wrote {out}/metrics.json, agreement_NNNN.png (green agree, red differ) and side_NNNN.png "
+          f"pixels; {s['specks']} specks ({100 * s['speck_fraction']:.3f}%), {s['holes']} holes "
+          f"({100 * s['hole_fraction']:.3f}%){extra}; wrote {out}/metrics.json, agreement_NNNN.png (green agree, red differ) and side_NNNN.png "
           f"(render | truth | 4x difference)")
+    for line in several_lines(_render_stats(args.render_dir)):
+        print(line)
     return 0
+
+
+def _render_stats(folder) -> list:
+    """The frame records of a render folder's ``stats.json`` ([] when it has none)."""
+    import json
+
+    try:
+        with open(os.path.join(folder, "stats.json"), encoding="utf-8") as fh:
+            return list(json.load(fh).get("frames", []))
+    except (OSError, ValueError):
+        return []

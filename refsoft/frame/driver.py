@@ -224,6 +224,13 @@ def frame_indices(scene: Scene, frames=None) -> list:
     return indices
 
 
+def _timed_write(out, frame):
+    """:func:`write_frame`, and its wall and thread CPU milliseconds."""
+    t, c = time.perf_counter(), time.thread_time()
+    write_frame(out, frame)
+    return 1000 * (time.perf_counter() - t), 1000 * (time.thread_time() - c)
+
+
 def run_frames(renderer, indices, out=None, progress=False, desc="frames", keep=True, write=None, done=None,
                on_frame=None) -> list:
     """``renderer.render_frame(f)`` for each index in order, each frame written to ``out`` (when
@@ -234,7 +241,10 @@ def run_frames(renderer, indices, out=None, progress=False, desc="frames", keep=
     about as long as rendering a frame, and zlib lets the renderer run meanwhile), one frame after
     another, each file atomically; the run waits for a frame's files before it counts the frame as
     done, and on an error or an interrupt it still waits for the files being written. The bytes
-    are those of a write in the main thread.
+    are those of a write in the main thread. The write's own times go into the frame's ``time_ms``
+    as ``write`` (wall milliseconds in the writer's thread) and ``write_cpu`` (that thread's CPU
+    milliseconds: the compression's cost, whatever else the cores run); ``total`` stays the
+    render's, whose stages overlap the previous frame's write.
 
     ``write``: the indices to write (default: all). ``keep=False`` drops each frame's arrays and
     per-reflector results once written (the returned frames keep their timings and reports), so
@@ -268,7 +278,8 @@ def run_frames(renderer, indices, out=None, progress=False, desc="frames", keep=
     def finish():
         fr, written = pending.pop()
         if written is not None:
-            written.result()  # the write's error, if any, is raised here
+            # the write's error, if any, is raised here
+            fr.time_ms["write"], fr.time_ms["write_cpu"] = written.result()
         if not keep:
             fr.arrays = {}
             fr.reflectors = {}
@@ -287,7 +298,7 @@ def run_frames(renderer, indices, out=None, progress=False, desc="frames", keep=
             if pending:
                 finish()
             writes = writer is not None and (write is None or f in write)
-            pending.append((fr, writer.submit(write_frame, out, fr) if writes else None))
+            pending.append((fr, writer.submit(_timed_write, out, fr) if writes else None))
         if pending:
             finish()
     finally:

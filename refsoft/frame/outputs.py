@@ -28,7 +28,8 @@ def frame_stats(frames, options=None) -> dict:
     """The ``stats.json`` content of rendered frames: the options (their preset and every
     resolved value, when given), per frame its stage milliseconds and what its reflection method
     reports (the vertex search: mean and max iterations per reflector, the skips taken; the
-    truth: reflector pixels and hits); a summary over the frames."""
+    truth: reflector pixels and hits); a summary over the frames (with the median write of a
+    frame's files, wall and CPU milliseconds, when they were written)."""
     out = {} if options is None else {"options": options.as_dict()}
     out["frames"] = [{"frame": f.index, "time_ms": {k: round(v, 3) for k, v in f.time_ms.items()}, **f.report}
                      for f in frames]
@@ -49,6 +50,11 @@ def frame_stats(frames, options=None) -> dict:
         summary["envmap_hits"] = int(sum(f.report["hits"] for f in frames))
     summary["frames"] = len(frames)
     summary["median_total_ms"] = float(np.median([f.time_ms["total"] for f in frames])) if frames else 0.0
+    writes = [f.time_ms["write"] for f in frames if "write" in f.time_ms]
+    if writes:  # written by the background thread (run_frames): its own stage
+        summary["median_write_ms"] = float(np.median(writes))
+        summary["median_write_cpu_ms"] = float(np.median([f.time_ms["write_cpu"] for f in frames
+                                                           if "write_cpu" in f.time_ms]))
     out["summary"] = summary
     return out
 
@@ -103,12 +109,16 @@ RUN_FILES = ("frame_[0-9]*.npz", "frame_[0-9]*.png", "stats.json", "run.json", "
 
 def run_manifest(kind: str, scene, frames, options=None) -> dict:
     """``run.json``: what a run into a folder is (``kind``: "render" or "truth"), so that
-    ``compare`` and later runs can tell whose frames a folder holds."""
+    ``compare`` and later runs can tell whose frames a folder holds. ``vertices`` counts the
+    vertices searched (the non-reflector objects'), ``vertices_all`` every object's (what
+    ``refsoft scenes`` lists)."""
     from .. import __version__
 
     return {"format": RUN_FORMAT, "kind": kind, "scene": scene.name, "width": int(scene.camera.width),
             "height": int(scene.camera.height), "frames": [int(f) for f in frames],
+            # searched: the non-reflector objects' vertices; all: every object's, as `refsoft scenes` counts
             "vertices": int(sum(o.mesh.n_vertices for o in scene.objects if not o.reflector)),
+            "vertices_all": int(sum(o.mesh.n_vertices for o in scene.objects)),
             "reflectors": list(scene.reflector_ids), "options": None if options is None else options.as_dict(),
             "refsoft": __version__}
 

@@ -116,15 +116,15 @@ class Mesh:
     def n_faces(self) -> int:
         return len(self.faces)
 
-    def boundary_edges(self) -> int:
-        """Edges used by exactly one triangle once vertices at the same position are welded
-        (within 1e-9 of the mesh's extent: seams and hard-normal copies count as joined); 0 for
-        a closed surface. Degenerate edges (both ends welded together) are ignored."""
+    def weld(self) -> tuple[np.ndarray, int]:
+        """One label per position, vertices within 1e-9 of the mesh's extent sharing it (seams
+        and hard-normal copies): ``(labels (V,) int64, number of labels)``, labels in the
+        lexicographic order of the positions."""
         v = self.vertices
         lo = v.min(axis=0)
         extent = float(np.max(v.max(axis=0) - lo)) or 1.0
         key = np.round((v - lo) / (extent * 1e-9))
-        # weld: rows sorted lexicographically, one label per run of equal rows (np.unique of rows,
+        # rows sorted lexicographically, one label per run of equal rows (np.unique of rows,
         # axis=0, sorts them as records: ten times as slow)
         order = np.lexsort(key.T[::-1])
         ordered = key[order]
@@ -132,12 +132,19 @@ class Mesh:
         first[1:] = np.any(ordered[1:] != ordered[:-1], axis=1)
         weld = np.empty(len(v), dtype=np.int64)
         weld[order] = np.cumsum(first) - 1
+        return weld, int(np.count_nonzero(first))
+
+    def boundary_edges(self) -> int:
+        """Edges used by exactly one triangle once vertices at the same position are welded
+        (:meth:`weld`); 0 for a closed surface. Degenerate edges (both ends welded together) are
+        ignored."""
+        weld, n_labels = self.weld()
         f = weld[self.faces]
         a, b = f.T.reshape(-1), f[:, [1, 2, 0]].T.reshape(-1)  # every edge of every triangle
         lo_end, hi_end = np.minimum(a, b), np.maximum(a, b)
         keep = lo_end != hi_end
         # an undirected edge as one int64 (labels < MAX_VERTICES = 2^26: the key stays below 2^52)
-        _, counts = np.unique(lo_end[keep] * int(np.count_nonzero(first)) + hi_end[keep], return_counts=True)
+        _, counts = np.unique(lo_end[keep] * n_labels + hi_end[keep], return_counts=True)
         return int(np.sum(counts == 1))
 
     def bounds(self) -> np.ndarray:

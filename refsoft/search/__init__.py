@@ -19,14 +19,14 @@ from ..errors import RefsoftError
 from ..raster import GBuffer
 from ..raster._threads import SERIAL_MAX_VERTICES
 from . import _kernels, _lanes
-from ._kernels import BAD_START, BORDER, CAPPED, CULLED, HIDDEN, RESTARTED
+from ._kernels import BAD_START, BORDER, CAPPED, CULLED, HIDDEN, RESTARTED, SEVERAL
 
 __all__ = ["search", "virtual_vertices", "start_pixel", "SearchResult", "trace_search", "Trace", "scores_at",
-           "HIDDEN", "BORDER", "CAPPED", "RESTARTED", "CULLED", "NEIGHBOURHOODS", "INVERSE_MODES",
+           "HIDDEN", "BORDER", "CAPPED", "RESTARTED", "CULLED", "SEVERAL", "NEIGHBOURHOODS", "INVERSE_MODES",
            "flag_names", "default_cap", "SEARCH_METHODS", "trace_hierarchy", "HierarchyTrace"]
 
 _FLAG_NAMES = ((HIDDEN, "HIDDEN"), (BORDER, "BORDER"), (CAPPED, "CAPPED"), (RESTARTED, "RESTARTED"),
-               (CULLED, "CULLED"))
+               (CULLED, "CULLED"), (SEVERAL, "SEVERAL"))
 
 
 def flag_names(flags: int) -> list[str]:
@@ -55,7 +55,8 @@ class SearchResult:
     iterations : ndarray, shape (N,), int32
         Neighbourhoods evaluated (standard plus inverse search).
     flags : ndarray, shape (N,), uint8
-        HIDDEN | BORDER | CAPPED | RESTARTED | CULLED.
+        HIDDEN | BORDER | CAPPED | RESTARTED | CULLED (SEVERAL is set in the frame's ``flags_k``
+        by the enumeration of every image, :mod:`refsoft.search.images`).
     neighbourhood, inverse : str
         The options used.
     cap : int

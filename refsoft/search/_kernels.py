@@ -20,6 +20,8 @@ BORDER = 2
 CAPPED = 4
 RESTARTED = 8
 CULLED = 16
+#: More than one reflection point on this reflector (spec section 4.8; set by the enumeration).
+SEVERAL = 32
 
 # Candidate offsets (drow, dcol), in visiting order: the current pixel, then left, up, right,
 # down (the crosshair), then up-left, up-right, down-right, down-left (box only).

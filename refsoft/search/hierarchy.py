@@ -35,15 +35,17 @@ from . import _hierarchy
 from ..constants import CONE_FACTOR, SPHERE_FACTOR
 
 
-def build(G, mask, fp):
+def build(G, mask, fp, base=None):
     """The pyramid of a packed, cropped G-buffer: ``(spheres, cones, offsets, sizes)`` with the
-    levels concatenated (level l's texel (i, j) at row ``offsets[l] + i * sizes[l] + j``)."""
+    levels concatenated (level l's texel (i, j) at row ``offsets[l] + i * sizes[l] + j``).
+    ``base`` is the kernel that fills level 0 (default :func:`_hierarchy.base_level`; the
+    enumeration of every image uses :func:`refsoft.search._images.dilated_base`)."""
     h, w = mask.shape
     size = 1
     while size < max(h, w):
         size *= 2
     sph, cone = np.full((size, size, 4), -1, dtype=G.dtype), np.full((size, size, 4), -1, dtype=G.dtype)
-    parallel_range(_hierarchy.base_level, h, G, mask, fp, sph, cone)
+    parallel_range(_hierarchy.base_level if base is None else base, h, G, mask, fp, sph, cone)
     s_levels, c_levels = [sph.reshape(-1, 4)], [cone.reshape(-1, 4)]
     sizes = [size]
     while sph.shape[0] > 1:

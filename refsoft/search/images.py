@@ -11,8 +11,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import validate
+from .._parallel import parallel_range
+from ..constants import IMAGE_MERGE, IMAGE_REACH, MAX_IMAGES
+from ..errors import RefsoftError
+
 #: Flag bit (spec section 4.7): the vertex has more than one reflection point on this reflector.
-SEVERAL = 32
+from ._kernels import SEVERAL  # noqa: E402  (defined beside the other flags)
 
 
 @dataclass(frozen=True, eq=False)
@@ -50,3 +55,207 @@ class Images:
 
     def __len__(self) -> int:
         return len(self.offset) - 1
+
+
+def _check_result(result, n):
+    from . import SearchResult
+
+    if not isinstance(result, SearchResult):
+        raise RefsoftError(f"result must be a refsoft.search.SearchResult, got {type(result).__name__}")
+    if len(result) != n:
+        raise RefsoftError(f"result has {len(result)} vertices, vertices has {n}")
+
+
+def _prepared(gbuffer, eye):
+    """The packed, cropped G-buffer and its dilated pyramid: ``(G, mask, fp, (r0, c0), pyramid)``."""
+    from . import _images, _packed, hierarchy
+
+    G, mask, fp, crop = _packed(gbuffer, eye)
+    return G, mask, fp, crop, hierarchy.build(G, mask, fp, base=_images.dilated_base)
+
+
+def find_images(gbuffer, eye, vertices, result, reach: float = IMAGE_REACH, merge: float = IMAGE_MERGE) -> Images:
+    """Every reflection point of every vertex on one reflector's G-buffer (spec section 4.8).
+
+    A texel is an image of vertex ``V`` when its score (spec section 4.1) is a maximum of its
+    covered 3x3 neighbourhood, ``V`` lies in front of its tangent plane (``dot(V - P, N) > 0``)
+    and one Newton step solving "normal = bisector" from it moves at most ``reach`` texels (a
+    maximum of a score that no solution is near, at the rim or on a part that does not reflect
+    ``V``, is not an image). Texels whose Newton points lie closer than ``merge`` texels are one
+    image: the one of highest score is kept (ties to the smaller row, then col). The cells of a
+    ray-cone pyramid whose bounds cannot hold a solution are pruned
+    (:mod:`refsoft.search._images`), so a vertex costs a few descents, at most every cell once.
+
+    The walk's pixel (``result.pixel``) comes first when it is an image (covered, ``V`` in
+    front, its Newton step within ``reach``; its own walk made it a maximum), so that the
+    single-image arrays of spec section 7 keep it; the others follow in row-major order.
+
+    Parameters
+    ----------
+    gbuffer : GBuffer
+        The reflector's G-buffer (float32 or float64; scores in its precision, Newton steps in
+        float64).
+    eye : array_like, shape (3,)
+        The eye, world space.
+    vertices : array_like, shape (N, 3)
+        Vertices, world space.
+    result : SearchResult
+        The walk's result for these vertices (its pixel is the first image).
+    reach, merge : float
+        Texels (defaults :data:`~refsoft.constants.IMAGE_REACH`,
+        :data:`~refsoft.constants.IMAGE_MERGE`).
+
+    Returns
+    -------
+    Images
+        Sheets -1 (made by the drawing of every image).
+    """
+    from . import _check_gbuffer, _images
+
+    dt = _check_gbuffer(gbuffer)
+    e = validate.point(eye, "eye")
+    verts = validate.points(vertices, "vertices")
+    _check_result(result, len(verts))
+    validate.number(reach, "reach", minimum=0.0)
+    validate.number(merge, "merge", minimum=0.0)
+    n = len(verts)
+    count = np.zeros(n, dtype=np.int32)
+    pixel = np.full((n, MAX_IMAGES, 2), -1, dtype=np.int32)
+    if n and gbuffer.mask.any():
+        G, mask, fp, (r0, c0), (sph, cone, offsets, sizes) = _prepared(gbuffer, e)
+        first = np.ascontiguousarray(np.asarray(result.pixel, dtype=np.int64) - [r0, c0])
+        first[np.asarray(result.pixel)[:, 0] < 0] = -1
+        stats = np.zeros((n, 4), dtype=np.int64)
+        parallel_range(_images.enumerate_all, n, G, mask, sph, cone, offsets, sizes, len(sizes),
+                       np.ascontiguousarray(verts), np.asarray(gbuffer.origin, dtype=np.float64), first, float(reach),
+                       float(merge), fp, count, pixel, stats)
+        pixel[:, :, 0] += r0
+        pixel[:, :, 1] += c0
+    return _record(gbuffer, verts, count, pixel)
+
+
+def _record(gbuffer, verts, count, pixel) -> Images:
+    """The :class:`Images` of per-vertex ``count`` (N,) and ``pixel`` (N, MAX_IMAGES, 2) (G-buffer
+    coordinates): rows compressed, virtual vertices mirrored in float64 (spec section 4.6)."""
+    offset = np.zeros(len(count) + 1, dtype=np.int64)
+    np.cumsum(count, out=offset[1:])
+    take = np.arange(MAX_IMAGES)[None, :] < count[:, None]
+    pix = np.ascontiguousarray(pixel[take], dtype=np.int32)
+    vert = np.repeat(np.arange(len(count)), count)
+    return Images(offset, pix, mirrored(gbuffer, verts[vert], pix), np.full(len(pix), -1, dtype=np.int32))
+
+
+def mirrored(gbuffer, vertices, pixels) -> np.ndarray:
+    """``V - 2 dot(V - P, N) N`` (spec section 4.6) per row, float64 world space, with P and N the
+    G-buffer's at ``pixels`` (M, 2); shape (M, 3)."""
+    v = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
+    if not len(v):
+        return np.zeros((0, 3), dtype=np.float64)
+    r, c = pixels[:, 0], pixels[:, 1]
+    p = gbuffer.position[r, c].astype(np.float64) + np.asarray(gbuffer.origin, dtype=np.float64)
+    nrm = gbuffer.normal[r, c].astype(np.float64)
+    d = v - p
+    k = 2.0 * ((d[:, 0] * nrm[:, 0] + d[:, 1] * nrm[:, 1]) + d[:, 2] * nrm[:, 2])
+    return v - k[:, None] * nrm
+
+
+#: The verdict names of :class:`ImagesTrace` rows (``refsoft.search._images`` codes).
+VERDICTS = ("accepted", "not a 3x3 maximum", "behind the tangent plane", "Newton step too far", "Newton step singular",
+            "merged", "too many candidates")
+
+
+@dataclass
+class ImagesTrace:
+    """How the enumeration found one vertex's images (:func:`trace_images`).
+
+    Attributes
+    ----------
+    images : list of [row, col]
+        The images, in output order (the walk's first when it is one).
+    walk_pixel : [row, col] or None
+        The walk's pixel, and ``walk_is_image`` whether it passed.
+    visited, pruned, judged : int
+        Pyramid cells visited (popped), cells pruned (bounds cannot meet the vertex), texels judged.
+    maxima : list of dict
+        Every judged texel that is a 3x3 maximum (or failed before that test could matter): its
+        ``texel``, ``score``, ``newton`` point (row, col) and ``verdict`` (:data:`VERDICTS`;
+        accepted maxima later dropped as one solution with a kept image are ``merged``).
+    """
+
+    images: list
+    walk_pixel: list | None
+    walk_is_image: bool
+    visited: int
+    pruned: int
+    judged: int
+    maxima: list
+
+    def to_dict(self) -> dict:
+        return {"images": self.images, "walk_pixel": self.walk_pixel, "walk_is_image": self.walk_is_image,
+                "visited": self.visited, "pruned": self.pruned, "judged": self.judged, "maxima": self.maxima}
+
+    def table(self) -> str:
+        """The trace as text: the counts, the maxima and their verdicts, the images."""
+        lines = [f"every image: {len(self.images)} found; pyramid cells visited {self.visited}, pruned {self.pruned}; "
+                 f"texels judged {self.judged}; maxima {len(self.maxima)}"]
+        lines.append(f"{'texel':>12} {'score':>12} {'Newton point':>18}  verdict")
+        for m in self.maxima:
+            nr, nc = m["newton"]
+            lines.append(f"{str(tuple(m['texel'])):>12} {m['score']:>12.8f} {f'({nr:.2f}, {nc:.2f})':>18}  {m['verdict']}")
+        walk = "none" if self.walk_pixel is None else (f"{tuple(self.walk_pixel)}, " +
+                                                      ("an image (kept first)" if self.walk_is_image else "not an image"))
+        lines.append(f"walk's pixel: {walk}")
+        lines.append("images: " + (", ".join(str(tuple(p)) for p in self.images) or "none"))
+        return "\n".join(lines)
+
+
+def trace_images(gbuffer, eye, vertex, walk_pixel=None, reach: float = IMAGE_REACH,
+                 merge: float = IMAGE_MERGE) -> ImagesTrace:
+    """Replay :func:`find_images` for one vertex (the kernels' own, with a record).
+
+    Parameters
+    ----------
+    gbuffer : GBuffer
+    eye, vertex : array_like, shape (3,)
+        World space.
+    walk_pixel : (row, col), optional
+        The walk's pixel (kept first when it is an image).
+
+    Returns
+    -------
+    ImagesTrace
+    """
+    from . import _check_gbuffer, _images
+
+    dt = _check_gbuffer(gbuffer)
+    e = validate.point(eye, "eye")
+    v = validate.point(vertex, "vertex")
+    if not gbuffer.mask.any():
+        raise RefsoftError("the reflector covers no pixel of its G-buffer: there is nothing to enumerate")
+    G, mask, fp, (r0, c0), (sph, cone, offsets, sizes) = _prepared(gbuffer, e)
+    v_rel = (v - np.asarray(gbuffer.origin, dtype=np.float64)).astype(dt)  # as find_images' kernel rounds it
+    cand = np.empty((MAX_IMAGES * 4, _images.CAND_WIDTH))
+    record = np.zeros((int(mask.size) + 1, _images.RECORD_WIDTH))
+    stack = np.empty((3 * len(sizes) + 4, 3), dtype=np.int64)
+    t, work = np.empty((2, 3)), np.empty((5, 2))
+    n_cand, visited, pruned, judged, n_rec = _images.enumerate_one(G, mask, sph, cone, offsets, sizes, len(sizes),
+                                                                   v_rel, float(reach), fp, stack, cand, t, work,
+                                                                   record, 0)
+    fr = fc = -1
+    if walk_pixel is not None and walk_pixel[0] >= 0:
+        fr, fc = int(walk_pixel[0]) - r0, int(walk_pixel[1]) - c0
+    fr, fc, flr, flc = _images.first_walk(G, mask, fr, fc, v_rel, float(reach), fp, t, work)
+    keep = np.empty(MAX_IMAGES, dtype=np.int64)
+    n_keep = _images.merge(cand, n_cand, fr, fc, flr, flc, float(merge), keep, np.empty(len(cand), dtype=bool))
+    kept = {(int(cand[k, 0]), int(cand[k, 1])) for k in keep[:n_keep] if k >= 0}
+    images = [[int(fr) + r0, int(fc) + c0] if k < 0 else [int(cand[k, 0]) + r0, int(cand[k, 1]) + c0]
+              for k in keep[:n_keep]]
+    maxima = []
+    for i, j, verdict, s, lr, lc in record[:n_rec]:
+        code = int(verdict)
+        if code == _images.ACCEPTED and (int(i), int(j)) not in kept and (int(i), int(j)) != (fr, fc):
+            code = _images.MERGED
+        maxima.append({"texel": [int(i) + r0, int(j) + c0], "score": float(s), "newton": [float(lr) + r0, float(lc) + c0],
+                       "verdict": VERDICTS[code]})
+    walk = None if walk_pixel is None or walk_pixel[0] < 0 else [int(walk_pixel[0]), int(walk_pixel[1])]
+    return ImagesTrace(images, walk, fr >= 0, int(visited), int(pruned), int(judged), maxima)

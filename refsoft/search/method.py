@@ -18,7 +18,9 @@ import numpy as np
 from .. import keys, limits
 from ..raster import PRECISIONS, GBuffer, _setup, gbuffer
 from ..seam import ReflectorResult, stencil_box
-from . import CULLED, SearchResult, search, skips, virtual_vertices
+from . import CULLED, SEVERAL, SearchResult, search, skips, virtual_vertices
+from .convex import several_possible
+from .images import find_images
 from .reflect import Reflection, coherent_starts, gbuffer_camera
 from .refine import refine as refine_points
 from .virtual import reflected_mesh, refined_parts, virtual_parts, virtual_pass
@@ -58,15 +60,31 @@ def gbuffer_outputs(gb: GBuffer, k: int) -> dict:
 
 
 def vertex_outputs(refl: Reflection, owner, k: int) -> dict:
-    """The spec section 7 per-vertex arrays of reflector ``k`` (plus its scores and margins)."""
+    """The spec section 7 per-vertex arrays of reflector ``k`` (plus its scores and margins),
+    with flag SEVERAL and the per-image arrays where every image was enumerated."""
     res = refl.result
+    flags = res.flags.astype(np.uint8)
+    out = {}
+    if refl.images is not None:
+        im = refl.images
+        count = im.count
+        flags = flags | np.where(count > 1, SEVERAL, 0).astype(np.uint8)
+        out = {keys.IMAGE_COUNT(k): count, keys.IMAGE_VERTEX(k): im.vertex,
+               keys.IMAGE_PIXEL(k): im.pixel.astype(np.int32), keys.IMAGE_VIRTUAL(k): im.virtual.astype(np.float32),
+               keys.IMAGE_SHEET(k): im.sheet.astype(np.int32)}
     return {keys.REFLECTION_PIXEL(k): res.pixel.astype(np.int32),
             keys.VIRTUAL_VERTEX(k): refl.virtual.astype(np.float32),
             keys.ITERATIONS(k): res.iterations.astype(np.int32),
-            keys.FLAGS(k): res.flags.astype(np.uint8),
+            keys.FLAGS(k): flags,
             keys.VERTEX_OBJECT(k): owner.astype(np.int32),
             keys.SCORE(k): res.score,
-            keys.MARGIN(k): res.margin}
+            keys.MARGIN(k): res.margin, **out}
+
+
+def image_counts(count) -> dict:
+    """Vertices with 0, 1, 2 and 3 or more images: ``{"0": n, "1": n, "2": n, "3+": n}``."""
+    c = np.asarray(count)
+    return {"0": int(np.sum(c == 0)), "1": int(np.sum(c == 1)), "2": int(np.sum(c == 2)), "3+": int(np.sum(c >= 3))}
 
 
 def virtual_relative(gb, res, verts, eye, refine, rule="mirror"):
@@ -90,7 +108,7 @@ class VertexSearch:
     options : RenderOptions
         Read: ``method``, ``neighbourhood``, ``inverse``, ``widen``, ``gbuffer_size``,
         ``precision``, ``coherence``, ``cap``, the skips, ``adaptive_widen``, ``tessellate``,
-        ``max_level``, ``refine``.
+        ``max_level``, ``refine``, ``images``.
     """
 
     name = "vertex"
@@ -106,6 +124,7 @@ class VertexSearch:
         self.previous = {}
         self._last = {}
         self._reflected = None  # the concatenated non-reflector meshes (reflected_mesh)
+        self._several = {}  # reflector id -> several_possible of its closed proxy (model space)
 
     # --- the seam --------------------------------------------------------------------------
     def reflect(self, view, k: int, stencil) -> ReflectorResult:
@@ -154,10 +173,15 @@ class VertexSearch:
 
     def frame_report(self, results) -> dict:
         """``stats.json``'s per-frame ``iterations`` (mean and max per reflector, CULLED vertices
-        left out) and ``skipped`` (what the exact skips left out, and tessellation counts)."""
-        iterations = {}
+        left out), ``skipped`` (what the exact skips left out, and tessellation counts) and, with
+        ``images="all"``, ``images``: per reflector where every image was enumerated, the
+        vertices with 0, 1, 2 and 3 or more images and the enumeration's time (the others are
+        listed in ``skipped["images_convex"]``)."""
+        iterations, images = {}, {}
         skipped = {"reflectors_outside_view": [], "gbuffers_reused": [], "searches_reused": {},
                    "virtual_objects_culled": {}, "widen_off": []}
+        if self.options.images == "all":
+            skipped["images_convex"] = []
         tessellation, silhouette, drawn = {}, {}, {}
         for k, r in results.items():
             rep = r.report
@@ -173,6 +197,10 @@ class VertexSearch:
                 tessellation[str(k)] = rep["tessellation"]
             if "silhouette" in rep:
                 silhouette[str(k)] = rep["silhouette"]
+            if "images" in rep:
+                images[str(k)] = rep["images"]
+            elif rep.get("images_convex"):
+                skipped["images_convex"].append(k)
             if "several" in rep:
                 drawn[str(k)] = rep["several"]
             res = r.state.result
@@ -183,6 +211,8 @@ class VertexSearch:
         if self.options.silhouette == "clip":
             skipped["silhouette"] = silhouette
         out = {"iterations": iterations, "skipped": skipped}
+        if self.options.images == "all":
+            out["images"] = images
         if drawn:  # every image drawn (search/several.py): candidates, subdivisions, pixels per reflector
             out["several"] = drawn
         return out
@@ -230,10 +260,26 @@ class VertexSearch:
             res = search(gb, eye, verts, opt.neighbourhood, opt.inverse, prev, opt.cap, method=opt.method)
         rel, surface = virtual_relative(gb, res, verts, eye, opt.refine, opt.virtual)
         world64 = rel.astype(np.float64) + gb.origin
-        refl = Reflection(k, gb, res, world64.astype(rel.dtype), world64, surface)
+        images = None
+        if opt.images == "all":
+            if self._can_have_several(k):
+                t2 = time.perf_counter()
+                images = find_images(gb, eye, verts, res)
+                report["images"] = {**image_counts(images.count), "ms": 1000 * (time.perf_counter() - t2)}
+            else:
+                report["images_convex"] = True
+        refl = Reflection(k, gb, res, world64.astype(rel.dtype), world64, surface, images)
         if opt.reuse:
             self._last[k] = _Last(key, gb, res, dict(view.transforms))
         return refl, 1000 * (t1 - t0), 1000 * (time.perf_counter() - t1)
+
+    def _can_have_several(self, k: int) -> bool:
+        """:func:`refsoft.search.convex.several_possible` of reflector ``k``'s closed proxy, once
+        per run (an object's transform is affine: it keeps convexity at every frame)."""
+        if k not in self._several:
+            obj = self.scene.objects[k - 1]
+            self._several[k] = several_possible(obj.closed_proxy if obj.closed_proxy is not None else obj.mesh)
+        return self._several[k]
 
     def _merged_search(self, gb, eye, verts, prev, last, reuse):
         """Search the vertices not in ``reuse``; the others keep ``last``'s pixel, score and

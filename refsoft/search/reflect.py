@@ -67,6 +67,9 @@ class Reflection:
         float64 (no rounding of large world coordinates): what the virtual raster draws.
     surface : (P, N, offset), optional
         Sub-texel reflection points when refined (:func:`refsoft.search.refine.refine`).
+    images : Images, optional
+        Every reflection point of every vertex (spec section 4.8), where the enumeration ran
+        (``images="all"`` on a reflector that can give two: :mod:`refsoft.search.convex`).
     """
 
     reflector: int
@@ -75,6 +78,7 @@ class Reflection:
     virtual: np.ndarray
     virtual64: np.ndarray | None = None
     surface: tuple | None = None
+    images: object = None
 
 
 def reflect(scene: Scene, frame: int = 0, reflectors=None, previous=None, **options):

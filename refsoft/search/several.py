@@ -31,7 +31,7 @@ from ..errors import RefsoftError
 from ..raster import _setup, shade
 from . import search
 from ._several import accept
-from .images import Images
+from .images import Images, find_images
 
 
 # --- sheets -----------------------------------------------------------------------------------
@@ -433,25 +433,27 @@ def _screen(virtual, camera, box):
 
 
 # --- the method's branch ----------------------------------------------------------------------
-#: ``find(gbuffer, eye, points (K, 3) float64) -> Images``: every image of points on a reflector.
-#: When set, open reflectors are drawn by this module (the tests set it to their brute-force
-#: enumeration); None: only where the method enumerated every image.
-FIND = None
-
-
 def image_source(scene, view, k, refl, opt):
-    """Where reflector ``k``'s images come from, or None (the virtual pass draws it).
+    """Where reflector ``k``'s images come from, or None (the virtual pass draws it): the images
+    the method enumerated (``images="all"`` on a reflector the convex skip does not skip,
+    :mod:`refsoft.search.convex`).
 
     Returns
     -------
     (gbuffer, eye, Images of the view's vertices, find) or None
-        ``find(points)`` gives the images of new points (subdivision midpoints).
+        ``find(points)`` gives the images of new points (subdivision midpoints): their walk, then
+        :func:`refsoft.search.images.find_images`.
     """
-    find = FIND
-    if find is None or not scene.objects[k - 1].open:
+    images = getattr(refl, "images", None)
+    if images is None:
         return None
     gb, eye = refl.gbuffer, np.asarray(view.camera.eye, np.float64)
-    return gb, eye, find(gb, eye, view.vertices), (lambda p: find(gb, eye, p))
+
+    def find(points):
+        walk = search(gb, eye, points, opt.neighbourhood, opt.inverse, None, opt.cap)
+        return find_images(gb, eye, points, walk)
+
+    return gb, eye, images, find
 
 
 def several_pass(scene, view, k, stencil, box, reflected, opt, gb, eye, images, find):

@@ -217,6 +217,8 @@ class VertexReplay:
     trace : Trace or HierarchyTrace
     gbuffer : GBuffer
         The G-buffer searched.
+    eye, position : ndarray, shape (3,), float64
+        The eye and the vertex, world space, at the frame (what the viewer's side view draws).
     """
 
     scene: str
@@ -228,6 +230,8 @@ class VertexReplay:
     method: str
     trace: object
     gbuffer: object
+    eye: np.ndarray = field(default=None, repr=False)
+    position: np.ndarray = field(default=None, repr=False)
 
     def to_dict(self) -> dict:
         """``trace.json``: the trace's fields and where it comes from."""
@@ -282,7 +286,7 @@ def trace_vertex(scene, vertex: int, reflector=None, frame: int = 0, coherence: 
     local = vertex - int(np.argmax(owner == obj))
     if opts.method == "hierarchy":
         tr = trace_hierarchy(gb, eye, verts[vertex])
-        return VertexReplay(scene.name, k, frame, vertex, obj, local, "hierarchy", tr, gb)
+        return VertexReplay(scene.name, k, frame, vertex, obj, local, "hierarchy", tr, gb, eye, verts[vertex])
     walk = dict(neighbourhood=opts.neighbourhood, inverse=opts.inverse)
     previous = None
     if coherence:  # this vertex's searches of the earlier frames
@@ -293,4 +297,18 @@ def trace_vertex(scene, vertex: int, reflector=None, frame: int = 0, coherence: 
                          previous=None if previous is None else previous[None], **walk)
             previous = res.pixel[0]
     tr = trace_search(gb, eye, verts[vertex], previous=previous, **walk)
-    return VertexReplay(scene.name, k, frame, vertex, obj, local, "walk", tr, gb)
+    return VertexReplay(scene.name, k, frame, vertex, obj, local, "walk", tr, gb, eye, verts[vertex])
+
+
+def trace_vertex_images(scene, replay: VertexReplay):
+    """How the enumeration of every image (spec section 4.8) finds the replayed vertex's images
+    in its reflector: an :class:`refsoft.search.images.ImagesTrace`, or None when the
+    reflector cannot give two reflection points (:mod:`refsoft.search.convex`: nothing is
+    enumerated there)."""
+    from .convex import several_possible
+    from .images import trace_images
+
+    obj = scene.objects[replay.reflector - 1]
+    if not several_possible(obj.closed_proxy if obj.closed_proxy is not None else obj.mesh):
+        return None
+    return trace_images(replay.gbuffer, replay.eye, replay.position, replay.trace.pixel)

@@ -203,3 +203,84 @@ def reflection_points_kernel(lo, hi, centre, rho, eye, eye_dir, points, dirs, co
     for j in range(lo, hi):
         _solve_point(todo[j], c0, c1, c2, rho, o0, o1, o2, a0, a1, a2, points, dirs, cos_phi, phi, samples, block,
                      xtol, rtol, maxiter, ts, fs, out)
+
+
+@kernel
+def _inside_point(i, c0, c1, c2, rho, o0, o1, o2, points, axis_a, axis_b, samples, xtol, rtol, maxiter, ts, fs,
+                  out, count):
+    """Every reflection point of ``points[i]`` seen from inside into ``out[i]``, in arc order,
+    their number into ``count[i]``; ``ts``, ``fs`` (``samples + 1``,) are scratch."""
+    v0, v1, v2 = points[i, 0], points[i, 1], points[i, 2]
+    a0, a1, a2 = axis_a[i, 0], axis_a[i, 1], axis_a[i, 2]
+    b0, b1, b2 = axis_b[i, 0], axis_b[i, 1], axis_b[i, 2]
+    two_pi = 2.0 * math.pi
+    for q in range(samples):
+        ts[q] = two_pi * (q / samples)
+        fs[q] = _arc_f(ts[q], a0, a1, a2, b0, b1, b2, c0, c1, c2, rho, o0, o1, o2, v0, v1, v2)
+    # the circle closes: the last interval ends where the first begins, with the same value
+    ts[samples] = two_pi
+    fs[samples] = fs[0]
+    m = 0
+    cap = out.shape[1]
+    for k in range(samples):
+        if fs[k] == 0.0:
+            t = ts[k]
+        elif fs[k] * fs[k + 1] < 0.0:
+            t = _brent(ts[k], ts[k + 1], fs[k], fs[k + 1], xtol, rtol, maxiter,
+                       a0, a1, a2, b0, b1, b2, c0, c1, c2, rho, o0, o1, o2, v0, v1, v2)
+        else:
+            continue
+        ct = math.cos(t)
+        st = math.sin(t)
+        n0 = ct * a0 + st * b0
+        n1 = ct * a1 + st * b1
+        n2 = ct * a2 + st * b2
+        r0 = c0 + rho * n0
+        r1 = c1 + rho * n1
+        r2 = c2 + rho * n2
+        # both the eye and the point in front of the inward tangent plane (normal -n)
+        if ((o0 - r0) * n0 + (o1 - r1) * n1 + (o2 - r2) * n2 < 0.0
+                and (v0 - r0) * n0 + (v1 - r1) * n1 + (v2 - r2) * n2 < 0.0 and m < cap):
+            out[i, m, 0] = r0
+            out[i, m, 1] = r1
+            out[i, m, 2] = r2
+            m += 1
+    count[i] = m
+
+
+@kernel
+def inside_points_kernel(lo, hi, centre, rho, eye, points, axis_a, axis_b, todo, samples, xtol, rtol, maxiter, out,
+                         count, ts, fs):
+    """Every reflection point of ``points[todo[lo:hi]]`` seen from inside the sphere; run over all
+    of ``todo`` by :func:`refsoft._parallel.parallel_range`.
+
+    Parameters
+    ----------
+    lo, hi : int
+        The entries of ``todo`` solved here.
+    centre, eye : ndarray, shape (3,), float64
+        Sphere centre and the eye (inside the sphere).
+    rho : float
+        Sphere radius.
+    points : ndarray, shape (N, 3), float64
+        The points.
+    axis_a, axis_b : ndarray, shape (N, 3), float64
+        Per point, orthonormal axes of the great circle searched: ``n(t) = cos t a + sin t b``.
+    todo : ndarray, shape (M,), int64
+        Rows to solve (points inside the sphere with a well-defined circle).
+    samples : int
+        Intervals around the circle sampled to bracket the roots.
+    xtol, rtol, maxiter :
+        Brent's stopping rule (``brentq``'s meaning).
+    out : ndarray, shape (N, K, 3), float64
+        Receives the reflection points, in increasing ``t`` (rows past ``count`` untouched).
+    count : ndarray, shape (N,), int32
+        Receives the number of reflection points (at most K).
+    ts, fs : ndarray, shape (samples + 1,), float64
+        Scratch, one pair per part.
+    """
+    c0, c1, c2 = centre[0], centre[1], centre[2]
+    o0, o1, o2 = eye[0], eye[1], eye[2]
+    for j in range(lo, hi):
+        _inside_point(todo[j], c0, c1, c2, rho, o0, o1, o2, points, axis_a, axis_b, samples, xtol, rtol, maxiter,
+                      ts, fs, out, count)

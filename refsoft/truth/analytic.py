@@ -8,6 +8,11 @@ bracket every sign change, each bracket is solved with Brent's method (the algor
 first root along the arc where both the eye and the point lie outside the tangent plane is kept.
 :func:`sphere_reflection_points_quartic` is Eberly's closed form ("Computing a Point of
 Reflection on a Sphere"), kept to cross-check the solver; it loses accuracy near grazing angles.
+
+:func:`sphere_inside_reflection_points` is the concave case: the eye and the points inside the
+sphere, reflected by its inner surface. The same equation is solved around the whole great circle
+through the eye and the point (the roots need not lie on the short arc between their directions),
+and every root is kept: up to four.
 """
 
 from __future__ import annotations
@@ -17,8 +22,9 @@ import numpy as np
 from .. import linalg
 from ..errors import RefsoftError
 from .._parallel import parallel_range
-from ._analytic import reflection_points_kernel
-from ..constants import ARC_SAMPLES, MAXITER, RTOL, XTOL
+from ._analytic import inside_points_kernel, reflection_points_kernel
+from ..constants import (ARC_SAMPLES, COLLINEAR_TOL, INSIDE_ARC_SAMPLES, MAX_SPHERE_IMAGES, MAXITER, RTOL,
+                         XTOL)
 
 #: Arc samples the kernel evaluates at a time (speed only).
 SAMPLE_BLOCK = 8
@@ -79,6 +85,99 @@ def sphere_reflection_points(centre, radius, eye, points) -> np.ndarray:
     parallel_range(reflection_points_kernel, len(todo), c, rho, o, eye_dir, pts, dirs, cos_phi, phi,
                    todo.astype(np.int64), ARC_SAMPLES, SAMPLE_BLOCK, XTOL, RTOL, MAXITER, out)
     return out
+
+
+def _circle_axes(e, d, rho):
+    """Per point, orthonormal axes ``a``, ``b`` of a great circle through the directions of ``e``
+    (the eye, from the centre) and of each row of ``d`` (the points), or an arbitrary one through
+    ``a`` where they are collinear; and whether each row has a circle at all (not both at the
+    centre, where every point of the sphere reflects)."""
+    n = len(d)
+    dist = np.sqrt(_dot3(d, d))
+    ne = float(np.sqrt(_dot3(e, e)))
+    if ne > COLLINEAR_TOL * rho:
+        a = np.broadcast_to(e / ne, (n, 3)).copy()
+        defined = np.ones(n, dtype=bool)
+    else:  # the eye at the centre: start at the point's direction
+        defined = dist > COLLINEAR_TOL * rho
+        with np.errstate(divide="ignore", invalid="ignore"):
+            a = np.where(defined[:, None], d / dist[:, None], 0.0)
+    b = d - _dot3(d, a)[:, None] * a
+    nb = np.sqrt(_dot3(b, b))
+    flat = nb <= COLLINEAR_TOL * rho
+    if flat.any():
+        # eye, point and centre on one line: every plane through it holds reflection points;
+        # the one through e_x (e_y when the line is along x) is searched
+        ex = np.cross(a, [1.0, 0.0, 0.0])
+        ey = np.cross(a, [0.0, 1.0, 0.0])
+        alt = np.where((np.sqrt(_dot3(ex, ex)) < 1e-6)[:, None], ey, ex)
+        b = np.where(flat[:, None], alt, b)
+        nb = np.sqrt(_dot3(b, b))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        b = np.where(defined[:, None], b / nb[:, None], 0.0)
+    return a, b, defined, dist
+
+
+def sphere_inside_reflection_points(centre, radius, eye, points, samples=INSIDE_ARC_SAMPLES):
+    """Every reflection point of ``points`` seen from ``eye`` in the inside of a mirror sphere.
+
+    The eye and the points lie inside the sphere; the mirror is its inner surface, whose normal
+    points to the centre. A point has up to four reflection points (Alhazen's problem), all on the
+    great circle through the eye and the point; the whole circle is sampled (``samples``
+    intervals) to bracket the roots of ``(u + v) . T``, each bracket solved by Brent's method,
+    and a root is kept when both the eye and the point lie in front of the inward tangent plane
+    (for points strictly inside, every root). Where the eye, the point and the centre are
+    collinear the reflection points form rings around that line: those in one plane through it
+    (the one through ``e_x``, or ``e_y`` for a line along ``x``) are returned; with both at the
+    centre every point of the sphere reflects, and none is returned.
+
+    Parameters
+    ----------
+    centre : array_like, shape (3,)
+    radius : float
+    eye : array_like, shape (3,)
+        Inside the sphere.
+    points : array_like, shape (N, 3)
+    samples : int
+        Intervals around the circle; roots closer than ``2 pi / samples`` radians of arc can be
+        missed (two images about to merge at a caustic).
+
+    Returns
+    -------
+    points : ndarray, shape (N, 4, 3), float64
+        The reflection points of each point in increasing angle around the circle from the eye's
+        direction (from the point's direction when the eye is at the centre) towards the point's;
+        NaN past ``count``.
+    virtual : ndarray, shape (N, 4, 3), float64
+        The virtual vertex of each: the point mirrored across the tangent plane there; NaN past
+        ``count``.
+    count : ndarray, shape (N,), int32
+        Reflection points per point; 0 for points on or outside the sphere.
+    """
+    c = np.asarray(centre, dtype=np.float64).reshape(3)
+    o = np.asarray(eye, dtype=np.float64).reshape(3)
+    pts = np.ascontiguousarray(np.asarray(points, dtype=np.float64).reshape(-1, 3))
+    if not (np.isfinite(radius) and radius > 0):
+        raise RefsoftError(f"sphere radius must be positive, got {radius!r}")
+    if not (np.all(np.isfinite(c)) and np.all(np.isfinite(o)) and np.all(np.isfinite(pts))):
+        raise RefsoftError("sphere centre, eye and points must be finite")
+    if not (isinstance(samples, (int, np.integer)) and samples >= 8):
+        raise RefsoftError(f"samples must be an integer of at least 8, got {samples!r}")
+    rho = float(radius)
+    if np.sqrt(_dot3(o - c, o - c)) >= rho:
+        raise RefsoftError("the eye must lie inside the sphere")
+    n = len(pts)
+    out = np.full((n, MAX_SPHERE_IMAGES, 3), np.nan)
+    count = np.zeros(n, dtype=np.int32)
+    a, b, defined, dist = _circle_axes(o - c, pts - c, rho)
+    todo = np.flatnonzero(defined & (dist < rho)).astype(np.int64)
+    if len(todo):
+        parallel_range(inside_points_kernel, len(todo), np.ascontiguousarray(c), rho, np.ascontiguousarray(o), pts,
+                       np.ascontiguousarray(a), np.ascontiguousarray(b), todo, int(samples), XTOL, RTOL, MAXITER,
+                       out, count, work=lambda: (np.empty(samples + 1), np.empty(samples + 1)))
+    nrm = (out - c) / rho
+    virtual = pts[:, None, :] - 2.0 * _dot3(pts[:, None, :] - out, nrm)[..., None] * nrm
+    return out, virtual, count
 
 
 def fit_sphere(vertices, rtol=1e-9):

@@ -166,7 +166,9 @@ def compare_runs(render_dir, truth_dir, out, on_frame=None) -> dict:
     Returns
     -------
     dict
-        ``{"render", "truth", "frames": [metrics per frame], "summary"}`` (``metrics.json``).
+        ``{"render", "truth", "frames": [metrics per frame], "summary"}`` (``metrics.json``); the
+        summary adds up the frames' specks and holes (:func:`refsoft.truth.metrics.defect_counts`),
+        their fractions of all the frames' mirror pixels.
 
     Raises
     ------
@@ -215,8 +217,12 @@ def compare_runs(render_dir, truth_dir, out, on_frame=None) -> dict:
     frames = report["frames"]
     px = np.array([f["reflector_pixels"] for f in frames], dtype=np.float64)
     dis = np.array([f["reflected_id_disagreement"] for f in frames])
+    n_specks = sum(f["specks"] for f in frames)
+    n_holes = sum(f["holes"] for f in frames)
     report["summary"] = {"frames": len(frames),
                          "reflected_id_disagreement": float((dis * px).sum() / px.sum()) if px.sum() else 0.0,
+                         "specks": n_specks, "speck_fraction": float(n_specks / px.sum()) if px.sum() else 0.0,
+                         "holes": n_holes, "hole_fraction": float(n_holes / px.sum()) if px.sum() else 0.0,
                          "only_in_render": sorted(set(render_files) - set(truth_files)),
                          "only_in_truth": sorted(set(truth_files) - set(render_files))}
     write_json(os.path.join(out, "metrics.json"), report)

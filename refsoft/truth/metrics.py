@@ -3,8 +3,9 @@
 Per vertex (where an analytic truth exists): ``1 - score``, the pixel distance between the
 found reflection pixel and the projection of the exact reflection point, and the distance
 between the virtual vertex and the exact one. Per image: the share of reflector pixels whose
-``reflected_id`` differs from the truth, colour error (mean and 99th percentile), and FLIP
-(information only, when the ``flip-evaluator`` package is installed).
+``reflected_id`` differs from the truth, colour error (mean and 99th percentile), isolated
+one-pixel defects (specks of wrong colour, holes showing the wrong object), and FLIP (information
+only, when the ``flip-evaluator`` package is installed).
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import keys, linalg
-from ..constants import RIM_PIXELS
+from ..constants import RIM_PIXELS, SPECK_LEVELS, SPECK_NEIGHBOUR_LEVELS
 from ..errors import RefsoftError
 
 
@@ -131,6 +132,81 @@ def color_error(render_image, truth_image, where=None) -> dict:
     return {"mean": float(e.mean()), "p99": float(np.percentile(e, 99)), "max": float(e.max())}
 
 
+def isolated(bad, good) -> np.ndarray:
+    """Pixels of ``bad`` whose two neighbours along their row (left and right) or along their
+    column (above and below) are both ``good``; a pixel on the image's border has no such pair in
+    that direction. (H, W) bool."""
+    bad = np.asarray(bad, dtype=bool)
+    good = np.asarray(good, dtype=bool)
+    row = np.zeros_like(bad)
+    col = np.zeros_like(bad)
+    row[:, 1:-1] = good[:, :-2] & good[:, 2:]
+    col[1:-1, :] = good[:-2, :] & good[2:, :]
+    return bad & (row | col)
+
+
+def level_difference(render_image, truth_image) -> np.ndarray:
+    """The largest channel difference of two 8-bit images, in levels. (H, W) int16."""
+    a = np.asarray(render_image)
+    b = np.asarray(truth_image)
+    if a.shape != b.shape:
+        raise RefsoftError(f"image shapes differ: render {a.shape}, truth {b.shape}")
+    if a.dtype != np.uint8 or b.dtype != np.uint8 or a.ndim != 3:
+        raise RefsoftError(f"specks need two (H, W, C) uint8 images, got {a.dtype}{list(a.shape)} and "
+                           f"{b.dtype}{list(b.shape)}")
+    return np.abs(a.astype(np.int16) - b.astype(np.int16)).max(axis=-1)
+
+
+def specks(render_image, truth_image, truth_id) -> np.ndarray:
+    """Mirror pixels (``truth_id >= 0``) more than ``SPECK_LEVELS`` off the truth in some channel
+    whose two neighbours along a row or along a column are mirror pixels within
+    ``SPECK_NEIGHBOUR_LEVELS`` of it: one-pixel defects in an otherwise right reflection.
+
+    Parameters
+    ----------
+    render_image, truth_image : ndarray, shape (H, W, 3), uint8
+    truth_id : ndarray, shape (H, W), int32
+        The truth's ``reflected_id`` (-1 off the mirrors).
+
+    Returns
+    -------
+    ndarray, shape (H, W), bool
+    """
+    mirror = reflector_pixels(truth_id)
+    d = level_difference(render_image, truth_image)
+    if d.shape != mirror.shape:
+        raise RefsoftError(f"image {d.shape} and reflected_id {mirror.shape} differ in size")
+    return isolated(mirror & (d > SPECK_LEVELS), mirror & (d <= SPECK_NEIGHBOUR_LEVELS))
+
+
+def holes(render_id, truth_id) -> np.ndarray:
+    """Mirror pixels showing the wrong object (``reflected_id`` not the truth's) whose two
+    neighbours along a row or along a column are mirror pixels showing the right one.
+
+    Parameters
+    ----------
+    render_id, truth_id : ndarray, shape (H, W), int32
+        ``reflected_id`` of the render and of the truth (-1 off the mirrors).
+
+    Returns
+    -------
+    ndarray, shape (H, W), bool
+    """
+    a, b = _check_ids(render_id, truth_id)
+    mirror = reflector_pixels(b)
+    return isolated(mirror & (a != b), mirror & (a == b))
+
+
+def defect_counts(render_arrays, truth_arrays) -> dict:
+    """Specks and holes of one frame: ``{"specks", "speck_fraction", "holes", "hole_fraction"}``,
+    fractions of the mirror pixels (0.0 where there are none)."""
+    tid = truth_arrays["reflected_id"]
+    n = int(reflector_pixels(tid).sum())
+    s = int(specks(render_arrays["image"], truth_arrays["image"], tid).sum())
+    h = int(holes(render_arrays["reflected_id"], tid).sum())
+    return {"specks": s, "speck_fraction": s / n if n else 0.0, "holes": h, "hole_fraction": h / n if n else 0.0}
+
+
 def flip_mean(render_image, truth_image):
     """Mean FLIP error (information only) when ``flip-evaluator`` is installed, else None."""
     try:
@@ -173,6 +249,7 @@ def frame_metrics(render_arrays, truth_arrays) -> dict:
         "object_id_mismatch": int(np.count_nonzero(np.asarray(render_arrays["object_id"])
                                                    != np.asarray(truth_arrays["object_id"]))),
     }
+    out.update(defect_counts(render_arrays, truth_arrays))
     flip = flip_mean(render_arrays["image"], truth_arrays["image"])
     if flip is not None:
         out["flip_mean"] = flip

@@ -11,7 +11,7 @@ def test_methods_and_the_truth_are_settings_of_one_sweep(tmp_path):
     rows = sweep(out=tmp_path / "s", scenes=["balls"], width=48, height=36, frames=1, repeats=1, knobs=["method"],
                  scheduler="serial", timing=True)
     by = {r["setting"]: r for r in rows}
-    assert set(by) == {"default", "method=hierarchy", "method=ldt", "method=envmap", "method=truth"}
+    assert set(by) == {"paper", "paper, method=hierarchy", "method=ldt", "method=envmap", "method=truth"}
     assert by["method=truth"]["disagreement"] == 0.0 and by["method=truth"]["color_error_mean"] == 0.0
     # the LDT sees what the truth sees on this scene; the environment map's parallax does not
     assert by["method=ldt"]["disagreement"] < 0.02 < by["method=envmap"]["disagreement"]

@@ -31,7 +31,7 @@ def test_fit_slope_recovers_exponents():
 
 def test_settings_are_one_factor_at_a_time():
     s = settings()
-    assert s[0][0] == "default" and len(s) == 1 + sum(len(v) - 1 for v in KNOBS.values())
+    assert s[0][0] == "paper" and len(s) == 1 + sum(len(v) - 1 for v in KNOBS.values())
     assert all(len(opts) == 1 for _, _, _, opts in s[1:])
 
 
@@ -40,8 +40,8 @@ def test_sweep_smoke(tmp_path, capsys):
     assert cli.main(["bench", "sweep", "--scheduler", "serial", "--scenes", "sphere", "planar", "--width", "48", "--height", "36", "--frames", "2",
                      "--repeats", "1", "--knob", "inverse", "--knob", "gbuffer_scale", "--out", str(out)]) == 0
     rows = _csv(out / "sweep.csv")
-    assert [r["setting"] for r in rows[:5]] == ["default", "gbuffer_scale=0.5", "gbuffer_scale=2.0", "inverse=search",
-                                                "inverse=discard"]
+    assert [r["setting"] for r in rows[:5]] == ["paper", "paper, gbuffer_scale=0.5", "paper, gbuffer_scale=2.0",
+                                                "paper, inverse=search", "paper, inverse=discard"]
     assert len(rows) == 10 and {r["scene"] for r in rows} == {"sphere", "planar"}
     for r in rows:
         assert float(r["time_ms"]) > 0 and 0 <= float(r["disagreement"]) <= 1
@@ -50,6 +50,15 @@ def test_sweep_smoke(tmp_path, capsys):
     assert all(r["virtual_distance_mean"] for r in sphere)  # exact points on the ball
     assert any(r["pareto"] == "True" for r in sphere)
     assert "## sphere" in (out / "sweep.md").read_text() and (out / "pareto.png").stat().st_size > 1000
+    # the report says what made it, and agreement in % as the accuracy report does
+    import refsoft
+
+    page = (out / "report.html").read_text()
+    assert f"<b>refsoft</b>: {refsoft.__version__}" in page and "<b>date</b>: 20" in page and "cores" in page
+    assert "<code>refsoft bench sweep --scheduler serial --scenes sphere planar --width 48" in page
+    assert "agreement %" in page and "disagreement</th>" not in page
+    sph = [r for r in rows if r["scene"] == "sphere" and r["setting"] == "paper"][0]
+    assert f"{100 * (1 - float(sph['disagreement'])):.3g}"[:3] in page
     assert cli.main(["bench", "sweep", "--scheduler", "serial", "--knob", "colour", "--out", str(out)]) == 2
 
 

@@ -106,6 +106,8 @@ def test_trace_command_writes_table_json_png_gif(tmp_path, capsys):
     gif = iio.imread(out / "trace.gif", index=None)
     assert len(gif) == min(len(data["steps"]), 150) + 1
     assert oct(os.stat(out / "trace.png").st_mode & 0o777) != "0o600"
+    page = (out / "trace.html").read_text()
+    assert page.startswith("<!DOCTYPE html>") and '"kind":"walk"' in page and "trace.html" in text
 
 
 
@@ -150,3 +152,14 @@ def test_every_option_of_every_command_has_help_text():
     missing = [f"{name} {act.option_strings or act.dest}" for name, p in sub.choices.items() for act in p._actions
                if not isinstance(act, argparse._HelpAction) and not act.help]
     assert not missing, missing
+
+
+@pytest.mark.parametrize("what, own, other", [("accuracy", "--sizes", "--knob"), ("sweep", "--knob", "--sizes"),
+                                              ("table1", "--scenes", "--max-width"),
+                                              ("scaling", "--max-width", "--setting")])
+def test_each_bench_subcommand_has_its_own_help(what, own, other, capsys):
+    with pytest.raises(SystemExit) as e:
+        cli.main(["bench", what, "--help"])
+    out = capsys.readouterr().out
+    assert e.value.code == 0 and f"refsoft bench {what}" in out
+    assert own in out and other not in out  # its own options only

@@ -112,3 +112,53 @@ def test_the_readme_claims_what_its_command_measures(tmp_path):
     rows = {r["setting"]: float(r["agreement"]) * 100
             for r in __import__("csv").DictReader(open(tmp_path / "accuracy.csv"))}
     assert lo <= rows["accurate"] <= hi and plo <= rows["paper"] <= phi, rows
+
+
+def test_a_misspelt_scene_name_gets_a_suggestion(capsys):
+    assert cli.main(["render", "kitchn", "--frames", "1"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "unknown scene 'kitchn' (did you mean 'kitchen'?)" in err
+    assert cli.main(["render", "zzzzzz", "--frames", "1"]) == 2
+    assert "did you mean" not in capsys.readouterr().err
+
+
+def test_run_json_names_the_vertices_searched_and_all(tmp_path):
+    import json
+
+    import refsoft
+
+    assert cli.main(["render", "sphere", "--frames", "1", "--width", "32", "--height", "24",
+                     "--out", str(tmp_path / "r")]) == 0
+    run = json.loads((tmp_path / "r" / "run.json").read_text())
+    scene = refsoft.load_scene("sphere")
+    assert run["vertices_all"] == sum(o.mesh.n_vertices for o in scene.objects)
+    assert run["vertices"] == sum(o.mesh.n_vertices for o in scene.objects if not o.reflector) < run["vertices_all"]
+
+
+def test_a_late_frame_of_a_static_scene_renders_two_frames_not_all(tmp_path, capsys):
+    """Every frame of a static scene after the first is the same: --frame 9 renders frames 0 and 9,
+    and frame 9 is --frame 1's frame 1, bit for bit."""
+    import json
+
+    import numpy as np
+
+    base = ["render", "sphere", "--width", "32", "--height", "24", "--preset", "paper"]
+    assert cli.main(base + ["--frame", "9", "--out", str(tmp_path / "a")]) == 0
+    assert "2/2 frames" in capsys.readouterr().err  # frames 0 and 9, not 0 .. 9
+    assert cli.main(base + ["--frame", "1", "--out", str(tmp_path / "b")]) == 0
+    assert json.loads((tmp_path / "a" / "run.json").read_text())["frames"] == [9]
+    assert sorted(p.name for p in (tmp_path / "a").glob("frame_*.npz")) == ["frame_0009.npz"]
+    a, b = np.load(tmp_path / "a" / "frame_0009.npz"), np.load(tmp_path / "b" / "frame_0001.npz")
+    assert sorted(a.files) == sorted(b.files)
+    for k in a.files:
+        assert np.array_equal(a[k], b[k], equal_nan=a[k].dtype.kind == "f"), k
+
+
+def test_refsoft_glsl_help_reads_as_plain_text():
+    import subprocess
+    import sys
+
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([os.path.join(ROOT, "ports", "glsl"), ROOT]))
+    r = subprocess.run([sys.executable, "-m", "refsoft_glsl", "--help"], capture_output=True, text=True, env=env,
+                       timeout=60)
+    assert r.returncode == 0 and "refsoft-glsl run GOLDEN" in r.stdout and "``" not in r.stdout

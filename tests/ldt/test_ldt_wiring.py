@@ -106,12 +106,12 @@ def test_cli_trace_replays_one_pixel(tmp_path, capsys):
     assert f"pixel ({row}, {col})" in out and "result: object" in out and "b1" in out
     got = json.loads((tmp_path / "t" / "trace.json").read_text())
     assert got["result"]["face"] == int(frame.arrays["ldt_face"][row, col])
+    assert '"kind":"ldt"' in (tmp_path / "t" / "trace.html").read_text() and "trace.html" in out
     for argv, match in ((["--method", "ldt"], "give --pixel ROW COL"),
                         (["--method", "ldt", "--pixel", "0", "0"], "not a reflector"),
                         (["--method", "ldt", "--pixel", "1", "1", "--vertex", "3"], "--vertex is an option"),
                         (["--pixel", "1", "1"], "add --method ldt"),
-                        (["--method", "envmap", "--pixel", "1", "1"], "no search to trace"),
-                        ([], "give --vertex I")):
+                        (["--method", "envmap", "--pixel", "1", "1"], "no search to trace")):
         assert cli.main(base + argv) == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and match in err[0], (argv, err)

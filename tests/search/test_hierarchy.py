@@ -134,5 +134,6 @@ def test_cli_trace_and_render_with_the_hierarchy(tmp_path, capsys):
                      "--out", str(tmp_path / "t")]) == 0
     out = capsys.readouterr().out
     assert "ray-cone hierarchy" in out and "chosen" in out and (tmp_path / "t" / "trace.png").exists()
+    assert '"kind":"hierarchy"' in (tmp_path / "t" / "trace.html").read_text()
     assert cli.main(["render", "sphere", "--method", "hierarchy", "--width", "48", "--height", "36",
                      "--out", str(tmp_path / "r")]) == 0

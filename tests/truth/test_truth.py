@@ -208,6 +208,11 @@ def test_truth_and_compare_commands(tmp_path, capsys):
     assert "reflected_id differs on" in out
     rep = json.loads((tmp_path / "c" / "metrics.json").read_text())
     assert 0 <= rep["summary"]["reflected_id_disagreement"] <= 1
+    # specks and holes per frame, added up in the summary and printed with it
+    s, f = rep["summary"], rep["frames"][0]
+    assert (s["specks"], s["holes"]) == (f["specks"], f["holes"])
+    assert s["speck_fraction"] == f["speck_fraction"] == f["specks"] / f["reflector_pixels"]
+    assert f"{s['specks']} specks" in out and f"{s['holes']} holes" in out
     assert "1" in rep["frames"][0]["vertices"]
     import imageio.v3 as iio
 

@@ -11,7 +11,8 @@ import time
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="refsoft-glsl", description=__doc__.split("\n\n")[0])
+    # the docstring's RST literals (``x``) read as plain text in --help
+    parser = argparse.ArgumentParser(prog="refsoft-glsl", description=__doc__.split("\n\n")[0].replace("``", ""))
     sub = parser.add_subparsers(dest="command", required=True)
     run = sub.add_parser("run", help="render golden cases from their inputs into a candidate folder")
     run.add_argument("golden", help="a golden set (refsoft golden --out GOLDEN): each CASE/inputs/ is read")

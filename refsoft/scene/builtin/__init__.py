@@ -8,6 +8,7 @@ from ...errors import SceneError
 from ..model import Scene
 from .basic import concave_scene, ellipsoid_scene, planar_scene, quad_scene, sphere_scene, torus_scene
 from .ldt import balls_scene, cup_scene, cylinder_scene, genus3_scene, hollow_box_scene, touching_scene
+from .nonconvex import shaving_scene, wavy_scene
 from .papers import ants_scene, kitchen_scene, ufo_scene
 
 #: name -> (builder, one-line description)
@@ -20,6 +21,8 @@ BUILTIN_SCENES = {
     "planar": (planar_scene, "a flat mirror wall; the camera slides sideways"),
     "concave": (concave_scene, "the inside of a mirror bowl seen from above"),
     "torus": (torus_scene, "half a mirror torus: mixed curvature"),
+    "shaving": (shaving_scene, "a concave spherical shaving mirror, objects inside f, near C and beyond C"),
+    "wavy": (wavy_scene, "a sinusoidal mirror sheet (four waves) with objects in front"),
     "quad": (quad_scene, "a two-triangle quad reflected in a mirror ball"),
     "balls": (balls_scene, "two balls (1 depth layer) moving in front of a mirror ball"),
     "hollow_box": (hollow_box_scene, "an open-top hollow box (2 depth layers) beside a mirror ball (static)"),
@@ -65,7 +68,11 @@ def load_scene(name_or_path, subdivide=None, **overrides) -> Scene:
     elif key.endswith(".toml") or os.path.sep in key or os.path.exists(key):
         scene = load_scene_file(key, subdivide)
     else:
-        raise SceneError(f"unknown scene {key!r}: not a built-in ({', '.join(BUILTIN_SCENES)}) nor a .toml file")
+        import difflib
+
+        near = difflib.get_close_matches(key.lower(), list(BUILTIN_SCENES), n=1, cutoff=0.6)
+        hint = f" (did you mean {near[0]!r}?)" if near else ""
+        raise SceneError(f"unknown scene {key!r}{hint}: not a built-in ({', '.join(BUILTIN_SCENES)}) nor a .toml file")
     if overrides:
         overrides = {k: v for k, v in overrides.items() if v is not None}
         scene = replace(scene, camera=replace(scene.camera, **overrides))

@@ -1,0 +1,122 @@
+"""What trace.html embeds (refsoft.viewer.data): every step and every candidate of the trace, the
+heat map's values at every pixel, the side view's geometry; the page is one file that fetches nothing."""
+
+import json
+import re
+
+import numpy as np
+import pytest
+
+from refsoft.errors import RefsoftError
+from refsoft.viewer import page_html, trace_data, write_trace_page
+
+
+def _page_data(html):
+    m = re.search(r'<script type="application/json" id="trace-data">(.*?)</script>', html, re.S)
+    return json.loads(m.group(1))
+
+
+def _same(a, b):
+    return a is None and b is None or a is not None and b is not None and float(f"{b:.9g}") == a
+
+
+@pytest.mark.parametrize("which", ["walk_replay", "inverse_replay"])
+def test_walk_data_holds_every_step_and_every_candidate(which, request):
+    rp = request.getfixturevalue(which)
+    tr = rp.trace
+    d = trace_data(rp)
+    assert d["kind"] == "walk" and len(d["steps"]) == len(tr.steps) == tr.iterations
+    assert d["start"] == tr.start and d["end"] == tr.pixel
+    for st, s in zip(d["steps"], tr.steps):
+        assert st["pixel"] == s["pixel"] and st["phase"] == s["phase"]
+        assert st["grid"] == (1 if s["phase"] == "inverse" else 0)
+        assert [c["name"] for c in st["cells"]] == [c["name"] for c in s["candidates"]] == d["columns"]
+        for c, sc in zip(st["cells"], s["candidates"]):
+            assert c["pixel"] == sc["pixel"] and c["status"] == sc["status"] and _same(c["value"], sc["score"])
+        assert (st["chosen"] is None) == (s["move_to"] is None)
+        if s["move_to"] is not None:
+            assert st["cells"][st["chosen"]]["pixel"] == s["move_to"]
+    assert ("Capped" in d["stop"]) == (tr.stop == "capped")
+
+
+@pytest.mark.parametrize("which", ["walk_replay", "inverse_replay"])
+def test_walk_heat_maps_are_the_score_fields_at_every_pixel(which, request):
+    rp = request.getfixturevalue(which)
+    mask = rp.gbuffer.mask
+    d = trace_data(rp)
+    fields = [rp.trace.score_map] + ([] if rp.trace.inverse_map is None else [rp.trace.inverse_map])
+    assert len(d["grids"]) == len(fields)
+    for g, field in zip(d["grids"], fields):
+        vals = np.array(g["values"], dtype=object).reshape(g["h"], g["w"])
+        rows, cols = np.nonzero(mask)
+        assert g["r0"] <= rows.min() and rows.max() < g["r0"] + g["h"]  # the box holds every covered pixel
+        assert g["c0"] <= cols.min() and cols.max() < g["c0"] + g["w"]
+        for i in range(g["h"]):
+            for j in range(g["w"]):
+                r, c = g["r0"] + i, g["c0"] + j
+                want = float(field[r, c]) if mask[r, c] else None
+                assert _same(vals[i, j], want), (r, c)
+
+
+def test_walk_side_view_keeps_distances_in_the_plane(walk_replay):
+    rp = walk_replay
+    d = trace_data(rp)
+    pts = {p["name"]: np.array(p["xy"]) for p in d["side"]["points"]}
+    P = rp.gbuffer.position[tuple(rp.trace.pixel)].astype(np.float64) + rp.gbuffer.origin
+    assert np.allclose(pts["reflection point P"], 0.0)
+    # eye and vertex lie in the drawing's plane: their distances to P are kept
+    for name, X in (("eye O", rp.eye), ("vertex V", rp.position)):
+        assert np.isclose(np.linalg.norm(pts[name]), np.linalg.norm(X - P), rtol=1e-6)
+    # the virtual vertex, mirrored across the tangent plane, is off the drawing's plane by the
+    # normal's tilt out of it: drawn no farther from P than the vertex
+    assert np.linalg.norm(pts["virtual vertex V'"]) <= np.linalg.norm(rp.position - P) * (1 + 1e-9)
+    assert len([s for s in d["steps"] if s["side"] is not None]) == len(d["steps"])
+
+
+def test_hierarchy_data_holds_every_event(hierarchy_replay):
+    tr = hierarchy_replay.trace
+    d = trace_data(hierarchy_replay)
+    assert d["kind"] == "hierarchy"
+    popped = [s for s in tr.steps if s["event"] in ("popped", "chosen")]
+    assert [s["phase"] for s in d["steps"]] == [s["event"] for s in popped]
+    first = next(i for i, s in enumerate(tr.steps) if s["event"] == "popped")
+    assert sum(len(s["cells"]) for s in d["steps"]) == len(tr.steps) - first - len(popped)
+    assert d["steps"][-1]["rect"][:2] == tr.pixel and d["end"] == tr.pixel
+    for st, ev in zip(d["steps"], popped):
+        side = 1 << ev["level"]
+        assert st["rect"][2:] == [side, side]
+
+
+def test_ldt_data_holds_every_sample_and_bisection_point(ldt_trace):
+    tr = ldt_trace
+    d = trace_data(tr)
+    faces = [fc for o in tr.objects for fc in o["faces"]]
+    want = []
+    for fc in faces:
+        want += [("linear", s["texel"], len(s["layers"])) for s in fc["samples"]]
+        want += [("bisection", p["texel"], 0 if p["z"] is None else 1) for p in (fc["bisection"] or {"points": []})["points"]]
+    assert [(s["phase"], s["pixel"], len(s["cells"])) for s in d["steps"]] == want
+    assert len(d["grids"]) == len(faces)
+    assert d["steps"][-1]["pixel"] == tr.result["texel"] or tr.result["binary_steps"] == 0
+    assert "Hit: object" in d["stop"]
+    hit = next(p for p in d["side"]["points"] if p["name"].startswith("hit"))
+    assert np.isclose(np.linalg.norm(hit["xy"]), tr.result["distance"], rtol=1e-5)
+
+
+def test_page_is_one_file_that_fetches_nothing(walk_replay, tmp_path):
+    write_trace_page(tmp_path, walk_replay)
+    html = (tmp_path / "trace.html").read_text()
+    assert _page_data(html) == json.loads(json.dumps(trace_data(walk_replay)))
+    assert not re.search(r"(src|href)\s*=|https?://(?!www\.w3\.org/2000/svg)|fetch\(|XMLHttpRequest|import\(", html)
+
+
+def test_page_data_cannot_close_its_script_block(walk_replay):
+    d = trace_data(walk_replay)
+    d["title"] = "a </script><script>alert(1)</script>"
+    html = page_html(d)
+    assert html.count("</script>") == 2 and _page_data(html)["title"] == d["title"]
+
+
+def test_trace_data_refuses_other_objects():
+    with pytest.raises(RefsoftError, match="VertexReplay or a PixelTrace"):
+        trace_data(object())
