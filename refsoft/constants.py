@@ -244,3 +244,18 @@ CONVEX_TOLERANCE = 1e-9
 #: A heat map embedded in trace.html holds at most this many pixels (about 10 bytes each in the
 #: page); a larger reflector is traced at a smaller --width/--height.
 VIEWER_MAX_GRID_PIXELS = 400_000
+
+# --- every image drawn on mirrors that are not convex (refsoft/search/several.py) ---
+#: Candidate virtual triangles per scene triangle: image triples of its vertices beyond this are
+#: left out (a vertex has at most a few images; the cap bounds a pathological G-buffer).
+SEVERAL_MAX_TRIPLES = 64
+#: Midpoint subdivisions of a scene triangle with a vertex without an image or no linked triple.
+SEVERAL_MAX_LEVEL = 3
+#: A candidate virtual triangle is rasterized dilated by this many pixels plus
+#: SEVERAL_DILATE_FRACTION of its longest edge: its vertices' images are exact, its edges are
+#: straight where the real image curves; the per-pixel ray test accepts only exact hits.
+SEVERAL_DILATE_PIXELS = 1.0
+SEVERAL_DILATE_FRACTION = 0.25
+#: Two images are linked when the walk started at one ends within this many texels (Chebyshev)
+#: of the other, both ways.
+SEVERAL_LINK_TEXELS = 1

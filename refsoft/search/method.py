@@ -139,7 +139,11 @@ class VertexSearch:
         if stencil.any():
             t = time.perf_counter()
             box = stencil_box(stencil) if opt.crop_virtual else (0, view.camera.height, 0, view.camera.width)
-            if opt.tessellate is None and opt.silhouette != "clip":
+            drawn = self._draw_images(view, k, refl, stencil, box)
+            if drawn is not None:  # every image, drawn by exact acceptance (search/several.py)
+                out.colour, out.reflected_id, out.covered, extra = drawn
+                report.update(extra)
+            elif opt.tessellate is None and opt.silhouette != "clip":
                 parts = virtual_parts(self.scene, view.meshes, refl)
             else:
                 self._reflected = reflected_mesh(self.scene, view.meshes, self._reflected)
@@ -148,12 +152,24 @@ class VertexSearch:
                 report.update(counts)
                 times["tessellate"] = 1000 * (time.perf_counter() - t)
                 t = time.perf_counter()
-            out.colour, out.reflected_id, out.covered, report["virtual_objects_culled"] = virtual_pass(
-                self.scene, parts, view.camera, stencil, box, opt.inverse, opt.cull_virtual)
+            if drawn is None:
+                out.colour, out.reflected_id, out.covered, report["virtual_objects_culled"] = virtual_pass(
+                    self.scene, parts, view.camera, stencil, box, opt.inverse, opt.cull_virtual)
             out.box = box
             times["virtual"] = 1000 * (time.perf_counter() - t)
         out.arrays = {**gbuffer_outputs(refl.gbuffer, k), **vertex_outputs(refl, view.vertex_object, k)}
         return out
+
+    def _draw_images(self, view, k, refl, stencil, box):
+        """Every image of reflector ``k`` drawn (:func:`refsoft.search.several.several_pass`), or
+        None: the virtual pass."""
+        from . import several
+
+        source = several.image_source(self.scene, view, k, refl, self.options)
+        if source is None:
+            return None
+        self._reflected = reflected_mesh(self.scene, view.meshes, self._reflected)
+        return several.several_pass(self.scene, view, k, stencil, box, self._reflected[1], self.options, *source)
 
     def frame_report(self, results) -> dict:
         """``stats.json``'s per-frame ``iterations`` (mean and max per reflector, CULLED vertices
@@ -166,7 +182,7 @@ class VertexSearch:
                    "virtual_objects_culled": {}, "widen_off": []}
         if self.options.images == "all":
             skipped["images_convex"] = []
-        tessellation, silhouette = {}, {}
+        tessellation, silhouette, drawn = {}, {}, {}
         for k, r in results.items():
             rep = r.report
             for flag, name in (("outside_view", "reflectors_outside_view"), ("gbuffer_reused", "gbuffers_reused")):
@@ -185,6 +201,8 @@ class VertexSearch:
                 images[str(k)] = rep["images"]
             elif rep.get("images_convex"):
                 skipped["images_convex"].append(k)
+            if "several" in rep:
+                drawn[str(k)] = rep["several"]
             res = r.state.result
             it = res.iterations[(res.flags & CULLED) == 0]
             iterations[str(k)] = {"mean": float(it.mean()) if len(it) else 0.0, "max": int(it.max()) if len(it) else 0}
@@ -195,6 +213,8 @@ class VertexSearch:
         out = {"iterations": iterations, "skipped": skipped}
         if self.options.images == "all":
             out["images"] = images
+        if drawn:  # every image drawn (search/several.py): candidates, subdivisions, pixels per reflector
+            out["several"] = drawn
         return out
 
     # --- the stages --------------------------------------------------------------------------

@@ -78,13 +78,18 @@ def test_per_image_arrays(concave):
                                                   int((count == 2).sum()), int((count >= 3).sum())]
 
 
-def test_one_image_changes_only_the_flag(concave):
+def test_one_image_changes_only_the_flag_and_the_mirror(concave):
+    """Besides the flag, every image changes only what the mirror shows (every image drawn,
+    refsoft/search/several.py)."""
     _, fr = concave
     _, one = _frame("concave", images="one")
     assert not any(k.startswith("image_") for k in one.arrays)
+    outside = one.arrays["object_id"] != 1
     for k, v in one.arrays.items():
         if k == keys.FLAGS(1):
             assert np.array_equal(v, fr.arrays[k] & ~np.uint8(SEVERAL))
+        elif k in ("image", "reflected_id"):
+            assert np.array_equal(v[outside], fr.arrays[k][outside]), k
         else:
             assert np.array_equal(v, fr.arrays[k]), k
     assert "images" not in one.report

@@ -1,0 +1,99 @@
+"""Slow, plainly correct reference for drawing every image on mirrors that are not convex
+(spec section 4.8): a per-pixel ray tracer of what a reflector shows, in NumPy (float64)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def _unit(x):
+    n = np.linalg.norm(x, axis=-1, keepdims=True)
+    return np.divide(x, n, out=np.zeros_like(x), where=n > 0)
+
+
+def reflected_rays(camera, stencil, reflector_mesh, triangle):
+    """Per stencil pixel (row-major): the eye ray through the pixel centre meets the visible
+    reflector triangle and is reflected about the interpolated normal there.
+
+    Returns
+    -------
+    rows, cols : (P,) int
+    origin, direction : (P, 3) float64
+    """
+    H, W = stencil.shape
+    inv = np.linalg.inv(camera.view_proj())
+    eye = np.asarray(camera.eye, np.float64)
+    rows, cols, origin, direction = [], [], [], []
+    for r, c in zip(*np.nonzero(stencil)):
+        x = (c + 0.5) / W * 2 - 1
+        y = (H - r - 0.5) / H * 2 - 1
+        far = inv @ np.array([x, y, 1.0, 1.0])
+        near = inv @ np.array([x, y, -1.0, 1.0])
+        d = _unit(far[:3] / far[3] - near[:3] / near[3])
+        f = reflector_mesh.faces[triangle[r, c]]
+        a, b, cc = reflector_mesh.vertices[f]
+        t, u, v = _moller(eye, d, a, b, cc)
+        if not np.isfinite(t):
+            continue
+        n = _unit((1 - u - v) * reflector_mesh.normals[f[0]] + u * reflector_mesh.normals[f[1]]
+                  + v * reflector_mesh.normals[f[2]])
+        rows.append(r)
+        cols.append(c)
+        origin.append(eye + t * d)
+        direction.append(d - 2 * np.dot(d, n) * n)
+    return np.asarray(rows, int), np.asarray(cols, int), np.asarray(origin).reshape(-1, 3), \
+        np.asarray(direction).reshape(-1, 3)
+
+
+def first_hits(origin, direction, tris):
+    """Per ray, the index of the nearest triangle of ``tris`` (T, 3, 3) hit with t > 0 (-1 none)."""
+    A, B, C = tris[:, 0], tris[:, 1], tris[:, 2]
+    e1, e2 = B - A, C - A
+    out = np.full(len(origin), -1)
+    for i, (p, rd) in enumerate(zip(origin, direction)):
+        pv = np.cross(rd, e2)
+        det = np.sum(e1 * pv, axis=1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            s = p - A
+            uu = np.sum(s * pv, axis=1) / det
+            q = np.cross(s, e1)
+            vv = (q @ rd) / det
+            tt = np.sum(e2 * q, axis=1) / det
+        hit = (tt > 0) & (uu >= 0) & (vv >= 0) & (uu + vv <= 1)
+        if hit.any():
+            out[i] = np.flatnonzero(hit)[np.argmin(tt[hit])]
+    return out
+
+
+def trace_reflections(scene, meshes, camera, stencil, reflector_mesh, triangle):
+    """What reflector pixels show: :func:`reflected_rays` intersected with every triangle of every
+    non-reflector object (float64, nearest t > 0 inside the triangle).
+
+    Returns
+    -------
+    reflected_id : ndarray (H, W) int32
+        Object id seen, 0 none (also off the stencil).
+    """
+    tris, ids = [], []
+    for k, obj in enumerate(scene.objects, start=1):
+        if not obj.reflector:
+            tris.append(meshes[k - 1].vertices[meshes[k - 1].faces])
+            ids.append(np.full(meshes[k - 1].n_faces, k, np.int32))
+    tris, ids = np.concatenate(tris), np.concatenate(ids)
+    rows, cols, origin, direction = reflected_rays(camera, stencil, reflector_mesh, triangle)
+    hit = first_hits(origin, direction, tris)
+    out = np.zeros(stencil.shape, np.int32)
+    out[rows, cols] = np.where(hit >= 0, ids[hit], 0)
+    return out
+
+
+def _moller(o, d, a, b, c):
+    e1, e2 = b - a, c - a
+    p = np.cross(d, e2)
+    det = np.dot(e1, p)
+    if det == 0:
+        return np.nan, 0.0, 0.0
+    s = o - a
+    u = np.dot(s, p) / det
+    q = np.cross(s, e1)
+    return np.dot(e2, q) / det, u, np.dot(d, q) / det
