@@ -225,12 +225,6 @@ IMAGE_BOUND_FACTOR = 2.5
 #: examined per vertex before merging.
 MAX_IMAGES = 16
 IMAGE_CANDIDATES = 64
-#: A 3x3 neighbour whose normal's cosine with the texel's is below this (a turn of more than
-#: about 14 degrees in one texel) is on another part of the surface, across a crease or a depth
-#: discontinuity: it does not widen the texel's bounds (at the rim of a bowl seen from above,
-#: the far wall's texels beside the near rim would otherwise make the near rim's cones cover
-#: every vertex).
-IMAGE_MIN_COS = 0.97
 #: The convex skip (refsoft.search.convex): a one-ring vertex counts as on a triangle's plane
 #: within this fraction of the mesh's extent (the weld's 1e-9: rounding of coplanar points).
 CONVEX_TOLERANCE = 1e-9

@@ -81,8 +81,7 @@ def _reflected(U, N):
 def reaches(P, N, U, mask, v_rel, r, c, factor=2.5):
     """Texel (r, c)'s reflected ray can reach the vertex (float64): within ``factor`` times the
     largest angle to a covered 3x3 neighbour's reflected ray, its apex anywhere within
-    ``factor`` times the largest distance to a neighbour's point (neighbours whose normal turns
-    by more than acos(0.97) left out)."""
+    ``factor`` times the largest distance to a neighbour's point."""
     h, w = mask.shape
     p, a = P[r, c].astype(np.float64), _reflected(U[r, c], N[r, c])
     rad = ang = 0.0
@@ -91,8 +90,6 @@ def reaches(P, N, U, mask, v_rel, r, c, factor=2.5):
             rr, cc = r + dr, c + dc
             if (dr, dc) == (0, 0) or not (0 <= rr < h and 0 <= cc < w and mask[rr, cc]):
                 continue
-            if np.dot(N[r, c].astype(np.float64), N[rr, cc].astype(np.float64)) < 0.97:
-                continue  # another part of the surface (IMAGE_MIN_COS)
             rad = max(rad, np.linalg.norm(P[rr, cc].astype(np.float64) - p))
             b = _reflected(U[rr, cc], N[rr, cc])
             ang = max(ang, np.arctan2(np.linalg.norm(np.cross(a, b)), a @ b))

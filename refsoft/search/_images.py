@@ -4,9 +4,7 @@ The bounds are Szabo's ray-cone pyramid (:mod:`refsoft.search._hierarchy`) over 
 sphere and cone are *dilated*: a texel's sphere is centred on its point with a radius of
 ``IMAGE_BOUND_FACTOR`` times the largest distance to a covered 3x3 neighbour's point, its cone
 is the reflected eye ray with a half-angle of ``IMAGE_BOUND_FACTOR`` times the largest angle to a
-neighbour's reflected ray; neighbours whose normal turns from the texel's by more than
-``acos(IMAGE_MIN_COS)`` lie on another part of the surface (across a crease or a silhouette)
-and do not widen it. A solution within ``IMAGE_REACH`` texels of a texel then lies in the
+neighbour's reflected ray. A solution within ``IMAGE_REACH`` texels of a texel then lies in the
 texel's sphere and reflects into its cone (to first order in the texel size), so a cell whose
 cone does not meet the vertex holds no image and is pruned (Mitchell and Hanrahan 1992, Wang,
 Hasan and Yan 2020: prune where the normal and bisector bounds cannot meet).
@@ -25,7 +23,7 @@ float64 (it decides, it is not an output's bits); scores are the search's own (`
 import numpy as np
 
 from .._numba import kernel, like
-from ..constants import IMAGE_BOUND_FACTOR, IMAGE_MIN_COS
+from ..constants import IMAGE_BOUND_FACTOR
 from ._hierarchy import _contains
 from ._kernels import _evaluate
 
@@ -72,8 +70,6 @@ def dilated_base(lo, hi, G, mask, fp, sph, cone):
                     if rr < 0 or rr >= h or cc < 0 or cc >= w or not mask[rr, cc] or (dr == 0 and dc == 0):
                         continue
                     q = G[rr, cc]
-                    if ((g[3] * q[3] + g[4] * q[4]) + g[5] * q[5]) < like(IMAGE_MIN_COS, fp):
-                        continue  # across a crease or a depth discontinuity: another part of the surface
                     dx, dy, dz = q[0] - g[0], q[1] - g[1], q[2] - g[2]
                     rad = max(rad, np.sqrt((dx * dx + dy * dy) + dz * dz))
                     bx, by, bz = _reflected(q, fp)
