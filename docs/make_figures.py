@@ -271,9 +271,57 @@ def teaching_figures():
 TEACHING_VERTEX = 1500
 
 
-if __name__ == "__main__" and sys.argv[1:] == ["teaching"]:
+def several_figure(scene_name="concave"):
+    """The score field of the vertex with the most images on ``concave`` (320x240, frame 0, the
+    accurate preset's search), its images (white circles, the walk's filled) and the maxima the
+    enumeration rejected (red crosses); ``docs/figures/several_concave.png`` and its trace
+    ``several_concave.txt``."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from refsoft.search.images import find_images, trace_images
+    from refsoft.search import scores_at
+    from refsoft.search.reflect import reflect
+
+    scene = refsoft.load_scene(scene_name, width=320, height=240)
+    verts, owner, refl = reflect(scene, 0)
+    r = refl[scene.reflector_ids[0]]
+    eye = scene.camera_at(0).eye
+    im = find_images(r.gbuffer, eye, verts, r.result)
+    i = int(np.argmax(im.count))  # the first vertex with the most images
+    gb = r.gbuffer
+    pix = np.argwhere(gb.mask)
+    s = np.zeros(gb.mask.shape)
+    s[pix[:, 0], pix[:, 1]] = scores_at(gb, eye, np.repeat(verts[i:i + 1], len(pix), axis=0), pix)
+    tr = trace_images(gb, eye, verts[i], r.result.pixel[i])
+    rows, cols = np.nonzero(gb.mask)
+    r0, r1, c0, c1 = rows.min(), rows.max() + 1, cols.min(), cols.max() + 1
+    field = np.where(gb.mask, -np.log10(np.maximum(1.0 - s.astype(np.float64), 1e-8)), np.nan)[r0:r1, c0:c1]
+    fig, ax = plt.subplots(figsize=(6.4, 5.0))
+    pic = ax.imshow(field, cmap="viridis", extent=(c0 - 0.5, c1 - 0.5, r1 - 0.5, r0 - 0.5))
+    fig.colorbar(pic, ax=ax, label="-log10(1 - s)")
+    for m in tr.maxima:
+        if m["verdict"] not in ("accepted", "merged"):
+            ax.plot(m["texel"][1], m["texel"][0], "x", color="red", ms=6)
+    for n, (pr, pc) in enumerate(tr.images):
+        ax.plot(pc, pr, "o", ms=11, mfc="white" if n == 0 and tr.walk_is_image else "none", mec="white", mew=2)
+    name = scene.objects[owner[i] - 1].name
+    ax.set_title(f"{scene_name}: vertex {i} ({name}), {len(tr.images)} images\n"
+                 "white: images (filled: the walk's), red: maxima rejected", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(os.path.join(FIG, f"several_{scene_name}.png"), dpi=100)
+    plt.close(fig)
+    with open(os.path.join(FIG, f"several_{scene_name}.txt"), "w") as fh:
+        fh.write(tr.table() + "\n")
+
+
+if __name__ == "__main__" and sys.argv[1:]:  # only the figures named: python docs/make_figures.py several teaching
     os.makedirs(FIG, exist_ok=True)
-    teaching_figures()
+    for name in sys.argv[1:]:
+        (globals().get(f"{name}_figure") or globals()[f"{name}_figures"])()
+    print(f"figures written to {FIG}")
 elif __name__ == "__main__":
     os.makedirs(FIG, exist_ok=True)
     teaching_figures()
@@ -288,6 +336,7 @@ elif __name__ == "__main__":
     try:
         fill_rule_figure()
         ldt_trace_figure()
+        several_figure()
     except ImportError:
         print("matplotlib missing: fill_rule.png not made (pip install '.[plot]')", file=sys.stderr)
     print(f"figures written to {FIG}")

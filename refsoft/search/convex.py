@@ -47,6 +47,8 @@ interpolated normals is checked by the plain reference that judges every texel
 
 from __future__ import annotations
 
+import weakref
+
 import numpy as np
 
 from ..constants import CONVEX_TOLERANCE
@@ -73,7 +75,13 @@ def several_possible(mesh: Mesh) -> bool:
     """
     if not isinstance(mesh, Mesh):
         raise RefsoftError(f"mesh must be a refsoft Mesh, got {type(mesh).__name__}")
-    return not (_flat(mesh) or _convex(mesh))
+    if mesh not in _DECIDED:  # a mesh does not change: decided once per process
+        _DECIDED[mesh] = not (_flat(mesh) or _convex(mesh))
+    return _DECIDED[mesh]
+
+
+#: Mesh -> its decision, while the mesh lives.
+_DECIDED = weakref.WeakKeyDictionary()
 
 
 def _flat(mesh: Mesh) -> bool:
