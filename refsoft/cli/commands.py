@@ -103,7 +103,8 @@ def _suggest_vertices(args, scene) -> int:
         for flag, v in (("--width", args.width), ("--height", args.height), ("--subdivide", args.subdivide),
                         ("--reflector", args.reflector)):
             extra += [] if v is None else [flag, str(v)]
-        for flag, v in (("--preset", args.preset), ("--method", args.method), ("--neighbourhood", args.neighbourhood),
+        preset = None if args.preset == "accurate" else args.preset  # the default needs no saying
+        for flag, v in (("--preset", preset), ("--method", args.method), ("--neighbourhood", args.neighbourhood),
                         ("--inverse", args.inverse), ("--widen", args.widen), ("--precision", args.precision)):
             extra += [] if v is None else [flag, str(v)]
         print("trace one with: refsoft trace " + shlex.join([args.scene, "--vertex", str(found[0]["vertex"]), *extra])
