@@ -244,9 +244,6 @@ CONVEX_TOLERANCE = 1e-9
 #: A heat map embedded in trace.html holds at most this many pixels (about 10 bytes each in the
 #: page); a larger reflector is traced at a smaller --width/--height.
 VIEWER_MAX_GRID_PIXELS = 400_000
-#: The side view calls the pixel a search ended at a reflection point when its normal and the
-#: bisector of the eye and the vertex are at most this many degrees apart.
-VIEWER_COINCIDE_DEG = 0.5
 
 # --- every image drawn on mirrors that are not convex (refsoft/search/several.py) ---
 #: Candidate virtual triangles per scene triangle: image triples of its vertices beyond this are

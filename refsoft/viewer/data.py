@@ -118,14 +118,15 @@ def _world(gbuffer, pix):
     return P, _unit(gbuffer.normal[r, c])
 
 
-def _vertex_side(gbuffer, eye, vertex, end, rule_note=""):
-    """The side view of a vertex search ending at pixel ``end``, and its plane."""
+def _vertex_side(gbuffer, eye, vertex, end, rule_note="", stopped=None):
+    """The side view of a vertex search ending at pixel ``end``, and its plane; ``stopped``:
+    "border" or "capped" when the search ended there for that reason."""
     E, V = np.asarray(eye, np.float64), np.asarray(vertex, np.float64)
     P, N = _world(gbuffer, end)
     pl = _Plane(P, E - P, V - P, N)
     B = _unit(_unit(E - P) + _unit(V - P))
     virtual = V - 2.0 * ((V - P) @ N) * N
-    side = {"caption": _side_caption(pl, N, B, float((V - P) @ N), rule_note),
+    side = {"caption": _side_caption(pl, N, B, float((V - P) @ N), stopped, rule_note),
             "points": [{"name": "eye O", "xy": pl.xy(E)}, {"name": "vertex V", "xy": pl.xy(V)},
                        {"name": "reflection point P", "xy": pl.xy(P)},
                        {"name": "virtual vertex V'", "xy": pl.xy(virtual)}],
@@ -136,25 +137,27 @@ def _vertex_side(gbuffer, eye, vertex, end, rule_note=""):
     return side, pl
 
 
-def _side_caption(pl, N, B, height, rule_note="") -> str:
-    """The side view's words for its case: a reflection point (N and B coincide), a hidden
-    vertex (behind the tangent plane: they cannot), or a walk stopped elsewhere (the border)."""
-    from ..constants import VIEWER_COINCIDE_DEG
-
+def _side_caption(pl, N, B, height, stopped=None, rule_note="") -> str:
+    """The side view's words for its case: a hidden vertex (behind the tangent plane: N and B
+    cannot coincide), a search stopped on the border or by the cap, or a reflection pixel (N and
+    B coincide to the pixel grid's precision)."""
     apart = float(np.degrees(np.arccos(np.clip(_unit(N) @ _unit(B), -1.0, 1.0))))
     head = (f"The plane of the eye ray and the vertex, through the pixel P the search ended at. The normal N leaves "
             f"this plane by {pl.out_deg:.2f}°. ")
+    mirrored = "V' is V mirrored across the tangent plane at P"
     if height < 0.0:
         body = (f"The vertex V is behind the tangent plane at P (HIDDEN): no point of the surface's side facing the "
                 f"eye reflects it, so N and the bisector B of the eye and V do not coincide (they are {apart:.1f}° "
-                f"apart); V' (V mirrored across the tangent plane) lies on the eye's side of it")
-    elif apart <= VIEWER_COINCIDE_DEG:
-        body = (f"P is a reflection point: N and the bisector B coincide (within {apart:.2f}°); V' is V mirrored "
-                f"across the tangent plane at P")
+                f"apart); {mirrored}, on the eye's side of that plane")
+    elif stopped == "border":
+        body = (f"The search stopped on the reflector's border (BORDER), N and the bisector B {apart:.1f}° apart: "
+                f"the true reflection point may lie beyond the silhouette; {mirrored}")
+    elif stopped == "capped":
+        body = (f"The walk was capped while still moving (CAPPED), N and the bisector B {apart:.1f}° apart; "
+                f"{mirrored}")
     else:
-        body = (f"N and the bisector B are {apart:.1f}° apart: the search stopped at P without reaching a "
-                f"reflection point (no neighbour scores higher, e.g. on the reflector's border); V' is V mirrored "
-                f"across the tangent plane at P")
+        body = (f"P is the reflection pixel: N and the bisector B coincide to the pixel grid's precision "
+                f"({apart:.2f}° apart: the exact reflection point lies between pixel centres); {mirrored}")
     return head + body + f"{rule_note}."
 
 
@@ -190,7 +193,11 @@ def walk_data(replay, images=None) -> dict:
     grids = [_grid(tr.score_map, mask, box, "standard score s", "−log10(1 − s)", SCORE_FORMULA, "nines")]
     if tr.inverse_map is not None:
         grids.append(_grid(tr.inverse_map, mask, box, "inverse score", "−log10(1 − s)", INVERSE_FORMULA, "nines"))
-    side, pl = _vertex_side(gb, tr.eye, tr.vertex, tr.pixel)
+    from ..search import flag_names
+
+    named = flag_names(tr.flags)
+    stopped = "capped" if tr.stop == "capped" else "border" if "BORDER" in named else None
+    side, pl = _vertex_side(gb, tr.eye, tr.vertex, tr.pixel, stopped=stopped)
     n_cand = 5 if tr.neighbourhood == "cross" else 9
     steps = []
     for i, s in enumerate(tr.steps, 1):

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from refsoft.errors import RefsoftError
+from refsoft.search import BORDER
 from refsoft.viewer import page_html, trace_data, write_trace_page
 
 
@@ -156,7 +157,9 @@ def test_side_caption_says_which_case_it_draws(which, request):
     behind = float((rp.position - P) @ N) < 0.0
     caption = trace_data(rp)["side"]["caption"]
     assert ("behind the tangent plane" in caption) == behind
-    assert ("coincide (within" in caption) == (not behind and "apart" not in caption)
+    border = bool(rp.trace.flags & BORDER)
+    assert ("coincide to the pixel grid's precision" in caption) == (not behind and not border)
+    assert ("on the reflector's border" in caption) == (border and not behind)
     if behind:
         assert "do not coincide" in caption
 
