@@ -158,7 +158,8 @@ def cmd_trace(args) -> int:
     found = _trace_images(args, scene, rp, RenderOptions(**opts).images)
     write_trace(args.out, rp, () if found is None else found.images)
     write_trace_page(args.out, rp, None if found is None else found.images)
-    print(f"wrote {args.out}/trace.json, trace.png (score field -log10(1 - s), path, start green, end red), "
+    beside = ", the inverse score field beside it" if tr.inverse_map is not None else ""
+    print(f"wrote {args.out}/trace.json, trace.png (score field -log10(1 - s), path, start green, end red{beside}), "
           f"trace.gif ({len(tr.steps)} steps) and trace.html (open it in a browser to step through the search"
           + ("" if found is None else "; every image circled") + ")")
     return 0

@@ -266,7 +266,8 @@ def hierarchy_data(replay, eye, vertex) -> dict:
             rect = [r0 + i * side_px, c0 + j * side_px, side_px, side_px]
         if st["event"] in ("popped", "chosen"):
             centre = [rect[0] + rect[2] // 2, rect[1] + rect[3] // 2]
-            what = f"L{lv} ({i}, {j})" if st["event"] == "popped" else f"pixel ({i}, {j})"
+            what = ((f"L{lv} ({i}, {j})" if st["event"] == "popped" else f"pixel ({i}, {j})")
+                    + ("" if st["attempt"] == 0 else f", pass {st['attempt'] + 1}"))
             steps.append({"grid": 0, "label": what, "phase": st["event"], "pixel": centre,
                           "rect": rect, "cells": [], "chosen": None, "side": None,
                           "note": "the result" if st["event"] == "chosen" else "none tested"})
@@ -293,7 +294,8 @@ def hierarchy_data(replay, eye, vertex) -> dict:
                        f"yellow pushed (the cone contains the vertex), grey rejected; the green dot: the first texel "
                        f"popped (the top level, L{tr.levels - 1}); red: the chosen pixel. Levels: L0 is one pixel, "
                        f"L{tr.levels - 1} {1 << (tr.levels - 1)}x{1 << (tr.levels - 1)} pixels; a texel of level l "
-                       f"covers 2^l x 2^l pixels. The map: the standard score, for orientation."),
+                       f"covers 2^l x 2^l pixels; pass 2 and on: the traversal again with its cones and spheres "
+                       f"enlarged, after a pass reached no base pixel. The map: the standard score, for orientation."),
             "steps": steps, "start": steps[0]["pixel"] if steps else list(end), "end": list(end), "images": [],
             "side": side, "stop": stop,
             "result": [f"{tr.tests} texel tests, {n_pop} texels popped"

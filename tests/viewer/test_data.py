@@ -193,3 +193,11 @@ def test_an_empty_map_says_so():
     vals = np.arange(12.0).reshape(3, 4)
     assert _grid(vals, np.zeros((3, 4), bool), (0, 3, 0, 4), "t", "l", "f", "linear")["empty"]
     assert not _grid(vals, np.eye(3, 4, dtype=bool), (0, 3, 0, 4), "t", "l", "f", "linear")["empty"]
+
+
+def test_hierarchy_labels_name_the_pass_after_the_first(hierarchy_replay):
+    tr = hierarchy_replay.trace
+    d = trace_data(hierarchy_replay)
+    events = [s for s in tr.steps if s["event"] in ("popped", "chosen")]
+    for st, ev in zip(d["steps"], events):
+        assert (f"pass {ev['attempt'] + 1}" in st["label"]) == (ev["attempt"] > 0)
