@@ -232,8 +232,9 @@ def check_figure():
 def teaching_figures():
     """docs/teaching.md's figures: one vertex's walk on the sphere as the trace command draws it
     (trace.png, three GIF frames), its trace.html, and a screenshot of that page in headless
-    chromium (when Playwright and chromium are installed)."""
-    from refsoft.search.pictures import trace_frames, trace_picture
+    chromium (when Playwright and chromium are installed); the trace.png of a hidden vertex's
+    walk with its inverse search, and of the same vertex's ray-cone hierarchy."""
+    from refsoft.search.pictures import hierarchy_picture, trace_frames, trace_picture
     from refsoft.search.trace import trace_vertex
     from refsoft.viewer import write_page, walk_data
 
@@ -248,6 +249,12 @@ def teaching_figures():
     write_page(page, walk_data(rp))
     with open(os.path.join(FIG, "teaching_trace.txt"), "w") as fh:
         fh.write(rp.trace.table() + "\n")
+    hidden = trace_vertex(scene, TEACHING_HIDDEN, neighbourhood="cross", inverse="search")
+    write_png(os.path.join(FIG, "teaching_inverse.png"),
+              trace_picture(hidden.trace, hidden.gbuffer.mask, labelled=True, replay=hidden))
+    hier = trace_vertex(scene, TEACHING_VERTEX, method="hierarchy")
+    write_png(os.path.join(FIG, "teaching_hierarchy.png"),
+              hierarchy_picture(hier.trace, hier.gbuffer.mask, labelled=True, replay=hier))
     try:
         import tempfile
 
@@ -269,6 +276,8 @@ def teaching_figures():
 
 #: The vertex of docs/teaching.md's lesson (the sphere scene at 320x240).
 TEACHING_VERTEX = 1500
+#: Its vertex behind the tangent plane (HIDDEN), traced with the inverse search.
+TEACHING_HIDDEN = 3295
 
 
 def several_figure(scene_name="concave"):

@@ -103,8 +103,12 @@ def _suggest_vertices(args, scene) -> int:
         for flag, v in (("--width", args.width), ("--height", args.height), ("--subdivide", args.subdivide),
                         ("--reflector", args.reflector)):
             extra += [] if v is None else [flag, str(v)]
+        preset = None if args.preset == "accurate" else args.preset  # the default needs no saying
+        for flag, v in (("--preset", preset), ("--method", args.method), ("--neighbourhood", args.neighbourhood),
+                        ("--inverse", args.inverse), ("--widen", args.widen), ("--precision", args.precision)):
+            extra += [] if v is None else [flag, str(v)]
         print("trace one with: refsoft trace " + shlex.join([args.scene, "--vertex", str(found[0]["vertex"]), *extra])
-              + " (and the search options given here); the LDT: --method ldt --pixel ROW COL")
+              + "; the LDT: --method ldt --pixel ROW COL")
     return 0
 
 
@@ -135,11 +139,14 @@ def cmd_trace(args) -> int:
     if rp.method == "hierarchy":
         print(f"vertex {rp.vertex} in reflector {rp.reflector} ({name(rp.reflector)!r}), frame {rp.frame}, ray-cone "
               f"hierarchy of {tr.levels} levels over {tr.base_size}x{tr.base_size} pixels at {tuple(tr.origin)}")
+        print("attempt: the traversal's pass (0 the first; each further pass restarts with the cones and spheres "
+              "enlarged, after a pass reached no base pixel); #: the event's index in trace.json's steps")
         print(f"{'#':>4} {'attempt':>7} {'level':>5} {'texel':>12}  event")
         for n, st in enumerate(tr.steps):
             if st["event"] in ("popped", "chosen"):
                 print(f"{n:>4} {st['attempt']:>7} {st['level']:>5} {str(tuple(st['texel'])):>12}  {st['event']}")
-        print(f"result: pixel {tr.pixel} after {tr.tests} texel tests")
+        pix = "none" if tr.pixel is None else f"({tr.pixel[0]}, {tr.pixel[1]})"
+        print(f"result: pixel {pix} after {tr.tests} texel tests")
         written = write_trace(args.out, rp) + [write_trace_page(args.out, rp)]
         print(f"wrote {args.out}/{', '.join(written)} (open trace.html in a browser to step through the traversal)")
         return 0
@@ -147,10 +154,12 @@ def cmd_trace(args) -> int:
           f"in reflector {rp.reflector} ({name(rp.reflector)!r}), frame {rp.frame}, {neighbourhood}, start "
           f"({tr.start[0]}, {tr.start[1]}){' after a restart' if tr.restarted else ''}")
     print(tr.table())
-    write_trace(args.out, rp)
+    os.makedirs(args.out, exist_ok=True)
     found = _trace_images(args, scene, rp, RenderOptions(**opts).images)
+    write_trace(args.out, rp, () if found is None else found.images)
     write_trace_page(args.out, rp, None if found is None else found.images)
-    print(f"wrote {args.out}/trace.json, trace.png (score field -log10(1 - s), path, start green, end red), "
+    beside = ", the inverse score field beside it" if tr.inverse_map is not None else ""
+    print(f"wrote {args.out}/trace.json, trace.png (score field -log10(1 - s), path, start green, end red{beside}), "
           f"trace.gif ({len(tr.steps)} steps) and trace.html (open it in a browser to step through the search"
           + ("" if found is None else "; every image circled") + ")")
     return 0
