@@ -205,3 +205,63 @@ def test_reflected_mesh_is_reused_for_the_same_mesh_objects_only():
     for got in (first[1], again[1]):
         for name in ("vertices", "normals", "faces", "face_object", "vertex_offsets", "face_offsets"):
             np.testing.assert_array_equal(getattr(got, name), getattr(want, name))
+
+
+def test_edge_pixel_errors_equal_one_plain_gauss_newton_step():
+    """The pixel metric against tests/naive.py's refinement run on each edge's midpoint from the
+    texel nearest to the midpoint of its ends' refined points: the distance from that midpoint to
+    the refined point, 2 where an end has no pixel or that texel is uncovered."""
+    from naive import naive_refine
+    from scene_data import sphere_searched
+
+    from refsoft import search
+    from refsoft.search.refine import refine
+    from refsoft.search.tessellate import edge_pixel_errors
+
+    scene, gb, verts, _, comb, res = sphere_searched("plane")
+    eye = scene.camera.eye
+    _, _, off = refine(gb, eye, verts, res)
+    f = comb.faces
+    a, b = f[:, 0], f[:, 1]
+    pa, pb = res.pixel[a].copy(), res.pixel[b].copy()
+    pa[::7] = -1  # ends without a pixel
+    got = edge_pixel_errors(gb, eye, verts[a], verts[b], pa, pb, off[a], off[b])
+    mid = 0.5 * ((pa + off[a].astype(np.float64)) + (pb + off[b].astype(np.float64)))
+    base = np.floor(mid + 0.5).astype(np.int64)
+    h, w = gb.mask.shape
+    ok = np.all(pa >= 0, axis=1) & np.all(pb >= 0, axis=1) & np.all(base >= 0, axis=1)
+    ok &= (base[:, 0] < h) & (base[:, 1] < w)
+    ok[ok] &= gb.mask[base[ok, 0], base[ok, 1]]
+    m = 0.5 * (verts[a] + verts[b])
+    zero = np.zeros(len(m), np.uint8)
+    _, _, step = naive_refine(gb.position, gb.normal, gb.mask, m[ok] - gb.origin, eye - gb.origin, base[ok], zero[ok],
+                              search.HIDDEN, search.CULLED)
+    want = np.full(len(m), 2.0)
+    want[ok] = np.hypot(base[ok, 0] + step[:, 0] - mid[ok, 0], base[ok, 1] + step[:, 1] - mid[ok, 1])
+    assert ok.sum() > 100 and (~ok).sum() > 10
+    np.testing.assert_array_equal(got[~ok], 2.0)
+    # the kernel's arithmetic is the G-buffer's float32, the reference's float64
+    np.testing.assert_allclose(got[ok], want[ok], rtol=0, atol=2e-3)
+    assert (want[ok] > 0.05).any()  # some edges bend by more than a twentieth of a pixel
+
+
+def test_the_pixel_metric_splits_some_edges_and_needs_the_subtexel_points():
+    """By the pixel metric, a threshold of a third of a pixel splits more than nothing and less
+    than everything; the metric refuses to run without the sub-texel points."""
+    from scene_data import sphere_searched
+
+    from refsoft.errors import RefsoftError
+    from refsoft.search.refine import refine
+    from refsoft.search.tessellate import tessellate
+
+    scene, gb, verts, _, comb, res = sphere_searched("plane")
+    eye = scene.camera.eye
+    surface = refine(gb, eye, verts, res)
+    args = (gb, eye, verts, comb.normals, comb.faces, comb.face_object, res.pixel, res.flags)
+    with pytest.raises(RefsoftError, match="sub-texel"):
+        tessellate(*args, 0.3, 2, metric="pixels")
+    some = tessellate(*args, 0.3, 2, surface=surface, metric="pixels")
+    every = tessellate(*args, 0.0, 2, surface=surface, metric="pixels")
+    assert len(comb.faces) < len(some.faces) < len(every.faces)
+    again = tessellate(*args, 0.3, 2, surface=surface, metric="pixels")
+    assert np.array_equal(again.faces, some.faces) and np.array_equal(again.surface[2], some.surface[2])
