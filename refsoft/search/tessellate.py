@@ -169,17 +169,67 @@ def _children(f, edge_keys, edge_mid, n_vertices, only=None):
     return slots.reshape(-1)[at], count
 
 
-def _triangle_errors(gbuffer, eye, verts, pixel, flags, offset, f, threshold, min_span, metric="thesis") -> np.ndarray:
+def outline_edges(faces, pixel, offset) -> np.ndarray:
+    """Which edges of ``faces`` can draw an object's outline in the reflection: an edge of one
+    face only (the mesh's border), of more than two, or of two faces turned different ways in
+    the image (their corners' reflection points, ``pixel + offset``, wound in opposite senses, or
+    one of them degenerate). An edge between two faces wound alike has the same object on both
+    sides, so where it is reflected changes the picture by shading only.
+
+    Parameters
+    ----------
+    faces : ndarray, shape (T, 3), int
+    pixel : ndarray, shape (N, 2), int
+    offset : ndarray, shape (N, 2)
+
+    Returns
+    -------
+    ndarray, shape (T, 3), bool
+        Edge k of face i runs from corner k to corner k + 1.
+    """
+    f = np.asarray(faces, dtype=np.int64)
+    t = len(f)
+    if t == 0:
+        return np.zeros((0, 3), dtype=bool)
+    q = np.asarray(pixel, np.float64) + np.asarray(offset, np.float64)
+    a, b, c = q[f[:, 0]], q[f[:, 1]], q[f[:, 2]]
+    side = np.sign((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]))
+    keys = _edge_keys(f.reshape(-1), f[:, [1, 2, 0]].reshape(-1), KEY_BASE)  # face-major: 3 i + k
+    order = np.argsort(keys, kind="stable")
+    sk = keys[order]
+    first = np.ones(len(sk), dtype=bool)
+    np.not_equal(sk[1:], sk[:-1], out=first[1:])
+    starts = np.flatnonzero(first)
+    group = np.cumsum(first) - 1
+    uses = np.diff(np.append(starts, len(sk)))
+    s = side[order // 3]
+    mixed = np.minimum.reduceat(s, starts) != np.maximum.reduceat(s, starts)
+    out_sorted = ((uses != 2) | mixed | (np.minimum.reduceat(np.abs(s), starts) == 0))[group]
+    out = np.empty(3 * t, dtype=bool)
+    out[order] = out_sorted
+    return out.reshape(t, 3)
+
+
+def _triangle_errors(gbuffer, eye, verts, pixel, flags, offset, f, threshold, min_span, metric="thesis",
+                     measured=None) -> np.ndarray:
     """Each triangle's largest edge error (:func:`edge_errors`), (T,) float64; -inf for a
     triangle with a CULLED corner (no reflection to refine) and, when adaptive (``threshold >
     0``), for one all of whose corners are hidden (no visible reflection whose error could be
     measured; full tessellation still splits it). Edges whose ends' pixels are at most
     ``min_span`` apart count 0. ``metric``: "thesis" (:func:`edge_errors`) or "pixels"
-    (:func:`edge_pixel_errors`, which needs ``offset``)."""
+    (:func:`edge_pixel_errors`, which needs ``offset``). ``measured`` ((T, 3) bool): the edges
+    measured, the others count 0."""
     errors = _edge_pixel_errors if metric == "pixels" else _edge_errors
     e0, e1 = f.reshape(-1), f[:, [1, 2, 0]].reshape(-1)
     err = np.zeros(len(e0))
-    if min_span > 0:  # an edge reflected within min_span pixels: nothing to draw between its ends
+    if measured is not None:
+        need = np.flatnonzero(measured.reshape(-1))
+        if min_span > 0:
+            rows, cols = pixel[:, 0], pixel[:, 1]
+            a, b = e0[need], e1[need]
+            need = need[(np.abs(rows[a] - rows[b]) > min_span) | (np.abs(cols[a] - cols[b]) > min_span)]
+        err[need] = errors(gbuffer, eye, verts, pixel, offset, e0[need], e1[need])
+    elif min_span > 0:  # an edge reflected within min_span pixels: nothing to draw between its ends
         # per axis, in the pixels' int32 (|differences| < 2^16): a tenth of the time of one
         # (E, 2) int64 block on 1.3M triangles, whose temporaries outgrow the cache
         rows, cols = pixel[:, 0], pixel[:, 1]
@@ -326,10 +376,11 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
         Beyond the thesis: an edge whose ends' reflection pixels are at most this many pixels
         apart along both axes is not a reason to split (its reflection covers a few pixels
         whatever its error; 0: the thesis's rule, every edge is measured).
-    metric : {"thesis", "pixels"}
-        The edge error ``threshold`` bounds: the thesis's (:func:`edge_errors`) or the distance
+    metric : {"thesis", "pixels", "outline"}
+        The edge error ``threshold`` bounds: the thesis's (:func:`edge_errors`), the distance
         in texels between the straight edge's midpoint and its reflection
-        (:func:`edge_pixel_errors`, with ``surface`` only).
+        (:func:`edge_pixel_errors`, with ``surface`` only), or that distance on the edges that
+        can draw an object's outline only (:func:`outline_edges`; the others count 0).
 
     Returns
     -------
@@ -339,9 +390,9 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
 
     validate.number(threshold, "tessellation threshold", minimum=0.0)
     validate.integer(max_level, "max_level", 0)
-    if metric not in ("thesis", "pixels"):
-        raise RefsoftError(f"tessellation metric must be 'thesis' or 'pixels', got {metric!r}")
-    if metric == "pixels" and surface is None:
+    if metric not in ("thesis", "pixels", "outline"):
+        raise RefsoftError(f"tessellation metric must be 'thesis', 'pixels' or 'outline', got {metric!r}")
+    if metric != "thesis" and surface is None:
         raise RefsoftError("the tessellation's pixel metric needs the sub-texel points (surface)")
     verts = [np.asarray(vertices, dtype=np.float64)]
     norms = [np.asarray(normals, dtype=np.float64)]
@@ -360,8 +411,12 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
         if len(cand) == 0:
             break
         f = faces[cand]
-        err = _triangle_errors(gbuffer, eye, allv, allp, allf, None if surf is None else np.concatenate(surf[2]), f,
-                               threshold, min_span, metric)
+        alloff = None if surf is None else np.concatenate(surf[2])
+        measured = None
+        if metric == "outline":  # the pixel metric on the edges that can draw an outline only
+            measured = outline_edges(faces, allp, alloff)[cand]
+        err = _triangle_errors(gbuffer, eye, allv, allp, allf, alloff, f, threshold, min_span,
+                               "pixels" if metric == "outline" else metric, measured)
         split_tri = cand[err > threshold]
         if len(split_tri) == 0:
             break

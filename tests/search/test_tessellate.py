@@ -265,3 +265,40 @@ def test_the_pixel_metric_splits_some_edges_and_needs_the_subtexel_points():
     assert len(comb.faces) < len(some.faces) < len(every.faces)
     again = tessellate(*args, 0.3, 2, surface=surface, metric="pixels")
     assert np.array_equal(again.faces, some.faces) and np.array_equal(again.surface[2], some.surface[2])
+    # the outline metric measures a subset of the edges: it splits no more (here, fewer)
+    outline = tessellate(*args, 0.3, 2, surface=surface, metric="outline")
+    assert len(comb.faces) < len(outline.faces) < len(some.faces)
+
+
+def test_outline_edges_equal_a_plain_count_of_faces_and_windings(rng):
+    """outline_edges against a loop over the edges: used once or thrice, or by two faces whose
+    reflected corners wind in opposite senses (or one degenerate)."""
+    from collections import defaultdict
+
+    from refsoft.search.tessellate import outline_edges
+
+    n = 40
+    faces = np.array([rng.choice(n, 3, replace=False) for _ in range(120)])
+    faces = np.concatenate([faces, faces[:10][:, [0, 2, 1]], faces[10:15]])  # flipped twins, a third use
+    pixel = rng.integers(0, 30, (n, 2)).astype(np.int32)
+    offset = rng.uniform(-0.5, 0.5, (n, 2)).astype(np.float32)
+    pixel[3] = pixel[4]  # a degenerate face somewhere, maybe
+    q = pixel.astype(np.float64) + offset.astype(np.float64)
+
+    def wind(face):
+        a, b, c = q[face]
+        return np.sign((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
+
+    users = defaultdict(list)
+    for i, f in enumerate(faces):
+        for k in range(3):
+            users[frozenset((int(f[k]), int(f[(k + 1) % 3])))].append(i)
+    want = np.zeros((len(faces), 3), dtype=bool)
+    for i, f in enumerate(faces):
+        for k in range(3):
+            u = users[frozenset((int(f[k]), int(f[(k + 1) % 3])))]
+            w = [wind(faces[j]) for j in u]
+            want[i, k] = len(u) != 2 or w[0] != w[1] or 0 in w
+    got = outline_edges(faces, pixel, offset)
+    np.testing.assert_array_equal(got, want)
+    assert want.any() and (~want).any()
