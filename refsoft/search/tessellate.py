@@ -346,7 +346,7 @@ class Tessellation:
 
 def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, threshold, max_level,
                neighbourhood="cross", inverse="plane", cap=None, crack_free=True, surface=None,
-               method="walk", min_span: int = 0, metric: str = "thesis") -> Tessellation:
+               method="walk", min_span: int = 0, metric: str = "thesis", outline=None) -> Tessellation:
     """Refine the reflected triangles of one reflector until every triangle's largest edge error
     is at most ``threshold`` (0: every triangle, i.e. full tessellation) or ``max_level`` levels.
 
@@ -376,11 +376,16 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
         Beyond the thesis: an edge whose ends' reflection pixels are at most this many pixels
         apart along both axes is not a reason to split (its reflection covers a few pixels
         whatever its error; 0: the thesis's rule, every edge is measured).
-    metric : {"thesis", "pixels", "outline"}
-        The edge error ``threshold`` bounds: the thesis's (:func:`edge_errors`), the distance
+    metric : {"thesis", "pixels"}
+        The edge error ``threshold`` bounds: the thesis's (:func:`edge_errors`) or the distance
         in texels between the straight edge's midpoint and its reflection
-        (:func:`edge_pixel_errors`, with ``surface`` only), or that distance on the edges that
-        can draw an object's outline only (:func:`outline_edges`; the others count 0).
+        (:func:`edge_pixel_errors`, with ``surface`` only).
+    outline : float, optional
+        Also split a triangle one of whose edges can draw an object's outline in the reflection
+        (:func:`outline_edges`) when that edge's reflection bends more than ``outline`` texels
+        away from the straight edge (:func:`edge_pixel_errors`; with ``surface`` only): where
+        an outline is drawn a fraction of a pixel off, its pixels show the other object, where
+        an edge inside an object changes the shading only.
 
     Returns
     -------
@@ -390,9 +395,11 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
 
     validate.number(threshold, "tessellation threshold", minimum=0.0)
     validate.integer(max_level, "max_level", 0)
-    if metric not in ("thesis", "pixels", "outline"):
-        raise RefsoftError(f"tessellation metric must be 'thesis', 'pixels' or 'outline', got {metric!r}")
-    if metric != "thesis" and surface is None:
+    if metric not in ("thesis", "pixels"):
+        raise RefsoftError(f"tessellation metric must be 'thesis' or 'pixels', got {metric!r}")
+    if outline is not None:
+        validate.number(outline, "outline threshold", minimum=0.0)
+    if (metric == "pixels" or outline is not None) and surface is None:
         raise RefsoftError("the tessellation's pixel metric needs the sub-texel points (surface)")
     verts = [np.asarray(vertices, dtype=np.float64)]
     norms = [np.asarray(normals, dtype=np.float64)]
@@ -412,12 +419,12 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
             break
         f = faces[cand]
         alloff = None if surf is None else np.concatenate(surf[2])
-        measured = None
-        if metric == "outline":  # the pixel metric on the edges that can draw an outline only
+        split = _triangle_errors(gbuffer, eye, allv, allp, allf, alloff, f, threshold, min_span, metric) > threshold
+        if outline is not None:  # and the pixel metric on the edges that can draw an outline
             measured = outline_edges(faces, allp, alloff)[cand]
-        err = _triangle_errors(gbuffer, eye, allv, allp, allf, alloff, f, threshold, min_span,
-                               "pixels" if metric == "outline" else metric, measured)
-        split_tri = cand[err > threshold]
+            split |= _triangle_errors(gbuffer, eye, allv, allp, allf, alloff, f, outline, min_span, "pixels",
+                                      measured) > outline
+        split_tri = cand[split]
         if len(split_tri) == 0:
             break
         keys = _split_edges(faces[split_tri])
