@@ -169,7 +169,7 @@ def _children(f, edge_keys, edge_mid, n_vertices, only=None):
     return slots.reshape(-1)[at], count
 
 
-def outline_edges(faces, pixel, offset) -> np.ndarray:
+def outline_edges(faces, pixel, offset, rows=None) -> np.ndarray:
     """Which edges of ``faces`` can draw an object's outline in the reflection: an edge of one
     face only (the mesh's border), of more than two, or of two faces turned different ways in
     the image (their corners' reflection points, ``pixel + offset``, wound in opposite senses, or
@@ -181,33 +181,36 @@ def outline_edges(faces, pixel, offset) -> np.ndarray:
     faces : ndarray, shape (T, 3), int
     pixel : ndarray, shape (N, 2), int
     offset : ndarray, shape (N, 2)
+    rows : ndarray of int, optional
+        The faces whose edges are wanted (default every face); their neighbours are still
+        looked for among all ``faces``.
 
     Returns
     -------
-    ndarray, shape (T, 3), bool
+    ndarray, shape (T, 3) or (len(rows), 3), bool
         Edge k of face i runs from corner k to corner k + 1.
     """
     f = np.asarray(faces, dtype=np.int64)
     t = len(f)
-    if t == 0:
-        return np.zeros((0, 3), dtype=bool)
+    if t == 0 or (rows is not None and len(rows) == 0):
+        return np.zeros((t if rows is None else 0, 3), dtype=bool)
     q = np.asarray(pixel, np.float64) + np.asarray(offset, np.float64)
     a, b, c = q[f[:, 0]], q[f[:, 1]], q[f[:, 2]]
     side = np.sign((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]))
-    keys = _edge_keys(f.reshape(-1), f[:, [1, 2, 0]].reshape(-1), KEY_BASE)  # face-major: 3 i + k
-    order = np.argsort(keys, kind="stable")
-    sk = keys[order]
+    # each edge's key with its face's winding (0, 1, 2) in the two low bits: one sort (no
+    # argsort) groups an edge's faces, their windings in order within the group
+    keys = _edge_keys(f.reshape(-1), f[:, [1, 2, 0]].reshape(-1), len(q))  # face-major: 3 i + k
+    packed = np.sort(keys * 4 + np.repeat(side.astype(np.int64) + 1, 3))
+    sk = packed >> 2
     first = np.ones(len(sk), dtype=bool)
     np.not_equal(sk[1:], sk[:-1], out=first[1:])
     starts = np.flatnonzero(first)
-    group = np.cumsum(first) - 1
-    uses = np.diff(np.append(starts, len(sk)))
-    s = side[order // 3]
-    mixed = np.minimum.reduceat(s, starts) != np.maximum.reduceat(s, starts)
-    out_sorted = ((uses != 2) | mixed | (np.minimum.reduceat(np.abs(s), starts) == 0))[group]
-    out = np.empty(3 * t, dtype=bool)
-    out[order] = out_sorted
-    return out.reshape(t, 3)
+    ends = np.append(starts[1:], len(sk)) - 1
+    lo, hi = packed[starts] & 3, packed[ends] & 3
+    # two faces wound alike and neither degenerate (winding 1 is 0): not an outline
+    outline = ((ends - starts) != 1) | (lo != hi) | (lo == 1)
+    want = keys if rows is None else keys.reshape(t, 3)[np.asarray(rows)].reshape(-1)
+    return outline[np.searchsorted(sk[starts], want)].reshape(-1, 3)
 
 
 def _triangle_errors(gbuffer, eye, verts, pixel, flags, offset, f, threshold, min_span, metric="thesis",
@@ -421,7 +424,7 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
         alloff = None if surf is None else np.concatenate(surf[2])
         split = _triangle_errors(gbuffer, eye, allv, allp, allf, alloff, f, threshold, min_span, metric) > threshold
         if outline is not None:  # and the pixel metric on the edges that can draw an outline
-            measured = outline_edges(faces, allp, alloff)[cand]
+            measured = outline_edges(faces, allp, alloff, cand)
             split |= _triangle_errors(gbuffer, eye, allv, allp, allf, alloff, f, outline, min_span, "pixels",
                                       measured) > outline
         split_tri = cand[split]

@@ -306,3 +306,5 @@ def test_outline_edges_equal_a_plain_count_of_faces_and_windings(rng):
     got = outline_edges(faces, pixel, offset)
     np.testing.assert_array_equal(got, want)
     assert want.any() and (~want).any()
+    rows = np.array([5, 0, 130, 7, 7])
+    np.testing.assert_array_equal(outline_edges(faces, pixel, offset, rows), want[rows])
