@@ -4,7 +4,7 @@ The bounds are Szabo's ray-cone pyramid (:mod:`refsoft.search._hierarchy`) over 
 sphere and cone are *dilated*: a texel's sphere is centred on its point with a radius of
 ``IMAGE_BOUND_FACTOR`` times the largest distance to a covered 3x3 neighbour's point, its cone
 is the reflected eye ray with a half-angle of ``IMAGE_BOUND_FACTOR`` times the largest angle to a
-neighbour's reflected ray. A solution within ``IMAGE_REACH`` texels of a texel then lies in the
+neighbour's reflected ray. A solution within 1.5 texels of a texel then lies in the
 texel's sphere and reflects into its cone (to first order in the texel size), so a cell whose
 cone does not meet the vertex holds no image and is pruned (Mitchell and Hanrahan 1992, Wang,
 Hasan and Yan 2020: prune where the normal and bisector bounds cannot meet).

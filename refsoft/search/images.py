@@ -206,10 +206,11 @@ class ImagesTrace:
         """The trace as text: the counts, the maxima and their verdicts, the images."""
         lines = [f"every image: {len(self.images)} found; pyramid cells visited {self.visited}, pruned {self.pruned}; "
                  f"texels judged {self.judged}; maxima {len(self.maxima)}"]
-        lines.append(f"{'texel':>12} {'score':>12} {'Newton point':>18}  verdict")
+        lines.append(f"{'texel':>12} {'score':>12} {'Newton point':>18} {'image':>12}  verdict")
         for m in self.maxima:
             nr, nc = m["newton"]
-            lines.append(f"{str(tuple(m['texel'])):>12} {m['score']:>12.8f} {f'({nr:.2f}, {nc:.2f})':>18}  {m['verdict']}")
+            lines.append(f"{str(tuple(m['texel'])):>12} {m['score']:>12.8f} {f'({nr:.2f}, {nc:.2f})':>18} "
+                         f"{str(tuple(m['image'])):>12}  {m['verdict']}")
         walk = "none" if self.walk_pixel is None else (f"{tuple(self.walk_pixel)}, " +
                                                       ("an image (kept first)" if self.walk_is_image else "not an image"))
         lines.append(f"walk's pixel: {walk}")
