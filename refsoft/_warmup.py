@@ -85,7 +85,8 @@ def warm(options: dict) -> None:
     right after the main view's raster, its own first work); then the kernels that come after
     the sub-texel refinement, called on the ball's search results through the functions the
     render calls them through (the same types), while the command, done with its raster,
-    compiles the refinement itself; then two frames of the reflector's stages (a fresh and a
+    compiles the refinement itself (and, with ``images="all"``, the enumeration of every image,
+    which the ball's own render skips as convex); then two frames of the reflector's stages (a fresh and a
     coherent search: whatever is left) and the composite's conversion to 8 bits."""
     from .frame.driver import composite
     from .options import RenderOptions
@@ -112,6 +113,12 @@ def warm(options: dict) -> None:
     res = search(gb, camera.eye, verts, opts.neighbourhood, opts.inverse, coherent_starts(None, len(verts), gb.mask.shape),
                  opts.cap, method=opts.method)
     _after_refinement(opts, gb, res, verts, camera)
+    if opts.images == "all":
+        # the ball is convex, so its render skips the enumeration: compiled here for the scenes
+        # whose mirrors are not (the render calls it with these types)
+        from .search.images import find_images
+
+        find_images(gb, camera.eye, verts, res)
     stencil = ball_gbuffer(proxy, camera, "float32", camera.eye).mask
     for _ in range(2):
         res = method.reflect(view, k, stencil)

@@ -223,15 +223,24 @@ TRUTH_RAYS_PER_THREAD = 20000
 # --- Every reflection point of a vertex (spec section 4.8) ------------------------------------
 #: ``images`` option: every reflection point (``all``) or the walk's one (``one``, the papers).
 IMAGE_MODES = ("all", "one")
-#: A texel that is a local maximum of the score is an image when one Newton step solving
-#: "normal = bisector" from it moves at most this many texels (Euclidean, in the texel grid).
-IMAGE_REACH = 1.5
-#: Accepted maxima whose Newton points lie closer than this many texels are one solution (a
-#: plateau or a tie): the best score is kept.
+#: A texel that is a local maximum of the score is an image when Newton's iteration solving
+#: "normal = bisector" from it, texel to texel, converges at most this many texels (Euclidean, in
+#: the texel grid) from it.
+IMAGE_REACH = 4.0
+#: Newton's iteration has converged when its step from the texel it stands on, or the move of
+#: the step's point from the last step's, is at most this many texels long (a solution on a
+#: texel's edge or corner is 0.5 to 0.71 texels from the texels beside it; a peak narrower than
+#: a texel sends the iteration back and forth between texels that point at one place); its image
+#: is the covered texel nearest the converged point.
+IMAGE_CONVERGED = 0.75
+#: Newton steps an iteration may take before it has converged.
+IMAGE_STEPS = 8
+#: Accepted maxima whose converged points lie closer than this many texels are one solution (a
+#: plateau, a tie, or two maxima of one solution): the best score is kept.
 IMAGE_MERGE = 1.0
 #: The enumeration's per-texel bounds cover this many times the largest step (position and
-#: reflected direction) to a 3x3 neighbour: more than the IMAGE_REACH texels (up to sqrt(2) IMAGE_REACH
-#: along a diagonal) a solution may lie from its texel.
+#: reflected direction) to a 3x3 neighbour: more than the 1.5 texels (up to sqrt(2) 1.5 along a
+#: diagonal) a solution may lie from a texel beside it.
 IMAGE_BOUND_FACTOR = 2.5
 #: Images kept per vertex and reflector (a concave sphere gives at most 4); accepted maxima
 #: examined per vertex before merging.

@@ -41,6 +41,16 @@ GBUFFER_WORK_BYTES = {4: 6 * 4 + 12, 8: 6 * 8 + 12}
 #: levels above, twice over while the levels are concatenated.
 HIERARCHY_PACKED_FLOATS = 9
 HIERARCHY_TEXEL_FLOATS = 8 * 2 * 4 / 3
+#: The enumeration of every reflection point (``images="all"``, on a reflector that may give a
+#: vertex several) packs the G-buffer and builds its dilated pyramid as the hierarchy search does,
+#: and per vertex holds its count, up to MAX_IMAGES pixels (2 int32), the walk's pixel (2 int64)
+#: and its statistics (4 int64)...
+IMAGES_VERTEX_WORK_BYTES = 4 + constants.MAX_IMAGES * 8 + 16 + 32
+#: ...and keeps per vertex its count and offset (int32, int64) and per image its pixel (2 int32),
+#: virtual vertex (3 float64), sheet and vertex (int32), for this many images a vertex (an
+#: estimate: the built-in concave bowl and torus average 1.2 to 1.6)...
+IMAGES_PER_VERTEX = 2
+IMAGES_VERTEX_OUTPUT_BYTES = 12 + IMAGES_PER_VERTEX * (8 + 24 + 4 + 4)
 #: Bytes per searched vertex and reflector kept in the outputs: pixel (2 int32), virtual vertex
 #: (3 float32), iterations, flags, object id, score and margin (float64 at most).
 VERTEX_OUTPUT_BYTES = 8 + 12 + 4 + 1 + 4 + 16
@@ -134,7 +144,8 @@ def frame_bytes(scene, options, frames_kept: int = 1) -> dict:
     Returns
     -------
     dict
-        ``view``, ``gbuffers``, ``vertices`` (kept per frame), ``cache`` (the driver's last
+        ``view``, ``gbuffers``, ``vertices`` (kept per frame, with every image of every vertex
+        on a reflector that may give several under ``images="all"``), ``cache`` (the driver's last
         G-buffers and results, for the reuse skip), ``work`` (transient buffers of the stages)
         and ``total``, in bytes.
     """
@@ -163,16 +174,32 @@ def frame_bytes(scene, options, frames_kept: int = 1) -> dict:
         n_reflected = sum(o.mesh.n_faces for o in scene.objects if not o.reflector)
         work += n_reflected * refined_growth(options) * REFINED_TRIANGLE_BYTES
         work += int(n_reflected * (refined_growth(options) - 1) / 2 * REFINED_VERTEX_BYTES)
+    if options.gbuffer_size is not None:
+        side = max(int(options.gbuffer_size[0]), int(options.gbuffer_size[1]))
+    else:
+        side = math.ceil(max(cam.width, cam.height) * options.widen)
+    pyramid_bytes = g_px * HIERARCHY_PACKED_FLOATS * p + int((1 << max(side - 1, 0).bit_length()) ** 2
+                                                             * HIERARCHY_TEXEL_FLOATS * p)
     if options.method == "hierarchy":
-        if options.gbuffer_size is not None:
-            side = max(int(options.gbuffer_size[0]), int(options.gbuffer_size[1]))
-        else:
-            side = math.ceil(max(cam.width, cam.height) * options.widen)
-        pyramid = (1 << max(side - 1, 0).bit_length()) ** 2
-        work += g_px * HIERARCHY_PACKED_FLOATS * p + int(pyramid * HIERARCHY_TEXEL_FLOATS * p)
+        work += pyramid_bytes
+    n_several = _reflectors_with_several(scene) if getattr(options, "images", "one") == "all" else 0
+    if n_several:
+        # one reflector enumerated at a time; its images kept with the frame
+        work += pyramid_bytes + n_verts * IMAGES_VERTEX_WORK_BYTES
+        kept_v += n_several * n_verts * IMAGES_VERTEX_OUTPUT_BYTES
     kept = (kept_view + kept_gb + kept_v) * max(int(frames_kept), 1)
     return {"view": kept_view, "gbuffers": kept_gb, "vertices": kept_v, "cache": cache, "work": work,
             "total": kept + cache + work}
+
+
+def _reflectors_with_several(scene) -> int:
+    """Reflectors of ``scene`` that may give a vertex several reflection points (the render's own
+    decision, :func:`refsoft.search.convex.several_possible`, cached per mesh: the render does
+    not make it again)."""
+    from .search.convex import several_possible  # the decision lives with the search
+
+    objs = [scene.objects[k - 1] for k in scene.reflector_ids]
+    return sum(bool(several_possible(o.closed_proxy if o.closed_proxy is not None else o.mesh)) for o in objs)
 
 
 def refined_growth(options) -> int:

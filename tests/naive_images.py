@@ -102,11 +102,59 @@ def reaches(P, N, U, mask, v_rel, r, c, factor=2.5):
     return off <= min(ang, np.pi) + np.arcsin(min(rad / dist, 1.0))
 
 
-def images_of(P, N, mask, eye_rel, v_rel, first=(-1, -1), reach=1.5, merge=1.0):
+def converge(P, N, U, mask, v_rel, r, c, reach=4.0, tol=0.75, steps=8, factor=2.5, path=None):
+    """Newton's iteration texel to texel from (r, c) (spec section 4.8): ((image row, image col),
+    (converged row, col)) when a step, or the move of the step's point from the last one (from
+    (r, c) at first), is at most ``tol`` texels within ``steps`` steps, or the iteration steps
+    back to the neighbour it came from (the point is then the middle of the two), every point within
+    ``reach`` texels of (r, c) and every texel stepped to covered, and the image (the covered
+    texel nearest the point, else the one stepped from) has the vertex in front and reaches it;
+    None otherwise. ``path``, a list, receives each step's (texel, point)."""
+    h, w = mask.shape
+    cr, cc, lr, lc = r, c, float(r), float(c)
+    prev = None
+    for _ in range(steps):
+        step = newton_step(P, N, U, mask, v_rel, cr, cc)
+        if step is None:
+            return None
+        point = (cr + step[0], cc + step[1])
+        done = step[0] ** 2 + step[1] ** 2 <= tol * tol or (point[0] - lr) ** 2 + (point[1] - lc) ** 2 <= tol * tol
+        nr, nc = int(np.floor(point[0] + 0.5)), int(np.floor(point[1] + 0.5))
+        if not done and (nr, nc) == prev and abs(cr - prev[0]) <= 1 and abs(cc - prev[1]) <= 1:
+            done = True  # back to the neighbour it came from: the middle of the two points
+            lr, lc = (lr + point[0]) * 0.5, (lc + point[1]) * 0.5
+            nr, nc = int(np.floor(lr + 0.5)), int(np.floor(lc + 0.5))
+        else:
+            lr, lc = point
+        if path is not None:
+            path.append(((cr, cc), (lr, lc)))
+        if (lr - r) ** 2 + (lc - c) ** 2 > reach * reach:
+            return None
+        inside = 0 <= nr < h and 0 <= nc < w and mask[nr, nc]
+        if done:
+            if inside:
+                cr, cc = nr, nc
+            d = (v_rel - P[cr, cc]).astype(P.dtype)
+            n = N[cr, cc]
+            if not ((d[0] * n[0] + d[1] * n[1]) + d[2] * n[2]) > 0:
+                return None
+            if not reaches(P, N, U, mask, v_rel, cr, cc, factor):
+                return None
+            return (cr, cc), (lr, lc)
+        if not inside:
+            return None
+        prev = (cr, cc)
+        cr, cc = nr, nc
+    return None
+
+
+def images_of(P, N, mask, eye_rel, v_rel, first=(-1, -1), reach=4.0, merge=1.0):
     """Every image of one vertex, by judging every covered texel: a list of (row, col), the walk's
     texel ``first`` first when it is an image (covered, in front, its reflected ray reaching the
-    vertex, Newton within reach), then the others in row-major order after merging (best score
-    first, ties to row then col)."""
+    vertex, Newton's iteration from it converging), then the others (each maximum's image: the
+    texel where its iteration converged) in row-major order after merging (best score first, ties
+    to the image's row then col; dropped when its image is a kept one's or its converged point is
+    within ``merge`` of a kept one's)."""
     dt = P.dtype.type
     s, U = scores(P, N, mask, eye_rel, v_rel)
     h, w = mask.shape
@@ -120,18 +168,18 @@ def images_of(P, N, mask, eye_rel, v_rel, first=(-1, -1), reach=1.5, merge=1.0):
     for r, c in zip(*np.nonzero(mask & (s >= nbr) & front)):
         if not reaches(P, N, U, mask, v_rel, r, c):
             continue
-        step = newton_step(P, N, U, mask, v_rel, r, c)
-        if step is not None and step[0] ** 2 + step[1] ** 2 <= reach * reach:
-            cand.append((float(s[r, c]), int(r), int(c), r + step[0], c + step[1]))
+        got = converge(P, N, U, mask, v_rel, r, c, reach)
+        if got is not None:
+            (ir, ic), (lr, lc) = got
+            cand.append((float(s[r, c]), ir, ic, lr, lc))
     kept = []
     fr, fc = first
     if fr >= 0 and mask[fr, fc] and front[fr, fc] and reaches(P, N, U, mask, v_rel, fr, fc):
-        step = newton_step(P, N, U, mask, v_rel, fr, fc)
-        if step is not None and step[0] ** 2 + step[1] ** 2 <= reach * reach:
-            kept.append((None, fr, fc, fr + step[0], fc + step[1]))
+        got = converge(P, N, U, mask, v_rel, fr, fc, reach)
+        if got is not None:
+            kept.append((None, fr, fc, got[1][0], got[1][1]))
     for sc, r, c, lr, lc in sorted(cand, key=lambda x: (-x[0], x[1], x[2])):
-        if any((k[0] is None and (r, c) == (k[1], k[2])) or (lr - k[3]) ** 2 + (lc - k[4]) ** 2 < merge * merge
-               for k in kept):
+        if any((r, c) == (k[1], k[2]) or (lr - k[3]) ** 2 + (lc - k[4]) ** 2 < merge * merge for k in kept):
             continue
         kept.append((sc, r, c, lr, lc))
     head = [k for k in kept if k[0] is None]

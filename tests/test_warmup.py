@@ -24,10 +24,10 @@ from refsoft import _numba, _warmup
 options = json.loads(sys.argv[1])
 _warmup.warm(options)
 warmed = {d: set(d.signatures) for d in _numba.KERNELS}
-refsoft.render("sphere", frames=2, width=80, height=60, **options)
-print(json.dumps({"warmed": sorted(d.py_func.__name__ for d in _numba.KERNELS if warmed[d]),
-                  "types": {d.py_func.__name__: len(warmed[d]) for d in _numba.KERNELS if warmed[d]},
-                  "new": sorted(d.py_func.__name__ for d in _numba.KERNELS if set(d.signatures) - warmed[d])}))
+refsoft.render(sys.argv[2] if len(sys.argv) > 2 else "sphere", frames=2, width=80, height=60, **options)
+print(json.dumps({"warmed": sorted(d.py_func.__name__ for d in _numba.KERNELS if warmed.get(d)),
+                  "types": {d.py_func.__name__: len(warmed[d]) for d in _numba.KERNELS if warmed.get(d)},
+                  "new": sorted(d.py_func.__name__ for d in _numba.KERNELS if set(d.signatures) - warmed.get(d, set()))}))
 """
 
 
@@ -47,6 +47,21 @@ def test_a_render_after_the_warm_up_calls_its_kernels_with_the_same_types(option
     if options["preset"] == "accurate":  # which calls all four
         assert calls == dict.fromkeys(primed, 1), calls
     assert max(calls.values()) <= 1, calls
+
+
+def test_the_warm_up_compiles_the_enumeration_of_every_image():
+    """With ``images="all"`` the warm-up compiles the enumeration's kernels (the ball's render
+    skips it as convex) with the types a render on a mirror that is not convex calls them with."""
+    from refsoft.search import _images
+
+    options = {"preset": "accurate"}
+    out = subprocess.run([sys.executable, "-c", CHILD, json.dumps(options), "concave"], capture_output=True, text=True,
+                         check=True)
+    got = json.loads(out.stdout.strip().splitlines()[-1])
+    top = {"enumerate_all", "dilated_base"}  # called from Python (their callees compile with them)
+    mine = {name for name in dir(_images) if hasattr(getattr(_images, name), "signatures")}
+    assert top <= mine and top <= set(got["warmed"]), got["warmed"]
+    assert not mine & set(got["new"]), got["new"]
 
 
 def test_ball_gbuffer_is_a_ball_seen_by_the_camera():

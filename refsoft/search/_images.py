@@ -4,7 +4,7 @@ The bounds are Szabo's ray-cone pyramid (:mod:`refsoft.search._hierarchy`) over 
 sphere and cone are *dilated*: a texel's sphere is centred on its point with a radius of
 ``IMAGE_BOUND_FACTOR`` times the largest distance to a covered 3x3 neighbour's point, its cone
 is the reflected eye ray with a half-angle of ``IMAGE_BOUND_FACTOR`` times the largest angle to a
-neighbour's reflected ray. A solution within ``IMAGE_REACH`` texels of a texel then lies in the
+neighbour's reflected ray. A solution within 1.5 texels of a texel then lies in the
 texel's sphere and reflects into its cone (to first order in the texel size), so a cell whose
 cone does not meet the vertex holds no image and is pruned (Mitchell and Hanrahan 1992, Wang,
 Hasan and Yan 2020: prune where the normal and bisector bounds cannot meet).
@@ -14,16 +14,22 @@ definition of an image (its reflected ray can reach the vertex from within the t
 without it a Newton step can land near a texel whose reflected ray points far from the vertex,
 where the bisector is ill-conditioned: ``U + B`` near zero). At each texel reached,
 :func:`_judge` applies the rest: a local maximum of the score over its covered 3x3
-neighbourhood, the vertex in front of its tangent plane, and one Newton step on ``r = (h - N)``
-in a tangent basis of ``N`` (``h`` the bisector; central differences over the crosshair,
-one-sided at the rim) moving at most ``IMAGE_REACH`` texels. The Newton arithmetic is
-float64 (it decides, it is not an output's bits); scores are the search's own (``_evaluate``).
+neighbourhood, the vertex in front of its tangent plane, and Newton's iteration on
+``r = (h - N)`` (:func:`converge`) converging within ``IMAGE_REACH`` texels of it. Each step is
+taken in a tangent basis of the texel it stands on (``h`` the bisector; central differences over
+the crosshair, one-sided at the rim) and moves the iteration to the texel nearest its point; the
+iteration has converged when a step is at most ``IMAGE_CONVERGED`` texels long, and its image is
+the covered texel nearest the converged point, which must itself have the vertex in front and
+within its bounds. A maximum a few texels from its solution (a score's peak shifted by the
+texels' spacing, or narrower than a texel) is then found, and the image is the texel of the
+solution rather than of the maximum. The Newton arithmetic is float64 (it decides, it is not an
+output's bits); scores are the search's own (``_evaluate``).
 """
 
 import numpy as np
 
 from .._numba import kernel, like
-from ..constants import IMAGE_BOUND_FACTOR
+from ..constants import IMAGE_BOUND_FACTOR, IMAGE_CONVERGED, IMAGE_STEPS
 from ._hierarchy import _contains
 from ._kernels import _evaluate
 
@@ -35,9 +41,11 @@ NEWTON_FAR = 3
 NEWTON_SINGULAR = 4
 MERGED = 5
 OVERFLOW = 6
-# record columns: row, col (crop texel), verdict, score, Newton row, Newton col
-RECORD_WIDTH = 6
-# candidate columns: row, col, score, Newton row, Newton col
+NOT_CONVERGED = 7
+CANNOT_REFLECT = 8
+# record columns: row, col (crop texel), verdict, score, converged row, converged col, image row, image col
+RECORD_WIDTH = 8
+# candidate columns: image row, image col, score, converged row, converged col
 CAND_WIDTH = 5
 
 
@@ -167,9 +175,9 @@ def newton(G, mask, r, c, v, t, work):
 
 
 @kernel
-def _judge(G, mask, r, c, v, reach, fp, t, work):
-    """The verdict on texel (r, c) (ACCEPTED or the first reason it is not an image), its score
-    and its Newton point (row, col)."""
+def _judge(G, mask, sph, cone, sizes0, r, c, v, reach, fp, t, work):
+    """The verdict on texel (r, c) (ACCEPTED or the first reason it is not an image), its score,
+    its image texel (row, col) and converged point (row, col) (:func:`converge`)."""
     h, w = mask.shape
     s = _evaluate(G, r, c, v, False, fp)
     for dr in range(-1, 2):
@@ -178,16 +186,65 @@ def _judge(G, mask, r, c, v, reach, fp, t, work):
             if rr < 0 or rr >= h or cc < 0 or cc >= w or not mask[rr, cc] or (dr == 0 and dc == 0):
                 continue
             if _evaluate(G, rr, cc, v, False, fp) > s:
-                return NOT_A_MAXIMUM, s, np.float64(r), np.float64(c)
+                return NOT_A_MAXIMUM, s, r, c, np.float64(r), np.float64(c)
     g = G[r, c]
     if not ((v[0] - g[0]) * g[3] + (v[1] - g[1]) * g[4]) + (v[2] - g[2]) * g[5] > like(0.0, fp):
-        return BEHIND, s, np.float64(r), np.float64(c)
-    ok, d_row, d_col = newton(G, mask, r, c, v, t, work)
-    if not ok:
-        return NEWTON_SINGULAR, s, np.float64(r), np.float64(c)
-    if d_row * d_row + d_col * d_col > reach * reach:
-        return NEWTON_FAR, s, r + d_row, c + d_col
-    return ACCEPTED, s, r + d_row, c + d_col
+        return BEHIND, s, r, c, np.float64(r), np.float64(c)
+    verdict, ir, ic, lr, lc = converge(G, mask, sph, cone, sizes0, r, c, v, reach, fp, t, work)
+    return verdict, s, ir, ic, lr, lc
+
+
+@kernel
+def converge(G, mask, sph, cone, sizes0, r, c, v, reach, fp, t, work):
+    """Newton's iteration on ``h - N = 0`` from texel (r, c), texel to texel (each step from the
+    texel nearest the last step's point, ``floor(x + 0.5)``): ``(verdict, image row, image col,
+    converged row, converged col)``. ACCEPTED when, within ``IMAGE_STEPS`` steps, a step or the
+    move of the step's point from the last one's (from (r, c) at first) is at most
+    ``IMAGE_CONVERGED`` texels, or the iteration steps back to the neighbour it came from (its
+    point is then the middle of the two texels' points), its point at most ``reach`` texels from
+    (r, c), and the image
+    (the covered texel nearest the point, else the texel the step was taken from) has the vertex
+    in front and within its dilated bounds; NEWTON_FAR when a step leaves the mirror or the
+    reach, NEWTON_SINGULAR, NOT_CONVERGED or CANNOT_REFLECT otherwise."""
+    h, w = mask.shape
+    cr, cc = r, c
+    pr, pc = -1, -1  # the texel stood on before (cr, cc)
+    lr, lc = np.float64(r), np.float64(c)
+    tol = IMAGE_CONVERGED * IMAGE_CONVERGED
+    for _ in range(IMAGE_STEPS):
+        ok, d_row, d_col = newton(G, mask, cr, cc, v, t, work)
+        if not ok:
+            return NEWTON_SINGULAR, cr, cc, lr, lc
+        # the point moves by less than the step when two texels both point at one place
+        mr, mc = cr + d_row - lr, cc + d_col - lc
+        done = d_row * d_row + d_col * d_col <= tol or mr * mr + mc * mc <= tol
+        nr, nc = int(np.floor(cr + d_row + 0.5)), int(np.floor(cc + d_col + 0.5))
+        if not done and nr == pr and nc == pc and abs(cr - pr) <= 1 and abs(cc - pc) <= 1:
+            # back and forth between two neighbours (a peak narrower than a texel): the
+            # solution lies between them, at the middle of their points
+            done = True
+            lr, lc = (lr + (cr + d_row)) * 0.5, (lc + (cc + d_col)) * 0.5
+            nr, nc = int(np.floor(lr + 0.5)), int(np.floor(lc + 0.5))
+        else:
+            lr, lc = cr + d_row, cc + d_col
+        if (lr - r) * (lr - r) + (lc - c) * (lc - c) > reach * reach:
+            return NEWTON_FAR, cr, cc, lr, lc
+        inside = 0 <= nr < h and 0 <= nc < w and mask[nr, nc]
+        if done:
+            if inside:
+                cr, cc = nr, nc
+            g = G[cr, cc]
+            if not ((v[0] - g[0]) * g[3] + (v[1] - g[1]) * g[4]) + (v[2] - g[2]) * g[5] > like(0.0, fp):
+                return CANNOT_REFLECT, cr, cc, lr, lc
+            q = cr * sizes0 + cc
+            if not _contains(sph[q], cone[q], v, like(1.0, fp), like(1.0, fp), fp):
+                return CANNOT_REFLECT, cr, cc, lr, lc
+            return ACCEPTED, cr, cc, lr, lc
+        if not inside:
+            return NEWTON_FAR, cr, cc, lr, lc
+        pr, pc = cr, cc
+        cr, cc = nr, nc
+    return NOT_CONVERGED, cr, cc, lr, lc
 
 
 @kernel
@@ -223,11 +280,11 @@ def enumerate_one(G, mask, sph, cone, offsets, sizes, n_levels, v, reach, fp, st
             if i >= mask.shape[0] or j >= mask.shape[1]:
                 continue
             judged += 1
-            verdict, s, lr, lc = _judge(G, mask, i, j, v, reach, fp, t, work)
+            verdict, s, ir, ic, lr, lc = _judge(G, mask, sph, cone, base, i, j, v, reach, fp, t, work)
             if verdict == ACCEPTED:
                 if n_cand < cand.shape[0]:
-                    cand[n_cand, 0] = i
-                    cand[n_cand, 1] = j
+                    cand[n_cand, 0] = ir
+                    cand[n_cand, 1] = ic
                     cand[n_cand, 2] = s
                     cand[n_cand, 3] = lr
                     cand[n_cand, 4] = lc
@@ -241,6 +298,8 @@ def enumerate_one(G, mask, sph, cone, offsets, sizes, n_levels, v, reach, fp, st
                 record[n_record, 3] = s
                 record[n_record, 4] = lr
                 record[n_record, 5] = lc
+                record[n_record, 6] = ir
+                record[n_record, 7] = ic
                 n_record += 1
             continue
         child = lvl - 1
@@ -261,10 +320,10 @@ def enumerate_one(G, mask, sph, cone, offsets, sizes, n_levels, v, reach, fp, st
 
 @kernel
 def merge(cand, n_cand, first_r, first_c, first_lr, first_lc, merge_dist, keep, used):
-    """Merge accepted texels of one solution: with the walk's texel ``(first_r, first_c)`` (its
-    Newton point ``(first_lr, first_lc)``) kept first when ``first_r >= 0``, then the others by
-    score (highest first; ties to the smaller row, then col), each dropped when its Newton point
-    lies within ``merge_dist`` texels of a kept one's. ``keep`` (K,) int64 receives the kept
+    """Merge accepted maxima of one solution: with the walk's texel ``(first_r, first_c)`` (its
+    converged point ``(first_lr, first_lc)``) kept first when ``first_r >= 0``, then the others by
+    score (highest first; ties to the smaller image row, then col), each dropped when its image
+    texel is a kept one's or its converged point lies within ``merge_dist`` texels of a kept one's. ``keep`` (K,) int64 receives the kept
     rows of ``cand`` (-1 for the walk's texel); returns how many, the walk's first, the others
     in row-major order. ``used`` (>= n_cand,) bool is a work array."""
     n_keep = 0
@@ -293,7 +352,7 @@ def merge(cand, n_cand, first_r, first_c, first_lr, first_lc, merge_dist, keep, 
                 same = cand[b, 0] == first_r and cand[b, 1] == first_c
             else:
                 lr, lc = cand[k, 3], cand[k, 4]
-                same = False
+                same = cand[b, 0] == cand[k, 0] and cand[b, 1] == cand[k, 1]
             dr, dc = cand[b, 3] - lr, cand[b, 4] - lc
             if same or dr * dr + dc * dc < m2:
                 near = True
@@ -355,8 +414,9 @@ def enumerate_all(lo, hi, G, mask, sph, cone, offsets, sizes, n_levels, vertices
 def first_walk(G, mask, sph, cone, sizes0, r, c, v, reach, fp, t, work):
     """The walk's texel (r, c) as the first image: ``(r, c, Newton row, Newton col)`` when it is
     covered, the vertex lies in front of its tangent plane and within the texel's dilated bounds
-    (``sph``, ``cone``: level 0 first, ``sizes0`` texels a row), and its Newton step moves at most
-    ``reach`` texels; ``(-1, -1, 0, 0)`` otherwise."""
+    (``sph``, ``cone``: level 0 first, ``sizes0`` texels a row), and Newton's iteration from it
+    converges (:func:`converge`; the walk's pixel stays the image, the converged point is what
+    merging compares); ``(-1, -1, 0, 0)`` otherwise."""
     h, w = mask.shape
     if r < 0 or r >= h or c < 0 or c >= w or not mask[r, c]:
         return -1, -1, 0.0, 0.0
@@ -366,7 +426,7 @@ def first_walk(G, mask, sph, cone, sizes0, r, c, v, reach, fp, t, work):
     q = r * sizes0 + c
     if not _contains(sph[q], cone[q], v, like(1.0, fp), like(1.0, fp), fp):
         return -1, -1, 0.0, 0.0
-    ok, d_row, d_col = newton(G, mask, r, c, v, t, work)
-    if not ok or d_row * d_row + d_col * d_col > reach * reach:
+    verdict, _, _, lr, lc = converge(G, mask, sph, cone, sizes0, r, c, v, reach, fp, t, work)
+    if verdict != ACCEPTED:
         return -1, -1, 0.0, 0.0
-    return r, c, r + d_row, c + d_col
+    return r, c, lr, lc

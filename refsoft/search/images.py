@@ -80,23 +80,26 @@ def find_images(gbuffer, eye, vertices, result, reach: float = IMAGE_REACH, merg
     A texel is an image of vertex ``V`` when its score (spec section 4.1) is a maximum of its
     covered 3x3 neighbourhood, ``V`` lies in front of its tangent plane (``dot(V - P, N) > 0``),
     its reflected eye ray can reach ``V`` (``V`` within the texel's dilated bounds,
-    :mod:`refsoft.search._images`) and one Newton step solving "normal = bisector" from it moves at most ``reach`` texels (a
-    maximum of a score that no solution is near, at the rim or on a part that does not reflect
-    ``V``, is not an image). Texels whose Newton points lie closer than ``merge`` texels are one
-    image: the one of highest score is kept (ties to the smaller row, then col). The cells of a
+    :mod:`refsoft.search._images`) and Newton's iteration solving "normal = bisector" from it,
+    texel to texel, converges at most ``reach`` texels away (a maximum of a score that no
+    solution is near, at the rim or on a part that does not reflect ``V``, is not an image). The
+    image is the covered texel nearest the converged point (it too must have ``V`` in front and
+    within its bounds). Maxima whose converged points lie closer than ``merge`` texels, or that
+    give the same texel, are one image: the one of highest score is kept (ties to the smaller
+    row, then col). The cells of a
     ray-cone pyramid whose bounds cannot hold a solution are pruned
     (:mod:`refsoft.search._images`), so a vertex costs a few descents, at most every cell once.
 
     The walk's pixel (``result.pixel``) comes first when it is an image (covered, ``V`` in
-    front and within its bounds, its Newton step within ``reach``; its own walk made it a
-    maximum), so that the
+    front and within its bounds, Newton's iteration from it converging within ``reach``; its
+    own walk made it a maximum; it stays the image's texel), so that the
     single-image arrays of spec section 7 keep it; the others follow in row-major order.
 
     Parameters
     ----------
     gbuffer : GBuffer
-        The reflector's G-buffer (float32 or float64; scores in its precision, Newton steps in
-        float64).
+        The reflector's G-buffer (float32 or float64; scores in its precision, Newton's iteration
+        in float64).
     eye : array_like, shape (3,)
         The eye, world space.
     vertices : array_like, shape (N, 3)
@@ -162,8 +165,9 @@ def mirrored(gbuffer, vertices, pixels) -> np.ndarray:
 
 
 #: The verdict names of :class:`ImagesTrace` rows (``refsoft.search._images`` codes).
-VERDICTS = ("accepted", "not a 3x3 maximum", "behind the tangent plane", "Newton step too far", "Newton step singular",
-            "merged", "too many candidates")
+VERDICTS = ("accepted", "not a 3x3 maximum", "behind the tangent plane", "Newton left the mirror or the reach",
+            "Newton step singular", "merged", "too many candidates", "Newton did not converge",
+            "converged texel cannot reflect the vertex")
 
 
 @dataclass
@@ -180,8 +184,10 @@ class ImagesTrace:
         Pyramid cells visited (popped), cells pruned (bounds cannot meet the vertex), texels judged.
     maxima : list of dict
         Every judged texel that is a 3x3 maximum (or failed before that test could matter): its
-        ``texel``, ``score``, ``newton`` point (row, col) and ``verdict`` (:data:`VERDICTS`;
-        accepted maxima later dropped as one solution with a kept image are ``merged``).
+        ``texel``, ``score``, ``newton`` point (row, col: where Newton's iteration from it
+        converged, or stopped), ``image`` texel (the covered texel nearest that point) and
+        ``verdict`` (:data:`VERDICTS`; accepted maxima later dropped as one solution with a kept
+        image are ``merged``).
     """
 
     images: list
@@ -200,10 +206,11 @@ class ImagesTrace:
         """The trace as text: the counts, the maxima and their verdicts, the images."""
         lines = [f"every image: {len(self.images)} found; pyramid cells visited {self.visited}, pruned {self.pruned}; "
                  f"texels judged {self.judged}; maxima {len(self.maxima)}"]
-        lines.append(f"{'texel':>12} {'score':>12} {'Newton point':>18}  verdict")
+        lines.append(f"{'texel':>12} {'score':>12} {'Newton point':>18} {'image':>12}  verdict")
         for m in self.maxima:
             nr, nc = m["newton"]
-            lines.append(f"{str(tuple(m['texel'])):>12} {m['score']:>12.8f} {f'({nr:.2f}, {nc:.2f})':>18}  {m['verdict']}")
+            lines.append(f"{str(tuple(m['texel'])):>12} {m['score']:>12.8f} {f'({nr:.2f}, {nc:.2f})':>18} "
+                         f"{str(tuple(m['image'])):>12}  {m['verdict']}")
         walk = "none" if self.walk_pixel is None else (f"{tuple(self.walk_pixel)}, " +
                                                       ("an image (kept first)" if self.walk_is_image else "not an image"))
         lines.append(f"walk's pixel: {walk}")
@@ -249,15 +256,18 @@ def trace_images(gbuffer, eye, vertex, walk_pixel=None, reach: float = IMAGE_REA
     fr, fc, flr, flc = _images.first_walk(G, mask, sph, cone, sizes[0], fr, fc, v_rel, float(reach), fp, t, work)
     keep = np.empty(MAX_IMAGES, dtype=np.int64)
     n_keep = _images.merge(cand, n_cand, fr, fc, flr, flc, float(merge), keep, np.empty(len(cand), dtype=bool))
-    kept = {(int(cand[k, 0]), int(cand[k, 1])) for k in keep[:n_keep] if k >= 0}
+    kept = {int(k) for k in keep[:n_keep] if k >= 0}
     images = [[int(fr) + r0, int(fc) + c0] if k < 0 else [int(cand[k, 0]) + r0, int(cand[k, 1]) + c0]
               for k in keep[:n_keep]]
     maxima = []
-    for i, j, verdict, s, lr, lc in record[:n_rec]:
+    n_accepted = 0  # the accepted records are the rows of cand, in order
+    for i, j, verdict, s, lr, lc, ir, ic in record[:n_rec]:
         code = int(verdict)
-        if code == _images.ACCEPTED and (int(i), int(j)) not in kept and (int(i), int(j)) != (fr, fc):
-            code = _images.MERGED
+        if code == _images.ACCEPTED:
+            if n_accepted not in kept:
+                code = _images.MERGED
+            n_accepted += 1
         maxima.append({"texel": [int(i) + r0, int(j) + c0], "score": float(s), "newton": [float(lr) + r0, float(lc) + c0],
-                       "verdict": VERDICTS[code]})
+                       "image": [int(ir) + r0, int(ic) + c0], "verdict": VERDICTS[code]})
     walk = None if walk_pixel is None or walk_pixel[0] < 0 else [int(walk_pixel[0]), int(walk_pixel[1])]
     return ImagesTrace(images, walk, fr >= 0, int(visited), int(pruned), int(judged), maxima)

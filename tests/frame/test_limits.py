@@ -189,3 +189,24 @@ def test_per_pixel_method_estimate_counts_its_textures_and_bounds_the_traced_pea
     flag = "--" + option.replace("_", "-")
     with pytest.raises(LimitError, match=f"{what} .* {flag}"):
         check_frame_memory(scene, RenderOptions(method=method, **{option: 4096}), limit="1G")
+
+
+def test_images_estimate_counts_the_enumeration_and_bounds_its_traced_peak():
+    """With every image (``images="all"``) on a mirror that is not convex, the enumeration's
+    packed G-buffer, dilated pyramid and per-vertex arrays are counted, and the estimate stays
+    above the traced peak; a convex mirror's estimate is the same either way (it is skipped)."""
+    scene = refsoft.load_scene("concave", width=160, height=120)
+    one, every = frame_bytes(scene, RenderOptions(images="one")), frame_bytes(scene, RenderOptions(images="all"))
+    assert every["work"] > one["work"] and every["vertices"] > one["vertices"]
+    ball = refsoft.load_scene("sphere", width=160, height=120)
+    assert frame_bytes(ball, RenderOptions(images="all")) == frame_bytes(ball, RenderOptions(images="one"))
+    opts = RenderOptions(images="all")
+    FrameDriver(scene, opts).render_frame(0)
+    tracemalloc.start()
+    try:
+        fr = FrameDriver(scene, opts).render_frame(0)
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    assert fr.report["images"], "the enumeration ran"
+    assert peak < every["total"] < 3 * peak, (peak, every["total"])

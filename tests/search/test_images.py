@@ -147,6 +147,8 @@ def test_trace_replays_the_kernel(case):
         assert [tuple(p) for p in tr.images] == _rows(im, i)
         assert tr.visited + tr.pruned >= 1 and tr.judged >= sum(m["verdict"] == "accepted" for m in tr.maxima)
         assert all(m["verdict"] in VERDICTS for m in tr.maxima)
-        accepted = {tuple(m["texel"]) for m in tr.maxima if m["verdict"] == "accepted"}
+        accepted = {tuple(m["image"]) for m in tr.maxima if m["verdict"] == "accepted"}
         assert set(_rows(im, i)) - {tuple(res.pixel[i])} <= accepted
+        assert all(abs(a - b) <= 4.0 for m in tr.maxima if m["verdict"] == "accepted"
+                   for a, b in zip(m["texel"], m["image"]))  # converged within IMAGE_REACH texels
         assert "every image" in tr.table() and tr.to_dict()["images"] == tr.images

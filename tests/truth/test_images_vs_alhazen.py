@@ -2,15 +2,20 @@
 reflection points seen from inside a sphere (Alhazen's problem, up to four per vertex:
 refsoft.truth.analytic.sphere_inside_reflection_points), on the G-buffer of a sphere's inside at
 160x120, over the vertices whose exact images in the view lie more than 2 pixels apart and more
-than 2 pixels from the view's border.
+than 2 pixels from the view's border, and whose exact count does not change when the vertex
+moves by 0.001 along an axis (a vertex beside a fold of the mapping, where two images are born
+together, has a reflected ray passing within a fraction of a millimetre of it that the mesh's
+facets and float32 can turn into two images or none: one such vertex, 0.2 mm from a fold, gives
+two images at 160x120).
 
 The goals are: the count of images found equals the exact count for 99.9% of those vertices, and
 every image found lies within 1 pixel of an exact point's projection. Measured (these fixtures,
-2026-12-07): counts agree on 99.52% (14 of 2,943 vertices, each one image short: for 4, vertices
-within 0.02 of the mirror, the score near the missed point stays below 0.991, its peak narrower
-than a texel; for the others the score's largest texel near the missed point lies 1-2 texels
-from its projection), and 98.9% of the images lie within 1 pixel (all within 1.73). The tests
-hold what is met: no image too many, and those figures as floors.
+2026-12-07, Newton's iteration from each maximum): counts agree on 99.97% at 160x120 (one
+vertex one image short: its iteration leaves the reach), 100% at 320x240 and 640x480 (the script
+of docs/several.md); 99.98% of the images lie within 1 pixel, all within 1.02 (the walk's pixel,
+kept as the first image, 1.01 pixels from its exact point; the others are the texels where
+Newton converged). The tests hold the goals where met, one step below where not: no image too
+many, the counts' share at the goal, within 1 pixel at 99.8%, all within 1.1.
 """
 
 import numpy as np
@@ -29,6 +34,8 @@ W, H = 160, 120
 #: Pixels between two images of a vertex, and between an image and the view's border, below
 #: which the vertex is not counted (two images about to merge; one about to leave the view).
 APART = 2.0
+#: A vertex whose exact count changes when it moves this far along an axis is beside a fold.
+FOLD = 1e-3
 
 
 @pytest.fixture(scope="module")
@@ -69,6 +76,11 @@ def exact_in_view(gb, eye, verts):
     both = inside[:, :, None] & inside[:, None, :] & ~np.eye(k, dtype=bool)
     clear &= ~np.any(both & ~(gaps > APART), axis=(1, 2))
     assert np.all(count <= k)
+    for axis in range(3):  # away from a fold of the mapping (two images born together)
+        for sign in (-1.0, 1.0):
+            moved = np.array(verts, dtype=np.float64)
+            moved[:, axis] += sign * FOLD
+            clear &= sphere_inside_reflection_points([0.0, 0.0, 0.0], 1.0, eye, moved)[2] == count
     return pix, inside, clear
 
 
@@ -83,17 +95,17 @@ def test_image_counts_are_alhazens(inside):
     assert clear.sum() >= 0.9 * len(verts)
     assert np.bincount(want[clear], minlength=4)[2:].sum() >= 500  # many vertices with several images
     assert np.all(im.count[clear] <= want[clear])  # never an image too many
-    assert agree.mean() >= 0.994  # the goal is 0.999 (module docstring)
+    assert agree.mean() >= 0.999  # the goal (module docstring)
 
 
 def test_every_image_found_is_near_an_exact_point(inside):
     gb, eye, verts, im = inside
-    pix, in_view, _ = exact_in_view(gb, eye, verts)
+    pix, in_view, clear = exact_in_view(gb, eye, verts)
     exact = pix[im.vertex]  # (M, 4, 2): the exact points of each image's vertex
     d = np.linalg.norm(exact - im.pixel[:, None, :].astype(np.float64), axis=-1)
-    d = np.where(np.isfinite(d), d, np.inf).min(axis=1)
+    d = np.where(np.isfinite(d), d, np.inf).min(axis=1)[clear[im.vertex]]
     print(f"\n{len(d)} images: distance to the nearest exact point's projection: median {np.median(d):.3f}, "
           f"within 1 px {100 * np.mean(d <= 1.0):.2f}%, max {d.max():.3f} px")
     assert len(d) > 4000
-    assert np.median(d) <= 0.5  # a texel's centre against a point spread over the texel: about 0.38
-    assert np.mean(d <= 1.0) >= 0.985 and d.max() <= 2.0  # the goal is every one within 1 (module docstring)
+    assert np.median(d) <= 0.5  # a texel's centre against a point spread over the texel: about 0.4
+    assert np.mean(d <= 1.0) >= 0.998 and d.max() <= 1.1  # the goal is every one within 1 (module docstring)
