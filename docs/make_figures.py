@@ -1,4 +1,5 @@
-"""Regenerate the figures under docs/figures/ from the code: ``python docs/make_figures.py``.
+"""Regenerate the figures under docs/figures/ from the code: ``python docs/make_figures.py``
+(``python docs/make_figures.py teaching``: docs/teaching.md's only).
 
 Needs the ``plot`` extra (matplotlib) for the fill-rule diagram.
 """
@@ -242,8 +243,111 @@ def check_figure():
     write_png(os.path.join(FIG, "check_report.png"), side_by_side(*pics))
 
 
-if __name__ == "__main__":
+def teaching_figures():
+    """docs/teaching.md's figures: one vertex's walk on the sphere as the trace command draws it
+    (trace.png, three GIF frames), its trace.html, and a screenshot of that page in headless
+    chromium (when Playwright and chromium are installed); the trace.png of a hidden vertex's
+    walk with its inverse search, and of the same vertex's ray-cone hierarchy."""
+    from refsoft.search.pictures import hierarchy_picture, trace_frames, trace_picture
+    from refsoft.search.trace import trace_vertex
+    from refsoft.viewer import write_page, walk_data
+
+    scene = refsoft.load_scene("sphere", width=320, height=240)
+    rp = trace_vertex(scene, TEACHING_VERTEX, neighbourhood="cross", inverse="search")
+    mask = rp.gbuffer.mask
+    write_png(os.path.join(FIG, "teaching_trace.png"), trace_picture(rp.trace, mask, labelled=True, replay=rp))
+    frames = trace_frames(rp.trace, mask, size=300, labelled=True)
+    n = len(rp.trace.steps)
+    write_png(os.path.join(FIG, "teaching_steps.png"), side_by_side(frames[0], frames[n // 2], frames[n - 1]))
+    page = os.path.join(FIG, "teaching_trace.html")
+    write_page(page, walk_data(rp))
+    with open(os.path.join(FIG, "teaching_trace.txt"), "w") as fh:
+        fh.write(rp.trace.table() + "\n")
+    hidden = trace_vertex(scene, TEACHING_HIDDEN, neighbourhood="cross", inverse="search")
+    write_png(os.path.join(FIG, "teaching_inverse.png"),
+              trace_picture(hidden.trace, hidden.gbuffer.mask, labelled=True, replay=hidden))
+    hier = trace_vertex(scene, TEACHING_VERTEX, method="hierarchy")
+    write_png(os.path.join(FIG, "teaching_hierarchy.png"),
+              hierarchy_picture(hier.trace, hier.gbuffer.mask, labelled=True, replay=hier))
+    try:
+        import tempfile
+
+        from playwright.sync_api import sync_playwright
+    except ImportError:
+        print("playwright missing: teaching_viewer.png not made", file=sys.stderr)
+        return
+    args = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+            "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+    with sync_playwright() as p, tempfile.TemporaryDirectory() as profile:
+        ctx = p.chromium.launch_persistent_context(profile, executable_path="/usr/bin/chromium", args=args,
+                                                   headless=True, viewport={"width": 1320, "height": 940})
+        pg = ctx.new_page()
+        pg.goto("file://" + page)
+        pg.evaluate(f"window.refsoftViewer.go({n // 2})")
+        pg.screenshot(path=os.path.join(FIG, "teaching_viewer.png"))
+        ctx.close()
+
+
+#: The vertex of docs/teaching.md's lesson (the sphere scene at 320x240).
+TEACHING_VERTEX = 1500
+#: Its vertex behind the tangent plane (HIDDEN), traced with the inverse search.
+TEACHING_HIDDEN = 3295
+
+
+def several_figure(scene_name="concave"):
+    """The score field of the vertex with the most images on ``concave`` (320x240, frame 0, the
+    accurate preset's search), its images (white circles, the walk's filled) and the maxima the
+    enumeration rejected (red crosses); ``docs/figures/several_concave.png`` and its trace
+    ``several_concave.txt``."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from refsoft.search.images import find_images, trace_images
+    from refsoft.search import scores_at
+    from refsoft.search.reflect import reflect
+
+    scene = refsoft.load_scene(scene_name, width=320, height=240)
+    verts, owner, refl = reflect(scene, 0)
+    r = refl[scene.reflector_ids[0]]
+    eye = scene.camera_at(0).eye
+    im = find_images(r.gbuffer, eye, verts, r.result)
+    i = int(np.argmax(im.count))  # the first vertex with the most images
+    gb = r.gbuffer
+    pix = np.argwhere(gb.mask)
+    s = np.zeros(gb.mask.shape)
+    s[pix[:, 0], pix[:, 1]] = scores_at(gb, eye, np.repeat(verts[i:i + 1], len(pix), axis=0), pix)
+    tr = trace_images(gb, eye, verts[i], r.result.pixel[i])
+    rows, cols = np.nonzero(gb.mask)
+    r0, r1, c0, c1 = rows.min(), rows.max() + 1, cols.min(), cols.max() + 1
+    field = np.where(gb.mask, -np.log10(np.maximum(1.0 - s.astype(np.float64), 1e-8)), np.nan)[r0:r1, c0:c1]
+    fig, ax = plt.subplots(figsize=(6.4, 5.0))
+    pic = ax.imshow(field, cmap="viridis", extent=(c0 - 0.5, c1 - 0.5, r1 - 0.5, r0 - 0.5))
+    fig.colorbar(pic, ax=ax, label="-log10(1 - s)")
+    for m in tr.maxima:
+        if m["verdict"] not in ("accepted", "merged"):
+            ax.plot(m["texel"][1], m["texel"][0], "x", color="red", ms=6)
+    for n, (pr, pc) in enumerate(tr.images):
+        ax.plot(pc, pr, "o", ms=11, mfc="white" if n == 0 and tr.walk_is_image else "none", mec="white", mew=2)
+    name = scene.objects[owner[i] - 1].name
+    ax.set_title(f"{scene_name}: vertex {i} ({name}), {len(tr.images)} images\n"
+                 "white: images (filled: the walk's), red: maxima rejected", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(os.path.join(FIG, f"several_{scene_name}.png"), dpi=100)
+    plt.close(fig)
+    with open(os.path.join(FIG, f"several_{scene_name}.txt"), "w") as fh:
+        fh.write(tr.table() + "\n")
+
+
+if __name__ == "__main__" and sys.argv[1:]:  # only the figures named: python docs/make_figures.py several teaching
     os.makedirs(FIG, exist_ok=True)
+    for name in sys.argv[1:]:
+        (globals().get(f"{name}_figure") or globals()[f"{name}_figures"])()
+    print(f"figures written to {FIG}")
+elif __name__ == "__main__":
+    os.makedirs(FIG, exist_ok=True)
+    teaching_figures()
     gbuffer_figure()
     trace_figure()
     frame_figure()
@@ -256,6 +360,7 @@ if __name__ == "__main__":
     try:
         fill_rule_figure()
         ldt_trace_figure()
+        several_figure()
     except ImportError:
         print("matplotlib missing: fill_rule.png not made (pip install '.[plot]')", file=sys.stderr)
     print(f"figures written to {FIG}")

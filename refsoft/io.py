@@ -65,18 +65,43 @@ def remove_temporaries() -> None:
 
 
 def write_npz(path, **arrays):
-    """``np.savez_compressed`` to ``path`` atomically."""
+    """``np.savez_compressed`` to ``path`` atomically (zlib's default level, 6)."""
     with atomic_path(path, ".npz") as tmp:
         np.savez_compressed(tmp, **arrays)
 
 
-def write_png(path, image):
-    """Write an (H, W, 3) or (H, W) uint8 image as PNG atomically (Pillow's encoder with its
-    defaults, which imageio also writes through, without loading imageio's plugin machinery)."""
+def write_npz_level(path, arrays, level: int):
+    """Write ``arrays`` as an ``.npz`` to ``path`` atomically, deflated at zlib ``level`` (0-9).
+
+    The archive is the one ``np.savez_compressed`` writes (one ``NAME.npy`` member per array, in
+    order, zip64 members) but for the compression level, so ``np.load`` reads the same arrays;
+    level 1 costs about half of level 6's CPU time on a frame's arrays, for a file ~10% larger.
+
+    Parameters
+    ----------
+    path : str or PathLike
+    arrays : dict of str to ndarray
+        Written in the dict's order; object arrays are refused (no pickles).
+    level : int
+        zlib's compression level (0 stores the members uncompressed).
+    """
+    with atomic_path(path, ".npz") as tmp:
+        with zipfile.ZipFile(tmp, mode="w", compression=zipfile.ZIP_DEFLATED, compresslevel=level,
+                             allowZip64=True) as zf:
+            for name, value in arrays.items():
+                with zf.open(name + ".npy", "w", force_zip64=True) as fh:
+                    np.lib.format.write_array(fh, np.asanyarray(value), allow_pickle=False)
+
+
+def write_png(path, image, level=None):
+    """Write an (H, W, 3) or (H, W) uint8 image as PNG atomically (Pillow's encoder, which
+    imageio also writes through, without loading imageio's plugin machinery), at zlib ``level``
+    (default: Pillow's, 6)."""
     from PIL import Image
 
+    extra = {} if level is None else {"compress_level": int(level)}
     with atomic_path(path, ".png") as tmp:
-        Image.fromarray(np.ascontiguousarray(image, dtype=np.uint8)).save(tmp, format="PNG")
+        Image.fromarray(np.ascontiguousarray(image, dtype=np.uint8)).save(tmp, format="PNG", **extra)
 
 
 def write_json(path, data):

@@ -71,10 +71,42 @@ def newton_step(P, N, U, mask, v_rel, r, c):
     return d_row, d_col
 
 
+def _reflected(U, N):
+    """The reflected eye ray ``I - 2 (N.I) N``, ``I = -U``, float64."""
+    i = -U.astype(np.float64)
+    n = N.astype(np.float64)
+    return i - 2.0 * np.sum(n * i, axis=-1, keepdims=True) * n
+
+
+def reaches(P, N, U, mask, v_rel, r, c, factor=2.5):
+    """Texel (r, c)'s reflected ray can reach the vertex (float64): within ``factor`` times the
+    largest angle to a covered 3x3 neighbour's reflected ray, its apex anywhere within
+    ``factor`` times the largest distance to a neighbour's point."""
+    h, w = mask.shape
+    p, a = P[r, c].astype(np.float64), _reflected(U[r, c], N[r, c])
+    rad = ang = 0.0
+    for dr in (-1, 0, 1):
+        for dc in (-1, 0, 1):
+            rr, cc = r + dr, c + dc
+            if (dr, dc) == (0, 0) or not (0 <= rr < h and 0 <= cc < w and mask[rr, cc]):
+                continue
+            rad = max(rad, np.linalg.norm(P[rr, cc].astype(np.float64) - p))
+            b = _reflected(U[rr, cc], N[rr, cc])
+            ang = max(ang, np.arctan2(np.linalg.norm(np.cross(a, b)), a @ b))
+    rad, ang = factor * rad, factor * ang
+    d = np.asarray(v_rel, dtype=np.float64) - p
+    dist = np.linalg.norm(d)
+    if dist <= rad:
+        return True
+    off = np.arctan2(np.linalg.norm(np.cross(d, a)), d @ a)
+    return off <= min(ang, np.pi) + np.arcsin(min(rad / dist, 1.0))
+
+
 def images_of(P, N, mask, eye_rel, v_rel, first=(-1, -1), reach=1.5, merge=1.0):
     """Every image of one vertex, by judging every covered texel: a list of (row, col), the walk's
-    texel ``first`` first when it is an image (covered, in front, Newton within reach), then the
-    others in row-major order after merging (best score first, ties to row then col)."""
+    texel ``first`` first when it is an image (covered, in front, its reflected ray reaching the
+    vertex, Newton within reach), then the others in row-major order after merging (best score
+    first, ties to row then col)."""
     dt = P.dtype.type
     s, U = scores(P, N, mask, eye_rel, v_rel)
     h, w = mask.shape
@@ -86,12 +118,14 @@ def images_of(P, N, mask, eye_rel, v_rel, first=(-1, -1), reach=1.5, merge=1.0):
     front = ((d[..., 0] * N[..., 0] + d[..., 1] * N[..., 1]) + d[..., 2] * N[..., 2]) > 0
     cand = []
     for r, c in zip(*np.nonzero(mask & (s >= nbr) & front)):
+        if not reaches(P, N, U, mask, v_rel, r, c):
+            continue
         step = newton_step(P, N, U, mask, v_rel, r, c)
         if step is not None and step[0] ** 2 + step[1] ** 2 <= reach * reach:
             cand.append((float(s[r, c]), int(r), int(c), r + step[0], c + step[1]))
     kept = []
     fr, fc = first
-    if fr >= 0 and mask[fr, fc] and front[fr, fc]:
+    if fr >= 0 and mask[fr, fc] and front[fr, fc] and reaches(P, N, U, mask, v_rel, fr, fc):
         step = newton_step(P, N, U, mask, v_rel, fr, fc)
         if step is not None and step[0] ** 2 + step[1] ** 2 <= reach * reach:
             kept.append((None, fr, fc, fr + step[0], fc + step[1]))

@@ -126,8 +126,8 @@ def provenance(command=None) -> dict:
 
 def provenance_html(p) -> str:
     """:func:`provenance` as the report's opening lines."""
-    lines = [f"<b>{html.escape(k)}</b>: " + (f"<code>{html.escape(v)}</code>" if k == "command" else html.escape(str(v)))
-             for k, v in p.items()]
+    lines = [f"<b>{html.escape(k)}</b>: "
+             + (f"<code>{html.escape(v)}</code>" if k == "command" else html.escape(str(v))) for k, v in p.items()]
     return "<p class=prov>" + "<br>".join(lines) + "</p>\n"
 
 

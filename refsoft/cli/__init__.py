@@ -149,23 +149,33 @@ _BENCH = {
                "Estalella et al.'s Table 1 (mean of the worst frame, mean over all frames), beside the paper's."),
 }
 #: Which bench subcommands each option belongs to (shown in their --help; refused by the others).
+#: A ``help`` given as a dict is per subcommand ("*": the rest), so that each --help shows only its
+#: own defaults.
 _BENCH_OPTIONS = [
     (("--scenes",), dict(nargs="+", default=None, metavar="SCENE",
-                         help="built-in scenes (accuracy: all; sweep: sphere quad kitchen; table1: kitchen ufo ants)"),
+                         help={"accuracy": "built-in scenes (default: all)",
+                               "sweep": "built-in scenes (default: sphere quad kitchen)",
+                               "table1": "built-in scenes (default: kitchen ufo ants)"}),
      ("accuracy", "sweep", "table1")),
     (("--sizes",), dict(nargs="+", default=None, metavar="WxH", help="image sizes (default 640x480 1024x768)"),
      ("accuracy",)),
     (("--setting",), dict(action="append", default=None, metavar="NAME",
                           help="only these settings (repeatable; default all: paper, accurate, and the accurate "
                                "preset with one part changed)"), ("accuracy",)),
-    (("--out",), dict(default=None, metavar="DIR", help="output folder (default: out/bench/WHAT)"),
+    (("--out",), dict(default=None, metavar="DIR",
+                      help={w: f"output folder (default: out/bench/{w})" for w in ("accuracy", "sweep", "scaling",
+                                                                                   "table1")}),
      ("accuracy", "sweep", "scaling", "table1")),
-    (("--width",), dict(type=int, default=None, help="image width (sweep 320, others 1024)"),
+    (("--width",), dict(type=int, default=None, help={"sweep": "image width (default 320)",
+                                                       "*": "image width (default 1024)"}),
      ("sweep", "scaling", "table1")),
-    (("--height",), dict(type=int, default=None, help="image height (sweep 240, others 768)"),
+    (("--height",), dict(type=int, default=None, help={"sweep": "image height (default 240)",
+                                                        "*": "image height (default 768)"}),
      ("sweep", "scaling", "table1")),
     (("--frames",), dict(type=int, default=None, metavar="N",
-                         help="frames per scene (accuracy: 5 spread over each animation; sweep: 3; table1: all)"),
+                         help={"accuracy": "frames per scene (default: 5 spread over each animation)",
+                               "sweep": "frames per scene (default 3)",
+                               "table1": "frames per scene (default: all)"}),
      ("accuracy", "sweep", "table1")),
     (("--repeats",), dict(type=int, default=None, metavar="N", help="timed runs per setting, the median kept "
                                                                     "(default 3)"), ("sweep", "scaling")),
@@ -176,6 +186,12 @@ _BENCH_OPTIONS = [
     (("--max-subdivisions",), dict(type=int, default=8, metavar="N", help="largest icosphere subdivision"),
      ("scaling",)),
     (("--max-width",), dict(type=int, default=2048, metavar="W", help="largest image width"), ("scaling",)),
+    (("--gbuffer-scales",), dict(nargs="+", type=float, default=None, metavar="S",
+                                 help="G-buffer pixel densities against the view's, one table per value (default 1)"),
+     ("table1",)),
+    (("--slowdowns",), dict(nargs="+", type=int, default=None, metavar="M",
+                            help="render each animation with M times the frames (each moving 1/M as far), one table "
+                                 "per value (default 1)"), ("table1",)),
     (("--scheduler",), dict(default=None, metavar="WHERE",
                             help="where the tasks run: 'local' (a Dask cluster on this machine; the default when Dask "
                                  "is installed), 'serial' (one after another in this process) or tcp://HOST:PORT (a "
@@ -207,7 +223,8 @@ def _bench_command(sub):
     for name, (short, long) in _BENCH.items():
         w = what.add_parser(name, help=short, description=long)
         for flags, kw, owners in _BENCH_OPTIONS:
-            w.add_argument(*flags, **(kw if name in owners else dict(kw, help=argparse.SUPPRESS)))
+            text = kw["help"] if not isinstance(kw["help"], dict) else kw["help"].get(name, kw["help"].get("*"))
+            w.add_argument(*flags, **dict(kw, help=text if name in owners else argparse.SUPPRESS))
         w.set_defaults(func=commands.cmd_bench)
 
 

@@ -103,8 +103,12 @@ def _suggest_vertices(args, scene) -> int:
         for flag, v in (("--width", args.width), ("--height", args.height), ("--subdivide", args.subdivide),
                         ("--reflector", args.reflector)):
             extra += [] if v is None else [flag, str(v)]
+        preset = None if args.preset == "accurate" else args.preset  # the default needs no saying
+        for flag, v in (("--preset", preset), ("--method", args.method), ("--neighbourhood", args.neighbourhood),
+                        ("--inverse", args.inverse), ("--widen", args.widen), ("--precision", args.precision)):
+            extra += [] if v is None else [flag, str(v)]
         print("trace one with: refsoft trace " + shlex.join([args.scene, "--vertex", str(found[0]["vertex"]), *extra])
-              + " (and the search options given here); the LDT: --method ldt --pixel ROW COL")
+              + "; the LDT: --method ldt --pixel ROW COL")
     return 0
 
 
@@ -135,11 +139,14 @@ def cmd_trace(args) -> int:
     if rp.method == "hierarchy":
         print(f"vertex {rp.vertex} in reflector {rp.reflector} ({name(rp.reflector)!r}), frame {rp.frame}, ray-cone "
               f"hierarchy of {tr.levels} levels over {tr.base_size}x{tr.base_size} pixels at {tuple(tr.origin)}")
+        print("attempt: the traversal's pass (0 the first; each further pass restarts with the cones and spheres "
+              "enlarged, after a pass reached no base pixel); #: the event's index in trace.json's steps")
         print(f"{'#':>4} {'attempt':>7} {'level':>5} {'texel':>12}  event")
         for n, st in enumerate(tr.steps):
             if st["event"] in ("popped", "chosen"):
                 print(f"{n:>4} {st['attempt']:>7} {st['level']:>5} {str(tuple(st['texel'])):>12}  {st['event']}")
-        print(f"result: pixel {tr.pixel} after {tr.tests} texel tests")
+        pix = "none" if tr.pixel is None else f"({tr.pixel[0]}, {tr.pixel[1]})"
+        print(f"result: pixel {pix} after {tr.tests} texel tests")
         written = write_trace(args.out, rp) + [write_trace_page(args.out, rp)]
         print(f"wrote {args.out}/{', '.join(written)} (open trace.html in a browser to step through the traversal)")
         return 0
@@ -147,28 +154,33 @@ def cmd_trace(args) -> int:
           f"in reflector {rp.reflector} ({name(rp.reflector)!r}), frame {rp.frame}, {neighbourhood}, start "
           f"({tr.start[0]}, {tr.start[1]}){' after a restart' if tr.restarted else ''}")
     print(tr.table())
-    write_trace(args.out, rp)
-    write_trace_page(args.out, rp)
-    print(f"wrote {args.out}/trace.json, trace.png (score field -log10(1 - s), path, start green, end red), "
-          f"trace.gif ({len(tr.steps)} steps) and trace.html (open it in a browser to step through the search)")
-    _trace_images(args, scene, rp, RenderOptions(**opts).images)
+    os.makedirs(args.out, exist_ok=True)
+    found = _trace_images(args, scene, rp, RenderOptions(**opts).images)
+    write_trace(args.out, rp, () if found is None else found.images)
+    write_trace_page(args.out, rp, None if found is None else found.images)
+    beside = ", the inverse score field beside it" if tr.inverse_map is not None else ""
+    print(f"wrote {args.out}/trace.json, trace.png (score field -log10(1 - s), path, start green, end red{beside}), "
+          f"trace.gif ({len(tr.steps)} steps) and trace.html (open it in a browser to step through the search"
+          + ("" if found is None else "; every image circled") + ")")
     return 0
 
 
 def _trace_images(args, scene, rp, mode):
-    """With ``images="all"``, print how every image of the vertex was found and write images.json."""
+    """With ``images="all"``, print how every image of the vertex was found and write images.json;
+    returns the :class:`~refsoft.search.images.ImagesTrace` (None otherwise or on a convex reflector)."""
     from ..io import write_json
     from ..search.trace import trace_vertex_images
 
     if mode != "all":
-        return
+        return None
     it = trace_vertex_images(scene, rp)
     if it is None:
         print(f"every image: reflector {rp.reflector} is convex (at most one reflection point): nothing enumerated")
-        return
+        return None
     print(it.table())
     write_json(os.path.join(args.out, "images.json"), it.to_dict())
     print(f"wrote {args.out}/images.json")
+    return it
 
 
 class _FirstRunNotice:
@@ -397,9 +409,11 @@ def cmd_bench(args) -> int:
 def _bench(args, bench, file_link) -> int:
     out = args.out or os.path.join("out", "bench", args.what)
     t0 = time.perf_counter()
-    unused = {"accuracy": ("knob", "width", "height", "repeats", "max_vertices", "max_subdivisions", "max_width"),
-              "sweep": ("sizes", "setting", "max_vertices", "max_subdivisions", "max_width"),
-              "scaling": ("scenes", "knob", "frames", "sizes", "setting", "no_timing"),
+    only_table1 = ("gbuffer_scales", "slowdowns")
+    unused = {"accuracy": ("knob", "width", "height", "repeats", "max_vertices", "max_subdivisions", "max_width",
+                           *only_table1),
+              "sweep": ("sizes", "setting", "max_vertices", "max_subdivisions", "max_width", *only_table1),
+              "scaling": ("scenes", "knob", "frames", "sizes", "setting", "no_timing", *only_table1),
               "table1": ("knob", "repeats", "sizes", "setting", "max_vertices", "max_subdivisions", "max_width")}
     given = [name for name in unused[args.what] if getattr(args, name) not in (None, False, [])
              and getattr(args, name) != BENCH_DEFAULTS.get(name)]
@@ -440,11 +454,13 @@ def _bench(args, bench, file_link) -> int:
               f"{out}/scaling.csv, .md{plot}")
     else:
         rows = bench.table1(args.scenes or ["kitchen", "ufo", "ants"], out, args.width or 1024, args.height or 768,
-                            args.frames, progress_bar=True, run_info=info, **timing, **run)
+                            args.frames, progress_bar=True, run_info=info, gbuffer_scales=args.gbuffer_scales or (1.0,),
+                            slowdowns=args.slowdowns or (1,), **timing, **run)
         for r in rows:
             ms = f", {r['ms_per_frame']} ms/frame (paper {r['paper_ms_per_frame']})" if r["ms_per_frame"] is not None \
                 else ""
-            print(f"{r['scene']:<8} max frame mean {r['max_frame_mean']:6.2f} (paper {r['paper_max_frame_mean']}), "
+            print(f"{r['scene']:<8} G-buffer {r['gbuffer']:>9} slowdown {r['slowdown']} ({r['frames']} frames): "
+                  f"max frame mean {r['max_frame_mean']:6.2f} (paper {r['paper_max_frame_mean']}), "
                   f"total mean {r['total_mean']:5.2f} (paper {r['paper_total_mean']}){ms}")
         print(f"table1 in {time.perf_counter() - t0:.0f} s ({info['run'].line()}); {out}/table1.csv, table1.md")
     print(f"report: {file_link(os.path.join(out, 'report.html'))}")

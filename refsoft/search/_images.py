@@ -9,10 +9,14 @@ texel's sphere and reflects into its cone (to first order in the texel size), so
 cone does not meet the vertex holds no image and is pruned (Mitchell and Hanrahan 1992, Wang,
 Hasan and Yan 2020: prune where the normal and bisector bounds cannot meet).
 
-At each texel reached, :func:`_judge` applies the definition: a local maximum of the score over
-its covered 3x3 neighbourhood, the vertex in front of its tangent plane, and one Newton step on
-``r = (h - N)`` in a tangent basis of ``N`` (``h`` the bisector; central differences over the
-crosshair, one-sided at the rim) moving at most ``IMAGE_REACH`` texels. The Newton arithmetic is
+A texel is reached only when its own dilated bounds meet the vertex: that test is part of the
+definition of an image (its reflected ray can reach the vertex from within the texel's reach;
+without it a Newton step can land near a texel whose reflected ray points far from the vertex,
+where the bisector is ill-conditioned: ``U + B`` near zero). At each texel reached,
+:func:`_judge` applies the rest: a local maximum of the score over its covered 3x3
+neighbourhood, the vertex in front of its tangent plane, and one Newton step on ``r = (h - N)``
+in a tangent basis of ``N`` (``h`` the bisector; central differences over the crosshair,
+one-sided at the rim) moving at most ``IMAGE_REACH`` texels. The Newton arithmetic is
 float64 (it decides, it is not an output's bits); scores are the search's own (``_evaluate``).
 """
 
@@ -331,7 +335,7 @@ def enumerate_all(lo, hi, G, mask, sph, cone, offsets, sizes, n_levels, vertices
             v[k] = like(vertices[i, k] - origin[k], fp)
         n_cand, visited, pruned, judged, _ = enumerate_one(G, mask, sph, cone, offsets, sizes, n_levels, v, reach, fp,
                                                            stack, cand, t, work, empty, 0)
-        fr, fc, flr, flc = first_walk(G, mask, first[i, 0], first[i, 1], v, reach, fp, t, work)
+        fr, fc, flr, flc = first_walk(G, mask, sph, cone, sizes[0], first[i, 0], first[i, 1], v, reach, fp, t, work)
         n_keep = merge(cand, n_cand, fr, fc, flr, flc, merge_dist, keep, used)
         for m in range(n_keep):
             if keep[m] < 0:
@@ -348,15 +352,19 @@ def enumerate_all(lo, hi, G, mask, sph, cone, offsets, sizes, n_levels, vertices
 
 
 @kernel
-def first_walk(G, mask, r, c, v, reach, fp, t, work):
+def first_walk(G, mask, sph, cone, sizes0, r, c, v, reach, fp, t, work):
     """The walk's texel (r, c) as the first image: ``(r, c, Newton row, Newton col)`` when it is
-    covered, the vertex lies in front of its tangent plane and its Newton step moves at most
+    covered, the vertex lies in front of its tangent plane and within the texel's dilated bounds
+    (``sph``, ``cone``: level 0 first, ``sizes0`` texels a row), and its Newton step moves at most
     ``reach`` texels; ``(-1, -1, 0, 0)`` otherwise."""
     h, w = mask.shape
     if r < 0 or r >= h or c < 0 or c >= w or not mask[r, c]:
         return -1, -1, 0.0, 0.0
     g = G[r, c]
     if not ((v[0] - g[0]) * g[3] + (v[1] - g[1]) * g[4]) + (v[2] - g[2]) * g[5] > like(0.0, fp):
+        return -1, -1, 0.0, 0.0
+    q = r * sizes0 + c
+    if not _contains(sph[q], cone[q], v, like(1.0, fp), like(1.0, fp), fp):
         return -1, -1, 0.0, 0.0
     ok, d_row, d_col = newton(G, mask, r, c, v, t, work)
     if not ok or d_row * d_row + d_col * d_col > reach * reach:

@@ -68,6 +68,42 @@ def _surface(P, N, mask, r, c, t0, t1, fp, out_p, out_n, i):
 
 
 @kernel
+def gauss_newton_step(P, N, mask, r, c, vx, vy, vz, ex, ey, ez, fp):
+    """One Gauss-Newton step on ``N(x) - h(x) = 0`` for the vertex (vx, vy, vz) from the covered
+    texel (r, c), the residual's derivatives by central differences (one-sided next to uncovered
+    texels, none along an axis with no covered neighbour): the offset (rows, cols) in texels,
+    not clamped."""
+    zero = like(0.0, fp)
+    d0 = _residual(P, N, r, c, vx, vy, vz, ex, ey, ez, fp)
+    # the residual's derivatives along rows (j0) and columns (j1)
+    ar, ac, br, bc, sa = _stencil(mask, r, c, 1, 0, fp)
+    pa = _residual(P, N, ar, ac, vx, vy, vz, ex, ey, ez, fp)
+    pb = _residual(P, N, br, bc, vx, vy, vz, ex, ey, ez, fp)
+    cr, cc, dr, dc, sb = _stencil(mask, r, c, 0, 1, fp)
+    pc = _residual(P, N, cr, cc, vx, vy, vz, ex, ey, ez, fp)
+    pd = _residual(P, N, dr, dc, vx, vy, vz, ex, ey, ez, fp)
+    j00, j01, j02 = (pa[0] - pb[0]) * sa, (pa[1] - pb[1]) * sa, (pa[2] - pb[2]) * sa
+    j10, j11, j12 = (pc[0] - pd[0]) * sb, (pc[1] - pd[1]) * sb, (pc[2] - pd[2]) * sb
+    # normal equations of min |d0 + J t|^2, t = (rows, cols)
+    a00 = (j00 * j00 + j01 * j01) + j02 * j02
+    a01 = (j00 * j10 + j01 * j11) + j02 * j12
+    a11 = (j10 * j10 + j11 * j11) + j12 * j12
+    b0 = -((j00 * d0[0] + j01 * d0[1]) + j02 * d0[2])
+    b1 = -((j10 * d0[0] + j11 * d0[1]) + j12 * d0[2])
+    det = a00 * a11 - a01 * a01
+    t0 = zero
+    t1 = zero
+    if det > like(1e-6, fp) * (a00 * a11):
+        t0 = (a11 * b0 - a01 * b1) / det
+        t1 = (a00 * b1 - a01 * b0) / det
+    elif a11 == zero and a00 > zero:
+        t0 = b0 / a00  # only the rows are usable
+    elif a00 == zero and a11 > zero:
+        t1 = b1 / a11  # only the columns
+    return t0, t1
+
+
+@kernel
 def refine(lo, hi, P, N, mask, vertices, eye, pixel, flags, fp, out_p, out_n, out_offset):
     """For each vertex ``lo .. hi - 1`` (run over every vertex by
     :func:`refsoft._parallel.parallel_range`): one Gauss-Newton step on ``N(x) - h(x) = 0`` from
@@ -93,33 +129,7 @@ def refine(lo, hi, P, N, mask, vertices, eye, pixel, flags, fp, out_p, out_n, ou
                 out_p[i, k] = P[r, c, k]
                 out_n[i, k] = N[r, c, k]
             continue
-        vx, vy, vz = vertices[i, 0], vertices[i, 1], vertices[i, 2]
-        d0 = _residual(P, N, r, c, vx, vy, vz, ex, ey, ez, fp)
-        # the residual's derivatives along rows (j0) and columns (j1)
-        ar, ac, br, bc, sa = _stencil(mask, r, c, 1, 0, fp)
-        pa = _residual(P, N, ar, ac, vx, vy, vz, ex, ey, ez, fp)
-        pb = _residual(P, N, br, bc, vx, vy, vz, ex, ey, ez, fp)
-        cr, cc, dr, dc, sb = _stencil(mask, r, c, 0, 1, fp)
-        pc = _residual(P, N, cr, cc, vx, vy, vz, ex, ey, ez, fp)
-        pd = _residual(P, N, dr, dc, vx, vy, vz, ex, ey, ez, fp)
-        j00, j01, j02 = (pa[0] - pb[0]) * sa, (pa[1] - pb[1]) * sa, (pa[2] - pb[2]) * sa
-        j10, j11, j12 = (pc[0] - pd[0]) * sb, (pc[1] - pd[1]) * sb, (pc[2] - pd[2]) * sb
-        # normal equations of min |d0 + J t|^2, t = (rows, cols)
-        a00 = (j00 * j00 + j01 * j01) + j02 * j02
-        a01 = (j00 * j10 + j01 * j11) + j02 * j12
-        a11 = (j10 * j10 + j11 * j11) + j12 * j12
-        b0 = -((j00 * d0[0] + j01 * d0[1]) + j02 * d0[2])
-        b1 = -((j10 * d0[0] + j11 * d0[1]) + j12 * d0[2])
-        det = a00 * a11 - a01 * a01
-        t0 = zero
-        t1 = zero
-        if det > like(1e-6, fp) * (a00 * a11):
-            t0 = (a11 * b0 - a01 * b1) / det
-            t1 = (a00 * b1 - a01 * b0) / det
-        elif a11 == zero and a00 > zero:
-            t0 = b0 / a00  # only the rows are usable
-        elif a00 == zero and a11 > zero:
-            t1 = b1 / a11  # only the columns
+        t0, t1 = gauss_newton_step(P, N, mask, r, c, vertices[i, 0], vertices[i, 1], vertices[i, 2], ex, ey, ez, fp)
         t0 = min(max(t0, -lim), lim)
         t1 = min(max(t1, -lim), lim)
         out_offset[i, 0] = t0

@@ -4,7 +4,8 @@ a small difference of cosines)."""
 import numpy as np
 
 from .._numba import kernel, like
-from ._refine import surface_values
+from ..constants import MAX_OFFSET
+from ._refine import gauss_newton_step, surface_values
 
 
 @kernel(inline=True)
@@ -59,3 +60,37 @@ def edge_errors(lo, hi, P, N, mask, origin, eye, verts, pixel, offset, e0, e1, s
         wx, wy, wz = _unit(mx - px, my - py, mz - pz)
         bx, by, bz = _unit(vx + wx, vy + wy, vz + wz)
         out[i] = 1.0 - ((nx * bx + ny * by + nz * bz) + 1.0) / 2.0
+
+
+@kernel
+def edge_pixel_errors(lo, hi, P, N, mask, origin, eye, verts, pixel, offset, e0, e1, fp, out):
+    """``out[i]`` for ``i`` in ``lo .. hi - 1``: how far, in texels, the reflection of the midpoint
+    of edge (e0[i], e1[i]) lies from the midpoint of its ends' refined reflection points (the
+    straight edge's midpoint), by one Gauss-Newton step of the refinement from the texel nearest
+    to the latter (the step is at most ``MAX_OFFSET`` per axis, so a larger error reads as about
+    that); 2 where an end has no pixel or that texel is not covered."""
+    h, w = mask.shape
+    zero = like(0.0, fp)
+    lim = like(MAX_OFFSET, fp)
+    ex = like(eye[0] - origin[0], fp)
+    ey = like(eye[1] - origin[1], fp)
+    ez = like(eye[2] - origin[2], fp)
+    for i in range(lo, hi):
+        a = e0[i]
+        b = e1[i]
+        out[i] = 2.0
+        if pixel[a, 0] < 0 or pixel[a, 1] < 0 or pixel[b, 0] < 0 or pixel[b, 1] < 0:
+            continue
+        mr = 0.5 * ((pixel[a, 0] + np.float64(offset[a, 0])) + (pixel[b, 0] + np.float64(offset[b, 0])))
+        mc = 0.5 * ((pixel[a, 1] + np.float64(offset[a, 1])) + (pixel[b, 1] + np.float64(offset[b, 1])))
+        r = int(np.floor(mr + 0.5))
+        c = int(np.floor(mc + 0.5))
+        if not (0 <= r < h and 0 <= c < w and mask[r, c]):
+            continue
+        vx = like(0.5 * (verts[a, 0] + verts[b, 0]) - origin[0], fp)
+        vy = like(0.5 * (verts[a, 1] + verts[b, 1]) - origin[1], fp)
+        vz = like(0.5 * (verts[a, 2] + verts[b, 2]) - origin[2], fp)
+        t0, t1 = gauss_newton_step(P, N, mask, r, c, vx, vy, vz, ex, ey, ez, fp)
+        t0 = min(max(t0, -lim), lim)
+        t1 = min(max(t1, -lim), lim)
+        out[i] = np.hypot((r + np.float64(t0)) - mr, (c + np.float64(t1)) - mc)

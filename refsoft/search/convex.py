@@ -47,11 +47,16 @@ interpolated normals is checked by the plain reference that judges every texel
 
 from __future__ import annotations
 
+import weakref
+
 import numpy as np
 
 from ..constants import CONVEX_TOLERANCE
 from ..errors import RefsoftError
 from ..scene.mesh import Mesh
+
+
+_BLOCK = 2048  # triangles per block of the local convexity test
 
 
 def several_possible(mesh: Mesh) -> bool:
@@ -70,7 +75,13 @@ def several_possible(mesh: Mesh) -> bool:
     """
     if not isinstance(mesh, Mesh):
         raise RefsoftError(f"mesh must be a refsoft Mesh, got {type(mesh).__name__}")
-    return not (_flat(mesh) or _convex(mesh))
+    if mesh not in _DECIDED:  # a mesh does not change: decided once per process
+        _DECIDED[mesh] = not (_flat(mesh) or _convex(mesh))
+    return _DECIDED[mesh]
+
+
+#: Mesh -> its decision, while the mesh lives.
+_DECIDED = weakref.WeakKeyDictionary()
 
 
 def _flat(mesh: Mesh) -> bool:
@@ -116,14 +127,19 @@ def _convex(mesh: Mesh) -> bool:
     start = np.searchsorted(both_src[ring_order], np.arange(n_labels + 1))
     unit = n / area2[:, None]
     tol = CONVEX_TOLERANCE * extent
-    above = np.zeros(len(f), dtype=bool)
-    below = np.zeros(len(f), dtype=bool)
-    for corner in range(3):
-        lab = f[:, corner]
-        deg = start[lab + 1] - start[lab]
-        tri = np.repeat(np.arange(len(f)), deg)
-        idx = np.repeat(start[lab], deg) + (np.arange(int(deg.sum())) - np.repeat(np.cumsum(deg) - deg, deg))
-        d = np.einsum("ij,ij->i", p[ring[idx]] - p[lab[tri]], unit[tri])
-        above |= np.bincount(tri, d > tol, len(f)) > 0
-        below |= np.bincount(tri, d < -tol, len(f)) > 0
-    return not np.any(above & below)
+    # in blocks of triangles: the one-rings' temporaries stay small beside a frame's arrays
+    for lo in range(0, len(f), _BLOCK):
+        fb, ub = f[lo:lo + _BLOCK], unit[lo:lo + _BLOCK]
+        above = np.zeros(len(fb), dtype=bool)
+        below = np.zeros(len(fb), dtype=bool)
+        for corner in range(3):
+            lab = fb[:, corner]
+            deg = start[lab + 1] - start[lab]
+            tri = np.repeat(np.arange(len(fb)), deg)
+            idx = np.repeat(start[lab], deg) + (np.arange(int(deg.sum())) - np.repeat(np.cumsum(deg) - deg, deg))
+            d = np.einsum("ij,ij->i", p[ring[idx]] - p[lab[tri]], ub[tri])
+            above |= np.bincount(tri, d > tol, len(fb)) > 0
+            below |= np.bincount(tri, d < -tol, len(fb)) > 0
+        if np.any(above & below):
+            return False
+    return True

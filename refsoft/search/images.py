@@ -78,8 +78,9 @@ def find_images(gbuffer, eye, vertices, result, reach: float = IMAGE_REACH, merg
     """Every reflection point of every vertex on one reflector's G-buffer (spec section 4.8).
 
     A texel is an image of vertex ``V`` when its score (spec section 4.1) is a maximum of its
-    covered 3x3 neighbourhood, ``V`` lies in front of its tangent plane (``dot(V - P, N) > 0``)
-    and one Newton step solving "normal = bisector" from it moves at most ``reach`` texels (a
+    covered 3x3 neighbourhood, ``V`` lies in front of its tangent plane (``dot(V - P, N) > 0``),
+    its reflected eye ray can reach ``V`` (``V`` within the texel's dilated bounds,
+    :mod:`refsoft.search._images`) and one Newton step solving "normal = bisector" from it moves at most ``reach`` texels (a
     maximum of a score that no solution is near, at the rim or on a part that does not reflect
     ``V``, is not an image). Texels whose Newton points lie closer than ``merge`` texels are one
     image: the one of highest score is kept (ties to the smaller row, then col). The cells of a
@@ -87,7 +88,8 @@ def find_images(gbuffer, eye, vertices, result, reach: float = IMAGE_REACH, merg
     (:mod:`refsoft.search._images`), so a vertex costs a few descents, at most every cell once.
 
     The walk's pixel (``result.pixel``) comes first when it is an image (covered, ``V`` in
-    front, its Newton step within ``reach``; its own walk made it a maximum), so that the
+    front and within its bounds, its Newton step within ``reach``; its own walk made it a
+    maximum), so that the
     single-image arrays of spec section 7 keep it; the others follow in row-major order.
 
     Parameters
@@ -244,7 +246,7 @@ def trace_images(gbuffer, eye, vertex, walk_pixel=None, reach: float = IMAGE_REA
     fr = fc = -1
     if walk_pixel is not None and walk_pixel[0] >= 0:
         fr, fc = int(walk_pixel[0]) - r0, int(walk_pixel[1]) - c0
-    fr, fc, flr, flc = _images.first_walk(G, mask, fr, fc, v_rel, float(reach), fp, t, work)
+    fr, fc, flr, flc = _images.first_walk(G, mask, sph, cone, sizes[0], fr, fc, v_rel, float(reach), fp, t, work)
     keep = np.empty(MAX_IMAGES, dtype=np.int64)
     n_keep = _images.merge(cand, n_cand, fr, fc, flr, flc, float(merge), keep, np.empty(len(cand), dtype=bool))
     kept = {(int(cand[k, 0]), int(cand[k, 1])) for k in keep[:n_keep] if k >= 0}

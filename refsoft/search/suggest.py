@@ -42,6 +42,8 @@ def interesting_vertices(scene, reflector=None, frame: int = 0, **options) -> li
     res = out[k].result
     it = np.asarray(res.iterations, dtype=np.int64)
     fl = np.asarray(res.flags, dtype=np.int64)
+    if out[k].images is not None:  # every image enumerated (images="all"): SEVERAL as the frame's flags have it
+        fl = fl | np.where(out[k].images.count > 1, SEVERAL, 0)
     live = (fl & CULLED) == 0
     found = []
     for kind, bit in KINDS:

@@ -65,6 +65,51 @@ def _edge_errors(gbuffer, eye, verts, pixel, offset, e0, e1):
     return out
 
 
+def edge_pixel_errors(gbuffer, eye, a_world, b_world, pa, pb, oa, ob) -> np.ndarray:
+    """How far, in texels, the reflection of each edge's midpoint (A + B) / 2 lies from the
+    midpoint of its ends' refined reflection points (where the rasterizer's straight edge passes):
+    one Gauss-Newton step of the sub-texel refinement (:func:`refsoft.search.refine.refine`) from
+    the texel nearest to the latter, each axis of the step clamped to ``MAX_OFFSET``; 2 where an
+    end has no pixel or that texel is uncovered. Unlike the thesis's error (:func:`edge_errors`,
+    a difference of cosines whose pixel size depends on the mirror's curvature), it reads in the
+    image's units.
+
+    Parameters
+    ----------
+    gbuffer : GBuffer
+    eye : (3,)
+    a_world, b_world : array_like, shape (E, 3)
+        World endpoints (float64).
+    pa, pb : array_like, shape (E, 2), int
+        Their reflection pixels (-1 where none).
+    oa, ob : array_like, shape (E, 2)
+        Their sub-texel offsets (rows, cols).
+
+    Returns
+    -------
+    ndarray, shape (E,), float64
+    """
+    a = np.asarray(a_world, dtype=np.float64).reshape(-1, 3)
+    e = len(a)
+    verts = np.concatenate([a, np.asarray(b_world, dtype=np.float64).reshape(-1, 3)])
+    pix = np.concatenate([np.asarray(pa), np.asarray(pb)]).reshape(-1, 2)
+    off = np.concatenate([np.asarray(oa), np.asarray(ob)]).reshape(-1, 2)
+    idx = np.arange(e, dtype=np.int64)
+    return _edge_pixel_errors(gbuffer, eye, verts, pix, off, idx, idx + e)
+
+
+def _edge_pixel_errors(gbuffer, eye, verts, pixel, offset, e0, e1):
+    """:func:`edge_pixel_errors` of edges (verts[e0], verts[e1]) without gathering them first."""
+    dt = gbuffer.position.dtype
+    out = np.empty(len(e0))
+    parallel_range(_kernels.edge_pixel_errors, len(e0), gbuffer.position, gbuffer.normal, gbuffer.mask,
+                   np.asarray(gbuffer.origin, np.float64), np.asarray(eye, dtype=np.float64),
+                   np.ascontiguousarray(verts, dtype=np.float64), np.ascontiguousarray(pixel, dtype=np.int64),
+                   np.ascontiguousarray(offset, dtype=dt), np.ascontiguousarray(e0, dtype=np.int64),
+                   np.ascontiguousarray(e1, dtype=np.int64), dt.type(0), out)
+    return out
+
+
 def _edge_keys(u, v, n):
     """Undirected edge keys ``min * n + max`` (int64)."""
     lo, hi = np.minimum(u, v), np.maximum(u, v)
@@ -124,22 +169,77 @@ def _children(f, edge_keys, edge_mid, n_vertices, only=None):
     return slots.reshape(-1)[at], count
 
 
-def _triangle_errors(gbuffer, eye, verts, pixel, flags, offset, f, threshold, min_span) -> np.ndarray:
+def outline_edges(faces, pixel, offset, rows=None) -> np.ndarray:
+    """Which edges of ``faces`` can draw an object's outline in the reflection: an edge of one
+    face only (the mesh's border), of more than two, or of two faces turned different ways in
+    the image (their corners' reflection points, ``pixel + offset``, wound in opposite senses, or
+    one of them degenerate). An edge between two faces wound alike has the same object on both
+    sides, so where it is reflected changes the picture by shading only.
+
+    Parameters
+    ----------
+    faces : ndarray, shape (T, 3), int
+    pixel : ndarray, shape (N, 2), int
+    offset : ndarray, shape (N, 2)
+    rows : ndarray of int, optional
+        The faces whose edges are wanted (default every face); their neighbours are still
+        looked for among all ``faces``.
+
+    Returns
+    -------
+    ndarray, shape (T, 3) or (len(rows), 3), bool
+        Edge k of face i runs from corner k to corner k + 1.
+    """
+    f = np.asarray(faces, dtype=np.int64)
+    t = len(f)
+    if t == 0 or (rows is not None and len(rows) == 0):
+        return np.zeros((t if rows is None else 0, 3), dtype=bool)
+    q = np.asarray(pixel, np.float64) + np.asarray(offset, np.float64)
+    a, b, c = q[f[:, 0]], q[f[:, 1]], q[f[:, 2]]
+    side = np.sign((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]))
+    # each edge's key with its face's winding (0, 1, 2) in the two low bits: one sort (no
+    # argsort) groups an edge's faces, their windings in order within the group
+    keys = _edge_keys(f.reshape(-1), f[:, [1, 2, 0]].reshape(-1), len(q))  # face-major: 3 i + k
+    packed = np.sort(keys * 4 + np.repeat(side.astype(np.int64) + 1, 3))
+    sk = packed >> 2
+    first = np.ones(len(sk), dtype=bool)
+    np.not_equal(sk[1:], sk[:-1], out=first[1:])
+    starts = np.flatnonzero(first)
+    ends = np.append(starts[1:], len(sk)) - 1
+    lo, hi = packed[starts] & 3, packed[ends] & 3
+    # two faces wound alike and neither degenerate (winding 1 is 0): not an outline
+    outline = ((ends - starts) != 1) | (lo != hi) | (lo == 1)
+    want = keys if rows is None else keys.reshape(t, 3)[np.asarray(rows)].reshape(-1)
+    return outline[np.searchsorted(sk[starts], want)].reshape(-1, 3)
+
+
+def _triangle_errors(gbuffer, eye, verts, pixel, flags, offset, f, threshold, min_span, metric="thesis",
+                     measured=None) -> np.ndarray:
     """Each triangle's largest edge error (:func:`edge_errors`), (T,) float64; -inf for a
     triangle with a CULLED corner (no reflection to refine) and, when adaptive (``threshold >
     0``), for one all of whose corners are hidden (no visible reflection whose error could be
     measured; full tessellation still splits it). Edges whose ends' pixels are at most
-    ``min_span`` apart count 0."""
+    ``min_span`` apart count 0. ``metric``: "thesis" (:func:`edge_errors`) or "pixels"
+    (:func:`edge_pixel_errors`, which needs ``offset``). ``measured`` ((T, 3) bool): the edges
+    measured, the others count 0."""
+    errors = _edge_pixel_errors if metric == "pixels" else _edge_errors
     e0, e1 = f.reshape(-1), f[:, [1, 2, 0]].reshape(-1)
     err = np.zeros(len(e0))
-    if min_span > 0:  # an edge reflected within min_span pixels: nothing to draw between its ends
+    if measured is not None:
+        need = np.flatnonzero(measured.reshape(-1))
+        if min_span > 0:
+            rows, cols = pixel[:, 0], pixel[:, 1]
+            a, b = e0[need], e1[need]
+            need = need[(np.abs(rows[a] - rows[b]) > min_span) | (np.abs(cols[a] - cols[b]) > min_span)]
+        err[need] = errors(gbuffer, eye, verts, pixel, offset, e0[need], e1[need])
+    elif min_span > 0:  # an edge reflected within min_span pixels: nothing to draw between its ends
         # per axis, in the pixels' int32 (|differences| < 2^16): a tenth of the time of one
         # (E, 2) int64 block on 1.3M triangles, whose temporaries outgrow the cache
         rows, cols = pixel[:, 0], pixel[:, 1]
         need = np.flatnonzero((np.abs(rows[e0] - rows[e1]) > min_span) | (np.abs(cols[e0] - cols[e1]) > min_span))
-        err[need] = _edge_errors(gbuffer, eye, verts, pixel, offset, e0[need], e1[need])
+        err[need] = errors(gbuffer, eye, verts, pixel, offset, e0[need], e1[need])
     else:
-        err[:] = _edge_errors(gbuffer, eye, verts, pixel, offset, e0, e1)
+        err[:] = errors(gbuffer, eye, verts, pixel, offset, e0, e1)
     # per-vertex tests gathered per corner, and the maximum of three columns: axis-1
     # reductions over rows of three are several times slower
     f0, f1, f2 = f[:, 0], f[:, 1], f[:, 2]
@@ -249,7 +349,7 @@ class Tessellation:
 
 def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, threshold, max_level,
                neighbourhood="cross", inverse="plane", cap=None, crack_free=True, surface=None,
-               method="walk", min_span: int = 0) -> Tessellation:
+               method="walk", min_span: int = 0, metric: str = "thesis", outline=None) -> Tessellation:
     """Refine the reflected triangles of one reflector until every triangle's largest edge error
     is at most ``threshold`` (0: every triangle, i.e. full tessellation) or ``max_level`` levels.
 
@@ -279,6 +379,16 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
         Beyond the thesis: an edge whose ends' reflection pixels are at most this many pixels
         apart along both axes is not a reason to split (its reflection covers a few pixels
         whatever its error; 0: the thesis's rule, every edge is measured).
+    metric : {"thesis", "pixels"}
+        The edge error ``threshold`` bounds: the thesis's (:func:`edge_errors`) or the distance
+        in texels between the straight edge's midpoint and its reflection
+        (:func:`edge_pixel_errors`, with ``surface`` only).
+    outline : float, optional
+        Also split a triangle one of whose edges can draw an object's outline in the reflection
+        (:func:`outline_edges`) when that edge's reflection bends more than ``outline`` texels
+        away from the straight edge (:func:`edge_pixel_errors`; with ``surface`` only): where
+        an outline is drawn a fraction of a pixel off, its pixels show the other object, where
+        an edge inside an object changes the shading only.
 
     Returns
     -------
@@ -288,6 +398,12 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
 
     validate.number(threshold, "tessellation threshold", minimum=0.0)
     validate.integer(max_level, "max_level", 0)
+    if metric not in ("thesis", "pixels"):
+        raise RefsoftError(f"tessellation metric must be 'thesis' or 'pixels', got {metric!r}")
+    if outline is not None:
+        validate.number(outline, "outline threshold", minimum=0.0)
+    if (metric == "pixels" or outline is not None) and surface is None:
+        raise RefsoftError("the tessellation's pixel metric needs the sub-texel points (surface)")
     verts = [np.asarray(vertices, dtype=np.float64)]
     norms = [np.asarray(normals, dtype=np.float64)]
     pix = [np.asarray(pixel, dtype=np.int32)]
@@ -305,9 +421,13 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
         if len(cand) == 0:
             break
         f = faces[cand]
-        err = _triangle_errors(gbuffer, eye, allv, allp, allf, None if surf is None else np.concatenate(surf[2]), f,
-                               threshold, min_span)
-        split_tri = cand[err > threshold]
+        alloff = None if surf is None else np.concatenate(surf[2])
+        split = _triangle_errors(gbuffer, eye, allv, allp, allf, alloff, f, threshold, min_span, metric) > threshold
+        if outline is not None:  # and the pixel metric on the edges that can draw an outline
+            measured = outline_edges(faces, allp, alloff, cand)
+            split |= _triangle_errors(gbuffer, eye, allv, allp, allf, alloff, f, outline, min_span, "pixels",
+                                      measured) > outline
+        split_tri = cand[split]
         if len(split_tri) == 0:
             break
         keys = _split_edges(faces[split_tri])

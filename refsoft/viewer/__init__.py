@@ -3,7 +3,8 @@ inline; nothing fetched; opens from disk).
 
 :func:`write_page` writes the data of :mod:`refsoft.viewer.data` into the page: the search's
 heat map with its colour bar and formula, the path step by step (a slider, step and play
-buttons, the arrow keys), each step's candidates in a table linked both ways to the picture, a
+buttons, the arrow, Home and End keys), each step's candidates in a table linked both ways to the
+picture (hovering highlights; a click chooses the step), a
 side view of the geometry and the stop reason in words (docs/teaching.md).
 """
 
@@ -23,12 +24,16 @@ h1 { font-size: 1.35em; margin: 0.2em 0; }
 #meta { color: #555; }
 #stop { background: #fff6d6; border-left: 4px solid #e0a800; padding: 0.4em 0.8em; margin: 0.6em 0; }
 .row { display: flex; gap: 2em; flex-wrap: wrap; align-items: flex-start; }
-#heat { image-rendering: pixelated; border: 1px solid #aaa; cursor: crosshair; }
+#heat { image-rendering: pixelated; border: 1px solid #aaa; cursor: crosshair; display: block; }
+#heat-box { position: relative; padding: 18px 0 30px 40px; display: inline-block; }
+.tick { position: absolute; font-size: 11px; color: #444; white-space: nowrap; }
+.axis { position: absolute; font-size: 11px; color: #666; }
 #controls { margin: 0.5em 0; display: flex; gap: 0.5em; align-items: center; }
 #slider { width: 320px; }
 #formula, #bar-label, #hover, #side-caption, .legend { font-size: 0.9em; color: #444; max-width: 520px; }
 table { border-collapse: collapse; font: 12px monospace; margin-top: 1em; }
 th, td { border: 1px solid #ddd; padding: 2px 5px; text-align: right; }
+th { position: sticky; top: 0; background: #f2f2f2; }
 tr.current { background: #ffe9b3; }
 tr.linked, td.linked { outline: 2px solid #ff00ff; }
 td.chosen { font-weight: bold; color: #c25400; }
@@ -44,14 +49,13 @@ _BODY = """
 <div class="row">
  <div>
   <h2 id="heat-title" style="font-size:1.05em"></h2>
-  <canvas id="heat" width="10" height="10"></canvas>
+  <div id="grid-pick" hidden><label for="grid-choice">heat map: </label><select id="grid-choice"></select></div>
+  <div id="heat-box"><canvas id="heat" width="10" height="10"></canvas></div>
   <div id="hover">&nbsp;</div>
   <canvas id="bar" width="520" height="46"></canvas>
   <div id="bar-label"></div>
   <div id="formula"></div>
-  <div class="legend">path: white (standard), cyan (inverse), orange (bisection); start green, end red; the
-  current step's candidates yellow, the one moved to orange; magenta: the pixel under the pointer or the
-  table cell under it; pink circles: every reflection point found.</div>
+  <div class="legend" id="legend"></div>
  </div>
  <div>
   <h2 style="font-size:1.05em">Side view</h2>

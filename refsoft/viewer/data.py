@@ -8,16 +8,20 @@ The shape (every field plain lists, numbers, strings, ``None``):
 - ``grids``: heat maps, each ``{"title", "label", "formula", "transform", "r0", "c0", "h", "w",
   "values"}``: ``values`` row by row, ``h * w`` numbers or ``None`` (not covered), for the
   pixels ``r0 .. r0 + h - 1``, ``c0 .. c0 + w - 1``; ``transform`` "nines" (drawn as
-  ``-log10(1 - v)``) or "linear";
-- ``columns``: the table's candidate column names;
+  ``-log10(1 - v)``) or "linear"; ``empty`` when no pixel holds a value;
+- ``columns``: the table's candidate column names; ``label_column``: what a step's ``label`` is
+  (None when it repeats the phase), ``last_column``: what a step's ``note`` (or its move) is;
+- ``legend``: the heat map's marks in words, for this kind of search;
 - ``steps``: in order, each ``{"grid", "label", "phase", "pixel", "rect", "cells", "chosen",
-  "side"}``: the grid it is drawn on, the pixel [row, col] (or ``rect`` [row, col, height, width]
+  "side"}``: the grid it is drawn on, its ``label`` (the phase for a walk; the texel or sample
+  otherwise), the pixel [row, col] (or ``rect`` [row, col, height, width]
   for a hierarchy texel), ``cells`` (one per column: ``{"name", "pixel", "status", "value",
   "text"}``), the index of the cell moved to (or ``None``), and the pixel's point in the side
   view (or ``None``);
 - ``start``, ``end``: pixels; ``images``: every reflection pixel found (several images), or [];
-- ``side``: the side view, ``{"caption", "points": [{"name", "xy"}], "arrows": [{"name", "from",
-  "dir"}], "line": [[x, y], [x, y]] or None}`` in the plane of the eye ray and the vertex;
+- ``side``: the side view, ``{"caption", "points": [{"name", "xy", "far"}], "arrows": [{"name",
+  "from", "dir"}], "rays": [[a, b], ...], "line": [[x, y], [x, y]] or None}`` in the plane of the
+  eye ray and the vertex (a ``far`` point is drawn at the view's edge, in its direction from P);
 - ``stop``: the stop reason in words; ``result``: lines of text.
 """
 
@@ -63,7 +67,8 @@ def _grid(values, mask, box, title, label, formula, transform) -> dict:
     if len(flat) > VIEWER_MAX_GRID_PIXELS:
         raise RefsoftError(f"the heat map would hold {len(flat)} pixels, more than the viewer's "
                            f"{VIEWER_MAX_GRID_PIXELS}: trace at a smaller --width/--height")
-    return {"title": title, "label": label, "formula": formula, "transform": transform, "r0": int(r0),
+    return {"title": title, "label": label, "formula": formula, "transform": transform, "empty": not m.any(),
+            "r0": int(r0),
             "c0": int(c0), "h": int(r1 - r0), "w": int(c1 - c0), "values": flat}
 
 
@@ -113,23 +118,47 @@ def _world(gbuffer, pix):
     return P, _unit(gbuffer.normal[r, c])
 
 
-def _vertex_side(gbuffer, eye, vertex, end, rule_note=""):
-    """The side view of a vertex search ending at pixel ``end``, and its plane."""
+def _vertex_side(gbuffer, eye, vertex, end, rule_note="", stopped=None):
+    """The side view of a vertex search ending at pixel ``end``, and its plane; ``stopped``:
+    "border" or "capped" when the search ended there for that reason."""
     E, V = np.asarray(eye, np.float64), np.asarray(vertex, np.float64)
     P, N = _world(gbuffer, end)
     pl = _Plane(P, E - P, V - P, N)
     B = _unit(_unit(E - P) + _unit(V - P))
     virtual = V - 2.0 * ((V - P) @ N) * N
-    side = {"caption": (f"The plane of the eye ray and the vertex, through the reflection point P. The normal N "
-                        f"leaves this plane by {pl.out_deg:.2f}°; at the reflection point N and the bisector B "
-                        f"coincide. V' is V mirrored across the tangent plane at P{rule_note}."),
+    side = {"caption": _side_caption(pl, N, B, float((V - P) @ N), stopped, rule_note),
             "points": [{"name": "eye O", "xy": pl.xy(E)}, {"name": "vertex V", "xy": pl.xy(V)},
-                       {"name": "reflection point P", "xy": pl.xy(P)}, {"name": "virtual vertex V'", "xy": pl.xy(virtual)}],
+                       {"name": "reflection point P", "xy": pl.xy(P)},
+                       {"name": "virtual vertex V'", "xy": pl.xy(virtual)}],
             "arrows": [{"name": "normal N", "from": pl.xy(P), "dir": pl.dir(N)},
                        {"name": "bisector B", "from": pl.xy(P), "dir": pl.dir(B)}],
             "rays": [[pl.xy(E), pl.xy(P)], [pl.xy(P), pl.xy(V)], [pl.xy(P), pl.xy(virtual)]],
             "line": [pl.xy(P - 10.0 * pl.right), pl.xy(P + 10.0 * pl.right)]}
     return side, pl
+
+
+def _side_caption(pl, N, B, height, stopped=None, rule_note="") -> str:
+    """The side view's words for its case: a hidden vertex (behind the tangent plane: N and B
+    cannot coincide), a search stopped on the border or by the cap, or a reflection pixel (N and
+    B coincide to the pixel grid's precision)."""
+    apart = float(np.degrees(np.arccos(np.clip(_unit(N) @ _unit(B), -1.0, 1.0))))
+    head = (f"The plane of the eye ray and the vertex, through the pixel P the search ended at. The normal N leaves "
+            f"this plane by {pl.out_deg:.2f}°. ")
+    mirrored = "V' is V mirrored across the tangent plane at P"
+    if height < 0.0:
+        body = (f"The vertex V is behind the tangent plane at P (HIDDEN): no point of the surface's side facing the "
+                f"eye reflects it, so N and the bisector B of the eye and V do not coincide (they are {apart:.1f}° "
+                f"apart); {mirrored}, on the eye's side of that plane")
+    elif stopped == "border":
+        body = (f"The search stopped on the reflector's border (BORDER), N and the bisector B {apart:.1f}° apart: "
+                f"the true reflection point may lie beyond the silhouette; {mirrored}")
+    elif stopped == "capped":
+        body = (f"The walk was capped while still moving (CAPPED), N and the bisector B {apart:.1f}° apart; "
+                f"{mirrored}")
+    else:
+        body = (f"P is the reflection pixel: N and the bisector B coincide to the pixel grid's precision "
+                f"({apart:.2f}° apart: the exact reflection point lies between pixel centres); {mirrored}")
+    return head + body + f"{rule_note}."
 
 
 def _stop_walk(trace) -> str:
@@ -146,6 +175,14 @@ def _stop_walk(trace) -> str:
     return words + ("" if not extra else " Also: " + "; ".join(extra) + ".")
 
 
+def _walk_legend(inverse, images) -> str:
+    return ("Path: white the standard search" + (", cyan the inverse search (its steps drawn on the inverse "
+                                                  "score's map)" if inverse else "")
+            + "; start green, end red; the current step's pixel white, its candidates yellow, the one moved to "
+              "orange; magenta: the pixel under the pointer, or the table cell under it"
+            + ("; pink circles: every reflection point found." if images else "."))
+
+
 def walk_data(replay, images=None) -> dict:
     """The page's data for a walk (:class:`refsoft.search.trace.VertexReplay` with a
     :class:`~refsoft.search.trace.Trace`). ``images``: optional (M, 2) reflection pixels of the
@@ -156,7 +193,11 @@ def walk_data(replay, images=None) -> dict:
     grids = [_grid(tr.score_map, mask, box, "standard score s", "−log10(1 − s)", SCORE_FORMULA, "nines")]
     if tr.inverse_map is not None:
         grids.append(_grid(tr.inverse_map, mask, box, "inverse score", "−log10(1 − s)", INVERSE_FORMULA, "nines"))
-    side, pl = _vertex_side(gb, tr.eye, tr.vertex, tr.pixel)
+    from ..search import flag_names
+
+    named = flag_names(tr.flags)
+    stopped = "capped" if tr.stop == "capped" else "border" if "BORDER" in named else None
+    side, pl = _vertex_side(gb, tr.eye, tr.vertex, tr.pixel, stopped=stopped)
     n_cand = 5 if tr.neighbourhood == "cross" else 9
     steps = []
     for i, s in enumerate(tr.steps, 1):
@@ -165,11 +206,14 @@ def walk_data(replay, images=None) -> dict:
                   "text": c["status"] if c["score"] is None else f"{c['score']:.8f}"} for c in s["candidates"]]
         chosen = None if s["move_to"] is None else [c["pixel"] for c in s["candidates"]].index(s["move_to"])
         P, N = _world(gb, s["pixel"])
-        steps.append({"grid": 0 if s["phase"] == "standard" or len(grids) == 1 else 1, "label": f"step {i}",
+        steps.append({"grid": 0 if s["phase"] == "standard" or len(grids) == 1 else 1, "label": s["phase"],
                       "phase": s["phase"], "pixel": list(s["pixel"]), "rect": None, "cells": cells,
                       "chosen": chosen, "side": {"xy": pl.xy(P), "normal": pl.dir(N)}})
     from ..search import flag_names
 
+    every = [] if images is None else [[int(a), int(b)] for a, b in np.asarray(images).reshape(-1, 2)]
+    found = [] if images is None else [f"every image: {len(every)} found" + (": " if every else "")
+                                       + ", ".join(f"({r}, {c})" for r, c in every) + " (circled in pink)"]
     return {"kind": "walk", "title": f"Vertex {replay.vertex} in reflector {replay.reflector}, {replay.scene} frame "
                                      f"{replay.frame}: the walk",
             "meta": [["scene", replay.scene], ["frame", replay.frame], ["reflector", replay.reflector],
@@ -177,11 +221,11 @@ def walk_data(replay, images=None) -> dict:
                      ["neighbourhood", tr.neighbourhood], ["inverse", tr.inverse], ["cap", tr.cap],
                      ["start", f"({tr.start[0]}, {tr.start[1]})" + (" after a restart" if tr.restarted else "")]],
             "grids": grids, "columns": [c["name"] for c in tr.steps[0]["candidates"]] if tr.steps else [],
+            "label_column": None, "last_column": "move", "legend": _walk_legend(len(grids) > 1, bool(every)),
             "n_candidates": n_cand, "steps": steps, "start": list(tr.start), "end": list(tr.pixel),
-            "images": [] if images is None else [[int(a), int(b)] for a, b in np.asarray(images).reshape(-1, 2)],
-            "side": side, "stop": _stop_walk(tr),
+            "images": every, "side": side, "stop": _stop_walk(tr),
             "result": [f"pixel ({tr.pixel[0]}, {tr.pixel[1]}), score {tr.score:.8f}, margin {tr.margin:.3g}, "
-                       f"{tr.iterations} iterations, flags: {', '.join(flag_names(tr.flags)) or 'none'}"]}
+                       f"{tr.iterations} iterations, flags: {', '.join(flag_names(tr.flags)) or 'none'}"] + found}
 
 
 def _score_field(gbuffer, eye, vertex):
@@ -222,13 +266,20 @@ def hierarchy_data(replay, eye, vertex) -> dict:
             rect = [r0 + i * side_px, c0 + j * side_px, side_px, side_px]
         if st["event"] in ("popped", "chosen"):
             centre = [rect[0] + rect[2] // 2, rect[1] + rect[3] // 2]
-            steps.append({"grid": 0, "label": f"{st['event']} L{lv}", "phase": st["event"], "pixel": centre,
-                          "rect": rect, "cells": [], "chosen": None, "side": None})
+            what = ((f"L{lv} ({i}, {j})" if st["event"] == "popped" else f"pixel ({i}, {j})")
+                    + ("" if st["attempt"] == 0 else f", pass {st['attempt'] + 1}"))
+            steps.append({"grid": 0, "label": what, "phase": st["event"], "pixel": centre,
+                          "rect": rect, "cells": [], "chosen": None, "side": None,
+                          "note": "the result" if st["event"] == "chosen" else "none tested"})
         elif steps:
             steps[-1]["cells"].append({"name": f"L{lv} ({i}, {j})", "pixel": [rect[0] + rect[2] // 2,
                                                                                rect[1] + rect[3] // 2],
                                        "status": st["event"], "value": None, "text": st["event"], "rect": rect})
             width = max(width, len(steps[-1]["cells"]))
+            pushed = sum(c["status"] == "pushed" for c in steps[-1]["cells"])
+            steps[-1]["note"] = f"{pushed} of {len(steps[-1]['cells'])} pushed"
+    n_pop = sum(s["phase"] == "popped" for s in steps)
+    n_chosen = len(steps) - n_pop
     stop = (f"Chosen: pixel ({tr.pixel[0]}, {tr.pixel[1]}) after {tr.tests} texel tests, the best base pixel "
             "whose cones contain the vertex." if tr.pixel is not None else
             f"No pixel: after {tr.tests} texel tests no texel's cone contains the vertex.")
@@ -238,8 +289,17 @@ def hierarchy_data(replay, eye, vertex) -> dict:
                      ["vertex", replay.vertex], ["levels", tr.levels], ["base", f"{tr.base_size}x{tr.base_size} "
                                                                                   f"at ({r0}, {c0})"]],
             "grids": grids, "columns": [f"child {k + 1}" for k in range(width)], "n_candidates": width,
+            "label_column": "texel", "last_column": "children pushed",
+            "legend": (f"The current texel outlined white, those popped before it faint white; its children tested: "
+                       f"yellow pushed (the cone contains the vertex), grey rejected; the green dot: the first texel "
+                       f"popped (the top level, L{tr.levels - 1}); red: the chosen pixel. Levels: L0 is one pixel, "
+                       f"L{tr.levels - 1} {1 << (tr.levels - 1)}x{1 << (tr.levels - 1)} pixels; a texel of level l "
+                       f"covers 2^l x 2^l pixels; pass 2 and on: the traversal again with its cones and spheres "
+                       f"enlarged, after a pass reached no base pixel. The map: the standard score, for orientation."),
             "steps": steps, "start": steps[0]["pixel"] if steps else list(end), "end": list(end), "images": [],
-            "side": side, "stop": stop, "result": [f"{tr.tests} texel tests, {len(steps)} texels popped"]}
+            "side": side, "stop": stop,
+            "result": [f"{tr.tests} texel tests, {n_pop} texels popped"
+                       + (", then the chosen pixel" if n_chosen else ", no pixel chosen")]}
 
 
 # --- the LDT pixel search ----------------------------------------------------------------------
@@ -263,11 +323,11 @@ def ldt_data(trace) -> dict:
                                f"{fc['name']}: layer 0's z", "z_0 (0 at the face's plane)", LDT_FORMULA, "linear"))
             for smp in fc["samples"]:
                 cells = [{"name": f"layer {v['layer']}", "pixel": smp["texel"], "status": v["test"], "value": v["z"],
-                          "text": f"z {v['z']:.6f}" + ("" if v["d"] is None else f", d {v['d']:.6f}") + f": {v['test']}"}
-                         for v in smp["layers"]]
+                          "text": f"z {v['z']:.6f}" + ("" if v["d"] is None else f", d {v['d']:.6f}")
+                          + f": {v['test']}"} for v in smp["layers"]]
                 width = max(width, len(cells))
                 hit = [i for i, v in enumerate(smp["layers"]) if v["test"] == "inside"]
-                steps.append({"grid": g, "label": f"{fc['name']} m{smp['m']}", "phase": "linear",
+                steps.append({"grid": g, "label": f"face {fc['name']} sample {smp['m']}", "phase": "linear",
                               "pixel": list(smp["texel"]), "rect": None, "cells": cells,
                               "chosen": hit[0] if hit else None, "note": _decision(smp), "s": smp["s"]})
             if fc["bisection"] is not None:
@@ -275,24 +335,29 @@ def ldt_data(trace) -> dict:
                     cells = [] if pt["z"] is None else [{"name": f"layer {fc['layer']}", "pixel": pt["texel"],
                                                          "status": "inside" if pt["inside"] else "outside",
                                                          "value": pt["z"], "text": f"z {pt['z']:.6f}, d {pt['d']:.6f}"}]
-                    steps.append({"grid": g, "label": f"{fc['name']} b{b}", "phase": "bisection",
+                    steps.append({"grid": g, "label": f"face {fc['name']} bisection {b}", "phase": "bisection",
                                   "pixel": list(pt["texel"]), "rect": None, "cells": cells,
-                                  "chosen": 0 if pt["inside"] else None, "note": "inside" if pt["inside"] else "outside",
+                                  "chosen": 0 if pt["inside"] else None,
+                                  "note": "inside" if pt["inside"] else "outside",
                                   "s": pt["s"]})
     ray, res = trace.ray, trace.result
     P, N, r = (np.asarray(ray[k], np.float64) for k in ("origin", "normal", "direction"))
     I = np.asarray(ray["incident"], np.float64)
     pl = _Plane(P, -I, N, N)
     E = np.asarray(ray["eye"], np.float64) if ray["eye"] is not None else P - I * 2.0
-    pts = [{"name": "eye O" if ray["eye"] is not None else "towards the eye", "xy": pl.xy(E)},
+    # the drawn ray reaches the hit (or 2 without one) and at least the last sample
+    reach = max([res["distance"] if res["object"] >= 0 else 2.0] + [st["s"] for st in steps])
+    # an eye much farther than the reflected ray reaches is drawn at the view's edge, in its direction
+    far = bool(np.linalg.norm(E - P) > 4.0 * reach)
+    pts = [{"name": "eye O" if ray["eye"] is not None else "towards the eye", "xy": pl.xy(E), "far": far},
            {"name": "reflector point P", "xy": pl.xy(P)}]
     if res["object"] >= 0:
         pts.append({"name": f"hit on object {res['object_id']}", "xy": pl.xy(np.asarray(res["hit"], np.float64))})
     for st in steps:
         st["side"] = {"xy": pl.xy(P + st.pop("s") * r), "normal": None}
-    reach = res["distance"] if res["object"] >= 0 else 2.0
     side = {"caption": "The plane of the eye ray and the normal at the reflector pixel: the reflected ray r leaves "
-                       "P; each step's dot is its sample's point P + s r.",
+                       "P (drawn to the hit, or at least to the last sample); the current step's sample, the point P + s r, "
+                       "is the orange circle on it.",
             "points": pts, "arrows": [{"name": "normal N", "from": pl.xy(P), "dir": pl.dir(N)},
                                       {"name": "reflected r", "from": pl.xy(P), "dir": pl.dir(r)}],
             "rays": [[pl.xy(E), pl.xy(P)], [pl.xy(P), pl.xy(P + reach * r)]],
@@ -311,6 +376,12 @@ def ldt_data(trace) -> dict:
                      ["reflector", f"{trace.reflector} ({trace.name(trace.reflector)})"]]
             + [[k, o[k]] for k in ("resolution", "layers", "faces", "linear", "tau", "regions", "precision")],
             "grids": grids, "columns": [f"layer {j}" for j in range(width)], "n_candidates": width, "steps": steps,
+            "label_column": "sample", "last_column": "decision",
+            "legend": ("Each face's map: layer 0's front depth z_0 (grey: no texel there). The current sample's texel "
+                       "outlined white, yellow while its layers are tested, orange when the ray is inside a layer; "
+                       "the samples' path white (linear) and orange (bisection), the first sample green, the last "
+                       "red. Side view: the reflected ray r from P, the current sample an orange circle on it."),
             "start": steps[0]["pixel"] if steps else [0, 0], "end": steps[-1]["pixel"] if steps else [0, 0],
             "images": [], "side": side, "stop": stop,
-            "result": [f"{res['linear_samples']} linear samples, {res['binary_steps']} bisection steps, flags: {named}"]}
+            "result": [f"{res['linear_samples']} linear samples, {res['binary_steps']} bisection steps, "
+                       f"flags: {named}"]}

@@ -84,6 +84,37 @@ def test_table1_smoke(tmp_path, capsys):
     assert "paper" in capsys.readouterr().out
 
 
+def test_table1_against_gbuffer_resolution_and_motion(tmp_path, capsys):
+    out = tmp_path / "t1"
+    assert cli.main(["bench", "table1", "--scheduler", "serial", "--no-timing", "--scenes", "ants", "--width", "48",
+                     "--height", "36", "--frames", "3", "--gbuffer-scales", "1", "2", "--slowdowns", "1", "2",
+                     "--out", str(out)]) == 0
+    rows = _csv(out / "table1.csv")
+    assert [(r["gbuffer"], r["slowdown"], r["frames"]) for r in rows] == [
+        ("48x36", "1", "3"), ("48x36", "2", "5"), ("96x72", "1", "3"), ("96x72", "2", "5")]
+    # a finer G-buffer has more pixels to cross: the cold first frame's walks are longer
+    assert float(rows[2]["max_frame_mean"]) > float(rows[0]["max_frame_mean"])
+    assert "slowdown 2 (5 frames)" in capsys.readouterr().out
+
+
+def test_a_slowed_animation_passes_through_the_same_poses():
+    import refsoft
+    from refsoft.bench.table1 import slowed
+
+    scene = refsoft.load_scene("ants", width=48, height=36)
+    slow = slowed(scene, 3)
+    assert slow.n_frames == (scene.n_frames - 1) * 3 + 1
+    for k in (0, 1, 7, scene.n_frames - 1):
+        a, b = scene.camera_at(k), slow.camera_at(3 * k)
+        assert np.array_equal(a.eye, b.eye) and np.array_equal(a.target, b.target)
+        for j in range(1, len(scene.objects) + 1):
+            assert np.array_equal(scene.world_mesh(j, k).vertices, slow.world_mesh(j, 3 * k).vertices)
+    # between two poses, the midway frame of a slowdown 2 is the midway point of the path
+    s2 = slowed(scene, 2)
+    mid = s2.camera_at(3).eye
+    assert np.allclose(mid, 0.5 * (scene.camera_at(1).eye + scene.camera_at(2).eye))
+
+
 def test_without_matplotlib_the_tables_are_still_written(tmp_path, capsys, monkeypatch):
     import importlib
 

@@ -163,3 +163,8 @@ def test_each_bench_subcommand_has_its_own_help(what, own, other, capsys):
     out = capsys.readouterr().out
     assert e.value.code == 0 and f"refsoft bench {what}" in out
     assert own in out and other not in out  # its own options only
+    # and its own defaults only: no other subcommand's named in its help
+    others = {"accuracy", "sweep", "scaling", "table1"} - {what}
+    words = " ".join(out.split())
+    assert not any(f"{o}:" in words or f"{o} " in words.split("options:", 1)[-1] for o in others), words
+    assert f"out/bench/{what}" in words

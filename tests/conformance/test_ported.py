@@ -114,3 +114,41 @@ def test_a_malformed_declaration_is_refused(golden, tmp_path, capsys, content, w
     err = capsys.readouterr().err.strip()
     assert err.startswith("refsoft: error:") and "ported.json" in err and len(err.splitlines()) == 1
     assert not report.exists()  # nothing written on bad input
+
+
+def _one_image_picture(path):
+    """The frame at ``path`` as a port that draws one image per vertex might write it: the
+    per-image arrays left out, one pixel of the picture and of the reflected ids changed."""
+    arrays = {k: v for k, v in read_npz(path).items() if not k.startswith("image_")}
+    arrays["image"] = arrays["image"].copy()
+    arrays["image"][0, 0] ^= np.uint8(64)
+    arrays["reflected_id"] = arrays["reflected_id"].copy()
+    arrays["reflected_id"][0, 0] += 1
+    write_npz(path, **arrays)
+
+
+def test_a_port_without_every_image_leaves_the_picture_drawn_from_every_image_not_ported(golden, tmp_path):
+    """On a frame the oracle drew from every image (it holds image_count_K), a port that declares
+    kind 'images' not ported is not judged on its picture and reflected ids; without the
+    declaration the same candidate fails."""
+    cand = _candidate(golden, tmp_path, ["concave_accurate"], {"kinds": ["images"]})
+    for path in (cand / "concave_accurate").glob("frame_*.npz"):
+        _one_image_picture(path)
+    s = check(golden, cand, cases=["concave_accurate"])
+    status = {(f.frame, f.key): f.status for f in s["_findings"]}
+    frames = _frames(golden, "concave_accurate")
+    assert s["passed"] and s["counts"]["fail"] == 0 and s["counts"]["missing"] == 0
+    assert all(status[(i, k)] == "not_ported" for i in range(frames) for k in ("image", "reflected_id"))
+    (cand / "ported.json").unlink()
+    s = check(golden, cand, cases=["concave_accurate"])
+    status = {(f.frame, f.key): f.status for f in s["_findings"]}
+    assert not s["passed"] and status[(0, "image")] == "fail"
+
+
+def test_a_port_without_every_image_is_judged_on_a_convex_picture(golden, tmp_path):
+    """The declaration does not excuse a picture the oracle drew from one image per vertex."""
+    cand = _candidate(golden, tmp_path, ["sphere"], {"kinds": ["images"]})
+    _one_image_picture(cand / "sphere" / "frame_0000.npz")
+    s = check(golden, cand, cases=["sphere"])
+    status = {f.key: f.status for f in s["_findings"]}
+    assert not s["passed"] and status["image"] == "fail"

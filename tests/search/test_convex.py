@@ -16,7 +16,7 @@ from refsoft.search.convex import several_possible
 from refsoft.search.images import find_images
 from refsoft.search.reflect import reflect
 
-NOT_CONVEX = {"concave", "torus"}
+NOT_CONVEX = {"concave", "torus", "shaving", "wavy"}
 
 
 def _proxy(scene, k):

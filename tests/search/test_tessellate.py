@@ -205,3 +205,106 @@ def test_reflected_mesh_is_reused_for_the_same_mesh_objects_only():
     for got in (first[1], again[1]):
         for name in ("vertices", "normals", "faces", "face_object", "vertex_offsets", "face_offsets"):
             np.testing.assert_array_equal(getattr(got, name), getattr(want, name))
+
+
+def test_edge_pixel_errors_equal_one_plain_gauss_newton_step():
+    """The pixel metric against tests/naive.py's refinement run on each edge's midpoint from the
+    texel nearest to the midpoint of its ends' refined points: the distance from that midpoint to
+    the refined point, 2 where an end has no pixel or that texel is uncovered."""
+    from naive import naive_refine
+    from scene_data import sphere_searched
+
+    from refsoft import search
+    from refsoft.search.refine import refine
+    from refsoft.search.tessellate import edge_pixel_errors
+
+    scene, gb, verts, _, comb, res = sphere_searched("plane")
+    eye = scene.camera.eye
+    _, _, off = refine(gb, eye, verts, res)
+    f = comb.faces
+    a, b = f[:, 0], f[:, 1]
+    pa, pb = res.pixel[a].copy(), res.pixel[b].copy()
+    pa[::7] = -1  # ends without a pixel
+    got = edge_pixel_errors(gb, eye, verts[a], verts[b], pa, pb, off[a], off[b])
+    mid = 0.5 * ((pa + off[a].astype(np.float64)) + (pb + off[b].astype(np.float64)))
+    base = np.floor(mid + 0.5).astype(np.int64)
+    h, w = gb.mask.shape
+    ok = np.all(pa >= 0, axis=1) & np.all(pb >= 0, axis=1) & np.all(base >= 0, axis=1)
+    ok &= (base[:, 0] < h) & (base[:, 1] < w)
+    ok[ok] &= gb.mask[base[ok, 0], base[ok, 1]]
+    m = 0.5 * (verts[a] + verts[b])
+    zero = np.zeros(len(m), np.uint8)
+    _, _, step = naive_refine(gb.position, gb.normal, gb.mask, m[ok] - gb.origin, eye - gb.origin, base[ok], zero[ok],
+                              search.HIDDEN, search.CULLED)
+    want = np.full(len(m), 2.0)
+    want[ok] = np.hypot(base[ok, 0] + step[:, 0] - mid[ok, 0], base[ok, 1] + step[:, 1] - mid[ok, 1])
+    assert ok.sum() > 100 and (~ok).sum() > 10
+    np.testing.assert_array_equal(got[~ok], 2.0)
+    # the kernel's arithmetic is the G-buffer's float32, the reference's float64
+    np.testing.assert_allclose(got[ok], want[ok], rtol=0, atol=2e-3)
+    assert (want[ok] > 0.05).any()  # some edges bend by more than a twentieth of a pixel
+
+
+def test_the_pixel_metric_splits_some_edges_and_needs_the_subtexel_points():
+    """By the pixel metric, a threshold of a third of a pixel splits more than nothing and less
+    than everything; the metric refuses to run without the sub-texel points."""
+    from scene_data import sphere_searched
+
+    from refsoft.errors import RefsoftError
+    from refsoft.search.refine import refine
+    from refsoft.search.tessellate import tessellate
+
+    scene, gb, verts, _, comb, res = sphere_searched("plane")
+    eye = scene.camera.eye
+    surface = refine(gb, eye, verts, res)
+    args = (gb, eye, verts, comb.normals, comb.faces, comb.face_object, res.pixel, res.flags)
+    with pytest.raises(RefsoftError, match="sub-texel"):
+        tessellate(*args, 0.3, 2, metric="pixels")
+    some = tessellate(*args, 0.3, 2, surface=surface, metric="pixels")
+    every = tessellate(*args, 0.0, 2, surface=surface, metric="pixels")
+    assert len(comb.faces) < len(some.faces) < len(every.faces)
+    again = tessellate(*args, 0.3, 2, surface=surface, metric="pixels")
+    assert np.array_equal(again.faces, some.faces) and np.array_equal(again.surface[2], some.surface[2])
+    # the outline edges measured alone (a threshold the thesis's error never exceeds): a subset
+    # of the edges, so no more splits (here, fewer); with today's rule, more than today's
+    outline = tessellate(*args, 2.0, 2, surface=surface, outline=0.3)
+    assert len(comb.faces) < len(outline.faces) < len(some.faces)
+    today = tessellate(*args, 1e-4, 2, surface=surface)
+    both = tessellate(*args, 1e-4, 2, surface=surface, outline=0.3)
+    assert len(today.faces) < len(both.faces)
+
+
+def test_outline_edges_equal_a_plain_count_of_faces_and_windings(rng):
+    """outline_edges against a loop over the edges: used once or thrice, or by two faces whose
+    reflected corners wind in opposite senses (or one degenerate)."""
+    from collections import defaultdict
+
+    from refsoft.search.tessellate import outline_edges
+
+    n = 40
+    faces = np.array([rng.choice(n, 3, replace=False) for _ in range(120)])
+    faces = np.concatenate([faces, faces[:10][:, [0, 2, 1]], faces[10:15]])  # flipped twins, a third use
+    pixel = rng.integers(0, 30, (n, 2)).astype(np.int32)
+    offset = rng.uniform(-0.5, 0.5, (n, 2)).astype(np.float32)
+    pixel[3] = pixel[4]  # a degenerate face somewhere, maybe
+    q = pixel.astype(np.float64) + offset.astype(np.float64)
+
+    def wind(face):
+        a, b, c = q[face]
+        return np.sign((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
+
+    users = defaultdict(list)
+    for i, f in enumerate(faces):
+        for k in range(3):
+            users[frozenset((int(f[k]), int(f[(k + 1) % 3])))].append(i)
+    want = np.zeros((len(faces), 3), dtype=bool)
+    for i, f in enumerate(faces):
+        for k in range(3):
+            u = users[frozenset((int(f[k]), int(f[(k + 1) % 3])))]
+            w = [wind(faces[j]) for j in u]
+            want[i, k] = len(u) != 2 or w[0] != w[1] or 0 in w
+    got = outline_edges(faces, pixel, offset)
+    np.testing.assert_array_equal(got, want)
+    assert want.any() and (~want).any()
+    rows = np.array([5, 0, 130, 7, 7])
+    np.testing.assert_array_equal(outline_edges(faces, pixel, offset, rows), want[rows])

@@ -97,11 +97,18 @@ def test_table_and_picture_light_each_other_up(browser, walk_replay, tmp_path):
     page, errors = _open(browser, tmp_path, walk_replay)
     steps = walk_replay.trace.steps
     k = len(steps) // 2
-    # a table cell: its step becomes current and its pixel is marked on the picture
+    # a table cell under the pointer: its pixel is marked on the picture and the cell lit, the
+    # step stays; a click chooses the step, and it stays when the pointer leaves
     cell = page.locator(f'#steps tr[data-step="{k}"] td.cand').nth(2)
     cell.hover()
-    assert _current_row(page) == k
+    assert _current_row(page) == 0
     assert page.evaluate("window.refsoftViewer.hover()") == steps[k]["candidates"][2]["pixel"]
+    assert "linked" in cell.get_attribute("class").split()
+    cell.click()
+    page.mouse.move(0, 0)
+    assert _current_row(page) == k and page.evaluate("window.refsoftViewer.hover()") is None
+    assert "linked" not in cell.get_attribute("class").split()
+    page.evaluate("window.refsoftViewer.go(0)")
     # a pixel of the picture: the rows of the steps at that pixel light up
     box = page.locator("#heat").bounding_box()
     g = page.evaluate("JSON.parse(document.getElementById('trace-data').textContent).grids[0]")
@@ -126,4 +133,63 @@ def test_heat_map_and_side_view_are_drawn(which, request, browser, tmp_path):
     assert len(np.unique(bar, axis=0)) > 20
     assert page.locator("#side circle").count() >= 3 and page.locator("#side line").count() >= 4
     assert errors == []
+    page.close()
+
+
+def test_without_chromium_the_browser_tests_fail_naming_the_packages(monkeypatch):
+    monkeypatch.setattr(shutil, "which", lambda name: None)
+    monkeypatch.setattr(os.path, "exists", lambda path: False)
+    with pytest.raises(pytest.fail.Exception, match="apt-get install chromium chromium-driver"):
+        _chromium()
+
+
+def test_home_end_keys_and_words_that_do_not_repeat(browser, hierarchy_replay, tmp_path):
+    page, errors = _open(browser, tmp_path, hierarchy_replay)
+    n = page.evaluate("window.refsoftViewer.steps")
+    page.keyboard.press("End")
+    assert _current_row(page) == n - 1
+    page.keyboard.press("Home")
+    assert _current_row(page) == 0
+    label = page.locator("#step-label").inner_text()
+    assert label.startswith(f"step 1 of {n}: popped L") and label.count("popped") == 1
+    heads = page.locator("#steps thead th").all_inner_texts()
+    assert heads[:4] == ["step", "phase", "texel", "pixel"] and heads[-1] == "children pushed" and "#" not in heads
+    assert "pushed" in page.locator("#legend").inner_text()
+    assert page.locator("#heat-box .tick").count() >= 4
+    assert errors == []
+    page.close()
+
+
+def test_an_inverse_search_shows_both_maps(browser, inverse_replay, tmp_path):
+    page, errors = _open(browser, tmp_path, inverse_replay)
+    heads = page.locator("#steps thead th").all_inner_texts()
+    assert heads[:3] == ["step", "phase", "pixel"] and heads[-1] == "move"
+    assert page.locator("#step-label").inner_text().startswith("step 1 of ") and "step 1," not in \
+        page.locator("#step-label").inner_text()
+    assert page.locator("#grid-pick").is_visible()
+    shots = {}
+    for value, title in (("0", "standard score s"), ("1", "inverse score")):
+        page.select_option("#grid-choice", value)
+        assert page.locator("#heat-title").inner_text() == title
+        shots[value] = page.locator("#heat").screenshot()
+    assert shots["0"] != shots["1"]
+    page.select_option("#grid-choice", "-1")  # the step's own again: the last step is an inverse one
+    page.keyboard.press("End")
+    assert page.locator("#heat-title").inner_text() == "inverse score"
+    assert errors == []
+    page.close()
+
+
+def test_a_face_with_no_covered_texel_says_so(browser, ldt_trace, tmp_path):
+    from refsoft.viewer import trace_data, write_page
+
+    d = trace_data(ldt_trace)
+    g = d["grids"][d["steps"][0]["grid"]]
+    g["values"], g["empty"] = [None] * len(g["values"]), True
+    write_page(tmp_path / "trace.html", d)
+    page = browser.new_page()
+    page.goto((tmp_path / "trace.html").as_uri())
+    page.wait_for_function("window.refsoftViewer !== undefined")
+    assert "no texel of this face covered" in page.locator("#bar-label").inner_text()
+    assert "sample" in page.locator("#legend").inner_text()
     page.close()

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from refsoft.errors import RefsoftError
+from refsoft.search import BORDER
 from refsoft.viewer import page_html, trace_data, write_trace_page
 
 
@@ -94,7 +95,8 @@ def test_ldt_data_holds_every_sample_and_bisection_point(ldt_trace):
     want = []
     for fc in faces:
         want += [("linear", s["texel"], len(s["layers"])) for s in fc["samples"]]
-        want += [("bisection", p["texel"], 0 if p["z"] is None else 1) for p in (fc["bisection"] or {"points": []})["points"]]
+        points = (fc["bisection"] or {"points": []})["points"]
+        want += [("bisection", p["texel"], 0 if p["z"] is None else 1) for p in points]
     assert [(s["phase"], s["pixel"], len(s["cells"])) for s in d["steps"]] == want
     assert len(d["grids"]) == len(faces)
     assert d["steps"][-1]["pixel"] == tr.result["texel"] or tr.result["binary_steps"] == 0
@@ -120,3 +122,82 @@ def test_page_data_cannot_close_its_script_block(walk_replay):
 def test_trace_data_refuses_other_objects():
     with pytest.raises(RefsoftError, match="VertexReplay or a PixelTrace"):
         trace_data(object())
+
+
+def test_page_is_the_same_bytes_on_every_run_and_thread_count(walk_replay, tmp_path):
+    import numba
+
+    from refsoft.search.trace import trace_vertex
+
+    write_trace_page(tmp_path / "a", walk_replay)
+    scene = __import__("refsoft").load_scene("sphere", width=160, height=120)
+    numba.set_num_threads(1)
+    try:
+        write_trace_page(tmp_path / "b", trace_vertex(scene, 1500, neighbourhood="box"))
+    finally:
+        numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+    assert (tmp_path / "a" / "trace.html").read_bytes() == (tmp_path / "b" / "trace.html").read_bytes()
+
+
+def test_hierarchy_result_counts_the_popped_texels_apart_from_the_chosen_pixel(hierarchy_replay):
+    tr = hierarchy_replay.trace
+    d = trace_data(hierarchy_replay)
+    popped = sum(s["event"] == "popped" for s in tr.steps)
+    chosen = sum(s["event"] == "chosen" for s in tr.steps)
+    assert chosen == 1 and f"{tr.tests} texel tests, {popped} texels popped, then the chosen pixel" == d["result"][0]
+    assert sum(s["phase"] == "popped" for s in d["steps"]) == popped
+
+
+@pytest.mark.parametrize("which", ["walk_replay", "inverse_replay"])
+def test_side_caption_says_which_case_it_draws(which, request):
+    rp = request.getfixturevalue(which)
+    gb = rp.gbuffer
+    P = gb.position[tuple(rp.trace.pixel)].astype(np.float64) + gb.origin
+    N = gb.normal[tuple(rp.trace.pixel)].astype(np.float64)
+    behind = float((rp.position - P) @ N) < 0.0
+    caption = trace_data(rp)["side"]["caption"]
+    assert ("behind the tangent plane" in caption) == behind
+    border = bool(rp.trace.flags & BORDER)
+    assert ("coincide to the pixel grid's precision" in caption) == (not behind and not border)
+    assert ("on the reflector's border" in caption) == (border and not behind)
+    if behind:
+        assert "do not coincide" in caption
+
+
+def test_each_method_has_its_own_legend_and_last_column(walk_replay, hierarchy_replay, ldt_trace):
+    w, h, l = trace_data(walk_replay), trace_data(hierarchy_replay), trace_data(ldt_trace)
+    assert len({w["legend"], h["legend"], l["legend"]}) == 3
+    assert "moved to" in w["legend"] and "pink" not in w["legend"]  # no images were given
+    assert all(k in h["legend"] for k in ("pushed", "rejected", "green dot", "L0")) and "moved to" not in h["legend"]
+    assert "layer" in l["legend"] and "sample" in l["legend"] and "moved to" not in l["legend"]
+    assert (w["last_column"], h["last_column"], l["last_column"]) == ("move", "children pushed", "decision")
+    assert w["label_column"] is None and h["label_column"] == "texel" and l["label_column"] == "sample"
+    for st in h["steps"]:  # the label is the texel, not the event again
+        assert st["phase"] not in st["label"]
+        assert st["note"] == ("the result" if st["phase"] == "chosen" else
+                              f"{sum(c['status'] == 'pushed' for c in st['cells'])} of {len(st['cells'])} pushed"
+                              if st["cells"] else "none tested")
+
+
+def test_ldt_side_ray_reaches_the_last_sample(ldt_trace):
+    d = trace_data(ldt_trace)
+    a, b = (np.array(p) for p in d["side"]["rays"][1])
+    reach = np.linalg.norm(b - a)
+    far = max(np.linalg.norm(np.array(s["side"]["xy"]) - a) for s in d["steps"])
+    assert reach >= far * (1 - 1e-6)
+
+
+def test_an_empty_map_says_so():
+    from refsoft.viewer.data import _grid
+
+    vals = np.arange(12.0).reshape(3, 4)
+    assert _grid(vals, np.zeros((3, 4), bool), (0, 3, 0, 4), "t", "l", "f", "linear")["empty"]
+    assert not _grid(vals, np.eye(3, 4, dtype=bool), (0, 3, 0, 4), "t", "l", "f", "linear")["empty"]
+
+
+def test_hierarchy_labels_name_the_pass_after_the_first(hierarchy_replay):
+    tr = hierarchy_replay.trace
+    d = trace_data(hierarchy_replay)
+    events = [s for s in tr.steps if s["event"] in ("popped", "chosen")]
+    for st, ev in zip(d["steps"], events):
+        assert (f"pass {ev['attempt'] + 1}" in st["label"]) == (ev["attempt"] > 0)

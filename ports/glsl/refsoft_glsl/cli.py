@@ -26,7 +26,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     from .context import GLUnavailable, context
     from .inputs import InputError
-    from .run import case_names, gl_versions, run_case
+    from .run import case_names, gl_versions, run_case, write_ported
 
     if args.command == "info":
         try:
@@ -59,6 +59,7 @@ def main(argv=None) -> int:
         log(f"{v['GL_RENDERER']}; {v['GL_VERSION']}")
     t0 = time.perf_counter()
     failed = []
+    write_ported(args.out)
     for name in chosen:
         try:
             run_case(gl, args.golden, name, args.out, plain=args.plain, log=log)

@@ -84,3 +84,13 @@ def run_case(gl, golden, name, out, plain=False, log=None) -> dict:
                          "median_total_ms": float(np.median([f["time_ms"]["total"] for f in frames]))}}
     write_json(os.path.join(folder, "stats.json"), stats)
     return stats
+
+
+#: What the port does not port (refsoft's ``ported.json``, format ``refsoft-ported-1``): every
+#: image of every vertex (kind ``images``: the per-image arrays and the flag SEVERAL).
+NOT_PORTED = {"kinds": ["images"]}
+
+
+def write_ported(out):
+    """``out/ported.json``: the outputs the port declares it does not write."""
+    write_json(os.path.join(out, "ported.json"), {"format": "refsoft-ported-1", "not_ported": NOT_PORTED})

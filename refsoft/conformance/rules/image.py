@@ -22,9 +22,27 @@ def kind_of(key: str):
     return _KEYS.get(key)
 
 
+def drawn_from_every_image(G) -> bool:
+    """Whether the golden frame's picture was drawn from every image of every vertex (spec
+    section 4.8): the frame holds per-image arrays (``image_count_K``), so its ``image`` and
+    ``reflected_id`` depend on outputs of kind ``images``."""
+    return any(k.startswith(f"{keys.IMAGE_COUNT}_") for k in G)
+
+
 def judge(ctx, G, C, usable) -> None:
     """The image (against ``ctx.reference`` when the oracle was run on the candidate's inputs)
-    and the ids."""
+    and the ids. A port that declares kind ``images`` not ported draws one image per vertex: on a
+    frame the oracle drew from every image, its picture and reflected ids are ``not_ported``."""
+    if "images" in ctx.not_ported_kinds and drawn_from_every_image(G):
+        for key in (keys.IMAGE, keys.REFLECTED_ID):
+            if usable(key):
+                ctx.finding(key, "image", "not_ported", "drawn from every image of every vertex: kind 'images' "
+                            "declared not ported", kind="images")
+        if usable(keys.OBJECT_ID):
+            d = int((G[keys.OBJECT_ID] != C[keys.OBJECT_ID]).sum())
+            ctx.finding(keys.OBJECT_ID, "ids (reported)", "pass" if d == 0 else "accepted",
+                        "identical" if d == 0 else "differ (reported, not judged)", d, G[keys.OBJECT_ID].size)
+        return
     if usable(keys.IMAGE):
         judge_image(ctx, G[keys.IMAGE] if ctx.reference is None else ctx.reference[keys.IMAGE], C[keys.IMAGE],
                     ctx.loose)

@@ -1,0 +1,99 @@
+"""The enumeration of every reflection point (refsoft.search.images.find_images) against the exact
+reflection points seen from inside a sphere (Alhazen's problem, up to four per vertex:
+refsoft.truth.analytic.sphere_inside_reflection_points), on the G-buffer of a sphere's inside at
+160x120, over the vertices whose exact images in the view lie more than 2 pixels apart and more
+than 2 pixels from the view's border.
+
+The goals are: the count of images found equals the exact count for 99.9% of those vertices, and
+every image found lies within 1 pixel of an exact point's projection. Measured (these fixtures,
+2026-12-07): counts agree on 99.52% (14 of 2,943 vertices, each one image short: for 4, vertices
+within 0.02 of the mirror, the score near the missed point stays below 0.991, its peak narrower
+than a texel; for the others the score's largest texel near the missed point lies 1-2 texels
+from its projection), and 98.9% of the images lie within 1 pixel (all within 1.73). The tests
+hold what is met: no image too many, and those figures as floors.
+"""
+
+import numpy as np
+import pytest
+
+from refsoft import linalg, search
+from refsoft.raster import gbuffer
+from refsoft.scene.camera import Camera
+from refsoft.scene.mesh import Mesh
+from refsoft.scene.primitives import icosphere
+from refsoft.search.images import find_images
+from refsoft.truth.analytic import sphere_inside_reflection_points
+from refsoft.truth.metrics import window_to_pixel
+
+W, H = 160, 120
+#: Pixels between two images of a vertex, and between an image and the view's border, below
+#: which the vertex is not counted (two images about to merge; one about to leave the view).
+APART = 2.0
+
+
+@pytest.fixture(scope="module")
+def inside():
+    """The G-buffer of the inside of a unit sphere (icosphere, 6 subdivisions, faces and normals
+    turned inwards) seen from inside, near its wall, and vertices filling the sphere."""
+    s = icosphere(6, 1.0)
+    mirror = Mesh(s.vertices, s.faces[:, [0, 2, 1]], -s.normals, name="inside")
+    eye = np.array([0.05, 0.03, 0.8])
+    cam = Camera(eye=eye, target=(0.0, 0.0, -1.0), fov_y=120.0, width=W, height=H, near=0.01, far=10.0)
+    gb = gbuffer(mirror, cam, "float32", origin=cam.eye)
+    rng = np.random.default_rng(0)
+    d = rng.normal(size=(3000, 3))
+    verts = d / np.linalg.norm(d, axis=1, keepdims=True) * rng.uniform(0.0, 0.95, (3000, 1)) ** (1 / 3)
+    res = search.search(gb, cam.eye, verts, "box")
+    return gb, eye, verts, find_images(gb, eye, verts, res)
+
+
+def exact_in_view(gb, eye, verts):
+    """Per vertex the exact points' projections (V, 4, 2), which lie in the view, and whether the
+    vertex is clear: each point well inside or well outside the view, the ones inside more than
+    APART pixels from each other."""
+    pts, _, count = sphere_inside_reflection_points([0.0, 0.0, 0.0], 1.0, eye, verts)
+    n, k = pts.shape[:2]
+    flat = pts.reshape(-1, 3)
+    found = np.isfinite(flat[:, 0])
+    w = linalg.homogeneous(np.where(found[:, None], flat, 0.0), gb.view_proj)[:, 3]
+    pix = np.full((n * k, 2), np.nan)
+    pix[found] = window_to_pixel(flat[found], gb.view_proj, (H, W))
+    pix, found, front = pix.reshape(n, k, 2), found.reshape(n, k), (w > 0).reshape(n, k)
+    r, c = pix[..., 0], pix[..., 1]
+    lo, hi_r, hi_c = -0.5 + APART, H - 0.5 - APART, W - 0.5 - APART
+    inside = found & front & (r > lo) & (r < hi_r) & (c > lo) & (c < hi_c)
+    outside = found & (~front | (r < -0.5 - APART) | (r > H - 0.5 + APART) | (c < -0.5 - APART)
+                       | (c > W - 0.5 + APART))
+    clear = np.all(~found | inside | outside, axis=1)
+    gaps = np.linalg.norm(pix[:, :, None] - pix[:, None, :], axis=-1)
+    both = inside[:, :, None] & inside[:, None, :] & ~np.eye(k, dtype=bool)
+    clear &= ~np.any(both & ~(gaps > APART), axis=(1, 2))
+    assert np.all(count <= k)
+    return pix, inside, clear
+
+
+def test_image_counts_are_alhazens(inside):
+    gb, eye, verts, im = inside
+    _, in_view, clear = exact_in_view(gb, eye, verts)
+    want = in_view.sum(axis=1)
+    agree = (im.count == want)[clear]
+    print(f"\n{clear.sum()} of {len(verts)} vertices clear; exact images in view per clear vertex: "
+          f"{np.bincount(want[clear]).tolist()}; found: {np.bincount(im.count[clear]).tolist()}; "
+          f"counts agree on {100 * agree.mean():.2f}%")
+    assert clear.sum() >= 0.9 * len(verts)
+    assert np.bincount(want[clear], minlength=4)[2:].sum() >= 500  # many vertices with several images
+    assert np.all(im.count[clear] <= want[clear])  # never an image too many
+    assert agree.mean() >= 0.994  # the goal is 0.999 (module docstring)
+
+
+def test_every_image_found_is_near_an_exact_point(inside):
+    gb, eye, verts, im = inside
+    pix, in_view, _ = exact_in_view(gb, eye, verts)
+    exact = pix[im.vertex]  # (M, 4, 2): the exact points of each image's vertex
+    d = np.linalg.norm(exact - im.pixel[:, None, :].astype(np.float64), axis=-1)
+    d = np.where(np.isfinite(d), d, np.inf).min(axis=1)
+    print(f"\n{len(d)} images: distance to the nearest exact point's projection: median {np.median(d):.3f}, "
+          f"within 1 px {100 * np.mean(d <= 1.0):.2f}%, max {d.max():.3f} px")
+    assert len(d) > 4000
+    assert np.median(d) <= 0.5  # a texel's centre against a point spread over the texel: about 0.38
+    assert np.mean(d <= 1.0) >= 0.985 and d.max() <= 2.0  # the goal is every one within 1 (module docstring)
