@@ -198,6 +198,20 @@ def refine_figure():
     write_png(os.path.join(FIG, "refine_quad.png"), side_by_side(*pics))
 
 
+def sheets_figure():
+    """The concave bowl at 640x480, frame 0, every image drawn (the accurate preset): the render,
+    the ray-traced truth, and the agreement map (green agrees, red not); docs/sheets.md."""
+    from refsoft.frame import FrameDriver, RenderOptions
+    from refsoft.truth.raytrace import TruthRenderer
+    from refsoft.visualize import agreement_map
+
+    scene = refsoft.load_scene("concave", width=640, height=480)
+    t = TruthRenderer(scene, exact=False).render_frame(0).arrays
+    r = FrameDriver(scene, RenderOptions(preset="accurate")).render_frame(0).arrays
+    agree = agreement_map(r["reflected_id"], t["reflected_id"], t["image"])
+    write_png(os.path.join(FIG, "sheets_concave.png"), side_by_side(r["image"], t["image"], agree))
+
+
 def check_figure():
     """What `refsoft check` draws for a port whose search ends one pixel off on every 40th
     vertex and whose image is off by 3 levels in a band: the reflection-pixel map (green
@@ -341,6 +355,7 @@ elif __name__ == "__main__":
     methods_figure()
     accuracy_figure()
     refine_figure()
+    sheets_figure()
     check_figure()
     try:
         fill_rule_figure()

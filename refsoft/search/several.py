@@ -28,7 +28,7 @@ import numpy as np
 from .. import constants
 from .._parallel import parallel_range
 from ..errors import RefsoftError
-from ..raster import _setup, shade
+from ..raster import GBuffer, _setup, shade
 from . import search
 from ._several import accept
 from .images import Images, find_images
@@ -453,7 +453,26 @@ def image_source(scene, view, k, refl, opt):
         walk = search(gb, eye, points, opt.neighbourhood, opt.inverse, None, opt.cap)
         return find_images(gb, eye, points, walk)
 
+    facing = facing_gbuffer(gb, eye)
+    if facing is not gb:  # the open mirror's back is seen: its images, on the side facing the eye
+        gb = facing
+        images = find(view.vertices)
     return gb, eye, images, find
+
+
+def facing_gbuffer(gb, eye):
+    """``gb`` with every normal turned to face the eye (an open mirror seen from behind reflects
+    on that side: the truth's reflection about the normal does not depend on its sign, but an image
+    needs the vertex in front of the tangent plane, spec section 4.8); ``gb`` itself where every
+    covered normal faces the eye already."""
+    P = np.asarray(gb.position)
+    N = np.asarray(gb.normal)
+    rel = (np.asarray(eye, np.float64) - gb.origin).astype(P.dtype)
+    back = gb.mask & (np.sum((rel - P) * N, axis=2) < 0)
+    if not back.any():
+        return gb
+    normal = np.where(back[..., None], -N, N).astype(N.dtype)
+    return GBuffer(gb.position, normal, gb.mask, gb.depth, gb.triangle, gb.view_proj, gb.origin)
 
 
 def several_pass(scene, view, k, stencil, box, reflected, opt, gb, eye, images, find):

@@ -72,7 +72,6 @@ def test_object_ids_agree_with_naive_ray_tracer(drawn):
     rid = frame.arrays["reflected_id"]
     agree = np.mean(rid[stencil] == truth[stencil])
     assert agree >= AGREEMENT_FLOOR, agree
-    # the plain virtual pass is far from it (the reason for the drawing)
     rep = out.report["several"]
     assert rep["pixels_accepted"] == int(np.sum(rid[stencil] > 0))
     assert rep["candidates"] > 0 and rep["pixels_rejected"] > 0
