@@ -78,17 +78,20 @@ def _walks(gb, eye, verts, images, edges, neighbourhood, cap):
     i = first + (np.arange(len(rep)) - np.repeat(np.cumsum(na) - na, na))
     target = b[rep]
     res = search(gb, eye, verts[target], neighbourhood, "plane", images.pixel[i], cap)
-    out = []
-    link = constants.SEVERAL_LINK_TEXELS
-    for k in range(len(i)):
-        lo, hi = off[target[k]], off[target[k] + 1]
-        if hi == lo:
-            continue
-        d = np.max(np.abs(images.pixel[lo:hi] - res.pixel[k]), axis=1)
-        j = int(np.argmin(d))
-        if d[j] <= link:
-            out.append((int(i[k]), int(lo + j)))
-    return np.asarray(out, np.int64).reshape(-1, 2)
+    # each walk's end against every image of its target: the nearest (Chebyshev, the first of
+    # equals) within SEVERAL_LINK_TEXELS
+    nt = off[target + 1] - off[target]
+    walk = np.repeat(np.arange(len(i)), nt)
+    if len(walk) == 0:
+        return np.zeros((0, 2), np.int64)
+    j = np.repeat(off[target], nt) + (np.arange(len(walk)) - np.repeat(np.cumsum(nt) - nt, nt))
+    d = np.max(np.abs(images.pixel[j].astype(np.int64) - res.pixel[walk].astype(np.int64)), axis=1)
+    order = np.lexsort((j, d, walk))  # by walk, then distance, then image index
+    walk, j, d = walk[order], j[order], d[order]
+    first = np.ones(len(walk), bool)
+    first[1:] = walk[1:] != walk[:-1]
+    keep = first & (d <= constants.SEVERAL_LINK_TEXELS)
+    return np.stack([i[walk[keep]], j[keep]], axis=1).astype(np.int64).reshape(-1, 2)
 
 
 def sheets(images: Images, pairs) -> Images:
