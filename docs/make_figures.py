@@ -304,7 +304,7 @@ def several_figure(scene_name="concave"):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from refsoft.search.images import find_images, trace_images
+    from refsoft.search.images import facing_gbuffer, find_images, trace_images
     from refsoft.search import scores_at
     from refsoft.search.reflect import reflect
 
@@ -312,9 +312,9 @@ def several_figure(scene_name="concave"):
     verts, owner, refl = reflect(scene, 0)
     r = refl[scene.reflector_ids[0]]
     eye = scene.camera_at(0).eye
-    im = find_images(r.gbuffer, eye, verts, r.result)
+    gb = facing_gbuffer(r.gbuffer, eye)  # as the method enumerates
+    im = find_images(gb, eye, verts, r.result)
     i = int(np.argmax(im.count))  # the first vertex with the most images
-    gb = r.gbuffer
     pix = np.argwhere(gb.mask)
     s = np.zeros(gb.mask.shape)
     s[pix[:, 0], pix[:, 1]] = scores_at(gb, eye, np.repeat(verts[i:i + 1], len(pix), axis=0), pix)

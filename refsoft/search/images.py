@@ -15,6 +15,7 @@ from .. import validate
 from .._parallel import parallel_range
 from ..constants import IMAGE_MERGE, IMAGE_REACH, MAX_IMAGES
 from ..errors import RefsoftError
+from ..raster import GBuffer
 
 #: Flag bit (spec section 4.7): the vertex has more than one reflection point on this reflector.
 from ._kernels import SEVERAL  # noqa: E402  (defined beside the other flags)
@@ -271,3 +272,18 @@ def trace_images(gbuffer, eye, vertex, walk_pixel=None, reach: float = IMAGE_REA
                        "image": [int(ir) + r0, int(ic) + c0], "verdict": VERDICTS[code]})
     walk = None if walk_pixel is None or walk_pixel[0] < 0 else [int(walk_pixel[0]), int(walk_pixel[1])]
     return ImagesTrace(images, walk, fr >= 0, int(visited), int(pruned), int(judged), maxima)
+
+
+def facing_gbuffer(gb, eye):
+    """``gb`` with every normal turned to face the eye (an open mirror seen from behind reflects
+    on that side: the truth's reflection about the normal does not depend on its sign, but an image
+    needs the vertex in front of the tangent plane, spec section 4.8); ``gb`` itself where every
+    covered normal faces the eye already."""
+    P = np.asarray(gb.position)
+    N = np.asarray(gb.normal)
+    rel = (np.asarray(eye, np.float64) - gb.origin).astype(P.dtype)
+    back = gb.mask & (np.sum((rel - P) * N, axis=2) < 0)
+    if not back.any():
+        return gb
+    normal = np.where(back[..., None], -N, N).astype(N.dtype)
+    return GBuffer(gb.position, normal, gb.mask, gb.depth, gb.triangle, gb.view_proj, gb.origin)

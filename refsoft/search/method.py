@@ -11,7 +11,7 @@ bit-identical.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -20,7 +20,7 @@ from ..raster import PRECISIONS, GBuffer, _setup, gbuffer
 from ..seam import ReflectorResult, stencil_box
 from . import CULLED, SEVERAL, SearchResult, search, skips, virtual_vertices
 from .convex import several_possible
-from .images import find_images
+from .images import facing_gbuffer, find_images
 from .reflect import Reflection, coherent_starts, gbuffer_camera
 from .refine import refine as refine_points
 from .virtual import reflected_mesh, refined_parts, virtual_parts, virtual_pass
@@ -141,8 +141,10 @@ class VertexSearch:
             box = stencil_box(stencil) if opt.crop_virtual else (0, view.camera.height, 0, view.camera.width)
             drawn = self._draw_images(view, k, refl, stencil, box)
             if drawn is not None:  # every image, drawn by exact acceptance (search/several.py)
-                out.colour, out.reflected_id, out.covered, extra = drawn
+                out.colour, out.reflected_id, out.covered, extra, sheeted = drawn
                 report.update(extra)
+                refl = replace(refl, images=sheeted)  # the images with their sheets
+                out.state = refl
             elif opt.tessellate is None and opt.silhouette != "clip":
                 parts = virtual_parts(self.scene, view.meshes, refl)
             else:
@@ -264,7 +266,8 @@ class VertexSearch:
         if opt.images == "all":
             if self._can_have_several(k):
                 t2 = time.perf_counter()
-                images = find_images(gb, eye, verts, res)
+                # an open mirror seen from behind reflects on the side facing the eye
+                images = find_images(facing_gbuffer(gb, eye), eye, verts, res)
                 report["images"] = {**image_counts(images.count), "ms": 1000 * (time.perf_counter() - t2)}
             else:
                 report["images_convex"] = True

@@ -31,7 +31,7 @@ from ..errors import RefsoftError
 from ..raster import GBuffer, _setup, shade
 from . import search
 from ._several import accept
-from .images import Images, find_images
+from .images import Images, facing_gbuffer, find_images
 
 
 # --- sheets -----------------------------------------------------------------------------------
@@ -450,32 +450,14 @@ def image_source(scene, view, k, refl, opt):
     images = getattr(refl, "images", None)
     if images is None:
         return None
-    gb, eye = refl.gbuffer, np.asarray(view.camera.eye, np.float64)
+    eye = np.asarray(view.camera.eye, np.float64)
+    gb = facing_gbuffer(refl.gbuffer, eye)  # where the images were enumerated
 
     def find(points):
         walk = search(gb, eye, points, opt.neighbourhood, opt.inverse, None, opt.cap)
         return find_images(gb, eye, points, walk)
 
-    facing = facing_gbuffer(gb, eye)
-    if facing is not gb:  # the open mirror's back is seen: its images, on the side facing the eye
-        gb = facing
-        images = find(view.vertices)
     return gb, eye, images, find
-
-
-def facing_gbuffer(gb, eye):
-    """``gb`` with every normal turned to face the eye (an open mirror seen from behind reflects
-    on that side: the truth's reflection about the normal does not depend on its sign, but an image
-    needs the vertex in front of the tangent plane, spec section 4.8); ``gb`` itself where every
-    covered normal faces the eye already."""
-    P = np.asarray(gb.position)
-    N = np.asarray(gb.normal)
-    rel = (np.asarray(eye, np.float64) - gb.origin).astype(P.dtype)
-    back = gb.mask & (np.sum((rel - P) * N, axis=2) < 0)
-    if not back.any():
-        return gb
-    normal = np.where(back[..., None], -N, N).astype(N.dtype)
-    return GBuffer(gb.position, normal, gb.mask, gb.depth, gb.triangle, gb.view_proj, gb.origin)
 
 
 def several_pass(scene, view, k, stencil, box, reflected, opt, gb, eye, images, find):
@@ -494,15 +476,15 @@ def several_pass(scene, view, k, stencil, box, reflected, opt, gb, eye, images, 
 
     Returns
     -------
-    colour, reflected_id, covered, report
+    colour, reflected_id, covered, report, images
         As :func:`draw`; ``report`` holds ``several``: images, candidate triangles, subdivided
-        triangles, pixels accepted and rejected.
+        triangles, pixels accepted and rejected; ``images`` with their sheets.
     """
-    cand, _ = candidates(gb, eye, view.vertices, reflected.normals, reflected.faces, reflected.face_object, images,
-                         find, opt.neighbourhood, opt.cap)
+    cand, with_sheets = candidates(gb, eye, view.vertices, reflected.normals, reflected.faces,
+                                   reflected.face_object, images, find, opt.neighbourhood, opt.cap)
     colors = np.vstack([np.zeros(3), [o.color for o in scene.objects]]).astype(np.float32)
     colour, rid, covered, counts = draw(cand, view.camera, view.meshes[k - 1], view.view.triangle, stencil, box,
                                         colors)
     report = {"images": int(len(images.pixel)), "candidates": int(len(cand.object_id)),
               "subdivided": int(cand.subdivided), **counts}
-    return colour, rid, covered, {"several": report}
+    return colour, rid, covered, {"several": report}, with_sheets

@@ -306,9 +306,9 @@ def trace_vertex_images(scene, replay: VertexReplay):
     reflector cannot give two reflection points (:mod:`refsoft.search.convex`: nothing is
     enumerated there)."""
     from .convex import several_possible
-    from .images import trace_images
+    from .images import facing_gbuffer, trace_images
 
     obj = scene.objects[replay.reflector - 1]
     if not several_possible(obj.closed_proxy if obj.closed_proxy is not None else obj.mesh):
         return None
-    return trace_images(replay.gbuffer, replay.eye, replay.position, replay.trace.pixel)
+    return trace_images(facing_gbuffer(replay.gbuffer, replay.eye), replay.eye, replay.position, replay.trace.pixel)

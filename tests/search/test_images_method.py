@@ -13,7 +13,7 @@ from refsoft.frame import FrameDriver, RenderOptions
 from refsoft.scene.builtin import builtin_names
 from refsoft.scene import scene_vertices
 from refsoft.search import SEVERAL, flag_names
-from refsoft.search.images import find_images
+from refsoft.search.images import facing_gbuffer, find_images
 
 W, H = 96, 72
 
@@ -63,12 +63,14 @@ def test_per_image_arrays(concave):
     assert vert.dtype == np.int32 and pix.dtype == np.int32 and virt.dtype == np.float32 and sheet.dtype == np.int32
     assert len(vert) == len(pix) == len(virt) == len(sheet) == count.sum()
     assert np.array_equal(vert, np.repeat(np.arange(n), count))
-    assert np.all(sheet == -1)
+    # sheets (spec section 4.8): each image in one, labelled by the smallest image index in it
+    assert np.all((sheet >= 0) & (sheet <= np.arange(len(sheet)))) and np.array_equal(sheet[sheet], sheet)
+    assert len(np.unique(sheet)) < len(sheet)  # images linked across edges share sheets
     assert np.array_equal((flags & SEVERAL) != 0, count > 1) and (count > 1).any()
     # the same images as find_images on the frame's own G-buffer and search
     refl = fr.reflectors[k].state
     verts, _ = scene_vertices(scene, 0)
-    im = find_images(refl.gbuffer, scene.camera_at(0).eye, verts, refl.result)
+    im = find_images(facing_gbuffer(refl.gbuffer, scene.camera_at(0).eye), scene.camera_at(0).eye, verts, refl.result)
     assert np.array_equal(im.pixel, pix) and np.array_equal(im.virtual.astype(np.float32), virt)
     # the walk's pixel is the first image wherever the vertex has it
     first = np.flatnonzero(count > 0)
