@@ -241,3 +241,65 @@ class _Pool:
         src = np.asarray([s for _, _, s in out], np.int64)
         return Candidates(virtual[tri_img], verts[f], normals[f], np.asarray(face_obj, np.int32)[src], src,
                           subdivided)
+
+
+def accept(r0, c0, valid, origin, direction, screen, bbox, dilate, real):
+    """The per-pixel acceptance of refsoft/search/_several.py in its plain form: every box pixel,
+    every candidate in index order, row by row, with no skipping; the same float64 operations
+    in the same order (Python floats are IEEE doubles).
+
+    Returns best_t (h, w) float64, best_c (h, w) int64, best_uv (h, w, 2) float64, tested (h, w) bool.
+    """
+    import math
+
+    h, w = valid.shape
+    best_t = np.full((h, w), np.inf)
+    best_c = np.full((h, w), -1, np.int64)
+    best_uv = np.zeros((h, w, 2))
+    tested = np.zeros((h, w), bool)
+    for r in range(h):
+        y = r + r0 + 0.5
+        for c in range(len(screen)):
+            if r < bbox[c, 0] or r >= bbox[c, 1]:
+                continue
+            (ax, ay), (bx, by), (cx, cy) = (tuple(float(v) for v in p) for p in screen[c])
+            area = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
+            sign = 1.0 if area >= 0.0 else -1.0
+            lab = math.sqrt((bx - ax) * (bx - ax) + (by - ay) * (by - ay))
+            lbc = math.sqrt((cx - bx) * (cx - bx) + (cy - by) * (cy - by))
+            lca = math.sqrt((ax - cx) * (ax - cx) + (ay - cy) * (ay - cy))
+            d = float(dilate[c])
+            plain = d < 0.0 or abs(area) <= 1e-12 * (lab + lbc + lca) * (lab + lbc + lca)
+            p0 = [float(v) for v in real[c, 0]]
+            e1 = [float(real[c, 1, i]) - p0[i] for i in range(3)]
+            e2 = [float(real[c, 2, i]) - p0[i] for i in range(3)]
+            for col in range(max(bbox[c, 2], c0), min(bbox[c, 3], c0 + w)):
+                j = col - c0
+                if not valid[r, j]:
+                    continue
+                if not plain:
+                    x = col + 0.5
+                    fab = sign * ((bx - ax) * (y - ay) - (by - ay) * (x - ax))
+                    fbc = sign * ((cx - bx) * (y - by) - (cy - by) * (x - bx))
+                    fca = sign * ((ax - cx) * (y - cy) - (ay - cy) * (x - cx))
+                    if fab < -d * lab or fbc < -d * lbc or fca < -d * lca:
+                        continue
+                tested[r, j] = True
+                dx, dy, dz = (float(v) for v in direction[r, j])
+                px, py, pz = dy * e2[2] - dz * e2[1], dz * e2[0] - dx * e2[2], dx * e2[1] - dy * e2[0]
+                det = (e1[0] * px + e1[1] * py) + e1[2] * pz
+                if det == 0.0:
+                    continue
+                inv = 1.0 / det
+                sx, sy, sz = (float(origin[r, j, i]) - p0[i] for i in range(3))
+                u = ((sx * px + sy * py) + sz * pz) * inv
+                if u < 0.0 or u > 1.0:
+                    continue
+                qx, qy, qz = sy * e1[2] - sz * e1[1], sz * e1[0] - sx * e1[2], sx * e1[1] - sy * e1[0]
+                v = ((dx * qx + dy * qy) + dz * qz) * inv
+                if v < 0.0 or u + v > 1.0:
+                    continue
+                t = ((e2[0] * qx + e2[1] * qy) + e2[2] * qz) * inv
+                if t > 0.0 and t < best_t[r, j]:
+                    best_t[r, j], best_c[r, j], best_uv[r, j] = t, c, (u, v)
+    return best_t, best_c, best_uv, tested

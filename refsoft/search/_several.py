@@ -8,12 +8,18 @@ from .._numba import kernel
 
 
 @kernel
-def accept(lo, hi, r0, c0, valid, origin, direction, screen, bbox, dilate, real, best_t, best_c, best_uv, tested):
+def accept(lo, hi, r0, c0, valid, span, origin, direction, screen, bbox, dilate, real, run, best_t, best_c, best_uv,
+           tested, seen):
     """For box rows ``lo .. hi - 1`` (run by :func:`refsoft._parallel.parallel_range`; each row
     writes only its own outputs): every candidate whose dilated screen triangle covers a valid
     pixel's centre has its real triangle intersected by the pixel's reflected ray
     (Moller-Trumbore); a hit with ``t > 0`` inside the triangle, nearer than the pixel's best
     so far, wins (ties keep the earlier candidate).
+
+    The candidates are the outer loop (each one's data read once, its set-up made once); every
+    pixel still sees them in index order, so the result is the row-by-row loop's. Consecutive
+    candidates with the same real triangle (a run) test a pixel's ray once: a later one's
+    intersection is the first one's, which was taken or refused already.
 
     Parameters
     ----------
@@ -21,6 +27,8 @@ def accept(lo, hi, r0, c0, valid, origin, direction, screen, bbox, dilate, real,
         The box's first row and column (``screen`` is in view pixels).
     valid : (h, w) bool
         Box pixels with a reflected ray.
+    span : (h, 2) int64
+        Per box row its valid pixels' first box column and last plus one (first >= last: none).
     origin, direction : (h, w, 3) float64
         The reflected ray of each box pixel.
     screen : (C, 3, 2) float64
@@ -31,34 +39,46 @@ def accept(lo, hi, r0, c0, valid, origin, direction, screen, bbox, dilate, real,
         Dilation in pixels; negative: the projection is unusable, the whole bbox is tested.
     real : (C, 3, 3) float64
         The candidates' real triangles (world space).
+    run : (C,) int64
+        Non-decreasing; equal for consecutive candidates whose real triangles are the same bits.
     best_t, best_c, best_uv, tested
         Outputs per box pixel: nearest accepted t (inf none), its candidate (-1), its
         barycentrics (u, v) and whether any candidate covered it.
+    seen : (h, w) int64
+        Work per box pixel, -1 on entry: the run that last tested its ray.
     """
     n = screen.shape[0]
-    w = valid.shape[1]
-    for r in range(lo, hi):
-        y = r + r0 + 0.5
-        for c in range(n):
-            if r < bbox[c, 0] or r >= bbox[c, 1]:
+    for c in range(n):
+        row0, row1 = max(lo, bbox[c, 0]), min(hi, bbox[c, 1])
+        if row0 >= row1:
+            continue
+        ax, ay = screen[c, 0, 0], screen[c, 0, 1]
+        bx, by = screen[c, 1, 0], screen[c, 1, 1]
+        cx, cy = screen[c, 2, 0], screen[c, 2, 1]
+        area = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
+        sign = 1.0 if area >= 0.0 else -1.0
+        lab = np.sqrt((bx - ax) * (bx - ax) + (by - ay) * (by - ay))
+        lbc = np.sqrt((cx - bx) * (cx - bx) + (cy - by) * (cy - by))
+        lca = np.sqrt((ax - cx) * (ax - cx) + (ay - cy) * (ay - cy))
+        d = dilate[c]
+        # a sliver or an unusable projection: the dilated box alone
+        plain = d < 0.0 or abs(area) <= 1e-12 * (lab + lbc + lca) * (lab + lbc + lca)
+        p0x, p0y, p0z = real[c, 0, 0], real[c, 0, 1], real[c, 0, 2]
+        e1x, e1y, e1z = real[c, 1, 0] - p0x, real[c, 1, 1] - p0y, real[c, 1, 2] - p0z
+        e2x, e2y, e2z = real[c, 2, 0] - p0x, real[c, 2, 1] - p0y, real[c, 2, 2] - p0z
+        for r in range(row0, row1):
+            y = r + r0 + 0.5
+            # only the row's valid columns
+            col0, col1 = max(bbox[c, 2], c0 + span[r, 0]), min(bbox[c, 3], c0 + span[r, 1])
+            if col0 >= col1:
                 continue
-            ax, ay = screen[c, 0, 0], screen[c, 0, 1]
-            bx, by = screen[c, 1, 0], screen[c, 1, 1]
-            cx, cy = screen[c, 2, 0], screen[c, 2, 1]
-            area = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
-            sign = 1.0 if area >= 0.0 else -1.0
-            lab = np.sqrt((bx - ax) * (bx - ax) + (by - ay) * (by - ay))
-            lbc = np.sqrt((cx - bx) * (cx - bx) + (cy - by) * (cy - by))
-            lca = np.sqrt((ax - cx) * (ax - cx) + (ay - cy) * (ay - cy))
-            d = dilate[c]
-            # a sliver or an unusable projection: the dilated box alone
-            plain = d < 0.0 or abs(area) <= 1e-12 * (lab + lbc + lca) * (lab + lbc + lca)
-            p0x, p0y, p0z = real[c, 0, 0], real[c, 0, 1], real[c, 0, 2]
-            e1x, e1y, e1z = real[c, 1, 0] - p0x, real[c, 1, 1] - p0y, real[c, 1, 2] - p0z
-            e2x, e2y, e2z = real[c, 2, 0] - p0x, real[c, 2, 1] - p0y, real[c, 2, 2] - p0z
-            for col in range(max(bbox[c, 2], c0), min(bbox[c, 3], c0 + w)):
+            if not plain:
+                col0, col1 = _narrow(col0, col1, y, ax, ay, bx, by, sign, -d * lab)
+                col0, col1 = _narrow(col0, col1, y, bx, by, cx, cy, sign, -d * lbc)
+                col0, col1 = _narrow(col0, col1, y, cx, cy, ax, ay, sign, -d * lca)
+            for col in range(col0, col1):
                 j = col - c0
-                if not valid[r, j]:
+                if not valid[r, j] or seen[r, j] == run[c]:  # tested by this run: nothing to change
                     continue
                 if not plain:
                     x = col + 0.5
@@ -69,6 +89,7 @@ def accept(lo, hi, r0, c0, valid, origin, direction, screen, bbox, dilate, real,
                     if fab < -d * lab or fbc < -d * lbc or fca < -d * lca:
                         continue
                 tested[r, j] = True
+                seen[r, j] = run[c]
                 dx, dy, dz = direction[r, j, 0], direction[r, j, 1], direction[r, j, 2]
                 px, py, pz = dy * e2z - dz * e2y, dz * e2x - dx * e2z, dx * e2y - dy * e2x
                 det = (e1x * px + e1y * py) + e1z * pz
@@ -89,3 +110,37 @@ def accept(lo, hi, r0, c0, valid, origin, direction, screen, bbox, dilate, real,
                     best_c[r, j] = c
                     best_uv[r, j, 0] = u
                     best_uv[r, j, 1] = v
+
+
+@kernel(inline=True)
+def _narrow(col0, col1, y, ax, ay, bx, by, sign, limit):
+    """The columns of ``col0 .. col1 - 1`` that may pass :func:`accept`'s test of the edge from
+    (ax, ay) to (bx, by) on row centre ``y``, ``sign * ((bx - ax) * (y - ay) - (by - ay) * (x - ax))
+    >= limit`` at ``x = col + 0.5``: its value is monotone in ``x`` (each rounded operation is), so
+    the passing columns are a prefix or a suffix, found by bisection with the same expression. The
+    caller still tests each column; this only skips columns that fail. Edges too large for the
+    products to stay finite are not narrowed."""
+    if not (abs(ax) < 1e100 and abs(ay) < 1e100 and abs(bx) < 1e100 and abs(by) < 1e100 and abs(limit) < 1e100):
+        return col0, col1
+    slope = sign * (by - ay)  # > 0: the value falls as x grows, < 0: it rises
+    lo, hi = col0, col1
+    if slope > 0.0:  # a prefix: the first failing column
+        while lo < hi:
+            mid = (lo + hi) // 2
+            x = mid + 0.5
+            if sign * ((bx - ax) * (y - ay) - (by - ay) * (x - ax)) < limit:
+                hi = mid
+            else:
+                lo = mid + 1
+        return col0, lo
+    if slope < 0.0:  # a suffix: the first passing column
+        while lo < hi:
+            mid = (lo + hi) // 2
+            x = mid + 0.5
+            if sign * ((bx - ax) * (y - ay) - (by - ay) * (x - ax)) < limit:
+                lo = mid + 1
+            else:
+                hi = mid
+        return lo, col1
+    return col0, col1
+

@@ -428,8 +428,9 @@ def draw(cand: Candidates, camera, reflector_mesh, triangle, stencil, box, color
     best_uv = np.zeros((h, w, 2))
     tested = np.zeros((h, w), bool)
     if len(screen):
-        parallel_range(accept, h, r0, c0, valid, origin, direction, screen, bbox, dilate,
-                       np.ascontiguousarray(cand.real), best_t, best_c, best_uv, tested)
+        real = np.ascontiguousarray(cand.real)
+        parallel_range(accept, h, r0, c0, valid, _spans(valid), origin, direction, screen, bbox, dilate, real,
+                       _runs(real), best_t, best_c, best_uv, tested, np.full((h, w), -1, np.int64))
     covered = best_c >= 0
     rid = np.zeros((h, w), np.int32)
     colour = np.zeros((h, w, 3), np.float32)
@@ -444,6 +445,24 @@ def draw(cand: Candidates, camera, reflector_mesh, triangle, stencil, box, color
         colour[covered] = shade(n, np.asarray(colors, np.float32)[cand.object_id[c]])
     counts = {"pixels_accepted": int(covered.sum()), "pixels_rejected": int((tested & ~covered).sum())}
     return colour, rid, covered, counts
+
+
+def _runs(real):
+    """(C,) int64: the run of each candidate, a new one wherever its real triangle (C, 3, 3) float64
+    differs in any bit from the previous one's."""
+    bits = real.reshape(len(real), -1).view(np.int64)
+    new = np.ones(len(real), bool)
+    new[1:] = np.any(bits[1:] != bits[:-1], axis=1)
+    return np.cumsum(new, dtype=np.int64)
+
+
+def _spans(valid):
+    """(h, 2) int64: per row of ``valid`` (h, w) its first True column and last plus one (0, 0:
+    none)."""
+    any_ = valid.any(axis=1)
+    first = np.where(any_, np.argmax(valid, axis=1), 0)
+    last = np.where(any_, valid.shape[1] - np.argmax(valid[:, ::-1], axis=1), 0)
+    return np.ascontiguousarray(np.stack([first, last], axis=1), np.int64)
 
 
 def _screen(virtual, camera, box):

@@ -261,3 +261,44 @@ def test_triples_and_matching_match_the_plain_python_pool():
     matched = new.matched(faces, t, owner)
     assert matched.tolist() == [old.matched(f, w) for f, w in zip(faces, want)]
     assert 0 < matched.sum() < len(faces)
+
+
+def test_acceptance_kernel_matches_the_plain_loop():
+    """The acceptance kernel (candidates outer, valid spans, bisected edges, one ray test per run
+    of equal real triangles) gives the plain pixel-by-candidate loop's outputs bit for bit, on
+    one thread and on several: overlapping triangles at several heights, runs of equal ones with
+    different screen triangles, unusable projections and slivers."""
+    import naive_several_pool
+
+    from refsoft._parallel import parallel_range
+    from refsoft.search._several import accept
+
+    rng = np.random.default_rng(3)
+    h, w, r0, c0 = 14, 18, 5, 7
+    valid = rng.random((h, w)) < 0.8
+    valid[3] = False
+    origin = np.concatenate([rng.uniform(-1, 1, (h, w, 2)), np.full((h, w, 1), 2.0)], axis=2)
+    direction = np.concatenate([rng.normal(0, 0.2, (h, w, 2)), np.full((h, w, 1), -1.0)], axis=2)
+    real = np.concatenate([rng.uniform(-1.5, 1.5, (30, 3, 2)), rng.uniform(-0.5, 0.5, (30, 1, 1)).repeat(3, 1)],
+                          axis=2)
+    real = np.repeat(real, rng.integers(1, 4, 30), axis=0)  # runs of equal real triangles
+    n = len(real)
+    screen = rng.uniform([c0 - 3, r0 - 3], [c0 + w + 3, r0 + h + 3], (n, 3, 2))
+    screen[::7, 2] = screen[::7, 0]  # slivers
+    dilate = rng.uniform(0.5, 3.0, n)
+    dilate[::5] = -1.0  # unusable projections: the whole bbox
+    lo, hi = np.floor(screen.min(axis=1) - dilate[:, None]), np.ceil(screen.max(axis=1) + dilate[:, None])
+    bbox = np.stack([lo[:, 1] - r0, hi[:, 1] - r0, lo[:, 0], hi[:, 0]], axis=1).astype(np.int64)
+    want = naive_several_pool.accept(r0, c0, valid, origin, direction, screen, bbox, dilate, real)
+    assert (want[1] >= 0).sum() > 20 and (want[2] > 0).any()
+    for threads in (True, False):
+        got = (np.full((h, w), np.inf), np.full((h, w), -1, np.int64), np.zeros((h, w, 2)), np.zeros((h, w), bool))
+        args = (accept, h, r0, c0, valid, several._spans(valid), origin, direction, screen, bbox, dilate, real,
+                several._runs(real), *got, np.full((h, w), -1, np.int64))
+        if threads:
+            parallel_range(*args)
+        else:
+            with one_thread():
+                parallel_range(*args)
+        for a, b in zip(got, want):
+            assert np.array_equal(a, b)
