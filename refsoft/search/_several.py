@@ -1,6 +1,7 @@
 """Kernel of :mod:`refsoft.search.several`: the per-pixel acceptance of candidate virtual
-triangles (float64). Its NumPy reference is ``tests/naive_images.py`` (``trace_reflections``,
-the same ray test over every scene triangle)."""
+triangles (float64). Its references: ``tests/naive_several_pool.py`` (``accept``, the plain
+pixel-by-candidate loop, bit for bit) and ``tests/naive_images.py`` (``trace_reflections``, the
+same ray test over every scene triangle)."""
 
 import numpy as np
 

@@ -248,7 +248,8 @@ def test_triples_and_matching_match_the_plain_python_pool():
     pairs = rng.integers(0, m, (4 * m, 2))
     full = np.arange(offset[8])
     pairs = np.concatenate([pairs, np.stack(np.meshgrid(full, full), axis=2).reshape(-1, 2)])
-    faces = np.concatenate([[[0, 1, 2], [1, 2, 3], [4, 5, 6], [5, 6, 7], [4, 6, 7]], rng.integers(0, 40, (300, 3))]).astype(np.int64)
+    faces = np.concatenate([[[0, 1, 2], [1, 2, 3], [4, 5, 6], [5, 6, 7], [4, 6, 7]],
+                            rng.integers(0, 40, (300, 3))]).astype(np.int64)
     verts = np.zeros((40, 3))
     new, old = several._Pool(verts, verts, images), naive_several_pool._Pool(verts, verts, images)
     new.add_links(pairs)
