@@ -145,3 +145,50 @@ def _narrow(col0, col1, y, ax, ay, bx, by, sign, limit):
         return lo, col1
     return col0, col1
 
+
+
+@kernel(inline=True)
+def _is_linked(linked, key_base, i, j):
+    """Whether images ``i`` and ``j`` are linked: ``min * key_base + max`` in the sorted ``linked``."""
+    key = min(i, j) * key_base + max(i, j)
+    lo, hi = 0, linked.shape[0]
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if linked[mid] < key:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo < linked.shape[0] and linked[lo] == key
+
+
+@kernel
+def linked_triples(lo, hi, faces, offset, count, linked, key_base, limit, start, out, fill):
+    """Faces ``lo .. hi - 1`` (run by :func:`refsoft._parallel.parallel_range`; each face writes
+    only its own outputs): the triples (i, j, k) of images of its corners (``offset[v] ..
+    offset[v] + count[v] - 1``) linked pairwise, in nested-loop order (first corner slowest), at
+    most ``limit``. ``fill`` False: writes each face's number of triples into ``start[f]``;
+    True: writes them into ``out`` (T, 3) int64 from row ``start[f]``."""
+    for f in range(lo, hi):
+        a, b, c = faces[f, 0], faces[f, 1], faces[f, 2]
+        n = 0
+        pos = start[f] if fill else 0
+        for i in range(offset[a], offset[a] + count[a]):
+            if n >= limit:
+                break
+            for j in range(offset[b], offset[b] + count[b]):
+                if n >= limit:
+                    break
+                if not _is_linked(linked, key_base, i, j):
+                    continue
+                for k in range(offset[c], offset[c] + count[c]):
+                    if not (_is_linked(linked, key_base, j, k) and _is_linked(linked, key_base, i, k)):
+                        continue
+                    if fill:
+                        out[pos + n, 0] = i
+                        out[pos + n, 1] = j
+                        out[pos + n, 2] = k
+                    n += 1
+                    if n >= limit:
+                        break
+        if not fill:
+            start[f] = n

@@ -30,7 +30,7 @@ from .._parallel import parallel_range
 from ..errors import RefsoftError
 from ..raster import GBuffer, _setup, shade
 from . import search
-from ._several import accept
+from ._several import accept, linked_triples
 from .images import Images, facing_gbuffer, find_images
 
 
@@ -267,14 +267,17 @@ class _Pool:
     def triples(self, faces):
         """Every face's linked image triples (i of its first corner, j, k), in nested-loop order
         and at most ``SEVERAL_MAX_TRIPLES`` per face: (T, 3) int64 and their faces (T,) int64."""
-        local, owner = _products(self.count[faces], None)
-        t = self.offset[faces[owner]] + local
-        keep = (_member(_pair_key(t[:, 0], t[:, 1]), self.linked) & _member(_pair_key(t[:, 1], t[:, 2]), self.linked)
-                & _member(_pair_key(t[:, 0], t[:, 2]), self.linked))
-        t, owner = t[keep], owner[keep]
-        rank = np.arange(len(owner)) - np.searchsorted(owner, owner)
-        keep = rank < constants.SEVERAL_MAX_TRIPLES
-        return t[keep], owner[keep]
+        faces = np.ascontiguousarray(faces, np.int64)
+        args = (faces, self.offset, self.count, self.linked, int(_KEY), constants.SEVERAL_MAX_TRIPLES)
+        n = np.zeros(len(faces), np.int64)
+        empty = np.zeros((0, 3), np.int64)
+        if len(faces):
+            parallel_range(linked_triples, len(faces), *args, n, empty, False)
+        start = np.cumsum(n) - n
+        t = np.empty((int(n.sum()), 3), np.int64)
+        if len(t):
+            parallel_range(linked_triples, len(faces), *args, start, t, True)
+        return t, np.repeat(np.arange(len(faces), dtype=np.int64), n)
 
     def matched(self, faces, t, owner):
         """(F,) bool: every image of every corner of the face belongs to one of its triples."""

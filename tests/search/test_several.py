@@ -235,8 +235,9 @@ def test_candidates_match_the_plain_python_pool(drawn, max_level):
 
 
 def test_triples_and_matching_match_the_plain_python_pool():
-    """Linked triples (with the per-face cap) and the matching on random links, against the plain
-    per-face loops, including corners without an image and faces over the cap."""
+    """Linked triples (the kernel, with the per-face cap, on one thread and several) and the
+    matching on random links, against the plain per-face loops, including corners without an
+    image and faces over the cap."""
     import naive_several_pool
 
     rng = np.random.default_rng(7)
@@ -259,6 +260,9 @@ def test_triples_and_matching_match_the_plain_python_pool():
     assert len(want[0]) == constants.SEVERAL_MAX_TRIPLES
     assert t.tolist() == [list(x) for w in want for x in w]
     assert owner.tolist() == [i for i, w in enumerate(want) for _ in w]
+    with one_thread():
+        t1, owner1 = new.triples(faces)
+    assert np.array_equal(t1, t) and np.array_equal(owner1, owner)
     matched = new.matched(faces, t, owner)
     assert matched.tolist() == [old.matched(f, w) for f, w in zip(faces, want)]
     assert 0 < matched.sum() < len(faces)
