@@ -7,7 +7,7 @@ from refsoft import constants
 from refsoft.errors import RefsoftError
 from refsoft.search import search
 from refsoft.search.images import Images
-from refsoft.search.several import Candidates, _walks, sheets
+from refsoft.search.several import Candidates, sheets
 
 
 def links(gb, eye, verts, images: Images, edges, neighbourhood="cross", cap=None) -> np.ndarray:
@@ -39,6 +39,34 @@ def links(gb, eye, verts, images: Images, edges, neighbourhood="cross", cap=None
     f = set(map(tuple, fwd.tolist()))
     pairs = sorted(p for p in map(tuple, back[:, ::-1].tolist()) if p in f)
     return np.asarray(pairs, np.int64).reshape(-1, 2)
+
+
+def _walks(gb, eye, verts, images, edges, neighbourhood, cap):
+    """(i, j) pairs: the walk of edge end b started at image i of end a ends at b's image j."""
+    off = images.offset
+    a, b = edges[:, 0], edges[:, 1]
+    na = off[a + 1] - off[a]
+    rep = np.repeat(np.arange(len(edges)), na)
+    if len(rep) == 0:
+        return np.zeros((0, 2), np.int64)
+    first = np.repeat(off[a], na)
+    i = first + (np.arange(len(rep)) - np.repeat(np.cumsum(na) - na, na))
+    target = b[rep]
+    res = search(gb, eye, verts[target], neighbourhood, "plane", images.pixel[i], cap)
+    # each walk's end against every image of its target: the nearest (Chebyshev, the first of
+    # equals) within SEVERAL_LINK_TEXELS
+    nt = off[target + 1] - off[target]
+    walk = np.repeat(np.arange(len(i)), nt)
+    if len(walk) == 0:
+        return np.zeros((0, 2), np.int64)
+    j = np.repeat(off[target], nt) + (np.arange(len(walk)) - np.repeat(np.cumsum(nt) - nt, nt))
+    d = np.max(np.abs(images.pixel[j].astype(np.int64) - res.pixel[walk].astype(np.int64)), axis=1)
+    order = np.lexsort((j, d, walk))  # by walk, then distance, then image index
+    walk, j, d = walk[order], j[order], d[order]
+    first = np.ones(len(walk), bool)
+    first[1:] = walk[1:] != walk[:-1]
+    keep = first & (d <= constants.SEVERAL_LINK_TEXELS)
+    return np.stack([i[walk[keep]], j[keep]], axis=1).astype(np.int64).reshape(-1, 2)
 
 
 def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, neighbourhood="cross", cap=None,

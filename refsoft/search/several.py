@@ -30,7 +30,7 @@ from .._parallel import parallel_range
 from ..errors import RefsoftError
 from ..raster import GBuffer, _setup, shade
 from . import search
-from ._several import accept, linked_triples
+from ._several import accept, linked_triples, nearest_image
 from .images import Images, facing_gbuffer, find_images
 
 
@@ -80,18 +80,12 @@ def _walks(gb, eye, verts, images, edges, neighbourhood, cap):
     res = search(gb, eye, verts[target], neighbourhood, "plane", images.pixel[i], cap)
     # each walk's end against every image of its target: the nearest (Chebyshev, the first of
     # equals) within SEVERAL_LINK_TEXELS
-    nt = off[target + 1] - off[target]
-    walk = np.repeat(np.arange(len(i)), nt)
-    if len(walk) == 0:
-        return np.zeros((0, 2), np.int64)
-    j = np.repeat(off[target], nt) + (np.arange(len(walk)) - np.repeat(np.cumsum(nt) - nt, nt))
-    d = np.max(np.abs(images.pixel[j].astype(np.int64) - res.pixel[walk].astype(np.int64)), axis=1)
-    order = np.lexsort((j, d, walk))  # by walk, then distance, then image index
-    walk, j, d = walk[order], j[order], d[order]
-    first = np.ones(len(walk), bool)
-    first[1:] = walk[1:] != walk[:-1]
-    keep = first & (d <= constants.SEVERAL_LINK_TEXELS)
-    return np.stack([i[walk[keep]], j[keep]], axis=1).astype(np.int64).reshape(-1, 2)
+    j = np.empty(len(i), np.int64)
+    parallel_range(nearest_image, len(i), np.ascontiguousarray(res.pixel, np.int64), np.ascontiguousarray(target),
+                   np.ascontiguousarray(off, np.int64), np.ascontiguousarray(images.pixel),
+                   int(constants.SEVERAL_LINK_TEXELS), j)
+    keep = j >= 0
+    return np.stack([i[keep], j[keep]], axis=1).astype(np.int64).reshape(-1, 2)
 
 
 def sheets(images: Images, pairs) -> Images:
