@@ -1,6 +1,7 @@
 """Kernel of :mod:`refsoft.search.several`: the per-pixel acceptance of candidate virtual
-triangles (float64). Its NumPy reference is ``tests/naive_images.py`` (``trace_reflections``,
-the same ray test over every scene triangle)."""
+triangles (float64). Its references: ``tests/naive_several_pool.py`` (``accept``, the plain
+pixel-by-candidate loop, bit for bit) and ``tests/naive_images.py`` (``trace_reflections``, the
+same ray test over every scene triangle)."""
 
 import numpy as np
 
@@ -8,12 +9,18 @@ from .._numba import kernel
 
 
 @kernel
-def accept(lo, hi, r0, c0, valid, origin, direction, screen, bbox, dilate, real, best_t, best_c, best_uv, tested):
+def accept(lo, hi, r0, c0, valid, span, origin, direction, screen, bbox, dilate, real, run, best_t, best_c, best_uv,
+           tested, seen):
     """For box rows ``lo .. hi - 1`` (run by :func:`refsoft._parallel.parallel_range`; each row
     writes only its own outputs): every candidate whose dilated screen triangle covers a valid
     pixel's centre has its real triangle intersected by the pixel's reflected ray
     (Moller-Trumbore); a hit with ``t > 0`` inside the triangle, nearer than the pixel's best
     so far, wins (ties keep the earlier candidate).
+
+    The candidates are the outer loop (each one's data read once, its set-up made once); every
+    pixel still sees them in index order, so the result is the row-by-row loop's. Consecutive
+    candidates with the same real triangle (a run) test a pixel's ray once: a later one's
+    intersection is the first one's, which was taken or refused already.
 
     Parameters
     ----------
@@ -21,6 +28,8 @@ def accept(lo, hi, r0, c0, valid, origin, direction, screen, bbox, dilate, real,
         The box's first row and column (``screen`` is in view pixels).
     valid : (h, w) bool
         Box pixels with a reflected ray.
+    span : (h, 2) int64
+        Per box row its valid pixels' first box column and last plus one (first >= last: none).
     origin, direction : (h, w, 3) float64
         The reflected ray of each box pixel.
     screen : (C, 3, 2) float64
@@ -31,34 +40,46 @@ def accept(lo, hi, r0, c0, valid, origin, direction, screen, bbox, dilate, real,
         Dilation in pixels; negative: the projection is unusable, the whole bbox is tested.
     real : (C, 3, 3) float64
         The candidates' real triangles (world space).
+    run : (C,) int64
+        Non-decreasing; equal for consecutive candidates whose real triangles are the same bits.
     best_t, best_c, best_uv, tested
         Outputs per box pixel: nearest accepted t (inf none), its candidate (-1), its
         barycentrics (u, v) and whether any candidate covered it.
+    seen : (h, w) int64
+        Work per box pixel, -1 on entry: the run that last tested its ray.
     """
     n = screen.shape[0]
-    w = valid.shape[1]
-    for r in range(lo, hi):
-        y = r + r0 + 0.5
-        for c in range(n):
-            if r < bbox[c, 0] or r >= bbox[c, 1]:
+    for c in range(n):
+        row0, row1 = max(lo, bbox[c, 0]), min(hi, bbox[c, 1])
+        if row0 >= row1:
+            continue
+        ax, ay = screen[c, 0, 0], screen[c, 0, 1]
+        bx, by = screen[c, 1, 0], screen[c, 1, 1]
+        cx, cy = screen[c, 2, 0], screen[c, 2, 1]
+        area = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
+        sign = 1.0 if area >= 0.0 else -1.0
+        lab = np.sqrt((bx - ax) * (bx - ax) + (by - ay) * (by - ay))
+        lbc = np.sqrt((cx - bx) * (cx - bx) + (cy - by) * (cy - by))
+        lca = np.sqrt((ax - cx) * (ax - cx) + (ay - cy) * (ay - cy))
+        d = dilate[c]
+        # a sliver or an unusable projection: the dilated box alone
+        plain = d < 0.0 or abs(area) <= 1e-12 * (lab + lbc + lca) * (lab + lbc + lca)
+        p0x, p0y, p0z = real[c, 0, 0], real[c, 0, 1], real[c, 0, 2]
+        e1x, e1y, e1z = real[c, 1, 0] - p0x, real[c, 1, 1] - p0y, real[c, 1, 2] - p0z
+        e2x, e2y, e2z = real[c, 2, 0] - p0x, real[c, 2, 1] - p0y, real[c, 2, 2] - p0z
+        for r in range(row0, row1):
+            y = r + r0 + 0.5
+            # only the row's valid columns
+            col0, col1 = max(bbox[c, 2], c0 + span[r, 0]), min(bbox[c, 3], c0 + span[r, 1])
+            if col0 >= col1:
                 continue
-            ax, ay = screen[c, 0, 0], screen[c, 0, 1]
-            bx, by = screen[c, 1, 0], screen[c, 1, 1]
-            cx, cy = screen[c, 2, 0], screen[c, 2, 1]
-            area = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
-            sign = 1.0 if area >= 0.0 else -1.0
-            lab = np.sqrt((bx - ax) * (bx - ax) + (by - ay) * (by - ay))
-            lbc = np.sqrt((cx - bx) * (cx - bx) + (cy - by) * (cy - by))
-            lca = np.sqrt((ax - cx) * (ax - cx) + (ay - cy) * (ay - cy))
-            d = dilate[c]
-            # a sliver or an unusable projection: the dilated box alone
-            plain = d < 0.0 or abs(area) <= 1e-12 * (lab + lbc + lca) * (lab + lbc + lca)
-            p0x, p0y, p0z = real[c, 0, 0], real[c, 0, 1], real[c, 0, 2]
-            e1x, e1y, e1z = real[c, 1, 0] - p0x, real[c, 1, 1] - p0y, real[c, 1, 2] - p0z
-            e2x, e2y, e2z = real[c, 2, 0] - p0x, real[c, 2, 1] - p0y, real[c, 2, 2] - p0z
-            for col in range(max(bbox[c, 2], c0), min(bbox[c, 3], c0 + w)):
+            if not plain:
+                col0, col1 = _narrow(col0, col1, y, ax, ay, bx, by, sign, -d * lab)
+                col0, col1 = _narrow(col0, col1, y, bx, by, cx, cy, sign, -d * lbc)
+                col0, col1 = _narrow(col0, col1, y, cx, cy, ax, ay, sign, -d * lca)
+            for col in range(col0, col1):
                 j = col - c0
-                if not valid[r, j]:
+                if not valid[r, j] or seen[r, j] == run[c]:  # tested by this run: nothing to change
                     continue
                 if not plain:
                     x = col + 0.5
@@ -69,6 +90,7 @@ def accept(lo, hi, r0, c0, valid, origin, direction, screen, bbox, dilate, real,
                     if fab < -d * lab or fbc < -d * lbc or fca < -d * lca:
                         continue
                 tested[r, j] = True
+                seen[r, j] = run[c]
                 dx, dy, dz = direction[r, j, 0], direction[r, j, 1], direction[r, j, 2]
                 px, py, pz = dy * e2z - dz * e2y, dz * e2x - dx * e2z, dx * e2y - dy * e2x
                 det = (e1x * px + e1y * py) + e1z * pz
@@ -89,3 +111,100 @@ def accept(lo, hi, r0, c0, valid, origin, direction, screen, bbox, dilate, real,
                     best_c[r, j] = c
                     best_uv[r, j, 0] = u
                     best_uv[r, j, 1] = v
+
+
+@kernel(inline=True)
+def _narrow(col0, col1, y, ax, ay, bx, by, sign, limit):
+    """The columns of ``col0 .. col1 - 1`` that may pass :func:`accept`'s test of the edge from
+    (ax, ay) to (bx, by) on row centre ``y``, ``sign * ((bx - ax) * (y - ay) - (by - ay) * (x - ax))
+    >= limit`` at ``x = col + 0.5``: its value is monotone in ``x`` (each rounded operation is), so
+    the passing columns are a prefix or a suffix, found by bisection with the same expression. The
+    caller still tests each column; this only skips columns that fail. Edges too large for the
+    products to stay finite are not narrowed."""
+    if not (abs(ax) < 1e100 and abs(ay) < 1e100 and abs(bx) < 1e100 and abs(by) < 1e100 and abs(limit) < 1e100):
+        return col0, col1
+    slope = sign * (by - ay)  # > 0: the value falls as x grows, < 0: it rises
+    lo, hi = col0, col1
+    if slope > 0.0:  # a prefix: the first failing column
+        while lo < hi:
+            mid = (lo + hi) // 2
+            x = mid + 0.5
+            if sign * ((bx - ax) * (y - ay) - (by - ay) * (x - ax)) < limit:
+                hi = mid
+            else:
+                lo = mid + 1
+        return col0, lo
+    if slope < 0.0:  # a suffix: the first passing column
+        while lo < hi:
+            mid = (lo + hi) // 2
+            x = mid + 0.5
+            if sign * ((bx - ax) * (y - ay) - (by - ay) * (x - ax)) < limit:
+                lo = mid + 1
+            else:
+                hi = mid
+        return lo, col1
+    return col0, col1
+
+
+
+@kernel(inline=True)
+def _is_linked(linked, key_base, i, j):
+    """Whether images ``i`` and ``j`` are linked: ``min * key_base + max`` in the sorted ``linked``."""
+    key = min(i, j) * key_base + max(i, j)
+    lo, hi = 0, linked.shape[0]
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if linked[mid] < key:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo < linked.shape[0] and linked[lo] == key
+
+
+@kernel
+def linked_triples(lo, hi, faces, offset, count, linked, key_base, limit, start, out, fill):
+    """Faces ``lo .. hi - 1`` (run by :func:`refsoft._parallel.parallel_range`; each face writes
+    only its own outputs): the triples (i, j, k) of images of its corners (``offset[v] ..
+    offset[v] + count[v] - 1``) linked pairwise, in nested-loop order (first corner slowest), at
+    most ``limit``. ``fill`` False: writes each face's number of triples into ``start[f]``;
+    True: writes them into ``out`` (T, 3) int64 from row ``start[f]``."""
+    for f in range(lo, hi):
+        a, b, c = faces[f, 0], faces[f, 1], faces[f, 2]
+        n = 0
+        pos = start[f] if fill else 0
+        for i in range(offset[a], offset[a] + count[a]):
+            if n >= limit:
+                break
+            for j in range(offset[b], offset[b] + count[b]):
+                if n >= limit:
+                    break
+                if not _is_linked(linked, key_base, i, j):
+                    continue
+                for k in range(offset[c], offset[c] + count[c]):
+                    if not (_is_linked(linked, key_base, j, k) and _is_linked(linked, key_base, i, k)):
+                        continue
+                    if fill:
+                        out[pos + n, 0] = i
+                        out[pos + n, 1] = j
+                        out[pos + n, 2] = k
+                    n += 1
+                    if n >= limit:
+                        break
+        if not fill:
+            start[f] = n
+
+
+@kernel
+def nearest_image(lo, hi, end, target, offset, pixel, reach, out):
+    """Walks ``lo .. hi - 1`` (run by :func:`refsoft._parallel.parallel_range`; each walk writes
+    only ``out[w]``): the image of vertex ``target[w]`` (``offset[v] .. offset[v + 1] - 1``,
+    ``pixel`` (M, 2) int32) nearest the walk's end ``end[w]`` (Chebyshev; the first of equals),
+    or -1 when none is within ``reach`` texels."""
+    for w in range(lo, hi):
+        v = target[w]
+        best, best_d = -1, reach + 1
+        for j in range(offset[v], offset[v + 1]):
+            d = max(abs(np.int64(pixel[j, 0]) - end[w, 0]), abs(np.int64(pixel[j, 1]) - end[w, 1]))
+            if d < best_d:
+                best, best_d = j, d
+        out[w] = best

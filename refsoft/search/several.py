@@ -30,7 +30,7 @@ from .._parallel import parallel_range
 from ..errors import RefsoftError
 from ..raster import GBuffer, _setup, shade
 from . import search
-from ._several import accept
+from ._several import accept, linked_triples, nearest_image
 from .images import Images, facing_gbuffer, find_images
 
 
@@ -61,9 +61,9 @@ def links(gb, eye, verts, images: Images, edges, neighbourhood="cross", cap=None
         return np.zeros((0, 2), np.int64)
     fwd = _walks(gb, eye, verts, images, edges, neighbourhood, cap)
     back = _walks(gb, eye, verts, images, edges[:, ::-1], neighbourhood, cap)
-    f = set(map(tuple, fwd.tolist()))
-    pairs = sorted(p for p in map(tuple, back[:, ::-1].tolist()) if p in f)
-    return np.asarray(pairs, np.int64).reshape(-1, 2)
+    back = back[:, ::-1]
+    pairs = back[_member(back[:, 0] * _KEY + back[:, 1], np.unique(fwd[:, 0] * _KEY + fwd[:, 1]))]
+    return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))].reshape(-1, 2)
 
 
 def _walks(gb, eye, verts, images, edges, neighbourhood, cap):
@@ -80,18 +80,12 @@ def _walks(gb, eye, verts, images, edges, neighbourhood, cap):
     res = search(gb, eye, verts[target], neighbourhood, "plane", images.pixel[i], cap)
     # each walk's end against every image of its target: the nearest (Chebyshev, the first of
     # equals) within SEVERAL_LINK_TEXELS
-    nt = off[target + 1] - off[target]
-    walk = np.repeat(np.arange(len(i)), nt)
-    if len(walk) == 0:
-        return np.zeros((0, 2), np.int64)
-    j = np.repeat(off[target], nt) + (np.arange(len(walk)) - np.repeat(np.cumsum(nt) - nt, nt))
-    d = np.max(np.abs(images.pixel[j].astype(np.int64) - res.pixel[walk].astype(np.int64)), axis=1)
-    order = np.lexsort((j, d, walk))  # by walk, then distance, then image index
-    walk, j, d = walk[order], j[order], d[order]
-    first = np.ones(len(walk), bool)
-    first[1:] = walk[1:] != walk[:-1]
-    keep = first & (d <= constants.SEVERAL_LINK_TEXELS)
-    return np.stack([i[walk[keep]], j[keep]], axis=1).astype(np.int64).reshape(-1, 2)
+    j = np.empty(len(i), np.int64)
+    parallel_range(nearest_image, len(i), np.ascontiguousarray(res.pixel, np.int64), np.ascontiguousarray(target),
+                   np.ascontiguousarray(off, np.int64), np.ascontiguousarray(images.pixel),
+                   int(constants.SEVERAL_LINK_TEXELS), j)
+    keep = j >= 0
+    return np.stack([i[keep], j[keep]], axis=1).astype(np.int64).reshape(-1, 2)
 
 
 def sheets(images: Images, pairs) -> Images:
@@ -173,25 +167,30 @@ def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, n
     pairs = links(gb, eye, verts, images, edges, neighbourhood, cap)
     with_sheets = sheets(images, pairs)
     pool.add_links(pairs)
-    pool.walked.update(map(tuple, edges.tolist()))
-    out = []
+    pool.walked = np.unique(edges[:, 0] * _KEY + edges[:, 1])
+    out_t, out_f, out_s, subdivided = [], [], [], []
     todo_faces, todo_src = faces, np.arange(len(faces), dtype=np.int64)
-    subdivided = set()
     for level in range(max_level + 1):
-        last = level == max_level
-        split, bare = [], []
-        for f, src in zip(todo_faces, todo_src):
-            triples = pool.triples(f, linked=True)
-            out.extend((t, f, src) for t in triples)
-            if not pool.matched(f, triples):  # a part of it may reflect where no linked triple draws it
-                (bare if last else split).append((f, src))
-        if last and bare:
-            out.extend(pool.rim_triples(bare, gb, eye, neighbourhood, cap))
-        if not split:
+        t, owner = pool.triples(todo_faces)
+        out_t.append(t)
+        out_f.append(todo_faces[owner])
+        out_s.append(todo_src[owner])
+        # a part of a face not matched may reflect where no linked triple draws it
+        rest = ~pool.matched(todo_faces, t, owner)
+        if not rest.any():
             break
-        subdivided.update(int(s) for _, s in split)
-        todo_faces, todo_src = pool.split(split, gb, eye, find, neighbourhood, cap)
-    return pool.candidates(out, face_obj, len(subdivided)), with_sheets
+        faces_rest, src_rest = todo_faces[rest], todo_src[rest]
+        if level == max_level:
+            t, owner = pool.rim_triples(faces_rest, gb, eye, neighbourhood, cap)
+            out_t.append(t)
+            out_f.append(faces_rest[owner])
+            out_s.append(src_rest[owner])
+            break
+        subdivided.append(src_rest)
+        todo_faces, todo_src = pool.split(faces_rest, src_rest, gb, eye, find, neighbourhood, cap)
+    n_sub = len(np.unique(np.concatenate(subdivided))) if subdivided else 0
+    return pool.candidates(np.concatenate(out_t), np.concatenate(out_f), np.concatenate(out_s), face_obj,
+                           n_sub), with_sheets
 
 
 def _edges(faces):
@@ -200,143 +199,181 @@ def _edges(faces):
     return np.unique(e, axis=0)
 
 
+#: Pair keys: ``i * _KEY + j`` for indices below 2**31 (vertices, images).
+_KEY = np.int64(1 << 32)
+
+
+def _pair_key(i, j):
+    """(...) int64 keys of unordered index pairs."""
+    i, j = np.asarray(i, np.int64), np.asarray(j, np.int64)
+    return np.minimum(i, j) * _KEY + np.maximum(i, j)
+
+
+def _member(keys, table):
+    """(...) bool: whether each key is in ``table`` (sorted, unique int64)."""
+    if len(table) == 0:
+        return np.zeros(np.shape(keys), bool)
+    pos = np.minimum(np.searchsorted(table, keys), len(table) - 1)
+    return table[pos] == keys
+
+
+def _ranges(start, count):
+    """The indices ``start[g] .. start[g] + count[g] - 1`` of every group ``g`` in order, and
+    each one's group and rank within it (all (sum(count),) int64)."""
+    count = np.asarray(count, np.int64)
+    group = np.repeat(np.arange(len(count), dtype=np.int64), count)
+    rank = np.arange(len(group), dtype=np.int64) - np.repeat(np.cumsum(count) - count, count)
+    return np.asarray(start, np.int64)[group] + rank, group, rank
+
+
+def _products(size, limit):
+    """Per face the first ``min(prod(size), limit)`` index triples of its corners' choices in
+    nested-loop order (first corner slowest). ``size`` (F, 3) int64; returns the triples
+    (T, 3) int64 and their faces (T,) int64."""
+    total = size[:, 0] * size[:, 1] * size[:, 2]
+    if limit is not None:
+        total = np.minimum(total, limit)
+    _, owner, q = _ranges(np.zeros(len(size), np.int64), total)
+    nb, nc = size[owner, 1], size[owner, 2]
+    return np.stack([q // (nb * nc), (q // nc) % nb, q % nc], axis=1), owner
+
+
 class _Pool:
-    """Vertices (scene vertices, then midpoints), their images and the links between images."""
+    """Vertices (scene vertices, then midpoints), their images and the links between images, as
+    arrays (links, walked edges and midpoints as sorted pair keys)."""
 
     def __init__(self, verts, normals, images):
         self.verts, self.normals = [verts], [normals]
         self.n = len(verts)
-        self.offset = list(images.offset[:-1])
-        self.count = list(np.diff(images.offset))
+        self.offset = np.asarray(images.offset[:-1], np.int64)
+        self.count = np.diff(np.asarray(images.offset, np.int64))
         self.pixel, self.virtual = [images.pixel], [images.virtual]
         self.m = len(images.pixel)
-        self.linked = set()
-        self.walked = set()  # edges whose links are known
-        self.midpoint = {}
+        self.linked = np.zeros(0, np.int64)
+        self.walked = np.zeros(0, np.int64)  # edges whose links are known
+        self.mid_key = np.zeros(0, np.int64)  # sorted edge keys, and their midpoints' vertex index
+        self.mid_index = np.zeros(0, np.int64)
 
     def add_links(self, pairs):
-        for i, j in pairs.tolist():
-            self.linked.add((min(i, j), max(i, j)))
+        pairs = np.asarray(pairs, np.int64).reshape(-1, 2)
+        self.linked = np.union1d(self.linked, _pair_key(pairs[:, 0], pairs[:, 1]))
 
-    def _images(self, v):
-        return range(self.offset[v], self.offset[v] + self.count[v])
+    def triples(self, faces):
+        """Every face's linked image triples (i of its first corner, j, k), in nested-loop order
+        and at most ``SEVERAL_MAX_TRIPLES`` per face: (T, 3) int64 and their faces (T,) int64."""
+        faces = np.ascontiguousarray(faces, np.int64)
+        args = (faces, self.offset, self.count, self.linked, int(_KEY), constants.SEVERAL_MAX_TRIPLES)
+        n = np.zeros(len(faces), np.int64)
+        empty = np.zeros((0, 3), np.int64)
+        if len(faces):
+            parallel_range(linked_triples, len(faces), *args, n, empty, False)
+        start = np.cumsum(n) - n
+        t = np.empty((int(n.sum()), 3), np.int64)
+        if len(t):
+            parallel_range(linked_triples, len(faces), *args, start, t, True)
+        return t, np.repeat(np.arange(len(faces), dtype=np.int64), n)
 
-    def triples(self, f, linked):
-        a, b, c = (int(x) for x in f)
-        out = []
-        for i in self._images(a):
-            for j in self._images(b):
-                if linked and (min(i, j), max(i, j)) not in self.linked:
-                    continue
-                for k in self._images(c):
-                    if linked and ((min(j, k), max(j, k)) not in self.linked
-                                   or (min(i, k), max(i, k)) not in self.linked):
-                        continue
-                    out.append((i, j, k))
-                    if len(out) >= constants.SEVERAL_MAX_TRIPLES:
-                        return out
-        return out
+    def matched(self, faces, t, owner):
+        """(F,) bool: every image of every corner of the face belongs to one of its triples."""
+        ok = np.all(self.count[faces] > 0, axis=1)
+        used = np.unique((owner[:, None] * self.m + t).reshape(-1))
+        flat = faces.reshape(-1)
+        img, corner, _ = _ranges(self.offset[flat], self.count[flat])
+        face = corner // 3
+        ok[face[~_member(face * self.m + img, used)]] = False
+        return ok
 
-    def matched(self, f, triples):
-        """Every image of every corner of face ``f`` belongs to one of its linked ``triples``."""
-        used = {i for t in triples for i in t}
-        return all(self.count[int(v)] > 0 and all(i in used for i in self._images(int(v))) for v in f)
-
-    def rim_triples(self, bare, gb, eye, neighbourhood, cap):
+    def rim_triples(self, faces, gb, eye, neighbourhood, cap):
         """Triples for last-level parts with an image in no linked triple: every image of each corner,
         and for a corner without one the pixels where its walks from the other corners' images
         end (at the rim or a fold), as points of the reflector (a virtual vertex projects where
-        its reflection point does: these serve only to rasterize; the acceptance is exact)."""
-        verts = np.concatenate(self.verts)
-        starts, targets, keys = [], [], []
-        for f, _ in bare:
-            for v in f:
-                if self.count[int(v)] == 0:
-                    for u in f:
-                        for i in self._images(int(u)):
-                            starts.append(i)
-                            targets.append(int(v))
-                            keys.append((int(v), i))
-        ends = {}
-        if starts:
+        its reflection point does: these serve only to rasterize; the acceptance is exact).
+        Returns (T, 3) int64 image triples and their faces (T,) int64."""
+        count = self.count[faces]
+        bare = faces.reshape(-1)[count.reshape(-1) == 0]  # corners without an image, face by face
+        bare_face = np.nonzero(count.reshape(-1) == 0)[0] // 3
+        # walks to each such corner from every image of every corner of its face, in order
+        u = faces[bare_face].reshape(-1)
+        starts, walk, _ = _ranges(self.offset[u], self.count[u])
+        targets = np.repeat(bare, 3)[walk]
+        base = self.m
+        tg = np.zeros(0, np.int64)
+        if len(starts):
+            verts = np.concatenate(self.verts)
             pixel = np.concatenate(self.pixel)
             res = search(gb, eye, verts[targets], neighbourhood, "plane", pixel[starts], cap)
             world = np.asarray(gb.position, np.float64)[res.pixel[:, 0], res.pixel[:, 1]] + gb.origin
             ok = np.asarray(gb.mask)[res.pixel[:, 0], res.pixel[:, 1]]
-            new = []
-            for key, p, good in zip(keys, world, ok):
-                if good:
-                    ends.setdefault(key[0], []).append(self.m + len(new))
-                    new.append(p)
-            if new:
-                self.virtual.append(np.asarray(new, np.float64))
-                self.pixel.append(np.zeros((len(new), 2), np.int32))
-                self.m += len(new)
-        out = []
-        for f, src in bare:
-            choices = [list(self._images(int(v))) or sorted(set(ends.get(int(v), []))) for v in f]
-            triples = []
-            for i in choices[0]:
-                for j in choices[1]:
-                    for k in choices[2]:
-                        if len(triples) < constants.SEVERAL_MAX_TRIPLES:
-                            triples.append((i, j, k))
-            out.extend((t, f, src) for t in triples)
-        return out
+            tg = targets[ok]
+            if len(tg):
+                self.virtual.append(np.asarray(world[ok], np.float64))
+                self.pixel.append(np.zeros((len(tg), 2), np.int32))
+                self.m += len(tg)
+        # a corner without an image chooses every walk end to it (over every face), in order
+        order = np.argsort(tg, kind="stable")
+        lo = np.searchsorted(tg[order], faces, "left")
+        size = np.where(count > 0, count, np.searchsorted(tg[order], faces, "right") - lo)
+        local, owner = _products(size, constants.SEVERAL_MAX_TRIPLES)
+        t = self.offset[faces[owner]] + local
+        own = count[owner] > 0
+        if not own.all():
+            t[~own] = base + order[(lo[owner] + local)[~own]]
+        return t, owner
 
-    def split(self, split, gb, eye, find, neighbourhood, cap):
+    def split(self, faces, src, gb, eye, find, neighbourhood, cap):
         """Cut each face at its edge midpoints (shared between faces); find the new points'
         images and link the new edges. Returns the parts and their scene triangles."""
-        verts = np.concatenate(self.verts)
-        normals = np.concatenate(self.normals)
-        new_keys, new_p, new_n = [], [], []
-        parts, src = [], []
-        for f, s in split:
-            a, b, c = (int(x) for x in f)
-            mids = []
-            for p, q in ((a, b), (b, c), (c, a)):
-                key = (min(p, q), max(p, q))
-                if key not in self.midpoint:
-                    self.midpoint[key] = self.n + len(new_keys)
-                    new_keys.append(key)
-                    new_p.append(0.5 * (verts[p] + verts[q]))
-                    nm = normals[p] + normals[q]
-                    length = np.sqrt(np.sum(nm * nm))
-                    new_n.append(nm / length if length > 0 else nm)
-                mids.append(self.midpoint[key])
-            ab, bc, ca = mids
-            parts += [(a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca)]
-            src += [s] * 4
-        if new_keys:
-            pts = np.asarray(new_p, np.float64)
+        keys = _pair_key(faces, faces[:, [1, 2, 0]]).reshape(-1)  # ab, bc, ca, face by face
+        known = _member(keys, self.mid_key)
+        mids = np.empty(len(keys), np.int64)
+        mids[known] = self.mid_index[np.searchsorted(self.mid_key, keys[known])]
+        uniq, first, inverse = np.unique(keys[~known], return_index=True, return_inverse=True)
+        order = np.argsort(first)  # new midpoints numbered in order of first use
+        rank = np.empty(len(uniq), np.int64)
+        rank[order] = np.arange(len(uniq))
+        mids[~known] = self.n + rank[inverse.reshape(-1)]
+        new_keys = uniq[order]
+        if len(new_keys):
+            verts = np.concatenate(self.verts)
+            normals = np.concatenate(self.normals)
+            p, q = new_keys // _KEY, new_keys % _KEY
+            pts = 0.5 * (verts[p] + verts[q])
+            nm = normals[p] + normals[q]
+            sq = nm * nm
+            length = np.sqrt((sq[:, 0] + sq[:, 1]) + sq[:, 2])[:, None]
+            nm = np.divide(nm, length, out=nm.copy(), where=length > 0)
             found = find(pts)
             self.verts.append(pts)
-            self.normals.append(np.asarray(new_n, np.float64))
-            self.offset += [self.m + int(o) for o in found.offset[:-1]]
-            self.count += [int(c) for c in np.diff(found.offset)]
+            self.normals.append(nm)
+            self.offset = np.concatenate([self.offset, self.m + np.asarray(found.offset[:-1], np.int64)])
+            self.count = np.concatenate([self.count, np.diff(np.asarray(found.offset, np.int64))])
             self.pixel.append(found.pixel)
             self.virtual.append(found.virtual)
             self.m += len(found.pixel)
             self.n += len(pts)
-        parts = np.asarray(parts, np.int64).reshape(-1, 3)
+            all_keys = np.concatenate([self.mid_key, new_keys])
+            all_index = np.concatenate([self.mid_index, self.n - len(pts) + np.arange(len(pts))])
+            by = np.argsort(all_keys)
+            self.mid_key, self.mid_index = all_keys[by], all_index[by]
+        a, b, c = faces[:, 0], faces[:, 1], faces[:, 2]
+        ab, bc, ca = mids[0::3], mids[1::3], mids[2::3]
+        parts = np.stack([a, ab, ca, ab, b, bc, ca, bc, c, ab, bc, ca], axis=1).reshape(-1, 3)
         # link the parts' edges over every vertex so far (the walk needs every image)
         allv = np.concatenate(self.verts)
-        images = Images(np.asarray(self.offset + [self.m], np.int64), np.concatenate(self.pixel),
+        images = Images(np.concatenate([self.offset, [self.m]]).astype(np.int64), np.concatenate(self.pixel),
                         np.concatenate(self.virtual), np.full(self.m, -1, np.int32))
         edges = _edges(parts)
-        fresh = np.array([tuple(e) not in self.walked for e in edges.tolist()], bool).reshape(-1)
-        self.walked.update(map(tuple, edges.tolist()))
+        ek = edges[:, 0] * _KEY + edges[:, 1]
+        fresh = ~_member(ek, self.walked)
+        self.walked = np.union1d(self.walked, ek)
         self.add_links(links(gb, eye, allv, images, edges[fresh], neighbourhood, cap))
-        return parts, np.asarray(src, np.int64)
+        return parts, np.repeat(np.asarray(src, np.int64), 4)
 
-    def candidates(self, out, face_obj, subdivided):
+    def candidates(self, tri_img, f, src, face_obj, subdivided):
         verts = np.concatenate(self.verts)
         normals = np.concatenate(self.normals)
         virtual = np.concatenate(self.virtual).reshape(-1, 3)
-        c = len(out)
-        tri_img = np.asarray([t for t, _, _ in out], np.int64).reshape(c, 3)
-        f = np.asarray([f for _, f, _ in out], np.int64).reshape(c, 3)
-        src = np.asarray([s for _, _, s in out], np.int64)
+        tri_img, f = tri_img.reshape(-1, 3), f.reshape(-1, 3)
         return Candidates(virtual[tri_img], verts[f], normals[f], np.asarray(face_obj, np.int32)[src], src,
                           subdivided)
 
@@ -388,8 +425,9 @@ def draw(cand: Candidates, camera, reflector_mesh, triangle, stencil, box, color
     best_uv = np.zeros((h, w, 2))
     tested = np.zeros((h, w), bool)
     if len(screen):
-        parallel_range(accept, h, r0, c0, valid, origin, direction, screen, bbox, dilate,
-                       np.ascontiguousarray(cand.real), best_t, best_c, best_uv, tested)
+        real = np.ascontiguousarray(cand.real)
+        parallel_range(accept, h, r0, c0, valid, _spans(valid), origin, direction, screen, bbox, dilate, real,
+                       _runs(real), best_t, best_c, best_uv, tested, np.full((h, w), -1, np.int64))
     covered = best_c >= 0
     rid = np.zeros((h, w), np.int32)
     colour = np.zeros((h, w, 3), np.float32)
@@ -404,6 +442,24 @@ def draw(cand: Candidates, camera, reflector_mesh, triangle, stencil, box, color
         colour[covered] = shade(n, np.asarray(colors, np.float32)[cand.object_id[c]])
     counts = {"pixels_accepted": int(covered.sum()), "pixels_rejected": int((tested & ~covered).sum())}
     return colour, rid, covered, counts
+
+
+def _runs(real):
+    """(C,) int64: the run of each candidate, a new one wherever its real triangle (C, 3, 3) float64
+    differs in any bit from the previous one's."""
+    bits = real.reshape(len(real), -1).view(np.int64)
+    new = np.ones(len(real), bool)
+    new[1:] = np.any(bits[1:] != bits[:-1], axis=1)
+    return np.cumsum(new, dtype=np.int64)
+
+
+def _spans(valid):
+    """(h, 2) int64: per row of ``valid`` (h, w) its first True column and last plus one (0, 0:
+    none)."""
+    any_ = valid.any(axis=1)
+    first = np.where(any_, np.argmax(valid, axis=1), 0)
+    last = np.where(any_, valid.shape[1] - np.argmax(valid[:, ::-1], axis=1), 0)
+    return np.ascontiguousarray(np.stack([first, last], axis=1), np.int64)
 
 
 def _screen(virtual, camera, box):

@@ -5,7 +5,7 @@ floor and a small box at 64x48)."""
 import numpy as np
 import pytest
 
-from refsoft import Camera, Scene, SceneObject, Transform, primitives
+from refsoft import Camera, Scene, SceneObject, Transform, constants, primitives
 from refsoft._parallel import one_thread
 from refsoft.errors import RefsoftError
 from refsoft.frame import FrameDriver, RenderOptions
@@ -212,3 +212,98 @@ def test_one_image_and_convex_mirrors_do_not_use_it():
                               reflector=True),) + scene.objects[1:], scene.camera, None, "tiny_ball")
     frame, (view, k, stencil, out) = _render(ball)
     assert stencil.any() and "several" not in out.report
+
+
+@pytest.mark.parametrize("max_level", [0, 1, 3])
+def test_candidates_match_the_plain_python_pool(drawn, max_level):
+    """The vectorized candidates (triples, matching, subdivision, rim triples, assembly) are the
+    plain per-face Python version's (tests/naive_several_pool.py) bit for bit, in the same order."""
+    import naive_several_pool
+
+    scene, frame, view, k, stencil, out, truth = drawn
+    gb, eye, images, find = several.image_source(scene, view, k, out.state, RenderOptions(images="all"))
+    comb = reflected_mesh(scene, view.meshes)[1]
+    args = (gb, eye, view.vertices, comb.normals, comb.faces, comb.face_object, images, find)
+    got, got_sheets = several.candidates(*args, max_level=max_level)
+    want, want_sheets = naive_several_pool.candidates(*args, max_level=max_level)
+    assert len(want.triangle) and (max_level == 0 or want.subdivided > 0)
+    for name in ("virtual", "real", "normals", "object_id", "triangle"):
+        a, b = getattr(got, name), getattr(want, name)
+        assert a.dtype == b.dtype and np.array_equal(a, b), name
+    assert got.subdivided == want.subdivided
+    assert np.array_equal(got_sheets.sheet, want_sheets.sheet)
+
+
+def test_triples_and_matching_match_the_plain_python_pool():
+    """Linked triples (the kernel, with the per-face cap, on one thread and several) and the
+    matching on random links, against the plain per-face loops, including corners without an
+    image and faces over the cap."""
+    import naive_several_pool
+
+    rng = np.random.default_rng(7)
+    count = rng.integers(0, 6, 40)
+    count[:8] = (5, 5, 5, 5, 1, 2, 1, 3)  # fully linked below: faces over the cap, faces matched
+    offset = np.concatenate([[0], np.cumsum(count)]).astype(np.int64)
+    m = int(offset[-1])
+    images = Images(offset, np.zeros((m, 2), np.int32), np.zeros((m, 3)), np.full(m, -1, np.int32))
+    pairs = rng.integers(0, m, (4 * m, 2))
+    full = np.arange(offset[8])
+    pairs = np.concatenate([pairs, np.stack(np.meshgrid(full, full), axis=2).reshape(-1, 2)])
+    faces = np.concatenate([[[0, 1, 2], [1, 2, 3], [4, 5, 6], [5, 6, 7], [4, 6, 7]],
+                            rng.integers(0, 40, (300, 3))]).astype(np.int64)
+    verts = np.zeros((40, 3))
+    new, old = several._Pool(verts, verts, images), naive_several_pool._Pool(verts, verts, images)
+    new.add_links(pairs)
+    old.add_links(pairs)
+    t, owner = new.triples(faces)
+    want = [old.triples(f, linked=True) for f in faces]
+    assert len(want[0]) == constants.SEVERAL_MAX_TRIPLES
+    assert t.tolist() == [list(x) for w in want for x in w]
+    assert owner.tolist() == [i for i, w in enumerate(want) for _ in w]
+    with one_thread():
+        t1, owner1 = new.triples(faces)
+    assert np.array_equal(t1, t) and np.array_equal(owner1, owner)
+    matched = new.matched(faces, t, owner)
+    assert matched.tolist() == [old.matched(f, w) for f, w in zip(faces, want)]
+    assert 0 < matched.sum() < len(faces)
+
+
+def test_acceptance_kernel_matches_the_plain_loop():
+    """The acceptance kernel (candidates outer, valid spans, bisected edges, one ray test per run
+    of equal real triangles) gives the plain pixel-by-candidate loop's outputs bit for bit, on
+    one thread and on several: overlapping triangles at several heights, runs of equal ones with
+    different screen triangles, unusable projections and slivers."""
+    import naive_several_pool
+
+    from refsoft._parallel import parallel_range
+    from refsoft.search._several import accept
+
+    rng = np.random.default_rng(3)
+    h, w, r0, c0 = 14, 18, 5, 7
+    valid = rng.random((h, w)) < 0.8
+    valid[3] = False
+    origin = np.concatenate([rng.uniform(-1, 1, (h, w, 2)), np.full((h, w, 1), 2.0)], axis=2)
+    direction = np.concatenate([rng.normal(0, 0.2, (h, w, 2)), np.full((h, w, 1), -1.0)], axis=2)
+    real = np.concatenate([rng.uniform(-1.5, 1.5, (30, 3, 2)), rng.uniform(-0.5, 0.5, (30, 1, 1)).repeat(3, 1)],
+                          axis=2)
+    real = np.repeat(real, rng.integers(1, 4, 30), axis=0)  # runs of equal real triangles
+    n = len(real)
+    screen = rng.uniform([c0 - 3, r0 - 3], [c0 + w + 3, r0 + h + 3], (n, 3, 2))
+    screen[::7, 2] = screen[::7, 0]  # slivers
+    dilate = rng.uniform(0.5, 3.0, n)
+    dilate[::5] = -1.0  # unusable projections: the whole bbox
+    lo, hi = np.floor(screen.min(axis=1) - dilate[:, None]), np.ceil(screen.max(axis=1) + dilate[:, None])
+    bbox = np.stack([lo[:, 1] - r0, hi[:, 1] - r0, lo[:, 0], hi[:, 0]], axis=1).astype(np.int64)
+    want = naive_several_pool.accept(r0, c0, valid, origin, direction, screen, bbox, dilate, real)
+    assert (want[1] >= 0).sum() > 20 and (want[2] > 0).any()
+    for threads in (True, False):
+        got = (np.full((h, w), np.inf), np.full((h, w), -1, np.int64), np.zeros((h, w, 2)), np.zeros((h, w), bool))
+        args = (accept, h, r0, c0, valid, several._spans(valid), origin, direction, screen, bbox, dilate, real,
+                several._runs(real), *got, np.full((h, w), -1, np.int64))
+        if threads:
+            parallel_range(*args)
+        else:
+            with one_thread():
+                parallel_range(*args)
+        for a, b in zip(got, want):
+            assert np.array_equal(a, b)
