@@ -40,6 +40,18 @@ def _arc_f(t, a0, a1, a2, b0, b1, b2, c0, c1, c2, rho, o0, o1, o2, v0, v1, v2):
     return s0 * (-st * a0 + ct * b0) + s1 * (-st * a1 + ct * b1) + s2 * (-st * a2 + ct * b2)
 
 
+@kernel(inline=True)
+def _circle_point(t, a0, a1, a2, b0, b1, b2, c0, c1, c2, rho):
+    """The unit normal ``n = cos(t) a + sin(t) b`` on the great circle and the sphere's point
+    ``c + rho n`` there."""
+    ct = math.cos(t)
+    st = math.sin(t)
+    n0 = ct * a0 + st * b0
+    n1 = ct * a1 + st * b1
+    n2 = ct * a2 + st * b2
+    return n0, n1, n2, c0 + rho * n0, c1 + rho * n1, c2 + rho * n2
+
+
 @kernel
 def _brent(lo, hi, f_lo, f_hi, xtol, rtol, maxiter, a0, a1, a2, b0, b1, b2, c0, c1, c2, rho, o0, o1, o2,
            v0, v1, v2):
@@ -149,14 +161,7 @@ def _solve_point(i, c0, c1, c2, rho, o0, o1, o2, a0, a1, a2, points, dirs, cos_p
             t = ts[k]  # a zero at the arc's end
         else:
             continue
-        ct = math.cos(t)
-        st = math.sin(t)
-        n0 = ct * a0 + st * b0
-        n1 = ct * a1 + st * b1
-        n2 = ct * a2 + st * b2
-        r0 = c0 + rho * n0
-        r1 = c1 + rho * n1
-        r2 = c2 + rho * n2
+        n0, n1, n2, r0, r1, r2 = _circle_point(t, a0, a1, a2, b0, b1, b2, c0, c1, c2, rho)
         # both the eye and the point outside the tangent plane
         if ((o0 - r0) * n0 + (o1 - r1) * n1 + (o2 - r2) * n2 > 0.0
                 and (v0 - r0) * n0 + (v1 - r1) * n1 + (v2 - r2) * n2 > 0.0):
@@ -230,14 +235,7 @@ def _inside_point(i, c0, c1, c2, rho, o0, o1, o2, points, axis_a, axis_b, sample
                        a0, a1, a2, b0, b1, b2, c0, c1, c2, rho, o0, o1, o2, v0, v1, v2)
         else:
             continue
-        ct = math.cos(t)
-        st = math.sin(t)
-        n0 = ct * a0 + st * b0
-        n1 = ct * a1 + st * b1
-        n2 = ct * a2 + st * b2
-        r0 = c0 + rho * n0
-        r1 = c1 + rho * n1
-        r2 = c2 + rho * n2
+        n0, n1, n2, r0, r1, r2 = _circle_point(t, a0, a1, a2, b0, b1, b2, c0, c1, c2, rho)
         # both the eye and the point in front of the inward tangent plane (normal -n)
         if ((o0 - r0) * n0 + (o1 - r1) * n1 + (o2 - r2) * n2 < 0.0
                 and (v0 - r0) * n0 + (v1 - r1) * n1 + (v2 - r2) * n2 < 0.0 and m < cap):
