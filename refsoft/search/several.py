@@ -29,6 +29,7 @@ from .. import constants
 from .._parallel import parallel_range
 from ..errors import RefsoftError
 from ..raster import GBuffer, _setup, shade
+from ..raster.rays import primary_rays
 from . import search
 from ._several import accept, linked_triples, nearest_image
 from .images import Images, facing_gbuffer, find_images
@@ -406,8 +407,6 @@ def draw(cand: Candidates, camera, reflector_mesh, triangle, stencil, box, color
         ``pixels_accepted`` (a candidate's real triangle hit), ``pixels_rejected`` (covered by a
         candidate, none hit).
     """
-    from ..truth.raytrace import primary_rays  # the truth's per-pixel reflected rays, shared
-
     r0, r1, c0, c1 = (int(x) for x in box)
     h, w = r1 - r0, c1 - c0
     sten = np.ascontiguousarray(stencil[r0:r1, c0:c1], bool)

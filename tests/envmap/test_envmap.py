@@ -17,7 +17,8 @@ from refsoft.errors import RefsoftError
 from refsoft.frame import FrameDriver
 from refsoft.options import RenderOptions
 from refsoft.scene.mesh import concatenate
-from refsoft.truth.raytrace import TruthRenderer, primary_rays
+from refsoft.raster.rays import primary_rays
+from refsoft.truth.raytrace import TruthRenderer
 
 
 def _driver(scene, **kw):

@@ -55,7 +55,7 @@ def test_no_kernel_has_a_parallel_loop():
     from refsoft import _numba
 
     for name in ("raster", "raster.layers", "search", "search._hierarchy", "search._virtual", "search.skips",
-                 "search.refine", "search.tessellate", "truth.analytic", "truth._primary", "ldt._search"):
+                 "search.refine", "search.tessellate", "truth.analytic", "raster._rays", "ldt._search"):
         importlib.import_module(f"refsoft.{name}")  # every module that defines kernels
     assert len(_numba.KERNELS) > 50
     parallel = [d.py_func.__qualname__ for d in _numba.KERNELS

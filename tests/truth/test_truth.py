@@ -11,7 +11,8 @@ from refsoft.truth.analytic import fit_sphere, sphere_reflection_points
 from refsoft.scene.primitives import icosphere, plane_grid
 from refsoft.raster import color_pass
 from refsoft.frame import render
-from refsoft.truth.raytrace import TruthRenderer, exact_sphere_vertices, ray_triangle, render_truth as truth
+from refsoft.raster.rays import ray_triangle
+from refsoft.truth.raytrace import TruthRenderer, exact_sphere_vertices, render_truth as truth
 
 FLOOR_Y = -1.5
 FLOOR_HALF = 6.0
@@ -269,7 +270,8 @@ def test_primary_ray_kernel_equals_the_numpy_rays_and_hits():
     """The truth's primary-ray kernel against camera.rays, ray_triangle and the interpolated,
     renormalised normal in NumPy, on the ball of the sphere scene (perspective) and an
     orthographic view of it."""
-    from refsoft.truth.raytrace import _interpolated_normals, primary_rays
+    from refsoft.raster.rays import primary_rays
+    from refsoft.truth.raytrace import _interpolated_normals
 
     scene = load_scene("sphere", width=96, height=72)
     for cam in (scene.camera, Camera(eye=(0, 0.5, 6), target=(0, 0, 0), width=96, height=72,

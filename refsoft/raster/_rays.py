@@ -1,6 +1,6 @@
 """The truth's primary rays as one kernel (float64, parallel over pixels): per reflector pixel the
 eye ray through the pixel centre (:meth:`refsoft.scene.camera.Camera.rays`), its hit on the
-pixel's visible triangle (Moller-Trumbore, :func:`refsoft.truth.raytrace.ray_triangle`), the
+pixel's visible triangle (Moller-Trumbore, :func:`refsoft.raster.rays.ray_triangle`), the
 normal interpolated there and renormalised, and the reflected direction. The NumPy versions are
 the references it is tested against (``tests/truth/test_truth.py``)."""
 
