@@ -149,9 +149,10 @@ def converge(P, N, U, mask, v_rel, r, c, reach=4.0, tol=0.75, steps=8, factor=2.
 
 
 def images_of(P, N, mask, eye_rel, v_rel, first=(-1, -1), reach=4.0, merge=1.0):
-    """Every image of one vertex, by judging every covered texel: a list of (row, col), the walk's
-    texel ``first`` first when it is an image (covered, in front, its reflected ray reaching the
-    vertex, Newton's iteration from it converging), then the others (each maximum's image: the
+    """Every image of one vertex, by judging every covered texel: a list of (row, col), the image
+    of the walk's texel ``first`` first when it has one (``first`` covered, in front, its reflected
+    ray reaching the vertex, Newton's iteration from it converging: the texel where it converged),
+    then the others (each maximum's image: the
     texel where its iteration converged) in row-major order after merging (best score first, ties
     to the image's row then col; dropped when its image is a kept one's or its converged point is
     within ``merge`` of a kept one's)."""
@@ -177,7 +178,7 @@ def images_of(P, N, mask, eye_rel, v_rel, first=(-1, -1), reach=4.0, merge=1.0):
     if fr >= 0 and mask[fr, fc] and front[fr, fc] and reaches(P, N, U, mask, v_rel, fr, fc):
         got = converge(P, N, U, mask, v_rel, fr, fc, reach)
         if got is not None:
-            kept.append((None, fr, fc, got[1][0], got[1][1]))
+            kept.append((None, got[0][0], got[0][1], got[1][0], got[1][1]))
     for sc, r, c, lr, lc in sorted(cand, key=lambda x: (-x[0], x[1], x[2])):
         if any((r, c) == (k[1], k[2]) or (lr - k[3]) ** 2 + (lc - k[4]) ** 2 < merge * merge for k in kept):
             continue

@@ -320,11 +320,11 @@ def enumerate_one(G, mask, sph, cone, offsets, sizes, n_levels, v, reach, fp, st
 
 @kernel
 def merge(cand, n_cand, first_r, first_c, first_lr, first_lc, merge_dist, keep, used):
-    """Merge accepted maxima of one solution: with the walk's texel ``(first_r, first_c)`` (its
+    """Merge accepted maxima of one solution: with the walk's image ``(first_r, first_c)`` (its
     converged point ``(first_lr, first_lc)``) kept first when ``first_r >= 0``, then the others by
     score (highest first; ties to the smaller image row, then col), each dropped when its image
     texel is a kept one's or its converged point lies within ``merge_dist`` texels of a kept one's. ``keep`` (K,) int64 receives the kept
-    rows of ``cand`` (-1 for the walk's texel); returns how many, the walk's first, the others
+    rows of ``cand`` (-1 for the walk's image); returns how many, the walk's first, the others
     in row-major order. ``used`` (>= n_cand,) bool is a work array."""
     n_keep = 0
     if first_r >= 0:
@@ -378,7 +378,8 @@ def enumerate_all(lo, hi, G, mask, sph, cone, offsets, sizes, n_levels, vertices
                   fp, count, pixel, stats):
     """Vertices ``lo .. hi - 1``: :func:`enumerate_one`, then the walk's texel ``first[i]`` (crop
     coordinates, -1 for none) judged without the 3x3 maximum test (the walk's own neighbourhood
-    made it a maximum) and kept first when it is an image, then :func:`merge`. Writes
+    made it a maximum) and its image kept first when it has one (:func:`first_walk`), then
+    :func:`merge`. Writes
     ``count[i]``, ``pixel[i, :count]`` (crop coordinates) and ``stats[i]`` (visited, pruned,
     judged, accepted before merging)."""
     cand = np.empty((pixel.shape[1] * 4, CAND_WIDTH), dtype=np.float64)
@@ -412,11 +413,12 @@ def enumerate_all(lo, hi, G, mask, sph, cone, offsets, sizes, n_levels, vertices
 
 @kernel
 def first_walk(G, mask, sph, cone, sizes0, r, c, v, reach, fp, t, work):
-    """The walk's texel (r, c) as the first image: ``(r, c, Newton row, Newton col)`` when it is
-    covered, the vertex lies in front of its tangent plane and within the texel's dilated bounds
-    (``sph``, ``cone``: level 0 first, ``sizes0`` texels a row), and Newton's iteration from it
-    converges (:func:`converge`; the walk's pixel stays the image, the converged point is what
-    merging compares); ``(-1, -1, 0, 0)`` otherwise."""
+    """The image of the walk's texel (r, c), the first image: ``(image row, image col, Newton
+    row, Newton col)`` when (r, c) is covered, the vertex lies in front of its tangent plane and
+    within the texel's dilated bounds (``sph``, ``cone``: level 0 first, ``sizes0`` texels a row),
+    and Newton's iteration from it converges (:func:`converge`: the image is the texel nearest
+    the converged point, as for every other maximum, so it lies within a pixel of the exact
+    point where the walk's own maximum can lie farther); ``(-1, -1, 0, 0)`` otherwise."""
     h, w = mask.shape
     if r < 0 or r >= h or c < 0 or c >= w or not mask[r, c]:
         return -1, -1, 0.0, 0.0
@@ -426,7 +428,7 @@ def first_walk(G, mask, sph, cone, sizes0, r, c, v, reach, fp, t, work):
     q = r * sizes0 + c
     if not _contains(sph[q], cone[q], v, like(1.0, fp), like(1.0, fp), fp):
         return -1, -1, 0.0, 0.0
-    verdict, _, _, lr, lc = converge(G, mask, sph, cone, sizes0, r, c, v, reach, fp, t, work)
+    verdict, ir, ic, lr, lc = converge(G, mask, sph, cone, sizes0, r, c, v, reach, fp, t, work)
     if verdict != ACCEPTED:
         return -1, -1, 0.0, 0.0
-    return r, c, lr, lc
+    return ir, ic, lr, lc

@@ -91,10 +91,12 @@ def find_images(gbuffer, eye, vertices, result, reach: float = IMAGE_REACH, merg
     ray-cone pyramid whose bounds cannot hold a solution are pruned
     (:mod:`refsoft.search._images`), so a vertex costs a few descents, at most every cell once.
 
-    The walk's pixel (``result.pixel``) comes first when it is an image (covered, ``V`` in
-    front and within its bounds, Newton's iteration from it converging within ``reach``; its
-    own walk made it a maximum; it stays the image's texel), so that the
-    single-image arrays of spec section 7 keep it; the others follow in row-major order.
+    The walk's image comes first: when the walk's pixel (``result.pixel``) is covered, has ``V``
+    in front and within its bounds, and Newton's iteration from it converges within ``reach``
+    (its own walk made it a maximum), the image is the texel where that iteration converged, as
+    for every other maximum (a maximum of the discrete score can lie a pixel or more from the
+    exact point; the converged texel lies within one). The single-image arrays of spec section 7
+    keep the walk's pixel itself; the other images follow in row-major order.
 
     Parameters
     ----------
@@ -178,9 +180,9 @@ class ImagesTrace:
     Attributes
     ----------
     images : list of [row, col]
-        The images, in output order (the walk's first when it is one).
+        The images, in output order (the walk's first when it has one).
     walk_pixel : [row, col] or None
-        The walk's pixel, and ``walk_is_image`` whether it passed.
+        The walk's pixel, and ``walk_is_image`` whether it has an image (the first).
     visited, pruned, judged : int
         Pyramid cells visited (popped), cells pruned (bounds cannot meet the vertex), texels judged.
     maxima : list of dict
@@ -213,7 +215,7 @@ class ImagesTrace:
             lines.append(f"{str(tuple(m['texel'])):>12} {m['score']:>12.8f} {f'({nr:.2f}, {nc:.2f})':>18} "
                          f"{str(tuple(m['image'])):>12}  {m['verdict']}")
         walk = "none" if self.walk_pixel is None else (f"{tuple(self.walk_pixel)}, " +
-                                                      ("an image (kept first)" if self.walk_is_image else "not an image"))
+                                                      ("its image kept first" if self.walk_is_image else "no image"))
         lines.append(f"walk's pixel: {walk}")
         lines.append("images: " + (", ".join(str(tuple(p)) for p in self.images) or "none"))
         return "\n".join(lines)
@@ -229,7 +231,7 @@ def trace_images(gbuffer, eye, vertex, walk_pixel=None, reach: float = IMAGE_REA
     eye, vertex : array_like, shape (3,)
         World space.
     walk_pixel : (row, col), optional
-        The walk's pixel (kept first when it is an image).
+        The walk's pixel (its image kept first when it has one).
 
     Returns
     -------

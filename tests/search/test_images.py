@@ -85,11 +85,22 @@ def test_walk_pixel_first_and_record(case):
     assert im.virtual.dtype == np.float64 and im.virtual.shape == (len(im.pixel), 3)
     assert np.all(im.sheet == -1) and len(im) == len(verts)
     assert np.array_equal(im.vertex, np.repeat(np.arange(len(verts)), im.count))
-    # where the walk's pixel is an image, it is the vertex's first
+    # where the walk's pixel has an image, it is the vertex's first: the texel where Newton's
+    # iteration from the walk's pixel converged (tests/naive_images.py's converge)
+    P, N, mask = gb.position, gb.normal, gb.mask
+    e_rel = (eye - gb.origin).astype(P.dtype)
+    _, U = naive_images.scores(P, N, mask, e_rel, (verts[0] - gb.origin).astype(P.dtype))
     for i in range(len(verts)):
         rows = _rows(im, i)
-        if tuple(res.pixel[i]) in rows:
-            assert rows[0] == tuple(res.pixel[i])
+        r, c = (int(x) for x in res.pixel[i])
+        v_rel = (verts[i] - gb.origin).astype(P.dtype)
+        got = None
+        if r >= 0 and mask[r, c]:
+            d, n = (v_rel - P[r, c]).astype(P.dtype), N[r, c]
+            if ((d[0] * n[0] + d[1] * n[1]) + d[2] * n[2]) > 0 and naive_images.reaches(P, N, U, mask, v_rel, r, c):
+                got = naive_images.converge(P, N, U, mask, v_rel, r, c)
+        if got is not None:
+            assert rows[0] == got[0]
     # the virtual vertex is the mirror across the image's tangent plane (float64, world space)
     r, c = im.pixel[:, 0], im.pixel[:, 1]
     p = gb.position[r, c].astype(np.float64) + gb.origin
@@ -148,7 +159,10 @@ def test_trace_replays_the_kernel(case):
         assert tr.visited + tr.pruned >= 1 and tr.judged >= sum(m["verdict"] == "accepted" for m in tr.maxima)
         assert all(m["verdict"] in VERDICTS for m in tr.maxima)
         accepted = {tuple(m["image"]) for m in tr.maxima if m["verdict"] == "accepted"}
-        assert set(_rows(im, i)) - {tuple(res.pixel[i])} <= accepted
+        walks = {tuple(tr.images[0])} if tr.walk_is_image else set()
+        assert set(_rows(im, i)) - walks <= accepted  # the others are accepted maxima's images
+        if tr.walk_is_image:  # the walk's image: within IMAGE_REACH texels of the walk's pixel
+            assert all(abs(a - b) <= 4.0 for a, b in zip(tr.images[0], res.pixel[i]))
         assert all(abs(a - b) <= 4.0 for m in tr.maxima if m["verdict"] == "accepted"
                    for a, b in zip(m["texel"], m["image"]))  # converged within IMAGE_REACH texels
         assert "every image" in tr.table() and tr.to_dict()["images"] == tr.images
