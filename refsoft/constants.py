@@ -268,3 +268,10 @@ SEVERAL_DILATE_FRACTION = 0.25
 #: Two images are linked when the walk started at one ends within this many texels (Chebyshev)
 #: of the other, both ways.
 SEVERAL_LINK_TEXELS = 1
+
+# --- Several bounces (spec section 5.1) ---------------------------------------------------------
+#: The most reflections an eye ray follows (``bounces``).
+MAX_BOUNCES = 8
+#: A later bounce's search starts each vertex at the covered pixel of highest score among this
+#: many covered pixels taken evenly over the level's stencil (no coherence there).
+BOUNCE_START_SAMPLES = 64

@@ -118,6 +118,10 @@ class RenderOptions:
     envmap_resolution : int, optional
         ``method="envmap"`` only (default 256): texels per cube face edge
         (:class:`refsoft.envmap.EnvironmentMap`).
+    bounces : int
+        Reflections followed per eye ray, 1 to 8 (default 1, the papers): with more, the
+        reflectors seen in a reflection are searched and drawn level by level
+        (:mod:`refsoft.search.bounces`, spec section 5.1). The vertex search only.
     """
 
     preset: str = "accurate"
@@ -148,6 +152,7 @@ class RenderOptions:
     ldt_tau: float | None = None
     ldt_regions: str | None = None
     envmap_resolution: int | None = None
+    bounces: int = 1
 
     def __post_init__(self):
         validate.choice(self.preset, PRESET_NAMES, "preset")
@@ -173,6 +178,10 @@ class RenderOptions:
             validate.integer(self.cap, "cap", 1)
         for name in SKIPS + ("adaptive_widen", "coherence", "refine"):
             validate.flag(getattr(self, name), name)
+        validate.integer(self.bounces, "bounces", 1, constants.MAX_BOUNCES)
+        if self.bounces > 1 and self.method in METHOD_DEFAULTS:
+            raise RefsoftError(f"bounces > 1 needs the vertex search: method {self.method!r} follows one bounce "
+                               f"(give method='walk' or 'hierarchy', or bounces=1)")
         self._check_own_options()
 
     def _check_own_options(self):
@@ -214,11 +223,13 @@ class RenderOptions:
 
     def as_dict(self) -> dict:
         """The options the method reads, by name (tuples as lists), as ``stats.json`` and golden
-        manifests record them: for the vertex search the preset and every option but the LDT's;
+        manifests record them: for the vertex search the preset and every option but the LDT's
+        (``bounces`` only when more than one);
         for ``method="ldt"`` the method, the precision and the LDT's options.
         ``RenderOptions(**as_dict())`` gives these options back."""
         if self.method in METHOD_DEFAULTS:
             names = ("method", "precision") + tuple(METHOD_DEFAULTS[self.method])
         else:
-            names = tuple(f.name for f in fields(self) if f.name not in _OWN_OPTIONS)
+            names = tuple(f.name for f in fields(self) if f.name not in _OWN_OPTIONS
+                          and not (f.name == "bounces" and self.bounces == 1))  # one bounce: as before
         return {name: (list(v) if isinstance(v, tuple) else v) for name in names for v in [getattr(self, name)]}

@@ -95,6 +95,9 @@ def render_options() -> argparse.ArgumentParser:
     p.add_argument("--images", choices=constants.IMAGE_MODES, default=None,
                    help="beyond the papers: every reflection point of every vertex on mirrors that are not convex "
                         "(flag SEVERAL, per-image arrays), or the walk's one (paper: one, accurate: all)")
+    p.add_argument("--bounces", type=int, default=None, metavar="N",
+                   help="beyond the papers: reflections followed per eye ray, 1 to 8 (default 1): mirrors that see "
+                        "each other, searched and drawn level by level (the vertex search only)")
     p.add_argument("--adaptive-widen", action="store_true",
                    help="approximation: use --widen only on frames where a reflector is cut by the image border")
     p.add_argument("--no-skip", action="append", metavar="NAME",
@@ -149,7 +152,7 @@ def ldt_kwargs(args) -> dict:
 
 #: The render options that only the vertex search reads (refused with ``--method ldt``).
 _VERTEX_SEARCH_FLAGS = ("neighbourhood", "inverse", "widen", "tessellate", "max_level", "tessellate_span", "refine",
-                        "virtual", "silhouette", "images")
+                        "virtual", "silhouette", "images", "bounces")
 
 
 def _threshold(text):
@@ -203,7 +206,7 @@ def render_kwargs(args) -> dict:
     line gives."""
     out = search_kwargs(args)
     given = dict(max_level=args.max_level, tessellate_span=args.tessellate_span, refine=args.refine,
-                 virtual=args.virtual, silhouette=args.silhouette, images=args.images)
+                 virtual=args.virtual, silhouette=args.silhouette, images=args.images, bounces=args.bounces)
     out.update({k: v for k, v in given.items() if v is not None})
     if args.tessellate is not None:
         out["tessellate"] = None if args.tessellate == "off" else args.tessellate

@@ -18,7 +18,7 @@ import numpy as np
 from .. import keys, limits
 from ..raster import PRECISIONS, GBuffer, _setup, gbuffer
 from ..seam import ReflectorResult, stencil_box
-from . import CULLED, SEVERAL, SearchResult, search, skips, virtual_vertices
+from . import CULLED, SEVERAL, SearchResult, bounces, search, skips, virtual_vertices
 from .convex import several_possible
 from .images import facing_gbuffer, find_images
 from .reflect import Reflection, coherent_starts, gbuffer_camera
@@ -108,7 +108,7 @@ class VertexSearch:
     options : RenderOptions
         Read: ``method``, ``neighbourhood``, ``inverse``, ``widen``, ``gbuffer_size``,
         ``precision``, ``coherence``, ``cap``, the skips, ``adaptive_widen``, ``tessellate``,
-        ``max_level``, ``refine``, ``images``.
+        ``max_level``, ``refine``, ``images``, ``bounces``.
     """
 
     name = "vertex"
@@ -121,6 +121,9 @@ class VertexSearch:
     def __init__(self, scene, options):
         self.scene = scene
         self.options = options
+        if options.bounces > 1:  # the reflections taken per pixel, and the later levels' time
+            self.pixel_arrays = {bounces.BOUNCE_DEPTH: ((), np.int8, 0)}
+            self.stages = self.stages + ("bounces",)
         self.previous = {}
         self._last = {}
         self._reflected = None  # the concatenated non-reflector meshes (reflected_mesh)
@@ -159,8 +162,21 @@ class VertexSearch:
                     self.scene, parts, view.camera, stencil, box, opt.inverse, opt.cull_virtual)
             out.box = box
             times["virtual"] = 1000 * (time.perf_counter() - t)
+            if opt.bounces > 1 and drawn is None:  # the reflectors seen in this image, level by level
+                t = time.perf_counter()
+                report["bounces"] = bounces.deepen(self.scene, view, k, stencil, box, out, refl, parts, opt,
+                                                   lambda v: self._first_level(refl.gbuffer, view.camera.eye, v))
+                times["bounces"] = 1000 * (time.perf_counter() - t)
         out.arrays = {**gbuffer_outputs(refl.gbuffer, k), **vertex_outputs(refl, view.vertex_object, k)}
         return out
+
+    def _first_level(self, gb, eye, verts):
+        """Virtual vertices (N, 3) float64 world and flags of more vertices (another reflector's)
+        on a first bounce's G-buffer, as :meth:`reflection` computes the scene's."""
+        opt = self.options
+        res = search(gb, eye, verts, opt.neighbourhood, opt.inverse, None, opt.cap, method=opt.method)
+        rel, _ = virtual_relative(gb, res, verts, eye, opt.refine, opt.virtual)
+        return rel.astype(np.float64) + gb.origin, res.flags
 
     def _draw_images(self, view, k, refl, stencil, box):
         """Every image of reflector ``k`` drawn (:func:`refsoft.search.several.several_pass`), or
@@ -184,9 +200,11 @@ class VertexSearch:
                    "virtual_objects_culled": {}, "widen_off": []}
         if self.options.images == "all":
             skipped["images_convex"] = []
-        tessellation, silhouette, drawn = {}, {}, {}
+        tessellation, silhouette, drawn, later = {}, {}, {}, {}
         for k, r in results.items():
             rep = r.report
+            if "bounces" in rep:
+                later[str(k)] = rep["bounces"]
             for flag, name in (("outside_view", "reflectors_outside_view"), ("gbuffer_reused", "gbuffers_reused")):
                 if rep.get(flag):
                     skipped[name].append(k)
@@ -217,6 +235,8 @@ class VertexSearch:
             out["images"] = images
         if drawn:  # every image drawn (search/several.py): candidates, subdivisions, pixels per reflector
             out["several"] = drawn
+        if self.options.bounces > 1:  # per first reflector, each later bounce drawn in its image
+            out["bounces"] = later
         return out
 
     # --- the stages --------------------------------------------------------------------------

@@ -1,0 +1,48 @@
+"""Kernels of the searches at a later bounce (spec section 5.1): the G-buffer of a reflector seen
+in an earlier bounce's image, where each pixel has its own eye (the previous bounce point)."""
+
+import numpy as np
+
+from .._numba import kernel
+from ._kernels import RECORD_WIDTH, _normalize, search_one
+
+
+@kernel
+def pack_eyes(lo, hi, P, N, mask, E, fp, G):
+    """Rows ``lo .. hi - 1`` of ``G`` (H, W, 9), zeros on entry: P, N and U = normalize(E - P)
+    at covered pixels, with ``E`` (H, W, 3) each pixel's own eye (``_kernels.pack`` with one eye
+    per pixel: the same arithmetic)."""
+    w = mask.shape[1]
+    for r in range(lo, hi):
+        for c in range(w):
+            if mask[r, c]:
+                for k in range(3):
+                    G[r, c, k] = P[r, c, k]
+                    G[r, c, 3 + k] = N[r, c, k]
+                ux, uy, uz = _normalize(E[r, c, 0] - P[r, c, 0], E[r, c, 1] - P[r, c, 1], E[r, c, 2] - P[r, c, 2], fp)
+                G[r, c, 6] = ux
+                G[r, c, 7] = uy
+                G[r, c, 8] = uz
+
+
+@kernel
+def search_each(lo, hi, G, mask, V, starts, n_candidates, cap, fp, pixel, score, margin, iterations, flags):
+    """Vertices ``lo .. hi - 1``: the walk of spec section 4.2 (``_kernels.search_one``, no
+    inverse search) in the packed G-buffer ``G`` from ``starts[i]`` (covered), each vertex's
+    results written to its own rows."""
+    scratch = np.empty((2, 9), dtype=G.dtype)
+    seen = np.zeros((2, 9), dtype=np.bool_)
+    record = np.empty((0, RECORD_WIDTH), dtype=np.float64)  # nothing recorded
+    v = np.empty(3, dtype=G.dtype)
+    for i in range(lo, hi):
+        for k in range(3):
+            v[k] = V[i, k]
+        r, c, s, m, it, fl, _ = search_one(G, mask, v, starts[i, 0], starts[i, 1], n_candidates, cap, False, fp, record,
+                                           scratch, seen)
+        pixel[i, 0] = r
+        pixel[i, 1] = c
+        score[i] = s
+        margin[i] = m
+        iterations[i] = it
+        flags[i] = fl
+

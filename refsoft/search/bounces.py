@@ -1,0 +1,386 @@
+"""Several bounces (spec section 5.1): reflections of reflections, by the vertex search at every
+level.
+
+Level 1 is the method of one bounce. With ``bounces = N > 1`` the virtual pass of level ``j``
+also rasterizes the other reflectors' virtual triangles (their vertices searched like every other
+vertex); where one of them, ``b``, is nearest, those pixels are a :class:`Bounce`: level ``j +
+1``'s stencil and G-buffer, ``b``'s world position and normal interpolated over its virtual
+triangles, and each pixel's own eye, the previous bounce point. The walk of spec section 4.2
+runs on it with the eye direction of each pixel taken from that pixel's eye
+(:mod:`refsoft.search._bounces`); a virtual vertex lies on the camera's ray through its
+reflection pixel at the whole path's length, ``|O - R1| + ... + |R_j - V|`` (the unfolded rule).
+Level ``j + 1``'s virtual triangles are drawn in its stencil only, and composited into level
+``j``'s picture as the frame composites a reflector: ``rho * reflection + (1 - rho) * the
+reflector's own shade``.
+
+What a later level does not do: coherence (each vertex starts from the covered pixel, among
+:data:`~refsoft.constants.BOUNCE_START_SAMPLES` spread over the stencil, where its score is
+highest), the inverse search (a hidden vertex's triangles are left out, as ``inverse =
+"discard"`` does), tessellation and the silhouette cut, and a reflector seeing itself.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import constants
+from .._numba import readonly
+from .._parallel import parallel_range
+from ..raster import CULL_MODES, GBuffer, _setup, interpolate, rasterize_trusted, shade
+from ..raster.rays import primary_rays
+from . import CULLED, HIDDEN, SearchResult, _bounces, search
+from .virtual import virtual_pass
+
+#: The per-pixel array of the reflections taken (0 off reflectors).
+BOUNCE_DEPTH = "bounce_depth"
+
+
+@dataclass(frozen=True, eq=False)
+class Bounce:
+    """A reflector seen in an earlier bounce's image: a later level's stencil and G-buffer.
+
+    Attributes
+    ----------
+    level : int
+        The bounce this reflector gives (2 for a reflector seen in a first bounce's image).
+    reflector : int
+        Its object id.
+    mask : ndarray (H, W) bool
+        Where it is seen (the level's stencil), over the view.
+    position, normal : ndarray (H, W, 3) float64
+        Its world position and unit normal there (zero elsewhere).
+    eye : ndarray (H, W, 3) float64
+        Each pixel's eye: the previous bounce point.
+    path : ndarray (H, W) float64
+        The path's length from the camera's eye to this bounce point.
+    direction : ndarray (H, W, 3) float64
+        The camera's unit ray direction through each pixel.
+    origin : ndarray (3,) float64
+        The camera's eye.
+    """
+
+    level: int
+    reflector: int
+    mask: np.ndarray
+    position: np.ndarray
+    normal: np.ndarray
+    eye: np.ndarray
+    path: np.ndarray
+    direction: np.ndarray
+    origin: np.ndarray
+
+    def box(self):
+        """(r0, r1, c0, c1): the bounding box of ``mask``."""
+        rows, cols = np.flatnonzero(self.mask.any(axis=1)), np.flatnonzero(self.mask.any(axis=0))
+        return int(rows[0]), int(rows[-1]) + 1, int(cols[0]), int(cols[-1]) + 1
+
+
+def gbuffer_of(bounce: Bounce, camera, precision="float32") -> GBuffer:
+    """The bounce's G-buffer, positions relative to the camera's eye in ``precision``."""
+    dt = np.dtype(precision)
+    origin = np.asarray(camera.eye, np.float64)
+    m = bounce.mask
+    pos = np.where(m[..., None], bounce.position - origin, 0.0).astype(dt)
+    nrm = np.where(m[..., None], bounce.normal, 0.0).astype(dt)
+    depth = np.where(m, np.float32(0.5), np.float32(1.0)).astype(np.float32)
+    tri = np.where(m, 0, -1).astype(np.int32)
+    return GBuffer(pos, nrm, m.copy(), depth, tri, camera.view_proj(), origin)
+
+
+def search_bounce(bounce: Bounce, gb: GBuffer, vertices, neighbourhood="cross", cap=None) -> SearchResult:
+    """The walk of spec section 4.2 for every vertex on a bounce's G-buffer, each pixel's eye
+    its own (:class:`Bounce`).
+
+    Parameters
+    ----------
+    bounce : Bounce
+    gb : GBuffer
+        :func:`gbuffer_of` the bounce.
+    vertices : ndarray (N, 3) float64
+        World space.
+    neighbourhood : {"cross", "box"}
+    cap : int, optional
+        Iteration cap (default ``2 * (width + height)``).
+
+    Returns
+    -------
+    SearchResult
+        Flags: HIDDEN where the vertex lies behind the end pixel's tangent plane, CAPPED, BORDER.
+    """
+    from . import default_cap
+
+    dt = gb.position.dtype.type
+    fp = dt(0)
+    verts = np.asarray(vertices, np.float64).reshape(-1, 3)
+    n = len(verts)
+    h, w = gb.mask.shape
+    cap = default_cap((h, w)) if cap is None else int(cap)
+    pixel = np.full((n, 2), -1, np.int32)
+    score, margin = np.zeros(n, dt), np.zeros(n, dt)
+    iterations, flags = np.zeros(n, np.int32), np.full(n, CULLED, np.uint8)
+    if not n or not gb.mask.any():
+        return SearchResult(pixel, score, margin, iterations, flags, neighbourhood, "discard", cap)
+    G = np.zeros((h, w, 9), dtype=dt)
+    eye_rel = np.ascontiguousarray((bounce.eye - gb.origin).astype(dt))
+    parallel_range(_bounces.pack_eyes, h, gb.position, gb.normal, gb.mask, eye_rel, fp, G)
+    rel = np.ascontiguousarray((verts - gb.origin).astype(dt))
+    starts = _starts(G, gb.mask, rel)
+    flags[:] = 0
+    parallel_range(_bounces.search_each, n, G, gb.mask, rel, starts, constants.NEIGHBOURHOODS[neighbourhood], cap, fp,
+                   pixel, score, margin, iterations, flags)
+    return SearchResult(pixel, score, margin, iterations, flags, neighbourhood, "discard", cap)
+
+
+def _starts(G, mask, rel):
+    """Per vertex the covered pixel of highest score among up to BOUNCE_START_SAMPLES covered
+    pixels taken evenly in row-major order (ties: the first): a stencil seen in a curved mirror
+    can be small and split, and no projection of the vertex points into it. (N, 2) int64."""
+    rows, cols = np.nonzero(mask)
+    step = max(1, -(-len(rows) // constants.BOUNCE_START_SAMPLES))
+    rows, cols = rows[::step], cols[::step]
+    g = G[rows, cols].astype(np.float64)  # (S, 9): P, N, U
+    d = rel.astype(np.float64)[:, None, :] - g[None, :, 0:3]
+    b = d / np.maximum(np.linalg.norm(d, axis=-1, keepdims=True), 1e-300)
+    hv = g[None, :, 6:9] + b
+    hv /= np.maximum(np.linalg.norm(hv, axis=-1, keepdims=True), 1e-300)
+    best = np.argmax(np.sum(hv * g[None, :, 3:6], axis=-1), axis=1)
+    return np.ascontiguousarray(np.stack([rows[best], cols[best]], axis=1), np.int64)
+
+
+def unfolded(bounce: Bounce, result: SearchResult, vertices) -> np.ndarray:
+    """Virtual vertices (N, 3) float64 world: on the camera's ray through each vertex's reflection
+    pixel, at the path's length to the bounce point plus ``|V - R|`` (spec section 5.1); NaN
+    where the search found no pixel."""
+    verts = np.asarray(vertices, np.float64).reshape(-1, 3)
+    out = np.full(verts.shape, np.nan)
+    ok = result.pixel[:, 0] >= 0
+    r, c = result.pixel[ok, 0], result.pixel[ok, 1]
+    length = bounce.path[r, c] + np.linalg.norm(verts[ok] - bounce.position[r, c], axis=1)
+    out[ok] = bounce.origin + length[:, None] * bounce.direction[r, c]
+    return out
+
+
+def object_parts(meshes, ids, virtual, flags, real=False):
+    """The virtual geometry of objects ``ids`` (their vertices consecutive in ``virtual`` and
+    ``flags``, in that order), one part per object: (virtual (n, 3) float64, normals, faces (m, 3)
+    int64, face object (m,) int32, flags (n,) uint8), plus the world positions with ``real``."""
+    parts, start = [], 0
+    for k in ids:
+        mesh = meshes[k - 1]
+        n = mesh.n_vertices
+        part = (virtual[start:start + n], mesh.normals, mesh.faces.astype(np.int64),
+                np.full(mesh.n_faces, k, dtype=np.int32), flags[start:start + n])
+        parts.append(part + ((mesh.vertices,) if real else ()))
+        start += n
+    return parts
+
+
+def seen_reflectors(parts, reflector_parts, camera, stencil, box):
+    """The reflectors whose virtual triangles are nearest at pixels of ``stencil``, drawn with the
+    virtual triangles of ``parts`` in one z-buffer over ``box`` (spec section 5.1).
+
+    Parameters
+    ----------
+    parts : list
+        The non-reflectors' virtual parts (:func:`object_parts`, or the virtual pass's own).
+    reflector_parts : list
+        :func:`object_parts` of the reflectors with ``real=True``.
+    camera : Camera
+    stencil : ndarray (H, W) bool
+    box : (r0, r1, c0, c1)
+
+    Returns
+    -------
+    dict
+        Reflector id -> (mask (H, W) bool, position (H, W, 3) float64 world, normal (H, W, 3)
+        float64 unit), for each reflector nearest at one pixel or more.
+    """
+    if not reflector_parts:
+        return {}
+    vp = camera.view_proj()
+    faces, face_obj, clips, flags, real = [], [], [], [], []
+    offset = 0
+    for part in list(parts) + list(reflector_parts):
+        virtual, _, f, fobj, fl = part[:5]
+        bad = ~np.all(np.isfinite(virtual), axis=1)
+        clip = _setup.transform_points(np.where(bad[:, None], 0.0, virtual), vp)
+        faces.append(f + offset)
+        face_obj.append(fobj)
+        clips.append(clip)
+        flags.append(np.where(bad, np.uint8(CULLED), fl).astype(np.uint8))
+        real.append(part[5] if len(part) > 5 else np.zeros((len(virtual), 3)))
+        offset += len(clip)
+    faces, face_obj, clip = np.concatenate(faces), np.concatenate(face_obj), np.ascontiguousarray(np.concatenate(clips))
+    flags, real = np.concatenate(flags), np.concatenate(real)
+    keep = ~np.any((flags[faces] & np.uint8(CULLED | HIDDEN)) != 0, axis=1)
+    faces, face_obj = faces[keep], face_obj[keep]
+    if not len(faces):
+        return {}
+    faces32 = readonly(np.ascontiguousarray(faces, np.int32))
+    r0, r1, c0, c1 = (int(x) for x in box)
+    frags = rasterize_trusted(clip, faces32, camera.width, camera.height, (r0, r1, c0, c1), None, CULL_MODES[None])
+    tri = frags.triangle
+    obj = np.where(tri >= 0, face_obj[np.maximum(tri, 0)], 0)
+    sten = stencil[r0:r1, c0:c1]
+    ids = [int(b) for b in np.unique(obj[sten & (tri >= 0)]) if int(b) in {int(p[3][0]) for p in reflector_parts
+                                                                               if len(p[3])}]
+    if not ids:
+        return {}
+    position = interpolate(frags, real, faces32, "float64")
+    normals = np.concatenate([p[1] for p in list(parts) + list(reflector_parts)])
+    normal = interpolate(frags, normals, faces32, "float64", normalize=True)
+    out = {}
+    H, W = stencil.shape
+    for b in ids:
+        m = sten & (obj == b)
+        mask = np.zeros((H, W), bool)
+        mask[r0:r1, c0:c1] = m
+        pos, nrm = np.zeros((H, W, 3)), np.zeros((H, W, 3))
+        pos[r0:r1, c0:c1][m] = position[m]
+        nrm[r0:r1, c0:c1][m] = normal[m]
+        out[b] = (mask, pos, nrm)
+    return out
+
+
+def first_bounces(camera, mesh, triangle, seen):
+    """The reflectors seen in a first bounce's image as level-2 :class:`Bounce` s.
+
+    Parameters
+    ----------
+    camera : Camera
+    mesh : Mesh
+        The first reflector's world mesh (the main view's).
+    triangle : ndarray (H, W) int
+        Its visible triangle per view pixel.
+    seen : dict
+        :func:`seen_reflectors`.
+    """
+    origin = np.asarray(camera.eye, np.float64)
+    out = []
+    for b, (mask, pos, nrm) in sorted(seen.items()):
+        rows, cols = np.nonzero(mask)
+        hit, _, _ = primary_rays(camera, mesh, rows, cols, triangle[rows, cols])
+        eye, direction, path = np.zeros(pos.shape), np.zeros(pos.shape), np.zeros(mask.shape)
+        first = np.linalg.norm(hit - origin, axis=1)
+        eye[rows, cols] = hit
+        direction[rows, cols] = (hit - origin) / np.maximum(first, 1e-300)[:, None]
+        path[rows, cols] = first + np.linalg.norm(pos[rows, cols] - hit, axis=1)
+        out.append(Bounce(2, b, mask, pos, nrm, eye, path, direction, origin))
+    return out
+
+
+def later_bounces(bounce: Bounce, seen):
+    """The reflectors seen in ``bounce``'s image as the next level's :class:`Bounce` s."""
+    out = []
+    for c, (mask, pos, nrm) in sorted(seen.items()):
+        rows, cols = np.nonzero(mask)
+        eye, path = np.zeros(pos.shape), np.zeros(mask.shape)
+        eye[rows, cols] = bounce.position[rows, cols]
+        path[rows, cols] = bounce.path[rows, cols] + np.linalg.norm(pos[rows, cols] - eye[rows, cols], axis=1)
+        out.append(Bounce(bounce.level + 1, c, mask, pos, nrm, eye, path, bounce.direction, bounce.origin))
+    return out
+
+
+def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, levels, report):
+    """Level ``bounce.level``'s picture in its stencil, and the later levels' inside it.
+
+    Parameters
+    ----------
+    scene, meshes, camera
+        The frame's.
+    bounce : Bounce
+    vertices : ndarray (N, 3) float64
+        The non-reflectors' vertices (:func:`refsoft.scene.scene_vertices`).
+    opt : RenderOptions
+        Read: ``neighbourhood``, ``cap``, ``precision``.
+    levels : int
+        The last level drawn (``bounces``).
+    report : list
+        Receives one dict per bounce drawn (level, reflector, pixels, milliseconds).
+
+    Returns
+    -------
+    box, colour (h, w, 3) float32, reflected_id (h, w) int32, covered (h, w) bool, depth (h, w) int8
+    """
+    import time
+
+    t0 = time.perf_counter()
+    box = bounce.box()
+    r0, r1, c0, c1 = box
+    gb = gbuffer_of(bounce, camera, opt.precision)
+    res = search_bounce(bounce, gb, vertices, opt.neighbourhood, opt.cap)
+    ids = [k for k, o in enumerate(scene.objects, start=1) if not o.reflector]
+    parts = object_parts(meshes, ids, unfolded(bounce, res, vertices), res.flags)
+    colour, rid, covered, _ = virtual_pass(scene, parts, camera, bounce.mask, box, "discard")
+    depth = np.where(bounce.mask[r0:r1, c0:c1], np.int8(bounce.level), np.int8(0)).astype(np.int8)
+    entry = {"level": bounce.level, "reflector": bounce.reflector, "pixels": int(bounce.mask.sum()),
+             "searched": int(len(vertices))}
+    report.append(entry)
+    if bounce.level < levels:
+        others = [k for k in scene.reflector_ids if k != bounce.reflector]
+        rparts = []
+        for k in others:
+            verts = meshes[k - 1].vertices
+            r = search_bounce(bounce, gb, verts, opt.neighbourhood, opt.cap)
+            rparts += object_parts(meshes, [k], unfolded(bounce, r, verts), r.flags, real=True)
+        for nxt in later_bounces(bounce, seen_reflectors(parts, rparts, camera, bounce.mask, box)):
+            deeper = draw_bounce(scene, meshes, nxt, camera, vertices, opt, levels, report)
+            blend(colour, rid, covered, depth, box, nxt, deeper, scene)
+    entry["ms"] = 1000 * (time.perf_counter() - t0)
+    return box, colour, rid, covered, depth
+
+
+def blend(colour, rid, covered, depth, box, bounce: Bounce, deeper, scene):
+    """Composite a later level's picture ``deeper`` (:func:`draw_bounce`) into an earlier one's
+    arrays over ``box``, in place, where ``bounce.mask``: the reflector's own shade blended with
+    its reflection by its reflectivity where the reflection covers (``rho * reflection + (1 -
+    rho) * own``, as the frame composites), its own shade elsewhere; the reflected object id and
+    the depth the later level's."""
+    r0, r1, c0, c1 = box
+    b0, b1, d0, d1 = deeper[0]
+    col2, rid2, cov2, dep2 = deeper[1:]
+    obj = scene.objects[bounce.reflector - 1]
+    m = bounce.mask[b0:b1, d0:d1]
+    own = shade(bounce.normal[b0:b1, d0:d1][m], np.asarray(obj.color, np.float32)).astype(np.float32)
+    rho = np.float32(obj.reflectivity)
+    mix = np.where(cov2[m][:, None], rho * col2[m] + (np.float32(1) - rho) * own, own)
+    sl = (slice(b0 - r0, b1 - r0), slice(d0 - c0, d1 - c0))
+    colour[sl][m] = mix
+    rid[sl][m] = rid2[m]
+    covered[sl][m] = True
+    depth[sl][m] = dep2[m]
+
+
+def deepen(scene, view, k, stencil, box, out, refl, parts, opt, search_first):
+    """After level 1 of reflector ``k`` (its :class:`~refsoft.seam.ReflectorResult` ``out`` over
+    ``box``, its reflection ``refl`` and virtual ``parts``): the reflectors seen in its image and
+    every later level, composited into ``out`` in place, with the per-pixel depth.
+
+    ``search_first(vertices)`` gives the first level's virtual vertices (N, 3) float64 and flags
+    of other vertices (the reflectors'), as the method computes its own.
+
+    Returns
+    -------
+    list of dict
+        One per later bounce drawn (:func:`draw_bounce`'s report).
+    """
+    report = []
+    r0, r1, c0, c1 = box
+    depth = np.where(stencil[r0:r1, c0:c1], np.int8(1), np.int8(0)).astype(np.int8)
+    rparts = []
+    for b in scene.reflector_ids:
+        if b == k:
+            continue
+        virtual, flags = search_first(view.meshes[b - 1].vertices)
+        rparts += object_parts(view.meshes, [b], virtual, flags, real=True)
+    seen = seen_reflectors(parts, rparts, view.camera, stencil, box)
+    colour, rid, covered = out.colour.copy(), out.reflected_id.copy(), out.covered.copy()
+    for bounce in first_bounces(view.camera, view.meshes[k - 1], view.view.triangle, seen):
+        deeper = draw_bounce(scene, view.meshes, bounce, view.camera, view.vertices, opt, opt.bounces, report)
+        blend(colour, rid, covered, depth, box, bounce, deeper, scene)
+    out.colour, out.reflected_id, out.covered = colour, rid, covered
+    out.pixels = {**out.pixels, BOUNCE_DEPTH: depth}
+    out.pixel_mask = stencil[r0:r1, c0:c1].copy()
+    return report

@@ -1,0 +1,160 @@
+"""Several bounces (spec section 5.1, refsoft.search.bounces): the search with each pixel's own
+eye, the option, and the first level left as it is."""
+
+import numpy as np
+import pytest
+
+from refsoft import search
+from refsoft._parallel import one_thread
+from refsoft.errors import RefsoftError
+from refsoft.frame.driver import FrameDriver
+from refsoft.options import RenderOptions
+from refsoft.raster import gbuffer
+from refsoft.scene.camera import Camera
+from refsoft.scene.model import Scene, SceneObject, Transform
+from refsoft.scene.primitives import box, icosphere, plane_grid
+from refsoft.search import _bounces, _kernels, _packed
+from refsoft.search.bounces import BOUNCE_DEPTH, Bounce, search_bounce
+from refsoft.truth.analytic import sphere_reflection_points
+from refsoft.truth.metrics import window_to_pixel
+
+
+@pytest.fixture(scope="module")
+def ball():
+    """A mirror ball's G-buffer at 160x120 and vertices around it."""
+    cam = Camera(eye=(0.0, 0.3, 4.0), target=(0, 0, 0), fov_y=40.0, width=160, height=120)
+    gb = gbuffer(icosphere(5, 1.0), cam, "float32", origin=cam.eye)
+    rng = np.random.default_rng(3)
+    d = rng.normal(size=(300, 3))
+    verts = d / np.linalg.norm(d, axis=1, keepdims=True) * rng.uniform(1.6, 4.0, (300, 1))
+    return cam, gb, verts
+
+
+def _bounce(cam, gb, eye):
+    """The ball's G-buffer as a bounce whose every pixel's eye is ``eye``."""
+    m = gb.mask
+    pos = np.where(m[..., None], gb.position.astype(np.float64) + gb.origin, 0.0)
+    nrm = np.where(m[..., None], gb.normal.astype(np.float64), 0.0)
+    eyes = np.where(m[..., None], np.asarray(eye, np.float64), 0.0)
+    d = pos - np.asarray(cam.eye)
+    direction = d / np.maximum(np.linalg.norm(d, axis=-1, keepdims=True), 1e-300)
+    return Bounce(2, 1, m, pos, nrm, eyes, np.zeros(m.shape), direction, np.asarray(cam.eye, np.float64))
+
+
+def test_packing_with_one_eye_per_pixel_equals_the_packing_with_the_camera_eye(ball):
+    cam, gb, _ = ball
+    G, mask, fp, (r0, c0) = _packed(gb, cam.eye)
+    eyes = np.broadcast_to((np.asarray(cam.eye) - gb.origin).astype(np.float32), mask.shape + (3,)).copy()
+    got = np.zeros_like(G)
+    _bounces.pack_eyes(0, mask.shape[0], np.ascontiguousarray(gb.position[r0:r0 + mask.shape[0], c0:c0 + mask.shape[1]]),
+                       np.ascontiguousarray(gb.normal[r0:r0 + mask.shape[0], c0:c0 + mask.shape[1]]), mask, eyes, fp, got)
+    assert np.array_equal(got, G)
+
+
+@pytest.mark.parametrize("eye", [(0.0, 0.3, 4.0), (1.5, 1.0, 2.5)])
+def test_the_search_finds_the_reflection_point_seen_from_each_pixels_eye(ball, eye):
+    """With every pixel's eye at ``eye`` (the camera's, then another point), the walk ends near the
+    exact reflection point of the vertex seen from ``eye`` (Alhazen's problem), for the vertices
+    whose point the camera sees well inside the ball's picture and whose walk ended without a flag
+    (HIDDEN: a point near or beyond the ball's outline from the camera). Measured (2026-12-07):
+    from the camera's eye every end pixel within 0.71 pixels (median 0.39); from (1.5, 1, 2.5)
+    96.7% within 1 pixel, median 0.40, the farthest 1.81 (the walk stops at the discrete score's
+    maximum, which a peak skewed by the oblique view moves off the solution's texel)."""
+    cam, gb, verts = ball
+    b = _bounce(cam, gb, eye)
+    res = search_bounce(b, gb, verts, "box")
+    exact = sphere_reflection_points([0, 0, 0], 1.0, eye, verts)
+    ok = np.all(np.isfinite(exact), axis=1)
+    ok[ok] &= np.sum(exact[ok] * (np.asarray(cam.eye) - exact[ok]), axis=1) > 0  # on the camera's side
+    px = np.full((len(verts), 2), np.nan)
+    px[ok] = window_to_pixel(exact[ok], gb.view_proj, gb.mask.shape)
+    inner = ok & np.isfinite(px[:, 0])
+    rr, cc = np.rint(np.nan_to_num(px, nan=-10)).astype(int).T
+    inside = (rr >= 3) & (rr < 117) & (cc >= 3) & (cc < 157)
+    inner &= inside
+    inner[inside] &= np.all([np.roll(np.roll(gb.mask, -dr, 0), -dc, 1)[rr[inside], cc[inside]]
+                             for dr in range(-3, 4) for dc in range(-3, 4)], axis=0)
+    inner &= res.flags == 0
+    assert inner.sum() >= 60
+    err = np.linalg.norm(res.pixel[inner] - px[inner], axis=1)
+    assert np.median(err) <= 0.5 and np.mean(err <= 1.0) >= 0.95 and err.max() <= 2.0, np.sort(err)[-5:]
+    if eye != (0.0, 0.3, 4.0):  # the camera's eye would give other pixels: the eyes are used
+        cam_exact = sphere_reflection_points([0, 0, 0], 1.0, cam.eye, verts[inner])
+        cam_px = window_to_pixel(cam_exact, gb.view_proj, gb.mask.shape)
+        assert np.median(np.linalg.norm(cam_px - px[inner], axis=1)) > 5
+
+
+def test_the_search_is_the_same_for_every_thread_count(ball):
+    cam, gb, verts = ball
+    b = _bounce(cam, gb, (1.5, 1.0, 2.5))
+    a = search_bounce(b, gb, verts, "cross")
+    with one_thread():
+        c = search_bounce(b, gb, verts, "cross")
+    for x, y in zip((a.pixel, a.score, a.iterations, a.flags), (c.pixel, c.score, c.iterations, c.flags)):
+        assert np.array_equal(x, y)
+
+
+@pytest.mark.parametrize("bad", [0, 9, 2.5, "x", True])
+def test_bad_bounces_are_refused(bad):
+    with pytest.raises(RefsoftError, match="bounces must be an integer in \\[1, 8\\]"):
+        RenderOptions(bounces=bad)
+
+
+@pytest.mark.parametrize("method", ["ldt", "envmap"])
+def test_the_per_pixel_methods_refuse_several_bounces(method):
+    with pytest.raises(RefsoftError, match=f"method '{method}' follows one bounce"):
+        RenderOptions(method=method, bounces=2)
+
+
+def test_one_bounce_records_the_options_as_before():
+    assert "bounces" not in RenderOptions().as_dict()
+    assert RenderOptions(bounces=3).as_dict()["bounces"] == 3
+    assert RenderOptions(**RenderOptions(bounces=3).as_dict()) == RenderOptions(bounces=3)
+
+
+def two_balls(width=96, height=72):
+    """Two mirror balls side by side, a box above and one in front, over a floor."""
+    objs = (SceneObject("ball_a", icosphere(3, 1.0), (0.9, 0.9, 0.9), Transform((-1.2, 0, 0)), reflector=True),
+            SceneObject("ball_b", icosphere(3, 1.0), (0.9, 0.9, 0.9), Transform((1.2, 0, 0)), reflector=True),
+            SceneObject("red", box((0.6, 0.6, 0.6), 2), (0.9, 0.2, 0.2), Transform((0, 1.3, 1.0))),
+            SceneObject("blue", box((0.5, 0.5, 0.5), 2), (0.2, 0.3, 0.9), Transform((0.0, -1.2, 1.5))),
+            SceneObject("floor", plane_grid((12, 12), (6, 6)), (0.4, 0.6, 0.4), Transform((0, -2.0, 0))))
+    cam = Camera(eye=(0.0, 0.6, 6.0), target=(0, 0, 0), fov_y=40.0, width=width, height=height)
+    return Scene(objs, cam, None, "two_balls")
+
+
+@pytest.fixture(scope="module")
+def renders():
+    sc = two_balls()
+    return {n: FrameDriver(sc, RenderOptions(bounces=n)).render_frame(0) for n in (1, 2, 3)}
+
+
+def test_the_first_level_is_one_bounces_picture_where_no_reflector_is_seen(renders):
+    one, two = renders[1].arrays, renders[2].arrays
+    depth = two[BOUNCE_DEPTH]
+    assert BOUNCE_DEPTH not in one
+    assert depth.dtype == np.int8 and set(np.unique(depth)) == {0, 1, 2}
+    assert np.array_equal(depth > 0, one["reflected_id"] >= 0)  # every reflector pixel, and only those
+    assert (depth == 2).sum() >= 20  # each ball shows the other
+    first = depth == 1
+    assert np.array_equal(two["reflected_id"][first], one["reflected_id"][first])
+    assert np.array_equal(two["image"][first], one["image"][first])
+    for key, a in one.items():  # the per-vertex arrays of the first level are as they were
+        if key not in ("image", "reflected_id"):
+            assert np.array_equal(a, two[key]), key
+
+
+def test_three_bounces_go_deeper_inside_the_second(renders):
+    two, three = renders[2].arrays[BOUNCE_DEPTH], renders[3].arrays[BOUNCE_DEPTH]
+    assert (three == 3).sum() > 0
+    assert np.array_equal(three >= 2, two >= 2)  # the third level lies inside the second's stencil
+    report = renders[3].report["bounces"]
+    assert {e["level"] for r in report.values() for e in r} == {2, 3}
+
+
+def test_several_bounces_give_the_same_bits_with_one_thread(renders):
+    sc = two_balls()
+    with one_thread():
+        f = FrameDriver(sc, RenderOptions(bounces=3)).render_frame(0)
+    for key, a in renders[3].arrays.items():
+        assert np.array_equal(a, f.arrays[key]), key
