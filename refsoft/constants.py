@@ -275,3 +275,7 @@ MAX_BOUNCES = 8
 #: A later bounce's search starts each vertex at the covered pixel of highest score among this
 #: many covered pixels taken evenly over the level's stencil (no coherence there).
 BOUNCE_START_SAMPLES = 64
+#: A reflector is searched on another's G-buffer (a later bounce) only where a reflected ray can
+#: reach its bounding sphere: its radius widened by this many times the spread of the rays of a
+#: texel's covered neighbours (``refsoft.search.bounces.may_see``).
+BOUNCE_BOUND_FACTOR = 2.5

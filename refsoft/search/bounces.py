@@ -162,6 +162,64 @@ def unfolded(bounce: Bounce, result: SearchResult, vertices) -> np.ndarray:
     return out
 
 
+def may_see(position, normal, eye, mask, centre, radius) -> bool:
+    """Whether a reflected ray of a G-buffer can reach a sphere (a reflector's bounds): False
+    only when, at every covered texel, the ray reflected about its normal from its eye passes the
+    sphere farther than ``radius`` plus BOUNCE_BOUND_FACTOR times the spread to its covered
+    4-neighbours (the arc their rays' angle sweeps at the sphere's distance, and the distance
+    between their points), so that a ray from anywhere between texels misses it too.
+
+    Parameters
+    ----------
+    position, normal : ndarray (H, W, 3)
+        World positions and unit normals (zero where not covered).
+    eye : ndarray (3,) or (H, W, 3)
+        The eye, or each texel's.
+    mask : ndarray (H, W) bool
+    centre : array_like (3,)
+    radius : float
+    """
+    rows, cols = np.nonzero(mask)
+    if not len(rows):
+        return False
+    P = np.asarray(position, np.float64)
+    N = np.asarray(normal, np.float64)
+    E = np.asarray(eye, np.float64)
+    p = P[rows, cols]
+    e = E if E.ndim == 1 else E[rows, cols]
+    i = p - e
+    i /= np.maximum(np.linalg.norm(i, axis=1, keepdims=True), 1e-300)
+    n = N[rows, cols]
+    r = i - 2.0 * np.sum(i * n, axis=1, keepdims=True) * n
+    R = np.zeros(P.shape)
+    R[rows, cols] = r
+    h, w = mask.shape
+    angle, step = np.zeros(len(rows)), np.zeros(len(rows))
+    for dr, dc in ((0, 1), (1, 0), (0, -1), (-1, 0)):
+        rr, cc = rows + dr, cols + dc
+        ok = (rr >= 0) & (rr < h) & (cc >= 0) & (cc < w)
+        ok[ok] &= mask[rr[ok], cc[ok]]
+        q = np.zeros((len(rows), 3))
+        q[ok] = R[rr[ok], cc[ok]]
+        cos = np.clip(np.sum(q * r, axis=1), -1.0, 1.0)
+        angle = np.maximum(angle, np.where(ok, np.arccos(cos), 0.0))
+        d = np.zeros(len(rows))
+        d[ok] = np.linalg.norm(P[rr[ok], cc[ok]] - p[ok], axis=1)
+        step = np.maximum(step, d)
+    cp = np.asarray(centre, np.float64) - p
+    t = np.maximum(np.sum(cp * r, axis=1), 0.0)
+    miss = np.linalg.norm(cp - t[:, None] * r, axis=1)
+    spread = np.linalg.norm(cp, axis=1) * np.minimum(angle, np.pi) + step
+    return bool(np.any(miss <= radius + constants.BOUNCE_BOUND_FACTOR * spread))
+
+
+def bounding_sphere(mesh):
+    """(centre (3,), radius) of a mesh's vertices: the centre of their box."""
+    v = np.asarray(mesh.vertices, np.float64)
+    c = 0.5 * (v.min(axis=0) + v.max(axis=0))
+    return c, float(np.sqrt(np.max(np.sum((v - c) ** 2, axis=1))))
+
+
 def object_parts(meshes, ids, virtual, flags, real=False):
     """The virtual geometry of objects ``ids`` (their vertices consecutive in ``virtual`` and
     ``flags``, in that order), one part per object: (virtual (n, 3) float64, normals, faces (m, 3)
@@ -310,16 +368,25 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, levels, re
     box = bounce.box()
     r0, r1, c0, c1 = box
     gb = gbuffer_of(bounce, camera, opt.precision)
-    res = search_bounce(bounce, gb, vertices, opt.neighbourhood, opt.cap)
     ids = [k for k, o in enumerate(scene.objects, start=1) if not o.reflector]
-    parts = object_parts(meshes, ids, unfolded(bounce, res, vertices), res.flags)
+    # only the objects a reflected ray of this level can reach are searched; the others' vertices
+    # are CULLED (their triangles are not drawn)
+    sizes = [meshes[k - 1].n_vertices for k in ids]
+    seen = np.repeat([may_see(bounce.position, bounce.normal, bounce.eye, bounce.mask, *bounding_sphere(meshes[k - 1]))
+                      for k in ids], sizes).astype(bool)
+    virtual = np.zeros((len(vertices), 3))
+    flags = np.full(len(vertices), CULLED, np.uint8)
+    res = search_bounce(bounce, gb, vertices[seen], opt.neighbourhood, opt.cap)
+    virtual[seen], flags[seen] = unfolded(bounce, res, vertices[seen]), res.flags
+    parts = object_parts(meshes, ids, virtual, flags)
     colour, rid, covered, _ = virtual_pass(scene, parts, camera, bounce.mask, box, "discard")
     depth = np.where(bounce.mask[r0:r1, c0:c1], np.int8(bounce.level), np.int8(0)).astype(np.int8)
     entry = {"level": bounce.level, "reflector": bounce.reflector, "pixels": int(bounce.mask.sum()),
-             "searched": int(len(vertices))}
+             "searched": int(seen.sum())}
     report.append(entry)
     if bounce.level < levels:
-        others = [k for k in scene.reflector_ids if k != bounce.reflector]
+        others = [k for k in scene.reflector_ids if k != bounce.reflector
+                  and may_see(bounce.position, bounce.normal, bounce.eye, bounce.mask, *bounding_sphere(meshes[k - 1]))]
         rparts = []
         for k in others:
             verts = meshes[k - 1].vertices
@@ -364,16 +431,22 @@ def deepen(scene, view, k, stencil, box, out, refl, parts, opt, search_first):
     Returns
     -------
     list of dict
-        One per later bounce drawn (:func:`draw_bounce`'s report).
+        The first level's (level 1: the other reflectors' vertices searched on this one's
+        G-buffer), then one per later bounce drawn (:func:`draw_bounce`'s report).
     """
-    report = []
+    first = {"level": 1, "reflector": int(k), "pixels": int(stencil.sum()), "searched": 0}
+    report = [first]
     r0, r1, c0, c1 = box
     depth = np.where(stencil[r0:r1, c0:c1], np.int8(1), np.int8(0)).astype(np.int8)
     rparts = []
+    gb = refl.gbuffer
+    position = np.where(gb.mask[..., None], gb.position.astype(np.float64) + gb.origin, 0.0)
     for b in scene.reflector_ids:
-        if b == k:
-            continue
+        if b == k or not may_see(position, gb.normal, np.asarray(view.camera.eye, np.float64), gb.mask,
+                                 *bounding_sphere(view.meshes[b - 1])):
+            continue  # no reflected ray of this reflector comes near b
         virtual, flags = search_first(view.meshes[b - 1].vertices)
+        first["searched"] += int(len(virtual))
         rparts += object_parts(view.meshes, [b], virtual, flags, real=True)
     seen = seen_reflectors(parts, rparts, view.camera, stencil, box)
     colour, rid, covered = out.colour.copy(), out.reflected_id.copy(), out.covered.copy()

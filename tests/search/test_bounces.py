@@ -149,7 +149,7 @@ def test_three_bounces_go_deeper_inside_the_second(renders):
     assert (three == 3).sum() > 0
     assert np.array_equal(three >= 2, two >= 2)  # the third level lies inside the second's stencil
     report = renders[3].report["bounces"]
-    assert {e["level"] for r in report.values() for e in r} == {2, 3}
+    assert {e["level"] for r in report.values() for e in r} == {1, 2, 3}
 
 
 def test_several_bounces_give_the_same_bits_with_one_thread(renders):
@@ -158,3 +158,39 @@ def test_several_bounces_give_the_same_bits_with_one_thread(renders):
         f = FrameDriver(sc, RenderOptions(bounces=3)).render_frame(0)
     for key, a in renders[3].arrays.items():
         assert np.array_equal(a, f.arrays[key]), key
+
+
+@pytest.mark.parametrize("name", ["two_balls", "ants"])
+def test_the_reach_test_skips_nothing_that_is_drawn(monkeypatch, renders, name):
+    """Reflectors and objects no reflected ray can reach are not searched at a later bounce
+    (``may_see``): the picture is the one searching everything gives (the ants' eyes: 8
+    reflectors among many objects, most out of each other's reach)."""
+    import refsoft
+    from refsoft.search import bounces
+
+    scene = two_balls() if name == "two_balls" else refsoft.load_scene("ants", width=320, height=240)
+    kept = renders[3] if name == "two_balls" else FrameDriver(scene, RenderOptions(bounces=3)).render_frame(0)
+    monkeypatch.setattr(bounces, "may_see", lambda *a: True)
+    every = FrameDriver(scene, RenderOptions(bounces=3)).render_frame(0)
+    for key, a in kept.arrays.items():
+        assert np.array_equal(a, every.arrays[key]), key
+    if name == "ants":
+        searched = [e["searched"] for r in every.report["bounces"].values() for e in r]
+        skipped = [e["searched"] for r in kept.report["bounces"].values() for e in r]
+        assert sum(skipped) < sum(searched)  # the test skipped something
+
+
+def test_the_reach_test_on_a_plane_mirror():
+    """A flat mirror facing +z seen from above it: its rays reach a sphere above it, in front of
+    the reflected eye's view, and not one behind the mirror."""
+    from refsoft.search.bounces import may_see
+
+    h = w = 8
+    mask = np.ones((h, w), bool)
+    xs = np.linspace(-1, 1, w)
+    pos = np.stack(list(np.meshgrid(xs, xs, indexing="ij")) + [np.zeros((h, w))], -1)
+    nrm = np.broadcast_to([0.0, 0.0, 1.0], (h, w, 3))
+    eye = np.array([0.0, 0.0, 3.0])
+    assert may_see(pos, nrm, eye, mask, (0.0, 0.0, 2.0), 0.2)  # straight back up the eye's way
+    assert not may_see(pos, nrm, eye, mask, (0.0, 0.0, -2.0), 0.2)  # behind the mirror
+    assert not may_see(pos, nrm, eye, mask, (20.0, 0.0, 1.0), 0.5)  # far to the side, low
