@@ -219,6 +219,13 @@ SUBPIXEL_HALF = SUBPIXEL_ONE >> 1
 #: Embree traces the reflected rays split over the threads in parts of at least this many rays
 #: (fewer rays: one call; the split does not change any ray's answer).
 TRUTH_RAYS_PER_THREAD = 20000
+#: The truth's mirror paths (spec section 5.1): at most this many reflections per eye ray
+#: (``bounces``; 1, the default, is the papers' first-order contract).
+MAX_BOUNCES = 8
+#: A ray leaving a reflector that can see itself (not convex) starts this far along its direction,
+#: times the reflector's bounding-box diagonal, when traced against that reflector: Embree's
+#: float32 hit on the triangle it leaves lies within about 1e-7 of the extent of it.
+TRUTH_SELF_OFFSET = 1e-5
 
 # --- Every reflection point of a vertex (spec section 4.8) ------------------------------------
 #: ``images`` option: every reflection point (``all``) or the walk's one (``one``, the papers).
