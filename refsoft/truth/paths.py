@@ -56,6 +56,14 @@ class MirrorPaths:
     levels: list = field(default_factory=list)
 
 
+def _interpolated_normals(normals, faces, tri, bary):
+    """The vertex normals of triangles ``tri`` interpolated at ``bary`` and renormalised (zero
+    where they cancel), float64 (P, 3)."""
+    n = np.einsum("nk,nkj->nj", bary, normals[faces[tri]])
+    length = np.linalg.norm(n, axis=1, keepdims=True)
+    return np.divide(n, length, out=np.zeros_like(n), where=length > 0)
+
+
 def sees_itself(scene: Scene, k: int) -> bool:
     """Whether reflector ``k`` can reflect a ray onto itself: not a convex closed body nor a plane
     (:func:`refsoft.search.convex.several_possible` of its drawn mesh, decided once per mesh; an
@@ -87,7 +95,8 @@ def trace_paths(origins, directions, first, first_tri, bounces, plain, mirrors) 
     bounces : int
         Most reflections per path (1 .. ``MAX_BOUNCES``).
     plain : refsoft.truth.raytrace._Targets
-        The non-reflectors.
+        The non-reflectors (anything with its ``named``, ``complete``, ``face_object``,
+        ``first_face``, ``normals``, ``faces`` and ``empty``).
     mirrors : callable
         ``mirrors(s) -> (targets, offset)``: the reflectors a ray leaving reflector ``s`` may
         meet (a ``_Targets``, empty when none) and the distance its origin moves along the ray
@@ -144,15 +153,14 @@ def _mirror_hits(o, d, src, src_tri, mirrors):
         if offset != 0 and int(s) in targets.first_face:  # the triangle a ray leaves cannot be hit again
             tr[(ob == s) & (tr - targets.first_face[int(s)] == src_tri[sel])] = -1
         keep = (tr >= 0) & (tt > 0.0)
-        tri[sel], t[sel], bary[sel], obj[sel] = np.where(keep, tr, -1), np.where(keep, tt, np.nan), bb, np.where(keep, ob, 0)
+        tri[sel], t[sel], bary[sel] = np.where(keep, tr, -1), np.where(keep, tt, np.nan), bb
+        obj[sel] = np.where(keep, ob, 0)
     return tri, t, bary, obj
 
 
 def _mirror_points(o, d, src, tri, t, bary, obj, mirrors):
     """The reflector hits (float64), the interpolated normals there and each hit triangle's index
     in its own reflector's mesh (``tri`` indexes the targets ``mirrors(src)``)."""
-    from .raytrace import _interpolated_normals
-
     hit = o + t[:, None] * d
     normal = np.zeros_like(hit)
     local = np.zeros(len(o), np.int64)

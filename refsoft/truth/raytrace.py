@@ -37,12 +37,7 @@ from ..scene.mesh import concatenate
 from ..scene.model import Scene
 from ..seam import ReflectorResult, stencil_box
 from .analytic import fit_sphere, sphere_reflection_points
-
-
-def _interpolated_normals(normals, faces, tri, bary):
-    n = np.einsum("nk,nkj->nj", bary, normals[faces[tri]])
-    length = np.linalg.norm(n, axis=1, keepdims=True)
-    return np.divide(n, length, out=np.zeros_like(n), where=length > 0)
+from .paths import _interpolated_normals, trace_paths
 
 
 class _Targets:
@@ -273,8 +268,6 @@ class RayTracedTruth:
             hit_tri, hit2, obj, nrm2 = self._targets_at(view.meshes).first_hits(hit[ok], ray[ok])
             depth = np.ones(len(hit2), np.int8)
         else:
-            from .paths import trace_paths
-
             paths = trace_paths(hit[ok], ray[ok], k, tri[ok], self.bounces, self._targets_at(view.meshes),
                                 self._mirrors_at(view))
             hit2, obj, nrm2, depth = paths.hit, paths.obj, paths.normal, paths.depth
@@ -396,5 +389,5 @@ def render_truth(scene, frames=None, out=None, progress=False, exact=True, memor
     bounces = check_bounces(bounces)
     scene = resolve_scene(scene, width, height, subdivide)
     indices = frame_indices(scene, frames)
-    return run_to_folder(TruthRenderer(scene, exact=exact, memory_limit=memory_limit, bounces=bounces), indices, out, "truth", None,
-                         progress, overwrite=overwrite, on_start=on_start)
+    driver = TruthRenderer(scene, exact=exact, memory_limit=memory_limit, bounces=bounces)
+    return run_to_folder(driver, indices, out, "truth", None, progress, overwrite=overwrite, on_start=on_start)

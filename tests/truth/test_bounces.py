@@ -178,7 +178,8 @@ def test_one_bounce_is_the_default_and_deeper_paths_keep_the_first_order_pixels(
     assert _same(three["image"][~on], one["image"][~on])
     # and one reflector alone (it cannot see itself) gives the first-order truth at any N
     alone = Scene((scene.objects[0],) + scene.objects[2:], scene.camera, None, "one_ball")
-    a, b = TruthRenderer(alone, bounces=1).render_frame(0).arrays, TruthRenderer(alone, bounces=4).render_frame(0).arrays
+    a = TruthRenderer(alone, bounces=1).render_frame(0).arrays
+    b = TruthRenderer(alone, bounces=4).render_frame(0).arrays
     for k in a:
         assert _same(a[k], b[k]), k
 
