@@ -246,3 +246,23 @@ def test_cli_bounces(tmp_path, capsys):
     assert "reflector pixels by reflections taken: 1:" in out and "3:" in out
     with np.load(tmp_path / "t" / "frame_0000.npz") as z:
         assert z["bounce_depth"].dtype == np.int8 and z["bounce_depth"].max() == 3
+
+
+# --- the built-in scene of mirrors facing each other --------------------------------------------
+
+def test_each_ball_of_the_mirrors_scene_shows_another(tmp_path, capsys):
+    """Every ball of ``mirrors`` shows another ball at its first and last frame (depth 2 and 3
+    on each), and compare takes such a truth as it takes a first-order one."""
+    from refsoft import load_scene, render
+
+    scene = load_scene("mirrors", width=96, height=72)
+    for frame in (0, scene.n_frames - 1):
+        a = TruthRenderer(scene, exact=False, bounces=3).render_frame(frame).arrays
+        for k in scene.reflector_ids:
+            depth = a["bounce_depth"][a["object_id"] == k]
+            assert (depth == 2).sum() >= 5 and (depth == 3).sum() >= 1, (frame, k)
+    size = ["--width", "32", "--height", "24", "--frames", "1"]
+    assert cli.main(["render", "mirrors", *size, "--out", str(tmp_path / "r")]) == 0
+    assert cli.main(["truth", "mirrors", *size, "--bounces", "2", "--out", str(tmp_path / "t")]) == 0
+    assert cli.main(["compare", str(tmp_path / "r"), str(tmp_path / "t"), "--out", str(tmp_path / "c")]) == 0
+    assert "reflected_id differs on" in capsys.readouterr().out
