@@ -113,6 +113,8 @@ class _Targets:
         hit = np.zeros((n, 3))
         obj = np.zeros(n, dtype=np.int32)
         normal = np.zeros((n, 3))
+        if self.empty:
+            return hit, obj, normal
         ok = np.flatnonzero(tri >= 0)
         hit[ok] = origins[ok] + t[ok][:, None] * directions[ok]
         obj[ok] = self.face_object[tri[ok]]

@@ -184,6 +184,18 @@ def test_one_bounce_is_the_default_and_deeper_paths_keep_the_first_order_pixels(
         assert _same(a[k], b[k]), k
 
 
+def test_mirrors_alone_see_each_other_and_nothing_else():
+    """A scene of reflectors only: at N = 1 every reflector pixel shows nothing; at N = 2 the
+    balls see each other (and then nothing)."""
+    scene = two_balls_and_a_box()
+    alone = Scene(scene.objects[:2], scene.camera, None, "two_balls_alone")
+    one = TruthRenderer(alone, exact=False).render_frame(0).arrays
+    two = TruthRenderer(alone, exact=False, bounces=2).render_frame(0).arrays
+    on = one["object_id"] > 0
+    assert on.sum() > 400 and np.all(one["reflected_id"][on] == 0) and np.all(two["reflected_id"][on] == 0)
+    assert np.all(one["bounce_depth"][on] == 1) and (two["bounce_depth"][on] == 2).sum() > 20
+
+
 def test_paths_are_the_same_bits_on_every_run_and_thread_count():
     import numba
 
