@@ -83,6 +83,18 @@ def test_a_mirror_that_sees_itself_agrees_with_the_brute_force_tracer():
     assert (a["bounce_depth"][on] == 3).sum() > 20  # rays reflect inside the bowl, again and again
 
 
+def test_which_reflectors_see_themselves():
+    from refsoft.truth.paths import sees_itself
+
+    assert not sees_itself(two_balls_and_a_box(), 1)  # a convex ball
+    assert sees_itself(bowl_scene(), 1)  # the inside of an open bowl
+    assert not sees_itself(corner_scene(), 1)  # a plane mirror
+    outside, proxy = bowl(1.0, 8, 24)  # an open shell seen from outside, with a closed proxy: its rim sees itself
+    scene = Scene((SceneObject("shell", outside, reflector=True, closed_proxy=proxy),) + bowl_scene().objects[1:],
+                  bowl_scene().camera)
+    assert sees_itself(scene, 1)
+
+
 # --- the corner reflector: two flat mirrors at a right angle ---------------------------------
 
 OBJECT = np.array([1.0, -0.4, 0.8])
