@@ -222,7 +222,7 @@ class RayTracedTruth:
         moving = set() if scene.animation is None else set(scene.animation.object_keys)
         when = view.frame if any(o.name in moving for o in scene.objects if o.reflector) else None
         cache, held = self._mirrors
-        if held != when or (when is not None and not cache):
+        if held != when:  # a reflector moved: the frame's own meshes
             cache = {}
             self._mirrors = (cache, when)
 

@@ -208,6 +208,23 @@ def test_mirrors_alone_see_each_other_and_nothing_else():
     assert np.all(one["bounce_depth"][on] == 1) and (two["bounce_depth"][on] == 2).sum() > 20
 
 
+def test_moving_mirrors_are_traced_where_they_are_at_each_frame():
+    """A ball that moves: frame 2 traced after frames 0 and 1 is frame 2 traced alone (the
+    reflectors' Embree scenes follow it), and differs from frame 0."""
+    from refsoft import Animation
+
+    scene = two_balls_and_a_box()
+    right = scene.objects[1]
+    keys = {right.name: ((0, right.transform), (2, Transform((0.9, 0.05, -0.4))))}
+    moving = Scene(scene.objects, scene.camera, Animation(3, (), keys), "moving")
+    walk = TruthRenderer(moving, exact=False, bounces=2)
+    first = [walk.render_frame(f).arrays for f in (0, 1, 2)]
+    alone = TruthRenderer(moving, exact=False, bounces=2).render_frame(2).arrays
+    for k in alone:
+        assert _same(first[2][k], alone[k]), k
+    assert not _same(first[0]["bounce_depth"], first[2]["bounce_depth"])
+
+
 def test_paths_are_the_same_bits_on_every_run_and_thread_count():
     import numba
 
