@@ -219,6 +219,13 @@ SUBPIXEL_HALF = SUBPIXEL_ONE >> 1
 #: Embree traces the reflected rays split over the threads in parts of at least this many rays
 #: (fewer rays: one call; the split does not change any ray's answer).
 TRUTH_RAYS_PER_THREAD = 20000
+#: Mirror paths (spec section 5.1), the truth's and the render's: at most this many reflections
+#: per eye ray (``bounces``; 1, the default, is the papers' first-order contract).
+MAX_BOUNCES = 8
+#: A ray leaving a reflector that can see itself (not convex) starts this far along its direction,
+#: times the reflector's bounding-box diagonal, when traced against that reflector: Embree's
+#: float32 hit on the triangle it leaves lies within about 1e-7 of the extent of it.
+TRUTH_SELF_OFFSET = 1e-5
 
 # --- Every reflection point of a vertex (spec section 4.8) ------------------------------------
 #: ``images`` option: every reflection point (``all``) or the walk's one (``one``, the papers).
@@ -270,8 +277,7 @@ SEVERAL_DILATE_FRACTION = 0.25
 SEVERAL_LINK_TEXELS = 1
 
 # --- Several bounces (spec section 5.1) ---------------------------------------------------------
-#: The most reflections an eye ray follows (``bounces``).
-MAX_BOUNCES = 8
+#: (The most reflections an eye ray follows: MAX_BOUNCES, with the truth's.)
 #: A later bounce's search starts each vertex at the covered pixel of highest score among this
 #: many covered pixels taken evenly over the level's stencil (no coherence there).
 BOUNCE_START_SAMPLES = 64

@@ -25,6 +25,9 @@ OBJECT_ID = "object_id"
 REFLECTED_ID = "reflected_id"
 #: (H, W, 3) float64, truth only: the world point each reflected ray hits (0 where none).
 REFLECTED_HIT = "reflected_hit"
+#: (H, W) int8: the reflections the mirror path through each reflector pixel takes (1 ..
+#: bounces; spec section 5.1), 0 elsewhere; the truth's always, a render's with bounces > 1.
+BOUNCE_DEPTH = "bounce_depth"
 
 # --- per reflector: the G-buffer ---------------------------------------------------------------
 GBUFFER_POSITION = PerReflector("gbuffer_position")

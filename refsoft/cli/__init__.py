@@ -64,6 +64,11 @@ def build_parser() -> argparse.ArgumentParser:
                         help="ray-trace the reflections (Embree) as the reference for compare")
     tr.add_argument("--no-exact", action="store_true",
                     help="skip the exact reflection points of spherical reflectors (per-vertex truth)")
+    tr.add_argument("--bounces", default="1", metavar="N",
+                    help=f"most reflections per eye ray, 1 to {constants.MAX_BOUNCES} (default 1: each reflected "
+                         "ray sees the non-reflectors only; N > 1: it may meet another reflector (or, leaving a "
+                         "reflector that is not convex, that one again) and reflect again, up to N reflections in "
+                         "all; the frames' bounce_depth holds the reflections taken)")
     tr.set_defaults(func=commands.cmd_truth)
 
     c = sub.add_parser("compare", help="metrics of a render against its truth, agreement maps, side-by-side pictures")

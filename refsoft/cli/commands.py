@@ -301,10 +301,21 @@ def several_lines(frames, name=None) -> list[str]:
     return lines
 
 
+def _bounces(text) -> int:
+    """``--bounces``: read here rather than by argparse, so that a bad value is one line."""
+    from ..constants import MAX_BOUNCES
+
+    value = text.strip()
+    if not (value.isascii() and value.isdigit() and 1 <= int(value) <= MAX_BOUNCES):
+        raise RefsoftError(f"--bounces must be an integer from 1 to {MAX_BOUNCES}, got {text!r}")
+    return int(value)
+
+
 def cmd_truth(args) -> int:
     from ..frame import frame_indices
     from ..truth import render_truth
 
+    bounces = _bounces(args.bounces)
     scene = _scene(args)
     frames = _one_of(args)
     if args.frame is not None:
@@ -314,10 +325,15 @@ def cmd_truth(args) -> int:
     notice = _FirstRunNotice("truth", 15)
     t0 = time.perf_counter()
     done, stats = render_truth(scene, frames=frames, out=out, progress=True, exact=not args.no_exact,
-                               memory_limit=args.memory_limit, overwrite=args.overwrite, on_start=notice)
+                               memory_limit=args.memory_limit, overwrite=args.overwrite, on_start=notice,
+                               bounces=bounces)
     rays = sum(f.report["reflector_pixels"] for f in done)
     print(f"{scene.name}: {len(done)} truth frame(s) written to {out} in {time.perf_counter() - t0:.1f} s "
           f"({_timing(done, notice.compiling)}; {rays} reflected rays)")
+    if bounces > 1:
+        depth = {j: sum(f.report["bounce_depth"][str(j)] for f in done) for j in range(1, bounces + 1)}
+        print("reflector pixels by reflections taken: "
+              + ", ".join(f"{j}: {n} ({100 * n / max(rays, 1):.1f}%)" for j, n in depth.items()))
     return 0
 
 

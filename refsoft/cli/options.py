@@ -95,7 +95,7 @@ def render_options() -> argparse.ArgumentParser:
     p.add_argument("--images", choices=constants.IMAGE_MODES, default=None,
                    help="beyond the papers: every reflection point of every vertex on mirrors that are not convex "
                         "(flag SEVERAL, per-image arrays), or the walk's one (paper: one, accurate: all)")
-    p.add_argument("--bounces", type=int, default=None, metavar="N",
+    p.add_argument("--bounces", default=None, metavar="N",
                    help="beyond the papers: reflections followed per eye ray, 1 to 8 (default 1): mirrors that see "
                         "each other, searched and drawn level by level (the vertex search only)")
     p.add_argument("--adaptive-widen", action="store_true",
@@ -155,6 +155,14 @@ _VERTEX_SEARCH_FLAGS = ("neighbourhood", "inverse", "widen", "tessellate", "max_
                         "virtual", "silhouette", "images", "bounces")
 
 
+def _count(text, flag):
+    """An integer option read here rather than by argparse, so that a bad value is one line."""
+    try:
+        return int(text)
+    except ValueError:
+        raise RefsoftError(f"{flag} must be an integer, got {text!r}") from None
+
+
 def _threshold(text):
     """--tessellate's value: a number, or 'off'/'none' for no tessellation."""
     if text.lower() in ("off", "none"):
@@ -206,7 +214,8 @@ def render_kwargs(args) -> dict:
     line gives."""
     out = search_kwargs(args)
     given = dict(max_level=args.max_level, tessellate_span=args.tessellate_span, refine=args.refine,
-                 virtual=args.virtual, silhouette=args.silhouette, images=args.images, bounces=args.bounces)
+                 virtual=args.virtual, silhouette=args.silhouette, images=args.images,
+                 bounces=None if args.bounces is None else _count(args.bounces, "--bounces"))
     out.update({k: v for k, v in given.items() if v is not None})
     if args.tessellate is not None:
         out["tessellate"] = None if args.tessellate == "off" else args.tessellate

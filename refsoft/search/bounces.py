@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import constants
+from .. import constants, keys
 from .._numba import readonly
 from .._parallel import parallel_range
 from ..raster import CULL_MODES, GBuffer, _setup, interpolate, rasterize_trusted, shade
@@ -34,7 +34,7 @@ from . import CULLED, HIDDEN, SearchResult, _bounces, search
 from .virtual import virtual_pass
 
 #: The per-pixel array of the reflections taken (0 off reflectors).
-BOUNCE_DEPTH = "bounce_depth"
+BOUNCE_DEPTH = keys.BOUNCE_DEPTH
 
 
 @dataclass(frozen=True, eq=False)

@@ -8,6 +8,7 @@ from ...errors import SceneError
 from ..model import Scene
 from .basic import concave_scene, ellipsoid_scene, planar_scene, quad_scene, sphere_scene, torus_scene
 from .ldt import balls_scene, cup_scene, cylinder_scene, genus3_scene, hollow_box_scene, touching_scene
+from .mirrors import mirrors_scene
 from .nonconvex import shaving_scene, wavy_scene
 from .papers import ants_scene, kitchen_scene, ufo_scene
 
@@ -30,6 +31,7 @@ BUILTIN_SCENES = {
     "cup": (cup_scene, "a cup with a handle (one closed mesh, 3+ depth layers) beside a mirror ball (static)"),
     "touching": (touching_scene, "a hollow box resting on top of a mirror ball (static; LDT paper Fig. 7)"),
     "cylinder": (cylinder_scene, "an upright cylinder beside a mirror ball, seen from the side (static; Fig. 5)"),
+    "mirrors": (mirrors_scene, "three mirror balls in a row that see each other (truth --bounces N); camera orbits"),
 }
 
 
