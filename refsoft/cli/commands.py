@@ -525,7 +525,35 @@ def cmd_compare(args) -> int:
           f"(render | truth | 4x difference)")
     for line in several_lines(_render_stats(args.render_dir)):
         print(line)
+    line = levels_line(report["frames"])
+    if line:
+        print(line)
     return 0
+
+
+def levels_line(frames) -> str:
+    """One line on the mirror paths of several bounces, from the frames' ``levels`` metrics:
+    the reflector pixels and the disagreement per number of reflections, and the depth mismatch
+    (or that the render follows one bounce where the truth follows more); "" when no frame has
+    them."""
+    rows = [f["levels"] for f in frames if "levels" in f]
+    if not rows:
+        return ""
+    pixels, wrong = {}, {}
+    for r in rows:
+        for j, n in r["pixels"].items():
+            pixels[j] = pixels.get(j, 0) + n
+            wrong[j] = wrong.get(j, 0.0) + r["disagreement"][j] * n
+    parts = [f"{j} reflection(s): {pixels[j]} px, {100 * wrong[j] / pixels[j]:.2f}% differ"
+             for j in sorted(pixels, key=int)]
+    mismatch = [r["depth_mismatch"] for r in rows]
+    if any(m is None for m in mismatch):
+        tail = "; the render records no bounce_depth (it follows one bounce: render with --bounces as the truth)"
+    else:
+        total = sum(pixels.values())
+        share = sum(m * sum(r["pixels"].values()) for m, r in zip(mismatch, rows)) / total
+        tail = f"; the number of reflections differs on {100 * share:.2f}% of reflector pixels"
+    return "mirror paths: " + ", ".join(parts) + tail
 
 
 def _render_stats(folder) -> list:

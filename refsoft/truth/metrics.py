@@ -229,6 +229,32 @@ def hit_distance(hit, truth_hit, render_id, truth_id) -> dict:
     return {"pixels": int(len(d)), "mean": float(d.mean()), "median": float(np.median(d)), "max": float(d.max())}
 
 
+def bounce_levels(render_arrays, truth_arrays):
+    """Per number of reflections the truth's mirror paths take (its ``bounce_depth``), the
+    reflector pixels and the share of them whose ``reflected_id`` differs, and, when the render
+    has a ``bounce_depth`` too, the share where the two depths differ: ``{"pixels": {j: n},
+    "disagreement": {j: share}, "depth_mismatch": share or None}`` (keys as strings); None when
+    the truth takes one reflection everywhere and the render records no depth."""
+    tid = np.asarray(truth_arrays["reflected_id"])
+    refl = reflector_pixels(tid)
+    tdepth = truth_arrays.get(keys.BOUNCE_DEPTH)
+    rdepth = render_arrays.get(keys.BOUNCE_DEPTH)
+    if tdepth is None or not refl.any():
+        return None
+    tdepth = np.asarray(tdepth)
+    if rdepth is None and tdepth[refl].max() <= 1:
+        return None
+    rid = np.asarray(render_arrays["reflected_id"])
+    out = {"pixels": {}, "disagreement": {}, "depth_mismatch": None}
+    for j in np.unique(tdepth[refl]):
+        m = refl & (tdepth == j)
+        out["pixels"][str(int(j))] = int(m.sum())
+        out["disagreement"][str(int(j))] = float(np.count_nonzero(rid[m] != tid[m]) / m.sum())
+    if rdepth is not None:
+        out["depth_mismatch"] = float(np.count_nonzero(np.asarray(rdepth)[refl] != tdepth[refl]) / refl.sum())
+    return out
+
+
 def frame_metrics(render_arrays, truth_arrays) -> dict:
     """Every metric of one frame from the spec section 7 arrays of a render and its truth.
 
@@ -250,6 +276,9 @@ def frame_metrics(render_arrays, truth_arrays) -> dict:
                                                    != np.asarray(truth_arrays["object_id"]))),
     }
     out.update(defect_counts(render_arrays, truth_arrays))
+    levels = bounce_levels(render_arrays, truth_arrays)
+    if levels is not None:
+        out["levels"] = levels
     flip = flip_mean(render_arrays["image"], truth_arrays["image"])
     if flip is not None:
         out["flip_mean"] = flip
