@@ -208,3 +208,66 @@ def nearest_image(lo, hi, end, target, offset, pixel, reach, out):
             if d < best_d:
                 best, best_d = j, d
         out[w] = best
+
+
+@kernel
+def rays_near(lo, hi, real, origin, direction, first, last, ray, margin, parallel, start, out, fill):
+    """Triangles ``lo .. hi - 1`` (run by :func:`refsoft._parallel.parallel_range`; each writes
+    only its own outputs): the rays among ``ray[first[f]:last[f]]`` that may hit triangle ``f``,
+    in order. A ray is left out only when Moller-Trumbore (float64, :func:`accept`'s arithmetic)
+    puts it clearly off the triangle: ``u`` or ``v`` below ``-margin``, ``u + v`` above
+    ``1 + margin``, or ``t`` below ``-margin * (|e1| + |e2|)``; a ray within ``parallel`` of the
+    plane (``|det| <= parallel * |d| |e1| |e2|``) or with a non-finite value is kept.
+
+    Parameters
+    ----------
+    real : (F, 3, 3) float64
+        The triangles (world space).
+    origin, direction : (R, 3) float64
+        The rays.
+    first, last : (F,) int64
+        Each triangle's rays to test: ``ray[first[f]:last[f]]``.
+    ray : (K,) int64
+        Ray indices.
+    margin, parallel : float
+        ``constants.SEVERAL_PRUNE_MARGIN``, ``constants.SEVERAL_PRUNE_PARALLEL``.
+    start : (F,) int64
+        ``fill`` False: written, each triangle's number of rays kept; True: read, where its rays
+        go in ``out``.
+    out : (T,) int64
+        ``fill`` True: the kept ray indices, triangle by triangle.
+    """
+    for f in range(lo, hi):
+        p0x, p0y, p0z = real[f, 0, 0], real[f, 0, 1], real[f, 0, 2]
+        e1x, e1y, e1z = real[f, 1, 0] - p0x, real[f, 1, 1] - p0y, real[f, 1, 2] - p0z
+        e2x, e2y, e2z = real[f, 2, 0] - p0x, real[f, 2, 1] - p0y, real[f, 2, 2] - p0z
+        l1 = np.sqrt((e1x * e1x + e1y * e1y) + e1z * e1z)
+        l2 = np.sqrt((e2x * e2x + e2y * e2y) + e2z * e2z)
+        t_min = -margin * (l1 + l2)
+        n = 0
+        pos = start[f] if fill else 0
+        for q in range(first[f], last[f]):
+            r = ray[q]
+            dx, dy, dz = direction[r, 0], direction[r, 1], direction[r, 2]
+            px, py, pz = dy * e2z - dz * e2y, dz * e2x - dx * e2z, dx * e2y - dy * e2x
+            det = (e1x * px + e1y * py) + e1z * pz
+            ld = np.sqrt((dx * dx + dy * dy) + dz * dz)
+            # the tests say "clearly off": a NaN fails them and the ray is kept
+            if not abs(det) <= parallel * (ld * l1 * l2):
+                inv = 1.0 / det
+                sx, sy, sz = origin[r, 0] - p0x, origin[r, 1] - p0y, origin[r, 2] - p0z
+                u = ((sx * px + sy * py) + sz * pz) * inv
+                if u < -margin or u > 1.0 + margin:
+                    continue
+                qx, qy, qz = sy * e1z - sz * e1y, sz * e1x - sx * e1z, sx * e1y - sy * e1x
+                v = ((dx * qx + dy * qy) + dz * qz) * inv
+                if v < -margin or u + v > 1.0 + margin:
+                    continue
+                t = ((e2x * qx + e2y * qy) + e2z * qz) * inv
+                if t < t_min:
+                    continue
+            if fill:
+                out[pos + n] = r
+            n += 1
+        if not fill:
+            start[f] = n

@@ -31,7 +31,7 @@ from ..errors import RefsoftError
 from ..raster import GBuffer, _setup, shade
 from ..raster.rays import primary_rays
 from . import search
-from ._several import accept, linked_triples, nearest_image
+from ._several import accept, linked_triples, nearest_image, rays_near
 from .images import Images, facing_gbuffer, find_images
 
 
@@ -135,8 +135,14 @@ class Candidates:
 
 
 def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, neighbourhood="cross", cap=None,
-               max_level=None):
+               max_level=None, rays=None):
     """Candidate virtual triangles of every scene triangle (module docstring, step 2).
+
+    With ``rays`` (the reflector's reflected rays, those :func:`draw` tests), the candidates of a
+    triangle (or part) no ray comes near are left out, and so are its parts: the acceptance
+    would refuse them at every pixel, so the picture is the same bits. A triangle that shares a
+    vertex with one a ray comes near is still matched and cut (its rim walks count for its
+    neighbours' corners without an image); the others are not (see ``docs/sheets.md``).
 
     Parameters
     ----------
@@ -152,6 +158,8 @@ def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, n
         ``find(points (K, 3) float64) -> Images``: every image of new points (midpoints).
     max_level : int, optional
         Subdivision levels (default ``constants.SEVERAL_MAX_LEVEL``).
+    rays : tuple of two (R, 3) float64, optional
+        Origins and directions of the reflected rays (:func:`pixel_rays`); None: every candidate.
 
     Returns
     -------
@@ -171,11 +179,22 @@ def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, n
     pool.walked = np.unique(edges[:, 0] * _KEY + edges[:, 1])
     out_t, out_f, out_s, subdivided = [], [], [], []
     todo_faces, todo_src = faces, np.arange(len(faces), dtype=np.int64)
+    reach = None if rays is None else _Reach(*rays)
+    span = None if reach is None else reach.every(len(faces))
+    alive = None
     for level in range(max_level + 1):
+        if reach is not None:
+            # the faces a ray comes near, and their neighbours; the others and their parts go
+            span = reach.test(pool.corners(todo_faces), span)
+            alive = span[1] > span[0]
+            near = _near(todo_faces, alive, pool.n)
+            todo_faces, todo_src, alive = todo_faces[near], todo_src[near], alive[near]
+            span = (span[0][near], span[1][near], span[2])
         t, owner = pool.triples(todo_faces)
-        out_t.append(t)
-        out_f.append(todo_faces[owner])
-        out_s.append(todo_src[owner])
+        kept = slice(None) if alive is None else alive[owner]
+        out_t.append(t[kept])
+        out_f.append(todo_faces[owner[kept]])
+        out_s.append(todo_src[owner[kept]])
         # a part of a face not matched may reflect where no linked triple draws it
         rest = ~pool.matched(todo_faces, t, owner)
         if not rest.any():
@@ -183,15 +202,56 @@ def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, n
         faces_rest, src_rest = todo_faces[rest], todo_src[rest]
         if level == max_level:
             t, owner = pool.rim_triples(faces_rest, gb, eye, neighbourhood, cap)
-            out_t.append(t)
-            out_f.append(faces_rest[owner])
-            out_s.append(src_rest[owner])
+            kept = slice(None) if alive is None else alive[rest][owner]
+            out_t.append(t[kept])
+            out_f.append(faces_rest[owner[kept]])
+            out_s.append(src_rest[owner[kept]])
             break
         subdivided.append(src_rest)
         todo_faces, todo_src = pool.split(faces_rest, src_rest, gb, eye, find, neighbourhood, cap)
+        if reach is not None:  # a part's rays are its face's (parts in order, four per face)
+            span = (np.repeat(span[0][rest], 4), np.repeat(span[1][rest], 4), span[2])
     n_sub = len(np.unique(np.concatenate(subdivided))) if subdivided else 0
     return pool.candidates(np.concatenate(out_t), np.concatenate(out_f), np.concatenate(out_s), face_obj,
                            n_sub), with_sheets
+
+
+def _near(faces, alive, n):
+    """(F,) bool: faces (F, 3) sharing a vertex (of ``n``) with an ``alive`` (F,) face."""
+    mark = np.zeros(n, bool)
+    mark[faces[alive].reshape(-1)] = True
+    return np.any(mark[faces], axis=1)
+
+
+class _Reach:
+    """The reflected rays that may hit each triangle (:func:`._several.rays_near`): a part is
+    tested against its face's rays alone (a ray that misses a face by the margin misses its parts).
+    A triangle's rays are ``(first, last, ray)``: ``ray[first[f]:last[f]]``."""
+
+    def __init__(self, origin, direction):
+        self.origin = np.ascontiguousarray(origin, np.float64).reshape(-1, 3)
+        self.direction = np.ascontiguousarray(direction, np.float64).reshape(-1, 3)
+
+    def every(self, n):
+        """Every ray for each of ``n`` triangles."""
+        r = len(self.origin)
+        return np.zeros(n, np.int64), np.full(n, r, np.int64), np.arange(r, dtype=np.int64)
+
+    def test(self, real, span):
+        """The rays of ``span`` that may hit each triangle of ``real`` (F, 3, 3) float64."""
+        first, last, ray = span
+        real = np.ascontiguousarray(real, np.float64)
+        args = (real, self.origin, self.direction, np.ascontiguousarray(first, np.int64),
+                np.ascontiguousarray(last, np.int64), np.ascontiguousarray(ray, np.int64),
+                float(constants.SEVERAL_PRUNE_MARGIN), float(constants.SEVERAL_PRUNE_PARALLEL))
+        n = np.zeros(len(real), np.int64)
+        if len(real):
+            parallel_range(rays_near, len(real), *args, n, np.zeros(0, np.int64), False)
+        start = np.cumsum(n) - n
+        out = np.empty(int(n.sum()), np.int64)
+        if len(out):
+            parallel_range(rays_near, len(real), *args, start, out, True)
+        return start, start + n, out
 
 
 def _edges(faces):
@@ -254,6 +314,10 @@ class _Pool:
         self.walked = np.zeros(0, np.int64)  # edges whose links are known
         self.mid_key = np.zeros(0, np.int64)  # sorted edge keys, and their midpoints' vertex index
         self.mid_index = np.zeros(0, np.int64)
+
+    def corners(self, faces):
+        """(F, 3, 3) float64: the corners of faces (F, 3) of the vertices so far."""
+        return np.concatenate(self.verts)[faces]
 
     def add_links(self, pairs):
         pairs = np.asarray(pairs, np.int64).reshape(-1, 2)
@@ -380,7 +444,37 @@ class _Pool:
 
 
 # --- drawing ----------------------------------------------------------------------------------
-def draw(cand: Candidates, camera, reflector_mesh, triangle, stencil, box, colors):
+def pixel_rays(camera, reflector_mesh, triangle, stencil, box):
+    """The reflected ray of every stencil pixel of the box (the truth's,
+    :func:`refsoft.raster.rays.primary_rays`).
+
+    Parameters
+    ----------
+    camera, reflector_mesh, triangle, stencil, box
+        As :func:`draw`.
+
+    Returns
+    -------
+    valid : (h, w) bool
+        Box pixels with a reflected ray.
+    origin, direction : (h, w, 3) float64
+        Each box pixel's reflected ray (zeros where not valid).
+    """
+    r0, r1, c0, c1 = (int(x) for x in box)
+    h, w = r1 - r0, c1 - c0
+    sten = np.ascontiguousarray(stencil[r0:r1, c0:c1], bool)
+    rows, cols = np.nonzero(sten)
+    hit, ray, ok = primary_rays(camera, reflector_mesh, rows + r0, cols + c0, triangle[rows + r0, cols + c0])
+    valid = np.zeros((h, w), bool)
+    origin = np.zeros((h, w, 3))
+    direction = np.zeros((h, w, 3))
+    valid[rows, cols] = ok
+    origin[rows, cols] = hit
+    direction[rows, cols] = ray
+    return valid, origin, direction
+
+
+def draw(cand: Candidates, camera, reflector_mesh, triangle, stencil, box, colors, rays=None):
     """Draw the candidates at the reflector's stencil pixels by exact per-pixel acceptance
     (module docstring, step 3).
 
@@ -397,6 +491,8 @@ def draw(cand: Candidates, camera, reflector_mesh, triangle, stencil, box, color
     box : (r0, r1, c0, c1)
     colors : (K + 1, 3) float32
         Object colours by id (row 0 unused).
+    rays : tuple, optional
+        :func:`pixel_rays` of these arguments (made here when not given).
 
     Returns
     -------
@@ -409,15 +505,7 @@ def draw(cand: Candidates, camera, reflector_mesh, triangle, stencil, box, color
     """
     r0, r1, c0, c1 = (int(x) for x in box)
     h, w = r1 - r0, c1 - c0
-    sten = np.ascontiguousarray(stencil[r0:r1, c0:c1], bool)
-    rows, cols = np.nonzero(sten)
-    hit, ray, ok = primary_rays(camera, reflector_mesh, rows + r0, cols + c0, triangle[rows + r0, cols + c0])
-    valid = np.zeros((h, w), bool)
-    origin = np.zeros((h, w, 3))
-    direction = np.zeros((h, w, 3))
-    valid[rows, cols] = ok
-    origin[rows, cols] = hit
-    direction[rows, cols] = ray
+    valid, origin, direction = pixel_rays(camera, reflector_mesh, triangle, stencil, box) if rays is None else rays
     screen, bbox, dilate = _screen(cand.virtual, camera, box)
     best_t = np.full((h, w), np.inf)
     best_c = np.full((h, w), -1, np.int64)
@@ -535,11 +623,14 @@ def several_pass(scene, view, k, stencil, box, reflected, opt, gb, eye, images, 
         As :func:`draw`; ``report`` holds ``several``: images, candidate triangles, subdivided
         triangles, pixels accepted and rejected; ``images`` with their sheets.
     """
+    mesh, triangle = view.meshes[k - 1], view.view.triangle
+    rays = pixel_rays(view.camera, mesh, triangle, stencil, box)
+    valid, origin, direction = rays
     cand, with_sheets = candidates(gb, eye, view.vertices, reflected.normals, reflected.faces,
-                                   reflected.face_object, images, find, opt.neighbourhood, opt.cap)
+                                   reflected.face_object, images, find, opt.neighbourhood, opt.cap,
+                                   rays=(origin[valid], direction[valid]))
     colors = np.vstack([np.zeros(3), [o.color for o in scene.objects]]).astype(np.float32)
-    colour, rid, covered, counts = draw(cand, view.camera, view.meshes[k - 1], view.view.triangle, stencil, box,
-                                        colors)
+    colour, rid, covered, counts = draw(cand, view.camera, mesh, triangle, stencil, box, colors, rays)
     report = {"images": int(len(images.pixel)), "candidates": int(len(cand.object_id)),
               "subdivided": int(cand.subdivided), **counts}
     return colour, rid, covered, {"several": report}, with_sheets

@@ -307,3 +307,70 @@ def test_acceptance_kernel_matches_the_plain_loop():
                 parallel_range(*args)
         for a, b in zip(got, want):
             assert np.array_equal(a, b)
+
+
+def test_rays_near_matches_the_plain_numpy_version():
+    """The kernel keeping the rays that may hit each triangle (on one thread and several) gives
+    the NumPy reference's lists: rays through, beside and behind triangles, rays in a triangle's
+    plane, a degenerate triangle and a non-finite one (kept: nothing proves them off)."""
+    import naive_several as naive_ref
+
+    from refsoft._parallel import parallel_range
+    from refsoft.search._several import rays_near
+
+    rng = np.random.default_rng(11)
+    real = rng.uniform(-1.0, 1.0, (40, 3, 3))
+    real[:, :, 2] = rng.uniform(-0.3, 0.3, (40, 1))  # roughly facing the rays
+    real[5] = [[0, 0, 0], [1, 0, 0], [2, 0, 0]]  # degenerate
+    real[6, 1, 0] = np.nan
+    origin = np.concatenate([rng.uniform(-1.2, 1.2, (300, 2)), np.full((300, 1), 2.0)], axis=1)
+    direction = np.concatenate([rng.normal(0, 0.1, (300, 2)), np.full((300, 1), -1.0)], axis=1)
+    origin[::9, 2] = -2.0  # behind: t < 0
+    direction[::13] = [1.0, 0.0, 0.0]  # in the plane of flat triangles
+    first = rng.integers(0, 150, 40)
+    last = first + rng.integers(0, 150, 40)
+    ray = rng.permutation(300).astype(np.int64)
+    margin, parallel = constants.SEVERAL_PRUNE_MARGIN, constants.SEVERAL_PRUNE_PARALLEL
+    want = naive_ref.rays_near(real, origin, direction, first, last, ray, margin, parallel)
+    kept = sum(len(w) for w in want)
+    assert 0 < kept < np.sum(last - first) and want[5] == ray[first[5]:last[5]].tolist()
+    assert want[6] == ray[first[6]:last[6]].tolist()
+    reach = several._Reach(origin, direction)
+    for threads in (True, False):
+        with one_thread(not threads):
+            start, end, out = reach.test(real, (first, last, ray))
+        assert [out[a:b].tolist() for a, b in zip(start, end)] == want
+    every = reach.test(real, reach.every(len(real)))
+    assert every[2][every[0][0]:every[1][0]].tolist() == naive_ref.rays_near(
+        real[:1], origin, direction, [0], [300], np.arange(300), margin, parallel)[0]
+
+
+def test_pruned_candidates_draw_the_same_bits(drawn):
+    """Candidates given the reflected rays leave out those no ray comes near (and their parts):
+    what is left is a subsequence of the full candidates, and the drawing is the same bits."""
+    scene, frame, view, k, stencil, out, truth = drawn
+    gb, eye, images, find = several.image_source(scene, view, k, out.state, RenderOptions(images="all"))
+    comb = reflected_mesh(scene, view.meshes)[1]
+    args = (gb, eye, view.vertices, comb.normals, comb.faces, comb.face_object, images, find)
+    box = (0, H, 0, W)
+    rays = several.pixel_rays(view.camera, view.meshes[k - 1], view.view.triangle, stencil, box)
+    valid, origin, direction = rays
+    full, _ = several.candidates(*args)
+    pruned, sheets = several.candidates(*args, rays=(origin[valid], direction[valid]))
+    assert 0 < len(pruned.triangle) < len(full.triangle) / 2
+    # a subsequence: every pruned candidate is the next equal full one
+    rows = np.concatenate([full.virtual.reshape(len(full.triangle), -1), full.real.reshape(len(full.triangle), -1)], 1)
+    want = np.concatenate([pruned.virtual.reshape(len(pruned.triangle), -1),
+                           pruned.real.reshape(len(pruned.triangle), -1)], 1)
+    at = 0
+    for row in want:
+        while at < len(rows) and not np.array_equal(rows[at], row):
+            at += 1
+        assert at < len(rows)
+        at += 1
+    colors = np.vstack([np.zeros(3), [o.color for o in scene.objects]]).astype(np.float32)
+    a = several.draw(full, view.camera, view.meshes[k - 1], view.view.triangle, stencil, box, colors)
+    b = several.draw(pruned, view.camera, view.meshes[k - 1], view.view.triangle, stencil, box, colors, rays)
+    for x, y in zip(a[:3], b[:3]):
+        assert np.array_equal(x, y)
+    assert a[3]["pixels_accepted"] == b[3]["pixels_accepted"] > 0
