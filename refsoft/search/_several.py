@@ -195,15 +195,15 @@ def linked_triples(lo, hi, faces, offset, count, linked, key_base, limit, start,
 
 
 @kernel
-def nearest_image(lo, hi, end, target, offset, pixel, reach, out):
+def nearest_image(lo, hi, end, target, start, count, pixel, reach, out):
     """Walks ``lo .. hi - 1`` (run by :func:`refsoft._parallel.parallel_range`; each walk writes
-    only ``out[w]``): the image of vertex ``target[w]`` (``offset[v] .. offset[v + 1] - 1``,
-    ``pixel`` (M, 2) int32) nearest the walk's end ``end[w]`` (Chebyshev; the first of equals),
-    or -1 when none is within ``reach`` texels."""
+    only ``out[w]``): the image of vertex ``target[w]`` (rows ``start[v] .. start[v] + count[v] -
+    1`` of ``pixel`` (M, 2) int32) nearest the walk's end ``end[w]`` (Chebyshev; the first of
+    equals), or -1 when none is within ``reach`` texels."""
     for w in range(lo, hi):
         v = target[w]
         best, best_d = -1, reach + 1
-        for j in range(offset[v], offset[v + 1]):
+        for j in range(start[v], start[v] + count[v]):
             d = max(abs(np.int64(pixel[j, 0]) - end[w, 0]), abs(np.int64(pixel[j, 1]) - end[w, 1]))
             if d < best_d:
                 best, best_d = j, d

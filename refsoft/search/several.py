@@ -57,34 +57,38 @@ def links(gb, eye, verts, images: Images, edges, neighbourhood="cross", cap=None
         Image index pairs (i, j), ``i`` an image of the edge's first vertex, ``j`` of its second,
         sorted by (i, j).
     """
+    off = np.asarray(images.offset, np.int64)
+    return _links(gb, eye, verts, off[:-1], np.diff(off), images.pixel, edges, neighbourhood, cap)
+
+
+def _links(gb, eye, verts, start, count, pixel, edges, neighbourhood, cap):
+    """:func:`links` with vertex ``v``'s images at rows ``start[v] .. start[v] + count[v] - 1``
+    of ``pixel`` (M, 2) int32 (in any order of the vertices)."""
     edges = np.asarray(edges, np.int64).reshape(-1, 2)
-    if len(edges) == 0 or len(images.pixel) == 0:
+    if len(edges) == 0 or len(pixel) == 0:
         return np.zeros((0, 2), np.int64)
-    fwd = _walks(gb, eye, verts, images, edges, neighbourhood, cap)
-    back = _walks(gb, eye, verts, images, edges[:, ::-1], neighbourhood, cap)
+    start, count = np.ascontiguousarray(start, np.int64), np.ascontiguousarray(count, np.int64)
+    pixel = np.ascontiguousarray(pixel)
+    fwd = _walks(gb, eye, verts, start, count, pixel, edges, neighbourhood, cap)
+    back = _walks(gb, eye, verts, start, count, pixel, edges[:, ::-1], neighbourhood, cap)
     back = back[:, ::-1]
     pairs = back[_member(back[:, 0] * _KEY + back[:, 1], np.unique(fwd[:, 0] * _KEY + fwd[:, 1]))]
     return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))].reshape(-1, 2)
 
 
-def _walks(gb, eye, verts, images, edges, neighbourhood, cap):
+def _walks(gb, eye, verts, start, count, pixel, edges, neighbourhood, cap):
     """(i, j) pairs: the walk of edge end b started at image i of end a ends at b's image j."""
-    off = images.offset
     a, b = edges[:, 0], edges[:, 1]
-    na = off[a + 1] - off[a]
-    rep = np.repeat(np.arange(len(edges)), na)
+    i, rep, _ = _ranges(start[a], count[a])
     if len(rep) == 0:
         return np.zeros((0, 2), np.int64)
-    first = np.repeat(off[a], na)
-    i = first + (np.arange(len(rep)) - np.repeat(np.cumsum(na) - na, na))
     target = b[rep]
-    res = search(gb, eye, verts[target], neighbourhood, "plane", images.pixel[i], cap)
+    res = search(gb, eye, verts[target], neighbourhood, "plane", pixel[i], cap)
     # each walk's end against every image of its target: the nearest (Chebyshev, the first of
     # equals) within SEVERAL_LINK_TEXELS
     j = np.empty(len(i), np.int64)
     parallel_range(nearest_image, len(i), np.ascontiguousarray(res.pixel, np.int64), np.ascontiguousarray(target),
-                   np.ascontiguousarray(off, np.int64), np.ascontiguousarray(images.pixel),
-                   int(constants.SEVERAL_LINK_TEXELS), j)
+                   start, count, pixel, int(constants.SEVERAL_LINK_TEXELS), j)
     keep = j >= 0
     return np.stack([i[keep], j[keep]], axis=1).astype(np.int64).reshape(-1, 2)
 
@@ -123,7 +127,8 @@ class Candidates:
     triangle : (C,) int64
         The scene triangle (row of the faces given) each candidate comes from.
     subdivided : int
-        Scene triangles cut at least once.
+        Scene triangles cut at least once (with the reflected rays given to :func:`candidates`:
+        of those it makes and keeps).
     """
 
     virtual: np.ndarray
@@ -139,10 +144,13 @@ def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, n
     """Candidate virtual triangles of every scene triangle (module docstring, step 2).
 
     With ``rays`` (the reflector's reflected rays, those :func:`draw` tests), the candidates of a
-    triangle (or part) no ray comes near are left out, and so are its parts: the acceptance
-    would refuse them at every pixel, so the picture is the same bits. A triangle that shares a
-    vertex with one a ray comes near is still matched and cut (its rim walks count for its
-    neighbours' corners without an image); the others are not (see ``docs/sheets.md``).
+    triangle (or part) no ray comes near (:class:`_Reach`) are left out, and so are its parts:
+    the acceptance would refuse them at every pixel, so the picture is the same bits. Only what
+    the others' candidates depend on is still made: a triangle sharing a vertex with one a ray
+    comes near is matched and cut (a part at the last level may take its rim triples from walks
+    of its neighbours' images), and at the last level only the parts a ray comes near and those
+    sharing with one of them not matched a corner without an image are kept; the images of
+    midpoints are found for the corners of the parts kept alone (see ``docs/sheets.md``).
 
     Parameters
     ----------
@@ -180,16 +188,14 @@ def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, n
     out_t, out_f, out_s, subdivided = [], [], [], []
     todo_faces, todo_src = faces, np.arange(len(faces), dtype=np.int64)
     reach = None if rays is None else _Reach(*rays)
-    span = None if reach is None else reach.every(len(faces))
-    alive = None
+    alive = span = None
+    if reach is not None:
+        # the faces a ray comes near, and their neighbours; the others and their parts go
+        span = reach.test(pool.corners(faces), reach.every(len(faces)))
+        alive = span[1] > span[0]
+        keep = _near(faces, alive, pool.n)
+        todo_faces, todo_src, alive, span = faces[keep], todo_src[keep], alive[keep], _take(span, keep)
     for level in range(max_level + 1):
-        if reach is not None:
-            # the faces a ray comes near, and their neighbours; the others and their parts go
-            span = reach.test(pool.corners(todo_faces), span)
-            alive = span[1] > span[0]
-            near = _near(todo_faces, alive, pool.n)
-            todo_faces, todo_src, alive = todo_faces[near], todo_src[near], alive[near]
-            span = (span[0][near], span[1][near], span[2])
         t, owner = pool.triples(todo_faces)
         kept = slice(None) if alive is None else alive[owner]
         out_t.append(t[kept])
@@ -208,12 +214,36 @@ def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, n
             out_s.append(src_rest[owner[kept]])
             break
         subdivided.append(src_rest)
-        todo_faces, todo_src = pool.split(faces_rest, src_rest, gb, eye, find, neighbourhood, cap)
-        if reach is not None:  # a part's rays are its face's (parts in order, four per face)
-            span = (np.repeat(span[0][rest], 4), np.repeat(span[1][rest], 4), span[2])
+        todo_faces, todo_src = pool.cut(faces_rest, src_rest)
+        if reach is None:
+            pool.settle(todo_faces, gb, eye, find, neighbourhood, cap)
+            continue
+        # a part's rays are its face's (parts in order, four per face)
+        span = reach.test(pool.corners(todo_faces), (np.repeat(span[0][rest], 4), np.repeat(span[1][rest], 4),
+                                                     span[2]))
+        alive = span[1] > span[0]
+        if level + 1 < max_level:
+            keep = _near(todo_faces, alive, pool.n)
+        else:
+            # the last level: the parts a ray comes near, and the parts sharing with one of them
+            # not matched a corner without an image (their walks to it give its rim triples)
+            near = todo_faces[alive]
+            pool.settle(near, gb, eye, find, neighbourhood, cap)
+            t, owner = pool.triples(near)
+            near = near[~pool.matched(near, t, owner)].reshape(-1)
+            bare = np.zeros(pool.n, bool)
+            bare[near[pool.count[near] == 0]] = True
+            keep = alive | np.any(bare[todo_faces], axis=1)
+        todo_faces, todo_src, alive, span = todo_faces[keep], todo_src[keep], alive[keep], _take(span, keep)
+        pool.settle(todo_faces, gb, eye, find, neighbourhood, cap)
     n_sub = len(np.unique(np.concatenate(subdivided))) if subdivided else 0
     return pool.candidates(np.concatenate(out_t), np.concatenate(out_f), np.concatenate(out_s), face_obj,
                            n_sub), with_sheets
+
+
+def _take(span, keep):
+    """The rays ``(first, last, ray)`` of the triangles ``keep`` (bool)."""
+    return span[0][keep], span[1][keep], span[2]
 
 
 def _near(faces, alive, n):
@@ -310,6 +340,7 @@ class _Pool:
         self.count = np.diff(np.asarray(images.offset, np.int64))
         self.pixel, self.virtual = [images.pixel], [images.virtual]
         self.m = len(images.pixel)
+        self.found = np.ones(self.n, bool)  # vertices whose images are known (midpoints: settle)
         self.linked = np.zeros(0, np.int64)
         self.walked = np.zeros(0, np.int64)  # edges whose links are known
         self.mid_key = np.zeros(0, np.int64)  # sorted edge keys, and their midpoints' vertex index
@@ -385,9 +416,10 @@ class _Pool:
             t[~own] = base + order[(lo[owner] + local)[~own]]
         return t, owner
 
-    def split(self, faces, src, gb, eye, find, neighbourhood, cap):
-        """Cut each face at its edge midpoints (shared between faces); find the new points'
-        images and link the new edges. Returns the parts and their scene triangles."""
+    def cut(self, faces, src):
+        """Cut each face at its edge midpoints (shared between faces; their images are not found
+        yet, :meth:`settle`). Returns the parts (four per face, in order) and their scene
+        triangles."""
         keys = _pair_key(faces, faces[:, [1, 2, 0]]).reshape(-1)  # ab, bc, ca, face by face
         known = _member(keys, self.mid_key)
         mids = np.empty(len(keys), np.int64)
@@ -407,14 +439,11 @@ class _Pool:
             sq = nm * nm
             length = np.sqrt((sq[:, 0] + sq[:, 1]) + sq[:, 2])[:, None]
             nm = np.divide(nm, length, out=nm.copy(), where=length > 0)
-            found = find(pts)
             self.verts.append(pts)
             self.normals.append(nm)
-            self.offset = np.concatenate([self.offset, self.m + np.asarray(found.offset[:-1], np.int64)])
-            self.count = np.concatenate([self.count, np.diff(np.asarray(found.offset, np.int64))])
-            self.pixel.append(found.pixel)
-            self.virtual.append(found.virtual)
-            self.m += len(found.pixel)
+            self.offset = np.concatenate([self.offset, np.zeros(len(pts), np.int64)])
+            self.count = np.concatenate([self.count, np.zeros(len(pts), np.int64)])
+            self.found = np.concatenate([self.found, np.zeros(len(pts), bool)])
             self.n += len(pts)
             all_keys = np.concatenate([self.mid_key, new_keys])
             all_index = np.concatenate([self.mid_index, self.n - len(pts) + np.arange(len(pts))])
@@ -423,16 +452,28 @@ class _Pool:
         a, b, c = faces[:, 0], faces[:, 1], faces[:, 2]
         ab, bc, ca = mids[0::3], mids[1::3], mids[2::3]
         parts = np.stack([a, ab, ca, ab, b, bc, ca, bc, c, ab, bc, ca], axis=1).reshape(-1, 3)
-        # link the parts' edges over every vertex so far (the walk needs every image)
-        allv = np.concatenate(self.verts)
-        images = Images(np.concatenate([self.offset, [self.m]]).astype(np.int64), np.concatenate(self.pixel),
-                        np.concatenate(self.virtual), np.full(self.m, -1, np.int32))
-        edges = _edges(parts)
+        return parts, np.repeat(np.asarray(src, np.int64), 4)
+
+    def settle(self, faces, gb, eye, find, neighbourhood, cap):
+        """Find the images of the corners of ``faces`` not found yet (``find``, in vertex order)
+        and link the faces' edges not walked yet."""
+        v = np.unique(faces)
+        v = v[~self.found[v]]
+        if len(v):
+            found = find(np.concatenate(self.verts)[v])
+            self.offset[v] = self.m + np.asarray(found.offset[:-1], np.int64)
+            self.count[v] = np.diff(np.asarray(found.offset, np.int64))
+            self.found[v] = True
+            self.pixel.append(found.pixel)
+            self.virtual.append(found.virtual)
+            self.m += len(found.pixel)
+        # link the edges over every vertex so far (the walk needs every image)
+        edges = _edges(faces)
         ek = edges[:, 0] * _KEY + edges[:, 1]
         fresh = ~_member(ek, self.walked)
         self.walked = np.union1d(self.walked, ek)
-        self.add_links(links(gb, eye, allv, images, edges[fresh], neighbourhood, cap))
-        return parts, np.repeat(np.asarray(src, np.int64), 4)
+        self.add_links(_links(gb, eye, np.concatenate(self.verts), self.offset, self.count,
+                              np.concatenate(self.pixel), edges[fresh], neighbourhood, cap))
 
     def candidates(self, tri_img, f, src, face_obj, subdivided):
         verts = np.concatenate(self.verts)

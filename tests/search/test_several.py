@@ -345,9 +345,11 @@ def test_rays_near_matches_the_plain_numpy_version():
         real[:1], origin, direction, [0], [300], np.arange(300), margin, parallel)[0]
 
 
-def test_pruned_candidates_draw_the_same_bits(drawn):
-    """Candidates given the reflected rays leave out those no ray comes near (and their parts):
-    what is left is a subsequence of the full candidates, and the drawing is the same bits."""
+@pytest.mark.parametrize("max_level", [0, 1, 3])
+def test_pruned_candidates_draw_the_same_bits(drawn, max_level):
+    """Candidates given the reflected rays leave out those no ray comes near (and their parts,
+    whose midpoints' images are then not found): what is left is a subsequence of the full
+    candidates, and the drawing is the same bits."""
     scene, frame, view, k, stencil, out, truth = drawn
     gb, eye, images, find = several.image_source(scene, view, k, out.state, RenderOptions(images="all"))
     comb = reflected_mesh(scene, view.meshes)[1]
@@ -355,9 +357,17 @@ def test_pruned_candidates_draw_the_same_bits(drawn):
     box = (0, H, 0, W)
     rays = several.pixel_rays(view.camera, view.meshes[k - 1], view.view.triangle, stencil, box)
     valid, origin, direction = rays
-    full, _ = several.candidates(*args)
-    pruned, sheets = several.candidates(*args, rays=(origin[valid], direction[valid]))
+    points = []
+
+    def counted(p):
+        points.append(len(p))
+        return find(p)
+
+    full, _ = several.candidates(*args[:-1], counted, max_level=max_level)
+    n_full, points[:] = sum(points), []
+    pruned, _ = several.candidates(*args[:-1], counted, max_level=max_level, rays=(origin[valid], direction[valid]))
     assert 0 < len(pruned.triangle) < len(full.triangle) / 2
+    assert max_level == 0 or 0 < sum(points) < n_full
     # a subsequence: every pruned candidate is the next equal full one
     rows = np.concatenate([full.virtual.reshape(len(full.triangle), -1), full.real.reshape(len(full.triangle), -1)], 1)
     want = np.concatenate([pruned.virtual.reshape(len(pruned.triangle), -1),
