@@ -31,7 +31,7 @@ from ..errors import RefsoftError
 from ..raster import GBuffer, _setup, shade
 from ..raster.rays import primary_rays
 from . import search
-from ._several import accept, linked_triples, nearest_image, rays_near
+from ._several import accept, accept_near, linked_triples, nearest_image, rays_near
 from .images import Images, facing_gbuffer, find_images
 
 
@@ -129,6 +129,11 @@ class Candidates:
     subdivided : int
         Scene triangles cut at least once (with the reflected rays given to :func:`candidates`:
         of those it makes and keeps).
+    rays : tuple or None
+        With the reflected rays given to :func:`candidates`: each candidate's rays that may hit
+        its real triangle, ``ray[first[c]:last[c]]`` ascending, as ``(first (C,) int64, last (C,)
+        int64, ray (K,) int64)``; a ray is the index of a valid pixel of :func:`pixel_rays` in
+        row-major order. None: every pixel is tested.
     """
 
     virtual: np.ndarray
@@ -137,6 +142,7 @@ class Candidates:
     object_id: np.ndarray
     triangle: np.ndarray
     subdivided: int
+    rays: tuple = None
 
 
 def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, neighbourhood="cross", cap=None,
@@ -185,13 +191,13 @@ def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, n
     with_sheets = sheets(images, pairs)
     pool.add_links(pairs)
     pool.walked = np.unique(edges[:, 0] * _KEY + edges[:, 1])
-    out_t, out_f, out_s, subdivided = [], [], [], []
+    out_t, out_f, out_s, out_r, subdivided = [], [], [], [], []
     todo_faces, todo_src = faces, np.arange(len(faces), dtype=np.int64)
     reach = None if rays is None else _Reach(*rays)
     alive = span = None
     if reach is not None:
         # the faces a ray comes near, and their neighbours; the others and their parts go
-        span = reach.test(pool.corners(faces), reach.every(len(faces)))
+        span = reach.test(pool.corners(faces), *reach.every(len(faces)))
         alive = span[1] > span[0]
         keep = _near(faces, alive, pool.n)
         todo_faces, todo_src, alive, span = faces[keep], todo_src[keep], alive[keep], _take(span, keep)
@@ -201,6 +207,8 @@ def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, n
         out_t.append(t[kept])
         out_f.append(todo_faces[owner[kept]])
         out_s.append(todo_src[owner[kept]])
+        if reach is not None:
+            out_r.append(_take(span, owner[kept]))
         # a part of a face not matched may reflect where no linked triple draws it
         rest = ~pool.matched(todo_faces, t, owner)
         if not rest.any():
@@ -212,6 +220,8 @@ def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, n
             out_t.append(t[kept])
             out_f.append(faces_rest[owner[kept]])
             out_s.append(src_rest[owner[kept]])
+            if reach is not None:
+                out_r.append(_take(_take(span, rest), owner[kept]))
             break
         subdivided.append(src_rest)
         todo_faces, todo_src = pool.cut(faces_rest, src_rest)
@@ -219,8 +229,7 @@ def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, n
             pool.settle(todo_faces, gb, eye, find, neighbourhood, cap)
             continue
         # a part's rays are its face's (parts in order, four per face)
-        span = reach.test(pool.corners(todo_faces), (np.repeat(span[0][rest], 4), np.repeat(span[1][rest], 4),
-                                                     span[2]))
+        span = reach.test(pool.corners(todo_faces), np.repeat(span[0][rest], 4), np.repeat(span[1][rest], 4))
         alive = span[1] > span[0]
         if level + 1 < max_level:
             keep = _near(todo_faces, alive, pool.n)
@@ -237,13 +246,16 @@ def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, n
         todo_faces, todo_src, alive, span = todo_faces[keep], todo_src[keep], alive[keep], _take(span, keep)
         pool.settle(todo_faces, gb, eye, find, neighbourhood, cap)
     n_sub = len(np.unique(np.concatenate(subdivided))) if subdivided else 0
-    return pool.candidates(np.concatenate(out_t), np.concatenate(out_f), np.concatenate(out_s), face_obj,
-                           n_sub), with_sheets
+    cand = pool.candidates(np.concatenate(out_t), np.concatenate(out_f), np.concatenate(out_s), face_obj, n_sub)
+    if reach is not None:
+        cand = replace(cand, rays=(np.concatenate([r[0] for r in out_r]), np.concatenate([r[1] for r in out_r]),
+                                   reach.ray()))
+    return cand, with_sheets
 
 
 def _take(span, keep):
-    """The rays ``(first, last, ray)`` of the triangles ``keep`` (bool)."""
-    return span[0][keep], span[1][keep], span[2]
+    """The rays ``(first, last)`` of the triangles ``keep`` (a mask or indices)."""
+    return span[0][keep], span[1][keep]
 
 
 def _near(faces, alive, n):
@@ -256,24 +268,33 @@ def _near(faces, alive, n):
 class _Reach:
     """The reflected rays that may hit each triangle (:func:`._several.rays_near`): a part is
     tested against its face's rays alone (a ray that misses a face by the margin misses its parts).
-    A triangle's rays are ``(first, last, ray)``: ``ray[first[f]:last[f]]``."""
+    A triangle's rays are ``ray()[first:last]`` (ascending): the lists of every test are kept, one
+    after another."""
 
     def __init__(self, origin, direction):
         self.origin = np.ascontiguousarray(origin, np.float64).reshape(-1, 3)
         self.direction = np.ascontiguousarray(direction, np.float64).reshape(-1, 3)
+        self.lists = [np.arange(len(self.origin), dtype=np.int64)]  # the first: every ray
+        self.size = len(self.origin)
+        self._ray = None
+
+    def ray(self):
+        """(K,) int64: every list so far."""
+        if self._ray is None or len(self._ray) != self.size:
+            self._ray = np.concatenate(self.lists)
+        return self._ray
 
     def every(self, n):
-        """Every ray for each of ``n`` triangles."""
-        r = len(self.origin)
-        return np.zeros(n, np.int64), np.full(n, r, np.int64), np.arange(r, dtype=np.int64)
+        """``(first, last)``: every ray for each of ``n`` triangles."""
+        return np.zeros(n, np.int64), np.full(n, len(self.origin), np.int64)
 
-    def test(self, real, span):
-        """The rays of ``span`` that may hit each triangle of ``real`` (F, 3, 3) float64."""
-        first, last, ray = span
+    def test(self, real, first, last):
+        """``(first, last)``: the rays of ``ray()[first:last]`` that may hit each triangle of
+        ``real`` (F, 3, 3) float64 (a new list each)."""
         real = np.ascontiguousarray(real, np.float64)
         args = (real, self.origin, self.direction, np.ascontiguousarray(first, np.int64),
-                np.ascontiguousarray(last, np.int64), np.ascontiguousarray(ray, np.int64),
-                float(constants.SEVERAL_PRUNE_MARGIN), float(constants.SEVERAL_PRUNE_PARALLEL))
+                np.ascontiguousarray(last, np.int64), self.ray(), float(constants.SEVERAL_PRUNE_MARGIN),
+                float(constants.SEVERAL_PRUNE_PARALLEL))
         n = np.zeros(len(real), np.int64)
         if len(real):
             parallel_range(rays_near, len(real), *args, n, np.zeros(0, np.int64), False)
@@ -281,7 +302,10 @@ class _Reach:
         out = np.empty(int(n.sum()), np.int64)
         if len(out):
             parallel_range(rays_near, len(real), *args, start, out, True)
-        return start, start + n, out
+        start += self.size
+        self.lists.append(out)
+        self.size += len(out)
+        return start, start + n
 
 
 def _edges(faces):
@@ -541,8 +565,8 @@ def draw(cand: Candidates, camera, reflector_mesh, triangle, stencil, box, color
     reflected_id : (h, w) int32
     covered : (h, w) bool
     counts : dict
-        ``pixels_accepted`` (a candidate's real triangle hit), ``pixels_rejected`` (covered by a
-        candidate, none hit).
+        ``pixels_accepted`` (a candidate's real triangle hit), ``pixels_empty`` (pixels with a
+        reflected ray where no candidate's triangle is hit: nothing drawn).
     """
     r0, r1, c0, c1 = (int(x) for x in box)
     h, w = r1 - r0, c1 - c0
@@ -554,8 +578,16 @@ def draw(cand: Candidates, camera, reflector_mesh, triangle, stencil, box, color
     tested = np.zeros((h, w), bool)
     if len(screen):
         real = np.ascontiguousarray(cand.real)
-        parallel_range(accept, h, r0, c0, valid, _spans(valid), origin, direction, screen, bbox, dilate, real,
-                       _runs(real), best_t, best_c, best_uv, tested, np.full((h, w), -1, np.int64))
+        seen = np.full((h, w), -1, np.int64)
+        if cand.rays is None:
+            parallel_range(accept, h, r0, c0, valid, _spans(valid), origin, direction, screen, bbox, dilate, real,
+                           _runs(real), best_t, best_c, best_uv, tested, seen)
+        else:  # each candidate's pixels whose rays may hit it, not every pixel it covers
+            rows, cols = np.nonzero(valid)
+            first, last, ray = (np.ascontiguousarray(a, np.int64) for a in cand.rays)
+            parallel_range(accept_near, h, r0, c0, rows, cols, np.ascontiguousarray(origin[valid]),
+                           np.ascontiguousarray(direction[valid]), screen, bbox, dilate, real, _runs(real), first,
+                           last, ray, best_t, best_c, best_uv, tested, seen)
     covered = best_c >= 0
     rid = np.zeros((h, w), np.int32)
     colour = np.zeros((h, w, 3), np.float32)
@@ -568,7 +600,7 @@ def draw(cand: Candidates, camera, reflector_mesh, triangle, stencil, box, color
         n = np.divide(n, length, out=np.zeros_like(n), where=length > 0)
         rid[covered] = cand.object_id[c]
         colour[covered] = shade(n, np.asarray(colors, np.float32)[cand.object_id[c]])
-    counts = {"pixels_accepted": int(covered.sum()), "pixels_rejected": int((tested & ~covered).sum())}
+    counts = {"pixels_accepted": int(covered.sum()), "pixels_empty": int((valid & ~covered).sum())}
     return colour, rid, covered, counts
 
 
@@ -661,8 +693,9 @@ def several_pass(scene, view, k, stencil, box, reflected, opt, gb, eye, images, 
     Returns
     -------
     colour, reflected_id, covered, report, images
-        As :func:`draw`; ``report`` holds ``several``: images, candidate triangles, subdivided
-        triangles, pixels accepted and rejected; ``images`` with their sheets.
+        As :func:`draw`; ``report`` holds ``several``: images, candidate triangles (those a
+        reflected ray may hit), subdivided triangles, pixels accepted and empty; ``images`` with
+        their sheets.
     """
     mesh, triangle = view.meshes[k - 1], view.view.triangle
     rays = pixel_rays(view.camera, mesh, triangle, stencil, box)
