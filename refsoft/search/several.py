@@ -196,10 +196,9 @@ def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, n
     reach = None if rays is None else _Reach(*rays)
     alive = span = None
     if reach is not None:
-        # the faces a ray comes near, and their neighbours; the others and their parts go
         span = reach.test(pool.corners(faces), *reach.every(len(faces)))
         alive = span[1] > span[0]
-        keep = _near(faces, alive, pool.n)
+        keep = pool.needed(faces, alive, max_level > 0, gb, eye, find, neighbourhood, cap)
         todo_faces, todo_src, alive, span = faces[keep], todo_src[keep], alive[keep], _take(span, keep)
     for level in range(max_level + 1):
         t, owner = pool.triples(todo_faces)
@@ -231,18 +230,7 @@ def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, n
         # a part's rays are its face's (parts in order, four per face)
         span = reach.test(pool.corners(todo_faces), np.repeat(span[0][rest], 4), np.repeat(span[1][rest], 4))
         alive = span[1] > span[0]
-        if level + 1 < max_level:
-            keep = _near(todo_faces, alive, pool.n)
-        else:
-            # the last level: the parts a ray comes near, and the parts sharing with one of them
-            # not matched a corner without an image (their walks to it give its rim triples)
-            near = todo_faces[alive]
-            pool.settle(near, gb, eye, find, neighbourhood, cap)
-            t, owner = pool.triples(near)
-            near = near[~pool.matched(near, t, owner)].reshape(-1)
-            bare = np.zeros(pool.n, bool)
-            bare[near[pool.count[near] == 0]] = True
-            keep = alive | np.any(bare[todo_faces], axis=1)
+        keep = pool.needed(todo_faces, alive, level + 1 < max_level, gb, eye, find, neighbourhood, cap)
         todo_faces, todo_src, alive, span = todo_faces[keep], todo_src[keep], alive[keep], _take(span, keep)
         pool.settle(todo_faces, gb, eye, find, neighbourhood, cap)
     n_sub = len(np.unique(np.concatenate(subdivided))) if subdivided else 0
@@ -256,13 +244,6 @@ def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, n
 def _take(span, keep):
     """The rays ``(first, last)`` of the triangles ``keep`` (a mask or indices)."""
     return span[0][keep], span[1][keep]
-
-
-def _near(faces, alive, n):
-    """(F,) bool: faces (F, 3) sharing a vertex (of ``n``) with an ``alive`` (F,) face."""
-    mark = np.zeros(n, bool)
-    mark[faces[alive].reshape(-1)] = True
-    return np.any(mark[faces], axis=1)
 
 
 class _Reach:
@@ -369,6 +350,26 @@ class _Pool:
         self.walked = np.zeros(0, np.int64)  # edges whose links are known
         self.mid_key = np.zeros(0, np.int64)  # sorted edge keys, and their midpoints' vertex index
         self.mid_index = np.zeros(0, np.int64)
+
+    def needed(self, faces, alive, cut, gb, eye, find, neighbourhood, cap):
+        """(F,) bool: the faces (F, 3) of a level whose candidates or walks the candidates of the
+        ``alive`` ones (those a ray comes near) depend on. Those alive, and beside an alive one not
+        matched (the others are neither cut nor walked from): sharing with it a corner without an
+        image (its walks may give the rim triples of the alive one's parts, or of itself at the
+        last level) or, when the level is ``cut`` further, an edge (the midpoints on it). The
+        images and links of the alive faces are made here (:meth:`settle`)."""
+        live = faces[alive]
+        self.settle(live, gb, eye, find, neighbourhood, cap)
+        t, owner = self.triples(live)
+        live = live[~self.matched(live, t, owner)]
+        bare = np.zeros(self.n, bool)
+        flat = live.reshape(-1)
+        bare[flat[self.count[flat] == 0]] = True
+        keep = alive | np.any(bare[faces], axis=1)
+        if cut:
+            keys = _pair_key(faces, faces[:, [1, 2, 0]])
+            keep |= np.any(_member(keys, np.unique(_pair_key(live, live[:, [1, 2, 0]]))), axis=1)
+        return keep
 
     def corners(self, faces):
         """(F, 3, 3) float64: the corners of faces (F, 3) of the vertices so far."""
