@@ -275,6 +275,14 @@ SEVERAL_DILATE_FRACTION = 0.25
 #: Two images are linked when the walk started at one ends within this many texels (Chebyshev)
 #: of the other, both ways.
 SEVERAL_LINK_TEXELS = 1
+#: A triangle is left out of the candidates (with its parts) when no reflected ray of the
+#: reflector's pixels comes within this margin of it: barycentrics below -margin or a sum above
+#: 1 + margin, or ``t`` below -margin times its two edges' lengths. Its parts' corners are its
+#: own up to rounding (1e-16 relative), which the margin covers many times over.
+SEVERAL_PRUNE_MARGIN = 1e-4
+#: A ray whose |det| (Moller-Trumbore) is at most this fraction of |d| |e1| |e2| (within 1e-6
+#: rad of the triangle's plane) is kept without a test: its barycentrics are ill-conditioned.
+SEVERAL_PRUNE_PARALLEL = 1e-6
 
 # --- Several bounces (spec section 5.1) ---------------------------------------------------------
 #: (The most reflections an eye ray follows: MAX_BOUNCES, with the truth's.)

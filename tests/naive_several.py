@@ -97,3 +97,35 @@ def _moller(o, d, a, b, c):
     u = np.dot(s, p) / det
     q = np.cross(s, e1)
     return np.dot(e2, q) / det, u, np.dot(d, q) / det
+
+
+def rays_near(real, origin, direction, first, last, ray, margin, parallel):
+    """The rays of ``ray[first[f]:last[f]]`` not clearly off each triangle of ``real`` (F, 3, 3),
+    as lists, in the arithmetic of ``refsoft.search._several.rays_near`` written out in NumPy: a
+    ray is off when its Moller-Trumbore barycentrics leave [-margin, 1 + margin] or its t is below
+    ``-margin * (|e1| + |e2|)``, unless it lies within ``parallel`` of the plane."""
+    out = []
+    for f in range(len(real)):
+        r = np.asarray(ray[first[f]:last[f]])
+        p0 = real[f, 0]
+        e1, e2 = real[f, 1] - p0, real[f, 2] - p0
+        l1 = np.sqrt((e1[0] * e1[0] + e1[1] * e1[1]) + e1[2] * e1[2])
+        l2 = np.sqrt((e2[0] * e2[0] + e2[1] * e2[1]) + e2[2] * e2[2])
+        d = direction[r]
+        dx, dy, dz = d[:, 0], d[:, 1], d[:, 2]
+        px, py, pz = dy * e2[2] - dz * e2[1], dz * e2[0] - dx * e2[2], dx * e2[1] - dy * e2[0]
+        det = (e1[0] * px + e1[1] * py) + e1[2] * pz
+        ld = np.sqrt((dx * dx + dy * dy) + dz * dz)
+        s = origin[r] - p0
+        sx, sy, sz = s[:, 0], s[:, 1], s[:, 2]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            inv = 1.0 / det
+            u = ((sx * px + sy * py) + sz * pz) * inv
+            qx, qy, qz = sy * e1[2] - sz * e1[1], sz * e1[0] - sx * e1[2], sx * e1[1] - sy * e1[0]
+            v = ((dx * qx + dy * qy) + dz * qz) * inv
+            t = ((e2[0] * qx + e2[1] * qy) + e2[2] * qz) * inv
+            off = (u < -margin) | (u > 1.0 + margin) | (v < -margin) | (u + v > 1.0 + margin)
+            off |= t < -margin * (l1 + l2)
+            off &= ~(np.abs(det) <= parallel * (ld * l1 * l2))
+        out.append(r[~off].tolist())
+    return out

@@ -113,6 +113,100 @@ def accept(lo, hi, r0, c0, valid, span, origin, direction, screen, bbox, dilate,
                     best_uv[r, j, 1] = v
 
 
+@kernel
+def accept_near(lo, hi, r0, c0, ray_row, ray_col, origin, direction, screen, bbox, dilate, real, run, first, last,
+                ray, best_t, best_c, best_uv, tested, seen):
+    """:func:`accept` over each candidate's rays that may hit its real triangle (``ray[first[c]:
+    last[c]]``, ascending) instead of every pixel it covers: the same cover test, the same ray
+    test and the same order of candidates per pixel, so where the lists hold every ray that
+    can hit, ``best_t``, ``best_c`` and ``best_uv`` are :func:`accept`'s bit for bit (``tested``
+    marks only the pixels of the lists that a candidate covers).
+
+    Parameters
+    ----------
+    ray_row, ray_col : (R,) int64
+        Each ray's box pixel, in row-major order.
+    origin, direction : (R, 3) float64
+        The rays.
+    first, last : (C,) int64
+    ray : (K,) int64
+        Ray indices, ascending within each candidate's list.
+    r0, c0, screen, bbox, dilate, real, run, best_t, best_c, best_uv, tested, seen
+        As :func:`accept`.
+    """
+    n = screen.shape[0]
+    for c in range(n):
+        row0, row1 = max(lo, bbox[c, 0]), min(hi, bbox[c, 1])
+        if row0 >= row1:
+            continue
+        a = _first_on_row(ray_row, ray, first[c], last[c], row0)
+        b = _first_on_row(ray_row, ray, a, last[c], row1)
+        if a >= b:
+            continue
+        ax, ay = screen[c, 0, 0], screen[c, 0, 1]
+        bx, by = screen[c, 1, 0], screen[c, 1, 1]
+        cx, cy = screen[c, 2, 0], screen[c, 2, 1]
+        area = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
+        sign = 1.0 if area >= 0.0 else -1.0
+        lab = np.sqrt((bx - ax) * (bx - ax) + (by - ay) * (by - ay))
+        lbc = np.sqrt((cx - bx) * (cx - bx) + (cy - by) * (cy - by))
+        lca = np.sqrt((ax - cx) * (ax - cx) + (ay - cy) * (ay - cy))
+        d = dilate[c]
+        plain = d < 0.0 or abs(area) <= 1e-12 * (lab + lbc + lca) * (lab + lbc + lca)
+        p0x, p0y, p0z = real[c, 0, 0], real[c, 0, 1], real[c, 0, 2]
+        e1x, e1y, e1z = real[c, 1, 0] - p0x, real[c, 1, 1] - p0y, real[c, 1, 2] - p0z
+        e2x, e2y, e2z = real[c, 2, 0] - p0x, real[c, 2, 1] - p0y, real[c, 2, 2] - p0z
+        for q in range(a, b):
+            k = ray[q]
+            r, j = ray_row[k], ray_col[k]
+            col = j + c0
+            if col < bbox[c, 2] or col >= bbox[c, 3] or seen[r, j] == run[c]:
+                continue
+            if not plain:
+                y = r + r0 + 0.5
+                x = col + 0.5
+                fab = sign * ((bx - ax) * (y - ay) - (by - ay) * (x - ax))
+                fbc = sign * ((cx - bx) * (y - by) - (cy - by) * (x - bx))
+                fca = sign * ((ax - cx) * (y - cy) - (ay - cy) * (x - cx))
+                if fab < -d * lab or fbc < -d * lbc or fca < -d * lca:
+                    continue
+            tested[r, j] = True
+            seen[r, j] = run[c]
+            dx, dy, dz = direction[k, 0], direction[k, 1], direction[k, 2]
+            px, py, pz = dy * e2z - dz * e2y, dz * e2x - dx * e2z, dx * e2y - dy * e2x
+            det = (e1x * px + e1y * py) + e1z * pz
+            if det == 0.0:
+                continue
+            inv = 1.0 / det
+            sx, sy, sz = origin[k, 0] - p0x, origin[k, 1] - p0y, origin[k, 2] - p0z
+            u = ((sx * px + sy * py) + sz * pz) * inv
+            if u < 0.0 or u > 1.0:
+                continue
+            qx, qy, qz = sy * e1z - sz * e1y, sz * e1x - sx * e1z, sx * e1y - sy * e1x
+            v = ((dx * qx + dy * qy) + dz * qz) * inv
+            if v < 0.0 or u + v > 1.0:
+                continue
+            t = ((e2x * qx + e2y * qy) + e2z * qz) * inv
+            if t > 0.0 and t < best_t[r, j]:
+                best_t[r, j] = t
+                best_c[r, j] = c
+                best_uv[r, j, 0] = u
+                best_uv[r, j, 1] = v
+
+
+@kernel(inline=True)
+def _first_on_row(ray_row, ray, lo, hi, row):
+    """The first ``q`` of ``lo .. hi - 1`` with ``ray_row[ray[q]] >= row`` (``hi`` if none;
+    ``ray[lo:hi]`` ascending, so their rows are)."""
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if ray_row[ray[mid]] < row:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
 @kernel(inline=True)
 def _narrow(col0, col1, y, ax, ay, bx, by, sign, limit):
     """The columns of ``col0 .. col1 - 1`` that may pass :func:`accept`'s test of the edge from
@@ -195,16 +289,79 @@ def linked_triples(lo, hi, faces, offset, count, linked, key_base, limit, start,
 
 
 @kernel
-def nearest_image(lo, hi, end, target, offset, pixel, reach, out):
+def nearest_image(lo, hi, end, target, start, count, pixel, reach, out):
     """Walks ``lo .. hi - 1`` (run by :func:`refsoft._parallel.parallel_range`; each walk writes
-    only ``out[w]``): the image of vertex ``target[w]`` (``offset[v] .. offset[v + 1] - 1``,
-    ``pixel`` (M, 2) int32) nearest the walk's end ``end[w]`` (Chebyshev; the first of equals),
-    or -1 when none is within ``reach`` texels."""
+    only ``out[w]``): the image of vertex ``target[w]`` (rows ``start[v] .. start[v] + count[v] -
+    1`` of ``pixel`` (M, 2) int32) nearest the walk's end ``end[w]`` (Chebyshev; the first of
+    equals), or -1 when none is within ``reach`` texels."""
     for w in range(lo, hi):
         v = target[w]
         best, best_d = -1, reach + 1
-        for j in range(offset[v], offset[v + 1]):
+        for j in range(start[v], start[v] + count[v]):
             d = max(abs(np.int64(pixel[j, 0]) - end[w, 0]), abs(np.int64(pixel[j, 1]) - end[w, 1]))
             if d < best_d:
                 best, best_d = j, d
         out[w] = best
+
+
+@kernel
+def rays_near(lo, hi, real, origin, direction, first, last, ray, margin, parallel, start, out, fill):
+    """Triangles ``lo .. hi - 1`` (run by :func:`refsoft._parallel.parallel_range`; each writes
+    only its own outputs): the rays among ``ray[first[f]:last[f]]`` that may hit triangle ``f``,
+    in order. A ray is left out only when Moller-Trumbore (float64, :func:`accept`'s arithmetic)
+    puts it clearly off the triangle: ``u`` or ``v`` below ``-margin``, ``u + v`` above
+    ``1 + margin``, or ``t`` below ``-margin * (|e1| + |e2|)``; a ray within ``parallel`` of the
+    plane (``|det| <= parallel * |d| |e1| |e2|``) or with a non-finite value is kept.
+
+    Parameters
+    ----------
+    real : (F, 3, 3) float64
+        The triangles (world space).
+    origin, direction : (R, 3) float64
+        The rays.
+    first, last : (F,) int64
+        Each triangle's rays to test: ``ray[first[f]:last[f]]``.
+    ray : (K,) int64
+        Ray indices.
+    margin, parallel : float
+        ``constants.SEVERAL_PRUNE_MARGIN``, ``constants.SEVERAL_PRUNE_PARALLEL``.
+    start : (F,) int64
+        ``fill`` False: written, each triangle's number of rays kept; True: read, where its rays
+        go in ``out``.
+    out : (T,) int64
+        ``fill`` True: the kept ray indices, triangle by triangle.
+    """
+    for f in range(lo, hi):
+        p0x, p0y, p0z = real[f, 0, 0], real[f, 0, 1], real[f, 0, 2]
+        e1x, e1y, e1z = real[f, 1, 0] - p0x, real[f, 1, 1] - p0y, real[f, 1, 2] - p0z
+        e2x, e2y, e2z = real[f, 2, 0] - p0x, real[f, 2, 1] - p0y, real[f, 2, 2] - p0z
+        l1 = np.sqrt((e1x * e1x + e1y * e1y) + e1z * e1z)
+        l2 = np.sqrt((e2x * e2x + e2y * e2y) + e2z * e2z)
+        t_min = -margin * (l1 + l2)
+        n = 0
+        pos = start[f] if fill else 0
+        for q in range(first[f], last[f]):
+            r = ray[q]
+            dx, dy, dz = direction[r, 0], direction[r, 1], direction[r, 2]
+            px, py, pz = dy * e2z - dz * e2y, dz * e2x - dx * e2z, dx * e2y - dy * e2x
+            det = (e1x * px + e1y * py) + e1z * pz
+            ld = np.sqrt((dx * dx + dy * dy) + dz * dz)
+            # the tests say "clearly off": a NaN fails them and the ray is kept
+            if not abs(det) <= parallel * (ld * l1 * l2):
+                inv = 1.0 / det
+                sx, sy, sz = origin[r, 0] - p0x, origin[r, 1] - p0y, origin[r, 2] - p0z
+                u = ((sx * px + sy * py) + sz * pz) * inv
+                if u < -margin or u > 1.0 + margin:
+                    continue
+                qx, qy, qz = sy * e1z - sz * e1y, sz * e1x - sx * e1z, sx * e1y - sy * e1x
+                v = ((dx * qx + dy * qy) + dz * qz) * inv
+                if v < -margin or u + v > 1.0 + margin:
+                    continue
+                t = ((e2x * qx + e2y * qy) + e2z * qz) * inv
+                if t < t_min:
+                    continue
+            if fill:
+                out[pos + n] = r
+            n += 1
+        if not fill:
+            start[f] = n

@@ -31,7 +31,7 @@ from ..errors import RefsoftError
 from ..raster import GBuffer, _setup, shade
 from ..raster.rays import primary_rays
 from . import search
-from ._several import accept, linked_triples, nearest_image
+from ._several import accept, accept_near, linked_triples, nearest_image, rays_near
 from .images import Images, facing_gbuffer, find_images
 
 
@@ -57,34 +57,38 @@ def links(gb, eye, verts, images: Images, edges, neighbourhood="cross", cap=None
         Image index pairs (i, j), ``i`` an image of the edge's first vertex, ``j`` of its second,
         sorted by (i, j).
     """
+    off = np.asarray(images.offset, np.int64)
+    return _links(gb, eye, verts, off[:-1], np.diff(off), images.pixel, edges, neighbourhood, cap)
+
+
+def _links(gb, eye, verts, start, count, pixel, edges, neighbourhood, cap):
+    """:func:`links` with vertex ``v``'s images at rows ``start[v] .. start[v] + count[v] - 1``
+    of ``pixel`` (M, 2) int32 (in any order of the vertices)."""
     edges = np.asarray(edges, np.int64).reshape(-1, 2)
-    if len(edges) == 0 or len(images.pixel) == 0:
+    if len(edges) == 0 or len(pixel) == 0:
         return np.zeros((0, 2), np.int64)
-    fwd = _walks(gb, eye, verts, images, edges, neighbourhood, cap)
-    back = _walks(gb, eye, verts, images, edges[:, ::-1], neighbourhood, cap)
+    start, count = np.ascontiguousarray(start, np.int64), np.ascontiguousarray(count, np.int64)
+    pixel = np.ascontiguousarray(pixel)
+    fwd = _walks(gb, eye, verts, start, count, pixel, edges, neighbourhood, cap)
+    back = _walks(gb, eye, verts, start, count, pixel, edges[:, ::-1], neighbourhood, cap)
     back = back[:, ::-1]
     pairs = back[_member(back[:, 0] * _KEY + back[:, 1], np.unique(fwd[:, 0] * _KEY + fwd[:, 1]))]
     return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))].reshape(-1, 2)
 
 
-def _walks(gb, eye, verts, images, edges, neighbourhood, cap):
+def _walks(gb, eye, verts, start, count, pixel, edges, neighbourhood, cap):
     """(i, j) pairs: the walk of edge end b started at image i of end a ends at b's image j."""
-    off = images.offset
     a, b = edges[:, 0], edges[:, 1]
-    na = off[a + 1] - off[a]
-    rep = np.repeat(np.arange(len(edges)), na)
+    i, rep, _ = _ranges(start[a], count[a])
     if len(rep) == 0:
         return np.zeros((0, 2), np.int64)
-    first = np.repeat(off[a], na)
-    i = first + (np.arange(len(rep)) - np.repeat(np.cumsum(na) - na, na))
     target = b[rep]
-    res = search(gb, eye, verts[target], neighbourhood, "plane", images.pixel[i], cap)
+    res = search(gb, eye, verts[target], neighbourhood, "plane", pixel[i], cap)
     # each walk's end against every image of its target: the nearest (Chebyshev, the first of
     # equals) within SEVERAL_LINK_TEXELS
     j = np.empty(len(i), np.int64)
     parallel_range(nearest_image, len(i), np.ascontiguousarray(res.pixel, np.int64), np.ascontiguousarray(target),
-                   np.ascontiguousarray(off, np.int64), np.ascontiguousarray(images.pixel),
-                   int(constants.SEVERAL_LINK_TEXELS), j)
+                   start, count, pixel, int(constants.SEVERAL_LINK_TEXELS), j)
     keep = j >= 0
     return np.stack([i[keep], j[keep]], axis=1).astype(np.int64).reshape(-1, 2)
 
@@ -123,7 +127,13 @@ class Candidates:
     triangle : (C,) int64
         The scene triangle (row of the faces given) each candidate comes from.
     subdivided : int
-        Scene triangles cut at least once.
+        Scene triangles cut at least once (with the reflected rays given to :func:`candidates`:
+        of those it makes and keeps).
+    rays : tuple or None
+        With the reflected rays given to :func:`candidates`: each candidate's rays that may hit
+        its real triangle, ``ray[first[c]:last[c]]`` ascending, as ``(first (C,) int64, last (C,)
+        int64, ray (K,) int64)``; a ray is the index of a valid pixel of :func:`pixel_rays` in
+        row-major order. None: every pixel is tested.
     """
 
     virtual: np.ndarray
@@ -132,11 +142,21 @@ class Candidates:
     object_id: np.ndarray
     triangle: np.ndarray
     subdivided: int
+    rays: tuple = None
 
 
 def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, neighbourhood="cross", cap=None,
-               max_level=None):
+               max_level=None, rays=None):
     """Candidate virtual triangles of every scene triangle (module docstring, step 2).
+
+    With ``rays`` (the reflector's reflected rays, those :func:`draw` tests), the candidates of a
+    triangle (or part) no ray comes near (:class:`_Reach`) are left out, and so are its parts:
+    the acceptance would refuse them at every pixel, so the picture is the same bits. Only what
+    the others' candidates depend on is still made: a triangle sharing a vertex with one a ray
+    comes near is matched and cut (a part at the last level may take its rim triples from walks
+    of its neighbours' images), and at the last level only the parts a ray comes near and those
+    sharing with one of them not matched a corner without an image are kept; the images of
+    midpoints are found for the corners of the parts kept alone (see ``docs/sheets.md``).
 
     Parameters
     ----------
@@ -152,6 +172,8 @@ def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, n
         ``find(points (K, 3) float64) -> Images``: every image of new points (midpoints).
     max_level : int, optional
         Subdivision levels (default ``constants.SEVERAL_MAX_LEVEL``).
+    rays : tuple of two (R, 3) float64, optional
+        Origins and directions of the reflected rays (:func:`pixel_rays`); None: every candidate.
 
     Returns
     -------
@@ -169,13 +191,23 @@ def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, n
     with_sheets = sheets(images, pairs)
     pool.add_links(pairs)
     pool.walked = np.unique(edges[:, 0] * _KEY + edges[:, 1])
-    out_t, out_f, out_s, subdivided = [], [], [], []
+    out_t, out_f, out_s, out_r, subdivided = [], [], [], [], []
     todo_faces, todo_src = faces, np.arange(len(faces), dtype=np.int64)
+    reach = None if rays is None else _Reach(*rays)
+    alive = span = None
+    if reach is not None:
+        span = reach.test(pool.corners(faces), *reach.every(len(faces)))
+        alive = span[1] > span[0]
+        keep = pool.needed(faces, alive, max_level > 0, gb, eye, find, neighbourhood, cap)
+        todo_faces, todo_src, alive, span = faces[keep], todo_src[keep], alive[keep], _take(span, keep)
     for level in range(max_level + 1):
         t, owner = pool.triples(todo_faces)
-        out_t.append(t)
-        out_f.append(todo_faces[owner])
-        out_s.append(todo_src[owner])
+        kept = slice(None) if alive is None else alive[owner]
+        out_t.append(t[kept])
+        out_f.append(todo_faces[owner[kept]])
+        out_s.append(todo_src[owner[kept]])
+        if reach is not None:
+            out_r.append(_take(span, owner[kept]))
         # a part of a face not matched may reflect where no linked triple draws it
         rest = ~pool.matched(todo_faces, t, owner)
         if not rest.any():
@@ -183,15 +215,78 @@ def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, n
         faces_rest, src_rest = todo_faces[rest], todo_src[rest]
         if level == max_level:
             t, owner = pool.rim_triples(faces_rest, gb, eye, neighbourhood, cap)
-            out_t.append(t)
-            out_f.append(faces_rest[owner])
-            out_s.append(src_rest[owner])
+            kept = slice(None) if alive is None else alive[rest][owner]
+            out_t.append(t[kept])
+            out_f.append(faces_rest[owner[kept]])
+            out_s.append(src_rest[owner[kept]])
+            if reach is not None:
+                out_r.append(_take(_take(span, rest), owner[kept]))
             break
         subdivided.append(src_rest)
-        todo_faces, todo_src = pool.split(faces_rest, src_rest, gb, eye, find, neighbourhood, cap)
+        todo_faces, todo_src = pool.cut(faces_rest, src_rest)
+        if reach is None:
+            pool.settle(todo_faces, gb, eye, find, neighbourhood, cap)
+            continue
+        # a part's rays are its face's (parts in order, four per face)
+        span = reach.test(pool.corners(todo_faces), np.repeat(span[0][rest], 4), np.repeat(span[1][rest], 4))
+        alive = span[1] > span[0]
+        keep = pool.needed(todo_faces, alive, level + 1 < max_level, gb, eye, find, neighbourhood, cap)
+        todo_faces, todo_src, alive, span = todo_faces[keep], todo_src[keep], alive[keep], _take(span, keep)
+        pool.settle(todo_faces, gb, eye, find, neighbourhood, cap)
     n_sub = len(np.unique(np.concatenate(subdivided))) if subdivided else 0
-    return pool.candidates(np.concatenate(out_t), np.concatenate(out_f), np.concatenate(out_s), face_obj,
-                           n_sub), with_sheets
+    cand = pool.candidates(np.concatenate(out_t), np.concatenate(out_f), np.concatenate(out_s), face_obj, n_sub)
+    if reach is not None:
+        cand = replace(cand, rays=(np.concatenate([r[0] for r in out_r]), np.concatenate([r[1] for r in out_r]),
+                                   reach.ray()))
+    return cand, with_sheets
+
+
+def _take(span, keep):
+    """The rays ``(first, last)`` of the triangles ``keep`` (a mask or indices)."""
+    return span[0][keep], span[1][keep]
+
+
+class _Reach:
+    """The reflected rays that may hit each triangle (:func:`._several.rays_near`): a part is
+    tested against its face's rays alone (a ray that misses a face by the margin misses its parts).
+    A triangle's rays are ``ray()[first:last]`` (ascending): the lists of every test are kept, one
+    after another."""
+
+    def __init__(self, origin, direction):
+        self.origin = np.ascontiguousarray(origin, np.float64).reshape(-1, 3)
+        self.direction = np.ascontiguousarray(direction, np.float64).reshape(-1, 3)
+        self.lists = [np.arange(len(self.origin), dtype=np.int64)]  # the first: every ray
+        self.size = len(self.origin)
+        self._ray = None
+
+    def ray(self):
+        """(K,) int64: every list so far."""
+        if self._ray is None or len(self._ray) != self.size:
+            self._ray = np.concatenate(self.lists)
+        return self._ray
+
+    def every(self, n):
+        """``(first, last)``: every ray for each of ``n`` triangles."""
+        return np.zeros(n, np.int64), np.full(n, len(self.origin), np.int64)
+
+    def test(self, real, first, last):
+        """``(first, last)``: the rays of ``ray()[first:last]`` that may hit each triangle of
+        ``real`` (F, 3, 3) float64 (a new list each)."""
+        real = np.ascontiguousarray(real, np.float64)
+        args = (real, self.origin, self.direction, np.ascontiguousarray(first, np.int64),
+                np.ascontiguousarray(last, np.int64), self.ray(), float(constants.SEVERAL_PRUNE_MARGIN),
+                float(constants.SEVERAL_PRUNE_PARALLEL))
+        n = np.zeros(len(real), np.int64)
+        if len(real):
+            parallel_range(rays_near, len(real), *args, n, np.zeros(0, np.int64), False)
+        start = np.cumsum(n) - n
+        out = np.empty(int(n.sum()), np.int64)
+        if len(out):
+            parallel_range(rays_near, len(real), *args, start, out, True)
+        start += self.size
+        self.lists.append(out)
+        self.size += len(out)
+        return start, start + n
 
 
 def _edges(faces):
@@ -250,10 +345,35 @@ class _Pool:
         self.count = np.diff(np.asarray(images.offset, np.int64))
         self.pixel, self.virtual = [images.pixel], [images.virtual]
         self.m = len(images.pixel)
+        self.found = np.ones(self.n, bool)  # vertices whose images are known (midpoints: settle)
         self.linked = np.zeros(0, np.int64)
         self.walked = np.zeros(0, np.int64)  # edges whose links are known
         self.mid_key = np.zeros(0, np.int64)  # sorted edge keys, and their midpoints' vertex index
         self.mid_index = np.zeros(0, np.int64)
+
+    def needed(self, faces, alive, cut, gb, eye, find, neighbourhood, cap):
+        """(F,) bool: the faces (F, 3) of a level whose candidates or walks the candidates of the
+        ``alive`` ones (those a ray comes near) depend on. Those alive, and beside an alive one not
+        matched (the others are neither cut nor walked from): sharing with it a corner without an
+        image (its walks may give the rim triples of the alive one's parts, or of itself at the
+        last level) or, when the level is ``cut`` further, an edge (the midpoints on it). The
+        images and links of the alive faces are made here (:meth:`settle`)."""
+        live = faces[alive]
+        self.settle(live, gb, eye, find, neighbourhood, cap)
+        t, owner = self.triples(live)
+        live = live[~self.matched(live, t, owner)]
+        bare = np.zeros(self.n, bool)
+        flat = live.reshape(-1)
+        bare[flat[self.count[flat] == 0]] = True
+        keep = alive | np.any(bare[faces], axis=1)
+        if cut:
+            keys = _pair_key(faces, faces[:, [1, 2, 0]])
+            keep |= np.any(_member(keys, np.unique(_pair_key(live, live[:, [1, 2, 0]]))), axis=1)
+        return keep
+
+    def corners(self, faces):
+        """(F, 3, 3) float64: the corners of faces (F, 3) of the vertices so far."""
+        return np.concatenate(self.verts)[faces]
 
     def add_links(self, pairs):
         pairs = np.asarray(pairs, np.int64).reshape(-1, 2)
@@ -321,9 +441,10 @@ class _Pool:
             t[~own] = base + order[(lo[owner] + local)[~own]]
         return t, owner
 
-    def split(self, faces, src, gb, eye, find, neighbourhood, cap):
-        """Cut each face at its edge midpoints (shared between faces); find the new points'
-        images and link the new edges. Returns the parts and their scene triangles."""
+    def cut(self, faces, src):
+        """Cut each face at its edge midpoints (shared between faces; their images are not found
+        yet, :meth:`settle`). Returns the parts (four per face, in order) and their scene
+        triangles."""
         keys = _pair_key(faces, faces[:, [1, 2, 0]]).reshape(-1)  # ab, bc, ca, face by face
         known = _member(keys, self.mid_key)
         mids = np.empty(len(keys), np.int64)
@@ -343,14 +464,11 @@ class _Pool:
             sq = nm * nm
             length = np.sqrt((sq[:, 0] + sq[:, 1]) + sq[:, 2])[:, None]
             nm = np.divide(nm, length, out=nm.copy(), where=length > 0)
-            found = find(pts)
             self.verts.append(pts)
             self.normals.append(nm)
-            self.offset = np.concatenate([self.offset, self.m + np.asarray(found.offset[:-1], np.int64)])
-            self.count = np.concatenate([self.count, np.diff(np.asarray(found.offset, np.int64))])
-            self.pixel.append(found.pixel)
-            self.virtual.append(found.virtual)
-            self.m += len(found.pixel)
+            self.offset = np.concatenate([self.offset, np.zeros(len(pts), np.int64)])
+            self.count = np.concatenate([self.count, np.zeros(len(pts), np.int64)])
+            self.found = np.concatenate([self.found, np.zeros(len(pts), bool)])
             self.n += len(pts)
             all_keys = np.concatenate([self.mid_key, new_keys])
             all_index = np.concatenate([self.mid_index, self.n - len(pts) + np.arange(len(pts))])
@@ -359,16 +477,28 @@ class _Pool:
         a, b, c = faces[:, 0], faces[:, 1], faces[:, 2]
         ab, bc, ca = mids[0::3], mids[1::3], mids[2::3]
         parts = np.stack([a, ab, ca, ab, b, bc, ca, bc, c, ab, bc, ca], axis=1).reshape(-1, 3)
-        # link the parts' edges over every vertex so far (the walk needs every image)
-        allv = np.concatenate(self.verts)
-        images = Images(np.concatenate([self.offset, [self.m]]).astype(np.int64), np.concatenate(self.pixel),
-                        np.concatenate(self.virtual), np.full(self.m, -1, np.int32))
-        edges = _edges(parts)
+        return parts, np.repeat(np.asarray(src, np.int64), 4)
+
+    def settle(self, faces, gb, eye, find, neighbourhood, cap):
+        """Find the images of the corners of ``faces`` not found yet (``find``, in vertex order)
+        and link the faces' edges not walked yet."""
+        v = np.unique(faces)
+        v = v[~self.found[v]]
+        if len(v):
+            found = find(np.concatenate(self.verts)[v])
+            self.offset[v] = self.m + np.asarray(found.offset[:-1], np.int64)
+            self.count[v] = np.diff(np.asarray(found.offset, np.int64))
+            self.found[v] = True
+            self.pixel.append(found.pixel)
+            self.virtual.append(found.virtual)
+            self.m += len(found.pixel)
+        # link the edges over every vertex so far (the walk needs every image)
+        edges = _edges(faces)
         ek = edges[:, 0] * _KEY + edges[:, 1]
         fresh = ~_member(ek, self.walked)
         self.walked = np.union1d(self.walked, ek)
-        self.add_links(links(gb, eye, allv, images, edges[fresh], neighbourhood, cap))
-        return parts, np.repeat(np.asarray(src, np.int64), 4)
+        self.add_links(_links(gb, eye, np.concatenate(self.verts), self.offset, self.count,
+                              np.concatenate(self.pixel), edges[fresh], neighbourhood, cap))
 
     def candidates(self, tri_img, f, src, face_obj, subdivided):
         verts = np.concatenate(self.verts)
@@ -380,7 +510,37 @@ class _Pool:
 
 
 # --- drawing ----------------------------------------------------------------------------------
-def draw(cand: Candidates, camera, reflector_mesh, triangle, stencil, box, colors):
+def pixel_rays(camera, reflector_mesh, triangle, stencil, box):
+    """The reflected ray of every stencil pixel of the box (the truth's,
+    :func:`refsoft.raster.rays.primary_rays`).
+
+    Parameters
+    ----------
+    camera, reflector_mesh, triangle, stencil, box
+        As :func:`draw`.
+
+    Returns
+    -------
+    valid : (h, w) bool
+        Box pixels with a reflected ray.
+    origin, direction : (h, w, 3) float64
+        Each box pixel's reflected ray (zeros where not valid).
+    """
+    r0, r1, c0, c1 = (int(x) for x in box)
+    h, w = r1 - r0, c1 - c0
+    sten = np.ascontiguousarray(stencil[r0:r1, c0:c1], bool)
+    rows, cols = np.nonzero(sten)
+    hit, ray, ok = primary_rays(camera, reflector_mesh, rows + r0, cols + c0, triangle[rows + r0, cols + c0])
+    valid = np.zeros((h, w), bool)
+    origin = np.zeros((h, w, 3))
+    direction = np.zeros((h, w, 3))
+    valid[rows, cols] = ok
+    origin[rows, cols] = hit
+    direction[rows, cols] = ray
+    return valid, origin, direction
+
+
+def draw(cand: Candidates, camera, reflector_mesh, triangle, stencil, box, colors, rays=None):
     """Draw the candidates at the reflector's stencil pixels by exact per-pixel acceptance
     (module docstring, step 3).
 
@@ -397,6 +557,8 @@ def draw(cand: Candidates, camera, reflector_mesh, triangle, stencil, box, color
     box : (r0, r1, c0, c1)
     colors : (K + 1, 3) float32
         Object colours by id (row 0 unused).
+    rays : tuple, optional
+        :func:`pixel_rays` of these arguments (made here when not given).
 
     Returns
     -------
@@ -404,20 +566,12 @@ def draw(cand: Candidates, camera, reflector_mesh, triangle, stencil, box, color
     reflected_id : (h, w) int32
     covered : (h, w) bool
     counts : dict
-        ``pixels_accepted`` (a candidate's real triangle hit), ``pixels_rejected`` (covered by a
-        candidate, none hit).
+        ``pixels_accepted`` (a candidate's real triangle hit), ``pixels_empty`` (pixels with a
+        reflected ray where no candidate's triangle is hit: nothing drawn).
     """
     r0, r1, c0, c1 = (int(x) for x in box)
     h, w = r1 - r0, c1 - c0
-    sten = np.ascontiguousarray(stencil[r0:r1, c0:c1], bool)
-    rows, cols = np.nonzero(sten)
-    hit, ray, ok = primary_rays(camera, reflector_mesh, rows + r0, cols + c0, triangle[rows + r0, cols + c0])
-    valid = np.zeros((h, w), bool)
-    origin = np.zeros((h, w, 3))
-    direction = np.zeros((h, w, 3))
-    valid[rows, cols] = ok
-    origin[rows, cols] = hit
-    direction[rows, cols] = ray
+    valid, origin, direction = pixel_rays(camera, reflector_mesh, triangle, stencil, box) if rays is None else rays
     screen, bbox, dilate = _screen(cand.virtual, camera, box)
     best_t = np.full((h, w), np.inf)
     best_c = np.full((h, w), -1, np.int64)
@@ -425,8 +579,16 @@ def draw(cand: Candidates, camera, reflector_mesh, triangle, stencil, box, color
     tested = np.zeros((h, w), bool)
     if len(screen):
         real = np.ascontiguousarray(cand.real)
-        parallel_range(accept, h, r0, c0, valid, _spans(valid), origin, direction, screen, bbox, dilate, real,
-                       _runs(real), best_t, best_c, best_uv, tested, np.full((h, w), -1, np.int64))
+        seen = np.full((h, w), -1, np.int64)
+        if cand.rays is None:
+            parallel_range(accept, h, r0, c0, valid, _spans(valid), origin, direction, screen, bbox, dilate, real,
+                           _runs(real), best_t, best_c, best_uv, tested, seen)
+        else:  # each candidate's pixels whose rays may hit it, not every pixel it covers
+            rows, cols = np.nonzero(valid)
+            first, last, ray = (np.ascontiguousarray(a, np.int64) for a in cand.rays)
+            parallel_range(accept_near, h, r0, c0, rows, cols, np.ascontiguousarray(origin[valid]),
+                           np.ascontiguousarray(direction[valid]), screen, bbox, dilate, real, _runs(real), first,
+                           last, ray, best_t, best_c, best_uv, tested, seen)
     covered = best_c >= 0
     rid = np.zeros((h, w), np.int32)
     colour = np.zeros((h, w, 3), np.float32)
@@ -439,7 +601,7 @@ def draw(cand: Candidates, camera, reflector_mesh, triangle, stencil, box, color
         n = np.divide(n, length, out=np.zeros_like(n), where=length > 0)
         rid[covered] = cand.object_id[c]
         colour[covered] = shade(n, np.asarray(colors, np.float32)[cand.object_id[c]])
-    counts = {"pixels_accepted": int(covered.sum()), "pixels_rejected": int((tested & ~covered).sum())}
+    counts = {"pixels_accepted": int(covered.sum()), "pixels_empty": int((valid & ~covered).sum())}
     return colour, rid, covered, counts
 
 
@@ -532,14 +694,18 @@ def several_pass(scene, view, k, stencil, box, reflected, opt, gb, eye, images, 
     Returns
     -------
     colour, reflected_id, covered, report, images
-        As :func:`draw`; ``report`` holds ``several``: images, candidate triangles, subdivided
-        triangles, pixels accepted and rejected; ``images`` with their sheets.
+        As :func:`draw`; ``report`` holds ``several``: images, candidate triangles (those a
+        reflected ray may hit), subdivided triangles, pixels accepted and empty; ``images`` with
+        their sheets.
     """
+    mesh, triangle = view.meshes[k - 1], view.view.triangle
+    rays = pixel_rays(view.camera, mesh, triangle, stencil, box)
+    valid, origin, direction = rays
     cand, with_sheets = candidates(gb, eye, view.vertices, reflected.normals, reflected.faces,
-                                   reflected.face_object, images, find, opt.neighbourhood, opt.cap)
+                                   reflected.face_object, images, find, opt.neighbourhood, opt.cap,
+                                   rays=(origin[valid], direction[valid]))
     colors = np.vstack([np.zeros(3), [o.color for o in scene.objects]]).astype(np.float32)
-    colour, rid, covered, counts = draw(cand, view.camera, view.meshes[k - 1], view.view.triangle, stencil, box,
-                                        colors)
+    colour, rid, covered, counts = draw(cand, view.camera, mesh, triangle, stencil, box, colors, rays)
     report = {"images": int(len(images.pixel)), "candidates": int(len(cand.object_id)),
               "subdivided": int(cand.subdivided), **counts}
     return colour, rid, covered, {"several": report}, with_sheets

@@ -74,7 +74,7 @@ def test_object_ids_agree_with_naive_ray_tracer(drawn):
     assert agree >= AGREEMENT_FLOOR, agree
     rep = out.report["several"]
     assert rep["pixels_accepted"] == int(np.sum(rid[stencil] > 0))
-    assert rep["candidates"] > 0 and rep["pixels_rejected"] > 0
+    assert rep["candidates"] > 0 and rep["pixels_empty"] == int(np.sum(stencil & (rid == 0))) > 0
 
 
 def test_every_drawn_pixel_sees_what_it_draws(drawn):
@@ -142,7 +142,7 @@ def test_triangle_spanning_the_tear_is_not_drawn_across_the_gap(drawn):
     assert np.sum(inside & ~hits) > 20  # the virtual triangle covers the gap...
     assert not np.any(covered & ~hits)  # ...where nothing is drawn
     assert np.array_equal(covered, inside & hits)  # it draws exactly the part that reflects there
-    assert counts["pixels_rejected"] == int(np.sum(inside & ~hits))
+    assert counts["pixels_empty"] == int(np.sum(stencil & ~hits))
 
 
 def test_triangle_crossing_a_fold_draws_only_its_reflecting_part(drawn):
@@ -307,3 +307,130 @@ def test_acceptance_kernel_matches_the_plain_loop():
                 parallel_range(*args)
         for a, b in zip(got, want):
             assert np.array_equal(a, b)
+
+
+def test_rays_near_matches_the_plain_numpy_version():
+    """The kernel keeping the rays that may hit each triangle (on one thread and several) gives
+    the NumPy reference's lists: rays through, beside and behind triangles, rays in a triangle's
+    plane, a degenerate triangle and a non-finite one (kept: nothing proves them off)."""
+    import naive_several as naive_ref
+
+    from refsoft._parallel import parallel_range
+    from refsoft.search._several import rays_near
+
+    rng = np.random.default_rng(11)
+    real = rng.uniform(-1.0, 1.0, (40, 3, 3))
+    real[:, :, 2] = rng.uniform(-0.3, 0.3, (40, 1))  # roughly facing the rays
+    real[5] = [[0, 0, 0], [1, 0, 0], [2, 0, 0]]  # degenerate
+    real[6, 1, 0] = np.nan
+    origin = np.concatenate([rng.uniform(-1.2, 1.2, (300, 2)), np.full((300, 1), 2.0)], axis=1)
+    direction = np.concatenate([rng.normal(0, 0.1, (300, 2)), np.full((300, 1), -1.0)], axis=1)
+    origin[::9, 2] = -2.0  # behind: t < 0
+    direction[::13] = [1.0, 0.0, 0.0]  # in the plane of flat triangles
+    first = rng.integers(0, 150, 40)
+    last = first + rng.integers(0, 150, 40)
+    ray = rng.permutation(300).astype(np.int64)
+    margin, parallel = constants.SEVERAL_PRUNE_MARGIN, constants.SEVERAL_PRUNE_PARALLEL
+    want = naive_ref.rays_near(real, origin, direction, first, last, ray, margin, parallel)
+    kept = sum(len(w) for w in want)
+    assert 0 < kept < np.sum(last - first) and want[5] == ray[first[5]:last[5]].tolist()
+    assert want[6] == ray[first[6]:last[6]].tolist()
+    reach = several._Reach(origin, direction)
+    every = reach.test(real, *reach.every(len(real)))
+    assert reach.ray()[every[0][0]:every[1][0]].tolist() == naive_ref.rays_near(
+        real[:1], origin, direction, [0], [300], np.arange(300), margin, parallel)[0]
+    for threads in (True, False):
+        with one_thread(not threads):
+            reach = several._Reach(origin, direction)
+            reach.lists.append(ray)  # lists after the first (every ray) are tested in turn
+            reach.size += len(ray)
+            start, end = reach.test(real, first + 300, last + 300)
+        assert [reach.ray()[a:b].tolist() for a, b in zip(start, end)] == want
+
+
+@pytest.mark.parametrize("max_level", [0, 1, 3])
+def test_pruned_candidates_draw_the_same_bits(drawn, max_level):
+    """Candidates given the reflected rays leave out those no ray comes near (and their parts,
+    whose midpoints' images are then not found): what is left is a subsequence of the full
+    candidates, and the drawing is the same bits."""
+    scene, frame, view, k, stencil, out, truth = drawn
+    gb, eye, images, find = several.image_source(scene, view, k, out.state, RenderOptions(images="all"))
+    comb = reflected_mesh(scene, view.meshes)[1]
+    args = (gb, eye, view.vertices, comb.normals, comb.faces, comb.face_object, images, find)
+    box = (0, H, 0, W)
+    rays = several.pixel_rays(view.camera, view.meshes[k - 1], view.view.triangle, stencil, box)
+    valid, origin, direction = rays
+    points = []
+
+    def counted(p):
+        points.append(len(p))
+        return find(p)
+
+    full, _ = several.candidates(*args[:-1], counted, max_level=max_level)
+    n_full, points[:] = sum(points), []
+    pruned, _ = several.candidates(*args[:-1], counted, max_level=max_level, rays=(origin[valid], direction[valid]))
+    assert 0 < len(pruned.triangle) < len(full.triangle) / 2
+    assert max_level == 0 or 0 < sum(points) < n_full
+    # a subsequence: every pruned candidate is the next equal full one
+    rows = np.concatenate([full.virtual.reshape(len(full.triangle), -1), full.real.reshape(len(full.triangle), -1)], 1)
+    want = np.concatenate([pruned.virtual.reshape(len(pruned.triangle), -1),
+                           pruned.real.reshape(len(pruned.triangle), -1)], 1)
+    at = 0
+    for row in want:
+        while at < len(rows) and not np.array_equal(rows[at], row):
+            at += 1
+        assert at < len(rows)
+        at += 1
+    colors = np.vstack([np.zeros(3), [o.color for o in scene.objects]]).astype(np.float32)
+    a = several.draw(full, view.camera, view.meshes[k - 1], view.view.triangle, stencil, box, colors)
+    b = several.draw(pruned, view.camera, view.meshes[k - 1], view.view.triangle, stencil, box, colors, rays)
+    for x, y in zip(a[:3], b[:3]):
+        assert np.array_equal(x, y)
+    assert a[3]["pixels_accepted"] == b[3]["pixels_accepted"] > 0
+
+
+def test_acceptance_over_ray_lists_matches_the_plain_loop():
+    """The acceptance over each candidate's rays (accept_near) gives the plain pixel-by-candidate
+    loop's nearest hits bit for bit, on one thread and on several: with every ray in every list
+    (and then its covered pixels too), and with the lists of the rays that may hit each real
+    triangle (rays_near), which leave out rays and pixels that cannot change the result."""
+    import naive_several_pool
+
+    from refsoft._parallel import parallel_range
+    from refsoft.search._several import accept_near
+
+    rng = np.random.default_rng(5)
+    h, w, r0, c0 = 14, 18, 5, 7
+    valid = rng.random((h, w)) < 0.8
+    valid[3] = False
+    origin = np.concatenate([rng.uniform(-1, 1, (h, w, 2)), np.full((h, w, 1), 2.0)], axis=2)
+    direction = np.concatenate([rng.normal(0, 0.2, (h, w, 2)), np.full((h, w, 1), -1.0)], axis=2)
+    real = np.concatenate([rng.uniform(-1.5, 1.5, (30, 3, 2)), rng.uniform(-0.5, 0.5, (30, 1, 1)).repeat(3, 1)],
+                          axis=2)
+    real = np.repeat(real, rng.integers(1, 4, 30), axis=0)
+    n = len(real)
+    screen = rng.uniform([c0 - 3, r0 - 3], [c0 + w + 3, r0 + h + 3], (n, 3, 2))
+    screen[::7, 2] = screen[::7, 0]
+    dilate = rng.uniform(0.5, 3.0, n)
+    dilate[::5] = -1.0
+    lo, hi = np.floor(screen.min(axis=1) - dilate[:, None]), np.ceil(screen.max(axis=1) + dilate[:, None])
+    bbox = np.stack([lo[:, 1] - r0, hi[:, 1] - r0, lo[:, 0], hi[:, 0]], axis=1).astype(np.int64)
+    want = naive_several_pool.accept(r0, c0, valid, origin, direction, screen, bbox, dilate, real)
+    assert (want[1] >= 0).sum() > 20
+    rows, cols = np.nonzero(valid)
+    o, d = np.ascontiguousarray(origin[valid]), np.ascontiguousarray(direction[valid])
+    reach = several._Reach(o, d)
+    near = reach.test(real, *reach.every(n))
+    every = reach.every(n)
+    assert np.sum(near[1] - near[0]) < np.sum(every[1] - every[0]) / 5  # the lists are short
+    for lists, same_tested in ((every, True), (near, False)):
+        for threads in (True, False):
+            got = (np.full((h, w), np.inf), np.full((h, w), -1, np.int64), np.zeros((h, w, 2)),
+                   np.zeros((h, w), bool))
+            args = (accept_near, h, r0, c0, rows, cols, o, d, screen, bbox, dilate, real, several._runs(real),
+                    *lists, reach.ray(), *got, np.full((h, w), -1, np.int64))
+            with one_thread(not threads):
+                parallel_range(*args)
+            for a, b in zip(got[:3], want[:3]):
+                assert np.array_equal(a, b)
+            assert np.array_equal(got[3], want[3]) if same_tested else not np.any(got[3] & ~want[3])
