@@ -28,8 +28,8 @@ import numpy as np
 from .. import constants, keys
 from .._numba import readonly
 from .._parallel import parallel_range
-from ..raster import CULL_MODES, GBuffer, _setup, interpolate, rasterize_trusted, shade
-from ..raster.rays import primary_rays
+from ..raster import CULL_MODES, GBuffer, _setup, rasterize_trusted, shade
+from ..raster.rays import primary_rays, ray_triangle
 from . import CULLED, HIDDEN, SearchResult, _bounces, search
 from .virtual import virtual_pass
 
@@ -220,17 +220,17 @@ def bounding_sphere(mesh):
     return c, float(np.sqrt(np.max(np.sum((v - c) ** 2, axis=1))))
 
 
-def object_parts(meshes, ids, virtual, flags, real=False):
+def object_parts(meshes, ids, virtual, flags):
     """The virtual geometry of objects ``ids`` (their vertices consecutive in ``virtual`` and
     ``flags``, in that order), one part per object: (virtual (n, 3) float64, normals, faces (m, 3)
-    int64, face object (m,) int32, flags (n,) uint8), plus the world positions with ``real``."""
+    int64, face object (m,) int32, flags (n,) uint8)."""
     parts, start = [], 0
     for k in ids:
         mesh = meshes[k - 1]
         n = mesh.n_vertices
         part = (virtual[start:start + n], mesh.normals, mesh.faces.astype(np.int64),
                 np.full(mesh.n_faces, k, dtype=np.int32), flags[start:start + n])
-        parts.append(part + ((mesh.vertices,) if real else ()))
+        parts.append(part)
         start += n
     return parts
 
@@ -244,7 +244,7 @@ def seen_reflectors(parts, reflector_parts, camera, stencil, box):
     parts : list
         The non-reflectors' virtual parts (:func:`object_parts`, or the virtual pass's own).
     reflector_parts : list
-        :func:`object_parts` of the reflectors with ``real=True``.
+        :func:`object_parts` of the reflectors, one part each.
     camera : Camera
     stencil : ndarray (H, W) bool
     box : (r0, r1, c0, c1)
@@ -252,13 +252,14 @@ def seen_reflectors(parts, reflector_parts, camera, stencil, box):
     Returns
     -------
     dict
-        Reflector id -> (mask (H, W) bool, position (H, W, 3) float64 world, normal (H, W, 3)
-        float64 unit), for each reflector nearest at one pixel or more.
+        Reflector id -> (mask (H, W) bool, face (H, W) int64: the reflector's triangle (a row of
+        its mesh's faces) nearest at each pixel of the mask, -1 elsewhere), for each reflector
+        nearest at one pixel or more.
     """
     if not reflector_parts:
         return {}
     vp = camera.view_proj()
-    faces, face_obj, clips, flags, real = [], [], [], [], []
+    faces, face_obj, clips, flags, local = [], [], [], [], []
     offset = 0
     for part in list(parts) + list(reflector_parts):
         virtual, _, f, fobj, fl = part[:5]
@@ -268,12 +269,12 @@ def seen_reflectors(parts, reflector_parts, camera, stencil, box):
         face_obj.append(fobj)
         clips.append(clip)
         flags.append(np.where(bad, np.uint8(CULLED), fl).astype(np.uint8))
-        real.append(part[5] if len(part) > 5 else np.zeros((len(virtual), 3)))
+        local.append(np.arange(len(f), dtype=np.int64))
         offset += len(clip)
     faces, face_obj, clip = np.concatenate(faces), np.concatenate(face_obj), np.ascontiguousarray(np.concatenate(clips))
-    flags, real = np.concatenate(flags), np.concatenate(real)
+    flags, local = np.concatenate(flags), np.concatenate(local)
     keep = ~np.any((flags[faces] & np.uint8(CULLED | HIDDEN)) != 0, axis=1)
-    faces, face_obj = faces[keep], face_obj[keep]
+    faces, face_obj, local = faces[keep], face_obj[keep], local[keep]
     if not len(faces):
         return {}
     faces32 = readonly(np.ascontiguousarray(faces, np.int32))
@@ -281,63 +282,82 @@ def seen_reflectors(parts, reflector_parts, camera, stencil, box):
     frags = rasterize_trusted(clip, faces32, camera.width, camera.height, (r0, r1, c0, c1), None, CULL_MODES[None])
     tri = frags.triangle
     obj = np.where(tri >= 0, face_obj[np.maximum(tri, 0)], 0)
-    sten = stencil[r0:r1, c0:c1]
-    ids = [int(b) for b in np.unique(obj[sten & (tri >= 0)]) if int(b) in {int(p[3][0]) for p in reflector_parts
-                                                                               if len(p[3])}]
-    if not ids:
-        return {}
-    position = interpolate(frags, real, faces32, "float64")
-    normals = np.concatenate([p[1] for p in list(parts) + list(reflector_parts)])
-    normal = interpolate(frags, normals, faces32, "float64", normalize=True)
+    sten = stencil[r0:r1, c0:c1] & (tri >= 0)
+    reflectors = {int(p[3][0]) for p in reflector_parts if len(p[3])}
     out = {}
     H, W = stencil.shape
-    for b in ids:
+    for b in (int(x) for x in np.unique(obj[sten])):
+        if b not in reflectors:
+            continue
         m = sten & (obj == b)
         mask = np.zeros((H, W), bool)
         mask[r0:r1, c0:c1] = m
-        pos, nrm = np.zeros((H, W, 3)), np.zeros((H, W, 3))
-        pos[r0:r1, c0:c1][m] = position[m]
-        nrm[r0:r1, c0:c1][m] = normal[m]
-        out[b] = (mask, pos, nrm)
+        face = np.full((H, W), -1, np.int64)
+        face[r0:r1, c0:c1][m] = local[tri[m]]
+        out[b] = (mask, face)
     return out
 
 
-def first_bounces(camera, mesh, triangle, seen):
-    """The reflectors seen in a first bounce's image as level-2 :class:`Bounce` s.
+def _arrive(mesh, face, origin, direction):
+    """Where rays (P, 3) meet the planes of ``mesh``'s triangles ``face`` (P,), and the normals
+    interpolated there (renormalised): ``(point (P, 3), normal (P, 3), ok (P,))``, ``ok`` False
+    where a ray is parallel to its plane or meets it behind its origin."""
+    f = mesh.faces[face]
+    v = np.asarray(mesh.vertices, np.float64)
+    t, bary = ray_triangle(origin, direction, v[f[:, 0]], v[f[:, 1]], v[f[:, 2]])
+    ok = np.isfinite(t) & (t > 0)
+    point = origin + np.where(ok, t, 0.0)[:, None] * direction
+    n = np.einsum("pk,pkj->pj", np.where(ok[:, None], bary, 0.0), np.asarray(mesh.normals, np.float64)[f])
+    length = np.linalg.norm(n, axis=1, keepdims=True)
+    ok &= length[:, 0] > 0
+    return point, n / np.where(length > 0, length, 1.0), ok
 
-    Parameters
-    ----------
-    camera : Camera
-    mesh : Mesh
-        The first reflector's world mesh (the main view's).
-    triangle : ndarray (H, W) int
-        Its visible triangle per view pixel.
-    seen : dict
-        :func:`seen_reflectors`.
-    """
+
+def _bounce(level, b, mask, face, mesh, origin, direction, path, camera_ray, camera_eye):
+    """The :class:`Bounce` of reflector ``b`` at ``level`` where the rays ``origin``,
+    ``direction`` (P, 3) of the previous level's pixels of ``mask`` (row-major) meet it, with the
+    path's length ``path`` (P,) to their origins and the camera's ray directions (P, 3)."""
+    rows, cols = np.nonzero(mask)
+    point, normal, ok = _arrive(mesh, face[rows, cols], origin, direction)
+    H, W = mask.shape
+    m = np.zeros((H, W), bool)
+    m[rows[ok], cols[ok]] = True
+    pos, nrm, eyes, dirs = (np.zeros((H, W, 3)) for _ in range(4))
+    length = np.zeros((H, W))
+    r, c = rows[ok], cols[ok]
+    pos[r, c], nrm[r, c], eyes[r, c], dirs[r, c] = point[ok], normal[ok], origin[ok], camera_ray[ok]
+    length[r, c] = path[ok] + np.linalg.norm(point[ok] - origin[ok], axis=1)
+    return Bounce(level, b, m, pos, nrm, eyes, length, dirs, camera_eye)
+
+
+def first_bounces(camera, meshes, k, triangle, seen):
+    """The reflectors seen in reflector ``k``'s first-bounce image as level-2 :class:`Bounce` s:
+    each pixel's eye ray meets ``k``'s visible triangle (``triangle``, the main view's;
+    :func:`refsoft.raster.rays.primary_rays`), reflects, and meets the triangle of the reflector
+    the virtual pass shows there (``seen``: :func:`seen_reflectors`); the bounce point is that
+    hit (float64, on the triangle's plane) and its normal the one interpolated there."""
     origin = np.asarray(camera.eye, np.float64)
     out = []
-    for b, (mask, pos, nrm) in sorted(seen.items()):
+    for b, (mask, face) in sorted(seen.items()):
         rows, cols = np.nonzero(mask)
-        hit, _, _ = primary_rays(camera, mesh, rows, cols, triangle[rows, cols])
-        eye, direction, path = np.zeros(pos.shape), np.zeros(pos.shape), np.zeros(mask.shape)
-        first = np.linalg.norm(hit - origin, axis=1)
-        eye[rows, cols] = hit
-        direction[rows, cols] = (hit - origin) / np.maximum(first, 1e-300)[:, None]
-        path[rows, cols] = first + np.linalg.norm(pos[rows, cols] - hit, axis=1)
-        out.append(Bounce(2, b, mask, pos, nrm, eye, path, direction, origin))
+        hit, ray, _ = primary_rays(camera, meshes[k - 1], rows, cols, triangle[rows, cols])
+        first = hit - origin
+        dist = np.linalg.norm(first, axis=1)
+        out.append(_bounce(2, b, mask, face, meshes[b - 1], hit, ray, dist,
+                           first / np.maximum(dist, 1e-300)[:, None], origin))
     return out
 
 
-def later_bounces(bounce: Bounce, seen):
-    """The reflectors seen in ``bounce``'s image as the next level's :class:`Bounce` s."""
+def later_bounces(bounce: Bounce, seen, meshes):
+    """The reflectors seen in ``bounce``'s image as the next level's :class:`Bounce` s (the
+    bounce's reflected rays, :func:`level_rays`, meeting their triangles)."""
     out = []
-    for c, (mask, pos, nrm) in sorted(seen.items()):
+    for c, (mask, face) in sorted(seen.items()):
         rows, cols = np.nonzero(mask)
-        eye, path = np.zeros(pos.shape), np.zeros(mask.shape)
-        eye[rows, cols] = bounce.position[rows, cols]
-        path[rows, cols] = bounce.path[rows, cols] + np.linalg.norm(pos[rows, cols] - eye[rows, cols], axis=1)
-        out.append(Bounce(bounce.level + 1, c, mask, pos, nrm, eye, path, bounce.direction, bounce.origin))
+        full = (0, mask.shape[0], 0, mask.shape[1])
+        _, origin, direction = level_rays(bounce, full)
+        out.append(_bounce(bounce.level + 1, c, mask, face, meshes[c - 1], origin[rows, cols], direction[rows, cols],
+                           bounce.path[rows, cols], bounce.direction[rows, cols], bounce.origin))
     return out
 
 
@@ -379,7 +399,10 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, levels, re
     res = search_bounce(bounce, gb, vertices[seen], opt.neighbourhood, opt.cap)
     virtual[seen], flags[seen] = unfolded(bounce, res, vertices[seen]), res.flags
     parts = object_parts(meshes, ids, virtual, flags)
-    colour, rid, covered, _ = virtual_pass(scene, parts, camera, bounce.mask, box, "discard")
+    if opt.images == "all":  # each pixel's reflected ray decides among the virtual triangles over it
+        colour, rid, covered = exact_pass(scene, meshes, ids, vertices, virtual, flags, bounce, camera, box)
+    else:
+        colour, rid, covered, _ = virtual_pass(scene, parts, camera, bounce.mask, box, "discard")
     depth = np.where(bounce.mask[r0:r1, c0:c1], np.int8(bounce.level), np.int8(0)).astype(np.int8)
     entry = {"level": bounce.level, "reflector": bounce.reflector, "pixels": int(bounce.mask.sum()),
              "searched": int(seen.sum())}
@@ -391,12 +414,58 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, levels, re
         for k in others:
             verts = meshes[k - 1].vertices
             r = search_bounce(bounce, gb, verts, opt.neighbourhood, opt.cap)
-            rparts += object_parts(meshes, [k], unfolded(bounce, r, verts), r.flags, real=True)
-        for nxt in later_bounces(bounce, seen_reflectors(parts, rparts, camera, bounce.mask, box)):
+            rparts += object_parts(meshes, [k], unfolded(bounce, r, verts), r.flags)
+        for nxt in later_bounces(bounce, seen_reflectors(parts, rparts, camera, bounce.mask, box), meshes):
             deeper = draw_bounce(scene, meshes, nxt, camera, vertices, opt, levels, report)
             blend(colour, rid, covered, depth, box, nxt, deeper, scene)
     entry["ms"] = 1000 * (time.perf_counter() - t0)
     return box, colour, rid, covered, depth
+
+
+def level_rays(bounce: Bounce, box):
+    """Each pixel's reflected ray at a bounce over ``box``: ``(valid (h, w) bool, origin (h, w, 3),
+    direction (h, w, 3))`` float64, the bounce point and the direction from the pixel's eye
+    reflected about the normal there (:func:`refsoft.search.several.draw`'s ``rays``)."""
+    r0, r1, c0, c1 = box
+    valid = bounce.mask[r0:r1, c0:c1].copy()
+    origin = np.where(valid[..., None], bounce.position[r0:r1, c0:c1], 0.0)
+    n = bounce.normal[r0:r1, c0:c1]
+    i = origin - bounce.eye[r0:r1, c0:c1]
+    i /= np.maximum(np.linalg.norm(i, axis=-1, keepdims=True), 1e-300)
+    d = i - 2.0 * np.sum(i * n, axis=-1, keepdims=True) * n
+    return valid, np.ascontiguousarray(origin), np.ascontiguousarray(np.where(valid[..., None], d, 0.0))
+
+
+def exact_pass(scene, meshes, ids, vertices, virtual, flags, bounce: Bounce, camera, box):
+    """A later level drawn by exact per-pixel acceptance (:func:`refsoft.search.several.draw`):
+    every triangle of objects ``ids`` without a CULLED corner is a candidate over the screen
+    bounds of its virtual triangle (dilated; the whole box for a triangle with a HIDDEN corner),
+    and at each pixel of the level's stencil it covers,
+    the level's reflected ray (:func:`level_rays`) is intersected with the real triangle; the
+    nearest hit is drawn. Returns colour (h, w, 3) float32, reflected_id (h, w) int32, covered
+    (h, w) bool over ``box``."""
+    from .several import Candidates, draw
+
+    starts = np.concatenate([[0], np.cumsum([meshes[k - 1].n_vertices for k in ids])])
+    faces, obj, normals = [], [], []
+    for k, s in zip(ids, starts[:-1]):
+        f = meshes[k - 1].faces.astype(np.int64) + s
+        faces.append(f)
+        obj.append(np.full(len(f), k, np.int32))
+        normals.append(meshes[k - 1].normals)
+    faces, obj, normals = np.concatenate(faces), np.concatenate(obj), np.concatenate(normals)
+    keep = ~np.any((flags[faces] & np.uint8(CULLED)) != 0, axis=1)
+    faces, obj = faces[keep], obj[keep]
+    verts = np.asarray(vertices, np.float64)
+    # a HIDDEN corner's virtual vertex is where its walk stopped, not its image: such a triangle
+    # is tried over the whole box (the draw's rule for a corner it cannot project)
+    virtual = np.where(((flags & np.uint8(HIDDEN)) != 0)[:, None], np.nan, virtual)
+    cand = Candidates(np.ascontiguousarray(virtual[faces]), np.ascontiguousarray(verts[faces]),
+                      np.ascontiguousarray(normals[faces], np.float64), obj, np.flatnonzero(keep), 0)
+    colors = np.vstack([np.zeros(3), [o.color for o in scene.objects]]).astype(np.float32)
+    with np.errstate(invalid="ignore"):  # the hidden corners' NaN bounds, replaced by the box
+        colour, rid, covered, _ = draw(cand, camera, None, None, bounce.mask, box, colors, rays=level_rays(bounce, box))
+    return colour, rid, covered
 
 
 def blend(colour, rid, covered, depth, box, bounce: Bounce, deeper, scene):
@@ -447,10 +516,10 @@ def deepen(scene, view, k, stencil, box, out, refl, parts, opt, search_first):
             continue  # no reflected ray of this reflector comes near b
         virtual, flags = search_first(view.meshes[b - 1].vertices)
         first["searched"] += int(len(virtual))
-        rparts += object_parts(view.meshes, [b], virtual, flags, real=True)
+        rparts += object_parts(view.meshes, [b], virtual, flags)
     seen = seen_reflectors(parts, rparts, view.camera, stencil, box)
     colour, rid, covered = out.colour.copy(), out.reflected_id.copy(), out.covered.copy()
-    for bounce in first_bounces(view.camera, view.meshes[k - 1], view.view.triangle, seen):
+    for bounce in first_bounces(view.camera, view.meshes, k, view.view.triangle, seen):
         deeper = draw_bounce(scene, view.meshes, bounce, view.camera, view.vertices, opt, opt.bounces, report)
         blend(colour, rid, covered, depth, box, bounce, deeper, scene)
     out.colour, out.reflected_id, out.covered = colour, rid, covered

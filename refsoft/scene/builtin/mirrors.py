@@ -14,18 +14,29 @@ from .basic import _orbit_keys
 
 #: The floor's height; the balls rest on it.
 FLOOR_Y = -0.7
+#: Quads along each side of a floor tile.
+TILE_CELLS = 4
 
 
-def _tiles(parity: int, size: float = 10.0, n: int = 10) -> Mesh:
+def _tiles(parity: int, size: float = 10.0, n: int = 10, cells: int = TILE_CELLS) -> Mesh:
     """Every other square tile (those with ``(i + j) % 2 == parity``) of an ``n`` x ``n`` board in
     the xz plane facing +y: one half of a checkered floor, so that a floor seen in a mirror ball
-    is told from the floor around it."""
+    is told from the floor around it. Each tile is a ``cells`` x ``cells`` grid of quads (a vertex
+    method reflects vertices: a tile of two triangles would be drawn straight-edged in a ball)."""
     step = size / n
-    quads = [(i, j) for i in range(n) for j in range(n) if (i + j) % 2 == parity]
-    corners = np.array([[0.0, 0.0], [0.0, 1.0], [1.0, 1.0], [1.0, 0.0]])
-    xz = np.concatenate([(np.array(q) + corners) * step - size / 2 for q in quads])
+    g = np.linspace(0.0, 1.0, cells + 1)
+    gu, gv = np.meshgrid(g, g, indexing="ij")
+    corners = np.stack([gu.ravel(), gv.ravel()], axis=1)  # (cells + 1)^2 points of one tile
+    k = np.arange(cells)
+    a = (k[:, None] * (cells + 1) + k[None, :]).ravel()  # each quad's first corner
+    quad = np.concatenate([np.stack([a, a + 1, a + cells + 2], 1), np.stack([a, a + cells + 2, a + cells + 1], 1)])
+    tiles = [(i, j) for i in range(n) for j in range(n) if (i + j) % 2 == parity]
+    xz = np.concatenate([(np.array(t) + corners) * step - size / 2 for t in tiles])
     v = np.stack([xz[:, 0], np.zeros(len(xz)), xz[:, 1]], axis=1)
-    f = np.concatenate([[[4 * t, 4 * t + 1, 4 * t + 2], [4 * t, 4 * t + 2, 4 * t + 3]] for t in range(len(quads))])
+    f = np.concatenate([quad + t * len(corners) for t in range(len(tiles))])
+    # wind each face towards +y, the side the floor is seen from
+    up = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])[:, 1] > 0
+    f = np.where(up[:, None], f, f[:, [0, 2, 1]])
     return Mesh(v, f, np.tile([0.0, 1.0, 0.0], (len(v), 1)), name="tiles")
 
 
