@@ -398,26 +398,33 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, levels, re
     flags = np.full(len(vertices), CULLED, np.uint8)
     res = search_bounce(bounce, gb, vertices[seen], opt.neighbourhood, opt.cap)
     virtual[seen], flags[seen] = unfolded(bounce, res, vertices[seen]), res.flags
-    parts = object_parts(meshes, ids, virtual, flags)
-    if opt.images == "all":  # each pixel's reflected ray decides among the virtual triangles over it
-        colour, rid, covered = exact_pass(scene, meshes, ids, vertices, virtual, flags, bounce, camera, box)
-    else:
-        colour, rid, covered, _ = virtual_pass(scene, parts, camera, bounce.mask, box, "discard")
     depth = np.where(bounce.mask[r0:r1, c0:c1], np.int8(bounce.level), np.int8(0)).astype(np.int8)
     entry = {"level": bounce.level, "reflector": bounce.reflector, "pixels": int(bounce.mask.sum()),
              "searched": int(seen.sum())}
     report.append(entry)
-    if bounce.level < levels:
-        others = [k for k in scene.reflector_ids if k != bounce.reflector
-                  and may_see(bounce.position, bounce.normal, bounce.eye, bounce.mask, *bounding_sphere(meshes[k - 1]))]
-        rparts = []
-        for k in others:
-            verts = meshes[k - 1].vertices
-            r = search_bounce(bounce, gb, verts, opt.neighbourhood, opt.cap)
-            rparts += object_parts(meshes, [k], unfolded(bounce, r, verts), r.flags)
-        for nxt in later_bounces(bounce, seen_reflectors(parts, rparts, camera, bounce.mask, box), meshes):
-            deeper = draw_bounce(scene, meshes, nxt, camera, vertices, opt, levels, report)
-            blend(colour, rid, covered, depth, box, nxt, deeper, scene)
+    others = [] if bounce.level >= levels else [
+        k for k in scene.reflector_ids if k != bounce.reflector
+        and may_see(bounce.position, bounce.normal, bounce.eye, bounce.mask, *bounding_sphere(meshes[k - 1]))]
+    found = []  # the other reflectors' vertices searched at this level: (id, vertices, virtual, flags)
+    for k in others:
+        verts = np.asarray(meshes[k - 1].vertices, np.float64)
+        r = search_bounce(bounce, gb, verts, opt.neighbourhood, opt.cap)
+        found.append(([k], verts, unfolded(bounce, r, verts), r.flags))
+    if opt.images == "all":  # each pixel's reflected ray decides among the virtual triangles over it
+        rays = level_rays(bounce, box)
+        colour, rid, covered, seen_refl = exact_level(scene, meshes, [(ids, vertices, virtual, flags)] + found, camera,
+                                                      bounce.mask, box, rays)
+        full = np.zeros(bounce.eye.shape)
+        full[r0:r1, c0:c1] = rays[1]
+        nxt = exact_bounces(bounce.level + 1, seen_refl, full, bounce.path, bounce.direction, bounce.origin)
+    else:
+        parts = object_parts(meshes, ids, virtual, flags)
+        colour, rid, covered, _ = virtual_pass(scene, parts, camera, bounce.mask, box, "discard")
+        rparts = sum((object_parts(meshes, k, v, fl) for k, _, v, fl in found), [])
+        nxt = later_bounces(bounce, seen_reflectors(parts, rparts, camera, bounce.mask, box), meshes) if found else []
+    for b in nxt:
+        deeper = draw_bounce(scene, meshes, b, camera, vertices, opt, levels, report)
+        blend(colour, rid, covered, depth, box, b, deeper, scene)
     entry["ms"] = 1000 * (time.perf_counter() - t0)
     return box, colour, rid, covered, depth
 
@@ -436,36 +443,112 @@ def level_rays(bounce: Bounce, box):
     return valid, np.ascontiguousarray(origin), np.ascontiguousarray(np.where(valid[..., None], d, 0.0))
 
 
-def exact_pass(scene, meshes, ids, vertices, virtual, flags, bounce: Bounce, camera, box):
-    """A later level drawn by exact per-pixel acceptance (:func:`refsoft.search.several.draw`):
-    every triangle of objects ``ids`` without a CULLED corner is a candidate over the screen
-    bounds of its virtual triangle (dilated; the whole box for a triangle with a HIDDEN corner),
-    and at each pixel of the level's stencil it covers,
-    the level's reflected ray (:func:`level_rays`) is intersected with the real triangle; the
-    nearest hit is drawn. Returns colour (h, w, 3) float32, reflected_id (h, w) int32, covered
-    (h, w) bool over ``box``."""
-    from .several import Candidates, draw
+def _candidates(meshes, groups):
+    """Candidates of :func:`refsoft.search.several.draw` from ``groups``: (object ids, their
+    vertices (n, 3) world, virtual vertices (n, 3), flags (n,)) each, the objects' vertices
+    consecutive in that order. A triangle with a CULLED corner is left out; one with a HIDDEN
+    corner (its virtual vertex is where its walk stopped, not its image) is tried over the whole
+    box (the draw's rule for a corner it cannot project)."""
+    from .several import Candidates
 
-    starts = np.concatenate([[0], np.cumsum([meshes[k - 1].n_vertices for k in ids])])
-    faces, obj, normals = [], [], []
-    for k, s in zip(ids, starts[:-1]):
-        f = meshes[k - 1].faces.astype(np.int64) + s
-        faces.append(f)
-        obj.append(np.full(len(f), k, np.int32))
-        normals.append(meshes[k - 1].normals)
-    faces, obj, normals = np.concatenate(faces), np.concatenate(obj), np.concatenate(normals)
-    keep = ~np.any((flags[faces] & np.uint8(CULLED)) != 0, axis=1)
-    faces, obj = faces[keep], obj[keep]
-    verts = np.asarray(vertices, np.float64)
-    # a HIDDEN corner's virtual vertex is where its walk stopped, not its image: such a triangle
-    # is tried over the whole box (the draw's rule for a corner it cannot project)
-    virtual = np.where(((flags & np.uint8(HIDDEN)) != 0)[:, None], np.nan, virtual)
-    cand = Candidates(np.ascontiguousarray(virtual[faces]), np.ascontiguousarray(verts[faces]),
-                      np.ascontiguousarray(normals[faces], np.float64), obj, np.flatnonzero(keep), 0)
+    virtual, real, normals, obj, tri = [], [], [], [], []
+    for ids, verts, virt, flags in groups:
+        virt = np.where(((flags & np.uint8(HIDDEN)) != 0)[:, None], np.nan, virt)
+        start = 0
+        for k in ids:
+            mesh = meshes[k - 1]
+            f = mesh.faces.astype(np.int64)
+            keep = ~np.any((flags[f + start] & np.uint8(CULLED)) != 0, axis=1)
+            f = f[keep]
+            virtual.append(virt[f + start])
+            real.append(np.asarray(verts, np.float64)[f + start])
+            normals.append(np.asarray(mesh.normals, np.float64)[f])
+            obj.append(np.full(len(f), k, np.int32))
+            tri.append(np.flatnonzero(keep))
+            start += mesh.n_vertices
+    cat = (lambda x, shape: np.ascontiguousarray(np.concatenate(x)) if x else np.zeros(shape))
+    return Candidates(cat(virtual, (0, 3, 3)), cat(real, (0, 3, 3)), cat(normals, (0, 3, 3)),
+                      cat(obj, (0,)).astype(np.int32), cat(tri, (0,)).astype(np.int64), 0)
+
+
+def nearest_hits(cand, camera, box, rays):
+    """Per pixel of ``box`` the candidate whose real triangle the pixel's ray meets nearest, among
+    those whose dilated virtual triangle covers it (:func:`refsoft.search.several.draw`'s
+    acceptance): ``(candidate (h, w) int64, -1 none; t (h, w); barycentrics u, v (h, w, 2))``."""
+    from . import several
+
+    r0, r1, c0, c1 = (int(x) for x in box)
+    h, w = r1 - r0, c1 - c0
+    valid, origin, direction = rays
+    best_t = np.full((h, w), np.inf)
+    best_c = np.full((h, w), -1, np.int64)
+    best_uv = np.zeros((h, w, 2))
+    if len(cand.real):
+        with np.errstate(invalid="ignore"):  # the hidden corners' NaN bounds, replaced by the box
+            screen, bbox, dilate = several._screen(cand.virtual, camera, (r0, r1, c0, c1))
+        real = np.ascontiguousarray(cand.real)
+        parallel_range(several.accept, h, r0, c0, valid, several._spans(valid), origin, direction, screen, bbox,
+                       dilate, real, several._runs(real), best_t, best_c, best_uv, np.zeros((h, w), bool),
+                       np.full((h, w), -1, np.int64))
+    return best_c, best_t, best_uv
+
+
+def exact_level(scene, meshes, groups, camera, stencil, box, rays):
+    """One level drawn by exact per-pixel acceptance: the nearest hit of each pixel's ray among
+    the candidates of ``groups`` (:func:`_candidates`; the non-reflectors, then the reflectors
+    searched at this level), shaded as :func:`refsoft.search.several.draw` shades it.
+
+    Returns
+    -------
+    colour (h, w, 3) float32, reflected_id (h, w) int32, covered (h, w) bool
+        Over ``box``; a pixel showing a reflector shows nothing here (the next level draws it).
+    reflectors : dict
+        Reflector id -> (mask (H, W) bool, point (H, W, 3), normal (H, W, 3), distance (H, W)):
+        the pixels where its triangle is the nearest hit, the hit (float64) and the normal
+        interpolated there, and the hit's distance along the ray.
+    """
+    r0, r1, c0, c1 = (int(x) for x in box)
+    cand = _candidates(meshes, groups)
+    best_c, best_t, best_uv = nearest_hits(cand, camera, box, rays)
+    valid, origin, direction = rays
+    hit = best_c >= 0
+    obj = np.zeros(best_c.shape, np.int32)
+    obj[hit] = cand.object_id[best_c[hit]]
+    u, v = best_uv[..., 0], best_uv[..., 1]
+    nrm = cand.normals[np.maximum(best_c, 0)]
+    n = (1.0 - u - v)[..., None] * nrm[..., 0, :] + u[..., None] * nrm[..., 1, :] + v[..., None] * nrm[..., 2, :]
+    length = np.linalg.norm(n, axis=-1, keepdims=True)
+    n = np.divide(n, length, out=np.zeros_like(n), where=length > 0)
+    is_reflector = np.isin(obj, [o for o in scene.reflector_ids])
+    drawn = hit & ~is_reflector
     colors = np.vstack([np.zeros(3), [o.color for o in scene.objects]]).astype(np.float32)
-    with np.errstate(invalid="ignore"):  # the hidden corners' NaN bounds, replaced by the box
-        colour, rid, covered, _ = draw(cand, camera, None, None, bounce.mask, box, colors, rays=level_rays(bounce, box))
-    return colour, rid, covered
+    colour = np.zeros(best_c.shape + (3,), np.float32)
+    colour[drawn] = shade(n[drawn], colors[obj[drawn]])
+    rid = np.where(drawn, obj, 0).astype(np.int32)
+    reflectors = {}
+    H, W = stencil.shape
+    for b in (int(x) for x in np.unique(obj[hit & is_reflector])):
+        m = hit & (obj == b)
+        mask = np.zeros((H, W), bool)
+        mask[r0:r1, c0:c1] = m
+        point, normal, dist = np.zeros((H, W, 3)), np.zeros((H, W, 3)), np.zeros((H, W))
+        point[r0:r1, c0:c1][m] = origin[m] + best_t[m][:, None] * direction[m]
+        normal[r0:r1, c0:c1][m] = n[m]
+        dist[r0:r1, c0:c1][m] = best_t[m] * np.linalg.norm(direction[m], axis=1)
+        reflectors[b] = (mask, point, normal, dist)
+    return colour, rid, drawn, reflectors
+
+
+def exact_bounces(level, reflectors, eye, path, direction, camera_eye):
+    """The next level's :class:`Bounce` s from :func:`exact_level`'s ``reflectors``: each
+    pixel's eye ``eye`` (H, W, 3) (the ray's origin), path length to it ``path`` (H, W) and the
+    camera's ray direction ``direction`` (H, W, 3)."""
+    out = []
+    for b, (mask, point, normal, dist) in sorted(reflectors.items()):
+        m = mask[..., None]
+        out.append(Bounce(level, b, mask, point, normal, np.where(m, eye, 0.0), np.where(mask, path + dist, 0.0),
+                          np.where(m, direction, 0.0), camera_eye))
+    return out
 
 
 def blend(colour, rid, covered, depth, box, bounce: Bounce, deeper, scene):
@@ -507,7 +590,7 @@ def deepen(scene, view, k, stencil, box, out, refl, parts, opt, search_first):
     report = [first]
     r0, r1, c0, c1 = box
     depth = np.where(stencil[r0:r1, c0:c1], np.int8(1), np.int8(0)).astype(np.int8)
-    rparts = []
+    found = []  # the other reflectors' vertices searched on this one: (ids, vertices, virtual, flags)
     gb = refl.gbuffer
     position = np.where(gb.mask[..., None], gb.position.astype(np.float64) + gb.origin, 0.0)
     for b in scene.reflector_ids:
@@ -516,10 +599,30 @@ def deepen(scene, view, k, stencil, box, out, refl, parts, opt, search_first):
             continue  # no reflected ray of this reflector comes near b
         virtual, flags = search_first(view.meshes[b - 1].vertices)
         first["searched"] += int(len(virtual))
-        rparts += object_parts(view.meshes, [b], virtual, flags)
-    seen = seen_reflectors(parts, rparts, view.camera, stencil, box)
+        found.append(([b], np.asarray(view.meshes[b - 1].vertices, np.float64), virtual, flags))
+    if not found:
+        bounces = []
+    elif opt.images == "all":  # the reflectors seen where each pixel's reflected ray meets them first
+        from .several import pixel_rays
+
+        camera = view.camera
+        rays = pixel_rays(camera, view.meshes[k - 1], view.view.triangle, stencil, box)
+        ids = [j for j, o in enumerate(scene.objects, start=1) if not o.reflector]
+        virtual = refl.virtual64 if refl.virtual64 is not None else refl.virtual.astype(np.float64)
+        _, _, _, seen = exact_level(scene, view.meshes, [(ids, view.vertices, virtual, refl.result.flags)] + found,
+                                    camera, stencil, box, rays)
+        eye = np.zeros(stencil.shape + (3,))
+        eye[r0:r1, c0:c1] = rays[1]
+        to = eye - np.asarray(camera.eye, np.float64)
+        path = np.where(stencil, np.linalg.norm(to, axis=-1), 0.0)
+        direction = to / np.maximum(path, 1e-300)[..., None]
+        bounces = exact_bounces(2, seen, eye, path, direction, np.asarray(camera.eye, np.float64))
+    else:
+        rparts = sum((object_parts(view.meshes, b, v, fl) for b, _, v, fl in found), [])
+        bounces = first_bounces(view.camera, view.meshes, k, view.view.triangle,
+                                seen_reflectors(parts, rparts, view.camera, stencil, box))
     colour, rid, covered = out.colour.copy(), out.reflected_id.copy(), out.covered.copy()
-    for bounce in first_bounces(view.camera, view.meshes, k, view.view.triangle, seen):
+    for bounce in bounces:
         deeper = draw_bounce(scene, view.meshes, bounce, view.camera, view.vertices, opt, opt.bounces, report)
         blend(colour, rid, covered, depth, box, bounce, deeper, scene)
     out.colour, out.reflected_id, out.covered = colour, rid, covered
