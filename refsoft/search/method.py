@@ -18,7 +18,7 @@ import numpy as np
 from .. import keys, limits
 from ..raster import PRECISIONS, GBuffer, _setup, gbuffer
 from ..seam import ReflectorResult, stencil_box
-from . import CULLED, SEVERAL, SearchResult, bounces, search, skips, virtual_vertices
+from . import CULLED, SEVERAL, SearchResult, levels, search, skips, virtual_vertices
 from .convex import several_possible
 from .images import facing_gbuffer, find_images
 from .reflect import Reflection, coherent_starts, gbuffer_camera
@@ -122,7 +122,7 @@ class VertexSearch:
         self.scene = scene
         self.options = options
         if options.bounces > 1:  # the reflections taken per pixel, and the later levels' time
-            self.pixel_arrays = {bounces.BOUNCE_DEPTH: ((), np.int8, 0)}
+            self.pixel_arrays = {levels.BOUNCE_DEPTH: ((), np.int8, 0)}
             self.stages = self.stages + ("bounces",)
         self.previous = {}
         self._last = {}
@@ -164,7 +164,7 @@ class VertexSearch:
             times["virtual"] = 1000 * (time.perf_counter() - t)
             if opt.bounces > 1 and drawn is None:  # the reflectors seen in this image, level by level
                 t = time.perf_counter()
-                report["bounces"] = bounces.deepen(self.scene, view, k, stencil, box, out, refl, parts, opt,
+                report["bounces"] = levels.deepen(self.scene, view, k, stencil, box, out, refl, parts, opt,
                                                    lambda v: self._first_level(refl.gbuffer, view.camera.eye, v))
                 times["bounces"] = 1000 * (time.perf_counter() - t)
         out.arrays = {**gbuffer_outputs(refl.gbuffer, k), **vertex_outputs(refl, view.vertex_object, k)}

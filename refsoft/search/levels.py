@@ -1,0 +1,370 @@
+"""Several bounces (spec section 5.1): the levels drawn, one inside the other.
+
+Level 1 is the method of one bounce. With ``bounces = N > 1`` the other reflectors' vertices are
+searched on each reflector's G-buffer like the scene's; where one of them, ``b``, is the nearest
+thing a pixel's reflection shows, those pixels are a :class:`~refsoft.search.bounces.Bounce`:
+level 2's stencil and G-buffer (``b``'s position and normal where the pixel's reflected ray
+meets it, each pixel's eye the first bounce point). Level 2 is searched and drawn in its stencil,
+the reflectors seen in it give level 3, and so on to level N. A level's picture is composited
+into the one before it as the frame composites a reflector: ``rho * reflection + (1 - rho) * the
+reflector's own shade``.
+
+Under the accurate preset (``images = "all"``) what a pixel shows at a level is decided by
+exact per-pixel acceptance (:func:`exact_level`): its reflected ray is met with the real
+triangles whose virtual triangles, from the level's search, cover it (dilated), the nearest hit
+drawn (:func:`refsoft.search.several.draw`'s rule). Under the paper preset the reflectors'
+virtual triangles are rasterized with the scene's (:func:`refsoft.search.bounces.seen_reflectors`)
+and a later level drawn by the virtual pass.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+
+import numpy as np
+
+from .. import keys
+from .._parallel import parallel_range
+from ..raster import shade
+from . import CULLED, HIDDEN
+from .bounces import (Bounce, bounding_sphere, first_bounces, gbuffer_of, later_bounces, level_rays, make_bounce,
+                      may_see, object_parts, search_bounce, seen_reflectors, unfolded)
+from .virtual import virtual_pass
+
+#: The per-pixel array of the reflections taken (0 off reflectors).
+BOUNCE_DEPTH = keys.BOUNCE_DEPTH
+
+
+# --- exact acceptance -----------------------------------------------------------------------
+def _candidates(meshes, groups, near=None):
+    """Candidates of :func:`refsoft.search.several.draw` from ``groups``: (object ids, their
+    vertices (n, 3) world, virtual vertices (n, 3), flags (n,)) each, the objects' vertices
+    consecutive in that order. A triangle with a CULLED corner is left out; one with a HIDDEN
+    corner (its virtual vertex is where its walk stopped, not its image) is tried over the whole
+    box (the draw's rule for a corner it cannot project). With ``near = (camera, box)`` only the
+    triangles whose dilated bounds may meet ``box`` (:func:`_near`) are kept. Returns the
+    candidates and, per group, how many it gave."""
+    from .several import Candidates
+
+    virtual, real, normals, obj, tri, counts = [], [], [], [], [], []
+    for ids, verts, virt, flags in groups:
+        virt = np.where(((flags & np.uint8(HIDDEN)) != 0)[:, None], np.nan, virt)
+        verts = np.asarray(verts, np.float64)
+        xy = None if near is None else _pixels(virt, near[0])
+        start, n = 0, 0
+        for k in ids:
+            mesh = meshes[k - 1]
+            f = mesh.faces.astype(np.int64)
+            keep = ~np.any((flags[f + start] & np.uint8(CULLED)) != 0, axis=1)
+            if near is not None:
+                keep &= _near(xy[f + start], near[1])
+            f = f[keep]
+            virtual.append(virt[f + start])
+            real.append(verts[f + start])
+            normals.append(np.asarray(mesh.normals, np.float64)[f])
+            obj.append(np.full(len(f), k, np.int32))
+            tri.append(np.flatnonzero(keep))
+            start += mesh.n_vertices
+            n += len(f)
+        counts.append(n)
+    cat = (lambda x, shape: np.ascontiguousarray(np.concatenate(x)) if x else np.zeros(shape))
+    cand = Candidates(cat(virtual, (0, 3, 3)), cat(real, (0, 3, 3)), cat(normals, (0, 3, 3)),
+                      cat(obj, (0,)).astype(np.int32), cat(tri, (0,)).astype(np.int64), 0)
+    return cand, counts
+
+
+def _pixels(virtual, camera):
+    """View (x, y) of points (N, 3) (pixel units, x along a row); NaN for a point at or behind
+    the eye plane or not finite."""
+    from ..raster import _setup
+
+    clip = _setup.transform_points(np.where(np.isfinite(virtual), virtual, 0.0), camera.view_proj())
+    w = clip[:, 3]
+    good = (w > 0) & np.all(np.isfinite(virtual), axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x = (clip[:, 0] / w + 1.0) * 0.5 * camera.width
+        y = (1.0 - clip[:, 1] / w) * 0.5 * camera.height
+    return np.where(good[:, None], np.stack([x, y], axis=1), np.nan)
+
+
+def _near(corners, box):
+    """Per triangle (T, 3, 2 view x, y) whether its bounds, dilated as the draw dilates them
+    (SEVERAL_DILATE_PIXELS plus SEVERAL_DILATE_FRACTION of its longest edge, no more than of its
+    box's width plus height), may meet ``box`` (r0, r1, c0, c1); True for a corner it cannot
+    project."""
+    from .. import constants
+
+    lo, hi = corners.min(axis=1), corners.max(axis=1)
+    grow = constants.SEVERAL_DILATE_PIXELS + constants.SEVERAL_DILATE_FRACTION * np.sum(hi - lo, axis=1) + 1.0
+    r0, r1, c0, c1 = box
+    with np.errstate(invalid="ignore"):
+        meets = ((lo[:, 0] - grow < c1) & (hi[:, 0] + grow > c0) & (lo[:, 1] - grow < r1) & (hi[:, 1] + grow > r0))
+    return meets | ~np.all(np.isfinite(corners), axis=(1, 2))
+
+
+def _bounds(cand, camera, box):
+    """The candidates' dilated bounds over ``box``: (C, 4) view rows and columns, clipped."""
+    from . import several
+
+    r0, r1, c0, c1 = box
+    with np.errstate(invalid="ignore"):  # the hidden corners' NaN bounds, replaced by the box
+        screen, bbox, dilate = several._screen(cand.virtual, camera, box)
+    rows = np.clip(bbox[:, 0:2] + r0, r0, r1)  # the draw's rows are the box's, its columns the view's
+    cols = np.clip(bbox[:, 2:4], c0, c1)
+    return screen, bbox, dilate, np.concatenate([rows, cols], axis=1)
+
+
+def _joined(a, b):
+    """Two sets of candidates as one, ``a``'s first."""
+    return replace(a, **{name: np.concatenate([getattr(a, name), getattr(b, name)])
+                         for name in ("virtual", "real", "normals", "object_id", "triangle")})
+
+
+def nearest_hits(cand, camera, box, rays):
+    """Per pixel of ``box`` the candidate whose real triangle the pixel's ray meets nearest, among
+    those whose dilated virtual triangle covers it (:func:`refsoft.search.several.draw`'s
+    acceptance): ``(candidate (h, w) int64, -1 none; t (h, w); barycentrics u, v (h, w, 2))``."""
+    from . import several
+
+    r0, r1, c0, c1 = (int(x) for x in box)
+    h, w = r1 - r0, c1 - c0
+    valid, origin, direction = (np.ascontiguousarray(a) for a in rays)
+    best_t = np.full((h, w), np.inf)
+    best_c = np.full((h, w), -1, np.int64)
+    best_uv = np.zeros((h, w, 2))
+    if len(cand.real) and valid.any():
+        screen, bbox, dilate, _ = _bounds(cand, camera, (r0, r1, c0, c1))
+        real = np.ascontiguousarray(cand.real)
+        parallel_range(several.accept, h, r0, c0, valid, several._spans(valid), origin, direction, screen, bbox,
+                       dilate, real, several._runs(real), best_t, best_c, best_uv, np.zeros((h, w), bool),
+                       np.full((h, w), -1, np.int64))
+    return best_c, best_t, best_uv
+
+
+def exact_level(scene, meshes, groups, camera, box, rays, reflectors_only=False):
+    """One level drawn by exact per-pixel acceptance: the nearest hit of each pixel's ray among
+    the candidates of ``groups`` (:func:`_candidates`; the non-reflectors first, then the
+    reflectors searched at this level), shaded as :func:`refsoft.search.several.draw` shades it.
+
+    Parameters
+    ----------
+    scene, meshes, camera
+    groups : list
+        As :func:`_candidates`.
+    box : (r0, r1, c0, c1)
+    rays : (valid (h, w), origin (h, w, 3), direction (h, w, 3))
+        Each pixel's reflected ray over ``box`` (``valid``: the level's stencil).
+    reflectors_only : bool
+        Only the reflectors are wanted: the pixels whose rays meet a reflector's candidate are
+        decided, with every candidate, and nothing is drawn.
+
+    Returns
+    -------
+    colour (h, w, 3) float32, reflected_id (h, w) int32, covered (h, w) bool
+        Over ``box``; a pixel showing a reflector shows nothing here (the next level draws it).
+    reflectors : dict
+        Reflector id -> (mask (h, w) bool, point (h, w, 3), normal (h, w, 3), distance (h, w))
+        over ``box``: the pixels where its triangle is the nearest hit, the hit (float64), the
+        normal interpolated there and the hit's distance along the ray.
+    """
+    r0, r1, c0, c1 = (int(x) for x in box)
+    h, w = r1 - r0, c1 - c0
+    colour, rid, drawn = np.zeros((h, w, 3), np.float32), np.zeros((h, w), np.int32), np.zeros((h, w), bool)
+    sub = box
+    valid, origin, direction = rays
+    if reflectors_only:  # the pixels whose rays meet a reflector, then what is nearest there
+        ref, _ = _candidates(meshes, groups[1:], near=(camera, box))
+        meet = nearest_hits(ref, camera, box, rays)[0] >= 0
+        if not meet.any():
+            return colour, rid, drawn, {}
+        rows, cols = np.flatnonzero(meet.any(axis=1)), np.flatnonzero(meet.any(axis=0))
+        sub = (r0 + int(rows[0]), r0 + int(rows[-1]) + 1, c0 + int(cols[0]), c0 + int(cols[-1]) + 1)
+        valid = valid & meet
+        scene_cand, _ = _candidates(meshes, groups[:1], near=(camera, sub))
+        cand = _joined(scene_cand, ref)
+    else:
+        cand, _ = _candidates(meshes, groups, near=(camera, box))
+    sl = (slice(sub[0] - r0, sub[1] - r0), slice(sub[2] - c0, sub[3] - c0))
+    valid, origin, direction = valid[sl], origin[sl], direction[sl]
+    best_c, best_t, best_uv = nearest_hits(cand, camera, sub, (valid, origin, direction))
+    hit = best_c >= 0
+    obj = np.zeros(best_c.shape, np.int32)
+    obj[hit] = cand.object_id[best_c[hit]]
+    u, v = best_uv[..., 0][hit], best_uv[..., 1][hit]
+    nrm = cand.normals[best_c[hit]]
+    n = (1.0 - u - v)[:, None] * nrm[:, 0] + u[:, None] * nrm[:, 1] + v[:, None] * nrm[:, 2]
+    length = np.linalg.norm(n, axis=1, keepdims=True)
+    n = np.divide(n, length, out=np.zeros_like(n), where=length > 0)
+    normal = np.zeros(best_c.shape + (3,))
+    normal[hit] = n
+    is_reflector = np.isin(obj, scene.reflector_ids)
+    if not reflectors_only:
+        shown = hit & ~is_reflector
+        colors = np.vstack([np.zeros(3), [o.color for o in scene.objects]]).astype(np.float32)
+        colour[sl][shown] = shade(normal[shown], colors[obj[shown]])
+        rid[sl][shown] = obj[shown]
+        drawn[sl] = shown
+    reflectors = {}
+    for k in (int(x) for x in np.unique(obj[hit & is_reflector])):
+        m = hit & (obj == k)
+        mask, point, nr, dist = np.zeros((h, w), bool), np.zeros((h, w, 3)), np.zeros((h, w, 3)), np.zeros((h, w))
+        mask[sl] = m
+        point[sl][m] = origin[m] + best_t[m][:, None] * direction[m]
+        nr[sl][m] = normal[m]
+        dist[sl][m] = best_t[m] * np.linalg.norm(direction[m], axis=1)
+        reflectors[k] = (mask, point, nr, dist)
+    return colour, rid, drawn, reflectors
+
+
+def exact_bounces(level, reflectors, rays, path, direction, camera_eye, box, shape):
+    """The next level's :class:`~refsoft.search.bounces.Bounce` s from :func:`exact_level`'s
+    ``reflectors`` over ``box``: each pixel's eye the origin of its ray (``rays``), its path's
+    length to that origin ``path`` (h, w) and the camera's ray direction ``direction`` (h, w, 3)."""
+    out = []
+    for b, (mask, point, normal, dist) in sorted(reflectors.items()):
+        bounce = make_bounce(level, b, mask, point, normal, rays[1], path + dist, direction, camera_eye,
+                             (box[0], box[2]), shape)
+        if bounce is not None:
+            out.append(bounce)
+    return out
+
+
+# --- the levels --------------------------------------------------------------------------------
+def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report):
+    """Level ``bounce.level``'s picture in its stencil, and the later levels' inside it.
+
+    Parameters
+    ----------
+    scene, meshes, camera
+        The frame's.
+    bounce : Bounce
+    vertices : ndarray (N, 3) float64
+        The non-reflectors' vertices (:func:`refsoft.scene.scene_vertices`).
+    opt : RenderOptions
+        Read: ``neighbourhood``, ``cap``, ``precision``, ``images``, ``bounces`` (the last level).
+    report : list
+        Receives one dict per bounce drawn (level, reflector, pixels, vertices searched, ms).
+
+    Returns
+    -------
+    colour (h, w, 3) float32, reflected_id (h, w) int32, covered (h, w) bool, depth (h, w) int8
+        Over ``bounce.box``.
+    """
+    t0 = time.perf_counter()
+    gb = gbuffer_of(bounce, camera, opt.precision)
+    ids = [k for k, o in enumerate(scene.objects, start=1) if not o.reflector]
+    reach = (lambda k: may_see(bounce.position, bounce.normal, bounce.eye, bounce.mask, *bounding_sphere(meshes[k - 1])))
+    # only the objects a reflected ray of this level can reach are searched; the others' vertices
+    # are CULLED (their triangles are not drawn)
+    seen = np.repeat([reach(k) for k in ids], [meshes[k - 1].n_vertices for k in ids]).astype(bool)
+    virtual = np.zeros((len(vertices), 3))
+    flags = np.full(len(vertices), CULLED, np.uint8)
+    res = search_bounce(bounce, gb, vertices[seen], opt.neighbourhood, opt.cap)
+    virtual[seen], flags[seen] = unfolded(bounce, res, vertices[seen]), res.flags
+    depth = np.where(bounce.mask, np.int8(bounce.level), np.int8(0)).astype(np.int8)
+    entry = {"level": bounce.level, "reflector": bounce.reflector, "pixels": int(bounce.mask.sum()),
+             "searched": int(seen.sum())}
+    report.append(entry)
+    others = [] if bounce.level >= opt.bounces else [k for k in scene.reflector_ids
+                                                      if k != bounce.reflector and reach(k)]
+    found = []  # the other reflectors' vertices searched at this level: (ids, vertices, virtual, flags)
+    for k in others:
+        verts = np.asarray(meshes[k - 1].vertices, np.float64)
+        r = search_bounce(bounce, gb, verts, opt.neighbourhood, opt.cap)
+        found.append(([k], verts, unfolded(bounce, r, verts), r.flags))
+        entry["searched"] += len(verts)
+    if opt.images == "all":  # each pixel's reflected ray decides among the virtual triangles over it
+        rays = level_rays(bounce)
+        colour, rid, covered, refl = exact_level(scene, meshes, [(ids, vertices, virtual, flags)] + found, camera,
+                                                 bounce.box, rays)
+        nxt = exact_bounces(bounce.level + 1, refl, rays, bounce.path, bounce.direction, bounce.origin, bounce.box,
+                            bounce.shape)
+    else:
+        parts = object_parts(meshes, ids, virtual, flags)
+        stencil = bounce.stencil()
+        colour, rid, covered, _ = virtual_pass(scene, parts, camera, stencil, bounce.box, "discard")
+        rparts = sum((object_parts(meshes, k, v, fl) for k, _, v, fl in found), [])
+        nxt = later_bounces(bounce, seen_reflectors(parts, rparts, camera, stencil, bounce.box), meshes) if found else []
+    for b in nxt:
+        blend(colour, rid, covered, depth, bounce.box, b, draw_bounce(scene, meshes, b, camera, vertices, opt, report),
+              scene)
+    entry["ms"] = 1000 * (time.perf_counter() - t0)
+    return colour, rid, covered, depth
+
+
+def blend(colour, rid, covered, depth, box, bounce: Bounce, deeper, scene):
+    """Composite a later level's picture ``deeper`` (:func:`draw_bounce` of ``bounce``) into an
+    earlier one's arrays over ``box``, in place, where ``bounce.mask``: the reflector's own shade
+    blended with its reflection by its reflectivity where the reflection covers (``rho *
+    reflection + (1 - rho) * own``, as the frame composites), its own shade elsewhere; the
+    reflected object id and the depth the later level's."""
+    col2, rid2, cov2, dep2 = deeper
+    b0, b1, d0, d1 = bounce.box
+    obj = scene.objects[bounce.reflector - 1]
+    m = bounce.mask
+    own = shade(bounce.normal[m], np.asarray(obj.color, np.float32)).astype(np.float32)
+    rho = np.float32(obj.reflectivity)
+    mix = np.where(cov2[m][:, None], rho * col2[m] + (np.float32(1) - rho) * own, own)
+    sl = (slice(b0 - box[0], b1 - box[0]), slice(d0 - box[2], d1 - box[2]))
+    colour[sl][m] = mix
+    rid[sl][m] = rid2[m]
+    covered[sl][m] = True
+    depth[sl][m] = dep2[m]
+
+
+def deepen(scene, view, k, stencil, box, out, refl, parts, opt, search_first):
+    """After level 1 of reflector ``k`` (its :class:`~refsoft.seam.ReflectorResult` ``out`` over
+    ``box``, its reflection ``refl`` and virtual ``parts``): the reflectors seen in its image and
+    every later level, composited into ``out`` in place, with the per-pixel depth.
+
+    ``search_first(vertices)`` gives the first level's virtual vertices (N, 3) float64 and flags
+    of other vertices (the reflectors'), as the method computes its own.
+
+    Returns
+    -------
+    list of dict
+        The first level's (level 1: the other reflectors' vertices searched on this one's
+        G-buffer), then one per later bounce drawn (:func:`draw_bounce`'s report).
+    """
+    first = {"level": 1, "reflector": int(k), "pixels": int(stencil.sum()), "searched": 0}
+    report = [first]
+    r0, r1, c0, c1 = box
+    camera = view.camera
+    eye = np.asarray(camera.eye, np.float64)
+    depth = np.where(stencil[r0:r1, c0:c1], np.int8(1), np.int8(0)).astype(np.int8)
+    found = []  # the other reflectors' vertices searched on this one: (ids, vertices, virtual, flags)
+    gb = refl.gbuffer
+    position = np.where(gb.mask[..., None], gb.position.astype(np.float64) + gb.origin, 0.0)
+    for b in scene.reflector_ids:
+        if b == k or not may_see(position, gb.normal, eye, gb.mask, *bounding_sphere(view.meshes[b - 1])):
+            continue  # no reflected ray of this reflector comes near b
+        virtual, flags = search_first(view.meshes[b - 1].vertices)
+        first["searched"] += int(len(virtual))
+        found.append(([b], np.asarray(view.meshes[b - 1].vertices, np.float64), virtual, flags))
+    if not found:
+        bounces = []
+    elif opt.images == "all":  # the reflectors seen where each pixel's reflected ray meets them first
+        from .several import pixel_rays
+
+        rays = pixel_rays(camera, view.meshes[k - 1], view.view.triangle, stencil, box)
+        ids = [j for j, o in enumerate(scene.objects, start=1) if not o.reflector]
+        virtual = refl.virtual64 if refl.virtual64 is not None else refl.virtual.astype(np.float64)
+        *_, seen = exact_level(scene, view.meshes, [(ids, view.vertices, virtual, refl.result.flags)] + found, camera,
+                               box, rays, reflectors_only=True)
+        to = np.where(rays[0][..., None], rays[1] - eye, 0.0)
+        path = np.linalg.norm(to, axis=-1)
+        direction = to / np.maximum(path, 1e-300)[..., None]
+        bounces = exact_bounces(2, seen, rays, path, direction, eye, box, stencil.shape)
+    else:
+        rparts = sum((object_parts(view.meshes, b, v, fl) for b, _, v, fl in found), [])
+        bounces = first_bounces(camera, view.meshes, k, view.view.triangle,
+                                seen_reflectors(parts, rparts, camera, stencil, box), box)
+    colour, rid, covered = out.colour.copy(), out.reflected_id.copy(), out.covered.copy()
+    for bounce in bounces:
+        blend(colour, rid, covered, depth, box, bounce,
+              draw_bounce(scene, view.meshes, bounce, camera, view.vertices, opt, report), scene)
+    out.colour, out.reflected_id, out.covered = colour, rid, covered
+    out.pixels = {**out.pixels, BOUNCE_DEPTH: depth}
+    out.pixel_mask = stencil[r0:r1, c0:c1].copy()
+    return report
