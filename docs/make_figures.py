@@ -212,6 +212,28 @@ def sheets_figure():
     write_png(os.path.join(FIG, "sheets_concave.png"), side_by_side(r["image"], t["image"], agree))
 
 
+def bounces_figure():
+    """The mirrors scene at 640x480, frame 0, three bounces (the accurate preset): the render, the
+    ray-traced truth with three bounces, and the reflections taken per pixel (the render's
+    bounce_depth: dark 1, mid 2, bright 3) with the pixels whose reflected object differs in
+    red; docs/bounces.md."""
+    import numpy as np
+
+    from refsoft.frame import FrameDriver, RenderOptions
+    from refsoft.truth.raytrace import TruthRenderer
+
+    scene = refsoft.load_scene("mirrors", width=640, height=480)
+    t = TruthRenderer(scene, exact=False, bounces=3).render_frame(0).arrays
+    r = FrameDriver(scene, RenderOptions(bounces=3)).render_frame(0).arrays
+    depth = r["bounce_depth"]
+    levels = np.zeros(depth.shape + (3,), np.uint8)
+    for j, grey in ((1, 70), (2, 150), (3, 240)):
+        levels[depth == j] = grey
+    wrong = (t["reflected_id"] >= 0) & (r["reflected_id"] != t["reflected_id"])
+    levels[wrong] = (230, 30, 30)
+    write_png(os.path.join(FIG, "bounces_mirrors.png"), side_by_side(r["image"], t["image"], levels))
+
+
 def check_figure():
     """What `refsoft check` draws for a port whose search ends one pixel off on every 40th
     vertex and whose image is off by 3 levels in a band: the reflection-pixel map (green
@@ -356,6 +378,7 @@ elif __name__ == "__main__":
     accuracy_figure()
     refine_figure()
     sheets_figure()
+    bounces_figure()
     check_figure()
     try:
         fill_rule_figure()
