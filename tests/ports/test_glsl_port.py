@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -54,19 +55,43 @@ def llvmpipe():
     return dict(line.split(": ", 1) for line in proc.stdout.splitlines())
 
 
+#: The reflection methods the GLSL port implements; it declares the others in ported.json.
+PORTED_METHODS = ("walk", "hierarchy")
+DECLARED_METHODS = ["ldt", "envmap"]
+
+
+def _doc_commands():
+    """docs/ports.md section 7's shell block: its ``refsoft-glsl run`` and ``refsoft check``
+    command lines (comments dropped), as a port author types them."""
+    text = (REPO / "docs" / "ports.md").read_text()
+    section = text.split("## 7. ", 1)[1].split("\n## ", 1)[0]
+    block = section.split("```sh\n", 1)[1].split("```", 1)[0]
+    lines = [ln.split("#", 1)[0].split() for ln in block.splitlines()]
+    return [ln for ln in lines if ln[:2] in (["refsoft-glsl", "run"], ["refsoft", "check"])]
+
+
+def _as_written(line, golden, out):
+    """A documented command line with its folders made the test's: ``golden`` the session's
+    golden set, the candidate (the word after ``--out`` of ``run``, the second folder of
+    ``check``) ``out``."""
+    folders = {"golden": str(golden)}
+    if line[0] == "refsoft-glsl":
+        folders[line[line.index("--out") + 1]] = str(out)
+    else:
+        folders[line[3]] = str(out)
+    return [folders.get(word, word) for word in line[1:]]
+
+
 @pytest.fixture(scope="module")
 def golden(golden_set, llvmpipe):
     """The session's golden set (tests/conftest.py: written once, shared with the conformance
-    tests) and the names of its vertex-search cases, the ones the port implements (the
-    comparison methods' cases are not ported)."""
+    tests), the names of its cases the port implements and of those it declares not ported."""
     manifest = json.loads((golden_set / "manifest.json").read_text())
-    names = [c["name"] for c in manifest["cases"] if c["options"].get("method", "walk") in PORTED_METHODS]
-    assert len(names) >= 21, names
-    return golden_set, names
-
-
-#: The reflection methods the GLSL port implements.
-PORTED_METHODS = ("walk", "hierarchy")
+    method = {c["name"]: c["options"].get("method", "walk") for c in manifest["cases"]}
+    names = [n for n, m in method.items() if m in PORTED_METHODS]
+    declared = [n for n, m in method.items() if m in DECLARED_METHODS]
+    assert len(names) >= 21 and len(declared) >= 7 and len(names) + len(declared) == len(method), method
+    return golden_set, names, declared
 
 
 #: Arrays of the golden frames that only the oracle writes (a port does not).
@@ -77,22 +102,31 @@ NOT_PORTED = ("image_count_", "image_vertex_", "image_pixel_", "image_virtual_",
 SEVERAL = 32
 
 
-def _candidate(golden, tmp_path_factory, *flags):
+def _candidate(golden, tmp_path_factory, variant):
+    """docs/ports.md's ``refsoft-glsl run`` line of ``variant`` (the exact one has no
+    ``--plain``), run as written on the session's golden set: every case, exit 0, one line per
+    case it declares not ported."""
+    runs = [ln for ln in _doc_commands() if ln[0] == "refsoft-glsl"]
+    line = [ln for ln in runs if ("--plain" in ln) == (variant == "plain")]
+    assert len(line) == 1, runs
     out = tmp_path_factory.mktemp("candidate") / "out"
-    cases = [arg for name in golden[1] for arg in ("--case", name)]
-    proc = _glsl("run", str(golden[0]), "--out", str(out), "--quiet", *cases, *flags)
+    proc = _glsl(*_as_written(line[0], golden[0], out), "--quiet")
     assert proc.returncode == 0, _why(proc)
+    skipped = [ln for ln in proc.stderr.splitlines() if "not ported (declared in ported.json)" in ln]
+    assert len(skipped) == len(golden[2]), proc.stderr
+    for name in golden[2]:
+        assert any(ln.startswith(f"case {name}: method ") for ln in skipped), (name, proc.stderr)
     return out
 
 
 @pytest.fixture(scope="module")
 def exact(golden, tmp_path_factory):
-    return _candidate(golden, tmp_path_factory)
+    return _candidate(golden, tmp_path_factory, "exact")
 
 
 @pytest.fixture(scope="module")
 def plain(golden, tmp_path_factory):
-    return _candidate(golden, tmp_path_factory, "--plain")
+    return _candidate(golden, tmp_path_factory, "plain")
 
 
 def _frames(golden_dir, name):
@@ -100,10 +134,26 @@ def _frames(golden_dir, name):
 
 
 def _check(golden, candidate, report, *flags):
-    cases = [arg for name in golden[1] for arg in ("--case", name)]
-    proc = _refsoft("check", str(golden[0]), str(candidate), "--out", str(report), *cases, *flags)
+    """docs/ports.md's ``refsoft check`` line, as written (every case), with ``flags``."""
+    line = [ln for ln in _doc_commands() if ln[0] == "refsoft"]
+    assert len(line) == 1, _doc_commands()
+    proc = _refsoft(*_as_written(line[0], golden[0], candidate), "--out", str(report), *flags)
     assert proc.returncode in (0, 1), _why(proc)
     return proc, json.loads((report / "summary.json").read_text())
+
+
+def _declared_not_ported(golden, proc, summary):
+    """Every case the port declares is reported not ported, in the summary and the output."""
+    gaps = summary["not_ported"]["cases"]
+    assert sorted(gaps) == sorted(golden[2]), gaps
+    assert all("declared not ported" in why for why in gaps.values()), gaps
+    assert f"not ported: {len(golden[2])} case(s)" in proc.stdout, proc.stdout[-2000:]
+
+
+def test_the_documented_commands_need_no_case_list():
+    lines = _doc_commands()
+    assert [ln[:2] for ln in lines] == [["refsoft-glsl", "run"], ["refsoft", "check"], ["refsoft-glsl", "run"]]
+    assert not any("--case" in ln for ln in lines), lines
 
 
 def test_llvmpipe_and_its_versions(llvmpipe):
@@ -112,10 +162,11 @@ def test_llvmpipe_and_its_versions(llvmpipe):
 
 
 def test_exact_variant_is_bit_identical_on_every_golden_case(golden, exact):
-    golden_dir, names = golden
-    # every case and the port's declaration, nothing else
+    golden_dir, names, _ = golden
+    # every case it ports and its declaration, nothing else
     assert sorted(p.name for p in exact.iterdir()) == sorted(names + ["ported.json"])
-    assert json.loads((exact / "ported.json").read_text())["not_ported"] == {"kinds": ["images"]}
+    assert json.loads((exact / "ported.json").read_text())["not_ported"] == {"methods": DECLARED_METHODS,
+                                                                          "kinds": ["images"]}
     differ = []
     for name in names:
         frames = _frames(golden_dir, name)
@@ -139,14 +190,37 @@ def test_exact_variant_passes_the_default_rules_with_no_tie(golden, exact, tmp_p
     proc, summary = _check(golden, exact, tmp_path / "report")
     assert proc.returncode == 0, _why(proc)
     assert summary["passed"]
+    _declared_not_ported(golden, proc, summary)
     assert summary["counts"]["fail"] == 0 and summary["counts"]["missing"] == 0, summary["counts"]
     assert summary["counts"]["accepted"] == 0, summary["counts"]  # bit-identical: nothing to accept
     assert summary["counts"]["pass"] > 0
     assert not summary["missing_files"]
 
 
+def test_a_case_missing_without_a_declaration_fails(golden, exact, tmp_path):
+    """The same candidate with a ported.json that no longer declares ``envmap``: its cases are
+    missing, and check fails; the ``ldt`` ones stay not ported."""
+    golden_dir, names, declared = golden
+    envmap = [n for n in declared if n.endswith("_envmap")]
+    ldt = [n for n in declared if n not in envmap]
+    assert envmap and ldt, declared
+    cand = tmp_path / "cand"
+    shutil.copytree(exact / names[0], cand / names[0])
+    (cand / "ported.json").write_text(json.dumps({"format": "refsoft-ported-1",
+                                                  "not_ported": {"methods": ["ldt"], "kinds": ["images"]}}))
+    cases = [arg for n in (names[0], envmap[0], ldt[0]) for arg in ("--case", n)]
+    proc = _refsoft("check", str(golden_dir), str(cand), "--out", str(tmp_path / "report"), *cases)
+    assert proc.returncode == 1, _why(proc)
+    summary = json.loads((tmp_path / "report" / "summary.json").read_text())
+    assert not summary["passed"] and summary["counts"]["missing"] > 0, summary["counts"]
+    assert summary["counts"]["fail"] == 0, summary["counts"]
+    missing = {f["case"] for f in summary["findings"] if f["status"] == "missing"}
+    assert missing == {envmap[0]}, missing
+    assert sorted(summary["not_ported"]["cases"]) == [ldt[0]], summary["not_ported"]
+
+
 def test_stats_record_the_renderer_and_per_stage_milliseconds(golden, exact, llvmpipe):
-    golden_dir, names = golden
+    golden_dir, names, _ = golden
     for name in names:
         stats = json.loads((exact / name / "stats.json").read_text())
         assert stats["variant"] == "exact"
@@ -169,7 +243,7 @@ def test_plain_variant_is_judged_by_the_gpu_profile(golden, plain, tmp_path):
     ``refsoft check`` has no ``gpu`` profile yet, the default rules judge it: it must then be
     complete (nothing missing), cover exactly the oracle's G-buffer pixels, and differ from the
     oracle (it is not the exact variant under another name)."""
-    golden_dir, names = golden
+    golden_dir, names, _ = golden
     assert sorted(p.name for p in plain.iterdir()) == sorted(names + ["ported.json"])
     for name in names:
         assert json.loads((plain / name / "stats.json").read_text())["variant"] == "plain"
@@ -177,6 +251,7 @@ def test_plain_variant_is_judged_by_the_gpu_profile(golden, plain, tmp_path):
         proc, summary = _check(golden, plain, tmp_path / "report", "--profile", "gpu")
         assert proc.returncode == 0, _why(proc)
         assert summary["counts"]["fail"] == 0 and summary["counts"]["missing"] == 0, summary["counts"]
+        _declared_not_ported(golden, proc, summary)
         return
     proc, summary = _check(golden, plain, tmp_path / "report")
     assert summary["counts"]["missing"] == 0 and not summary["missing_files"], summary["counts"]

@@ -49,11 +49,11 @@ def write_json(path, data):
     _atomic_write(path, write)
 
 
-def case_names(golden) -> list:
-    """The cases of a golden set, in its manifest's order (those with inputs)."""
+def case_methods(golden) -> dict:
+    """Each case of a golden set (manifest order) -> its reflection method (its options')."""
     with open(os.path.join(golden, "manifest.json")) as fh:
         manifest = json.load(fh)
-    return [c["name"] for c in manifest["cases"]]
+    return {c["name"]: c["options"].get("method", "walk") for c in manifest["cases"]}
 
 
 def run_case(gl, golden, name, out, plain=False, log=None) -> dict:
@@ -86,9 +86,10 @@ def run_case(gl, golden, name, out, plain=False, log=None) -> dict:
     return stats
 
 
-#: What the port does not port (refsoft's ``ported.json``, format ``refsoft-ported-1``): every
-#: image of every vertex (kind ``images``: the per-image arrays and the flag SEVERAL).
-NOT_PORTED = {"kinds": ["images"]}
+#: What the port does not port (refsoft's ``ported.json``, format ``refsoft-ported-1``): the
+#: comparison methods (every case of them), and every image of every vertex (kind ``images``:
+#: the per-image arrays and the flag SEVERAL).
+NOT_PORTED = {"methods": ["ldt", "envmap"], "kinds": ["images"]}
 
 
 def write_ported(out):
