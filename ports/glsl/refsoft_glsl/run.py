@@ -61,7 +61,9 @@ def run_case(gl, golden, name, out, plain=False, log=None) -> dict:
     from .pipeline import Pipeline
 
     case = read_case(os.path.join(golden, name, "inputs"))
-    if plain:
+    if case.options.get("method") == "envmap":
+        from .envmap import EnvmapPipeline as cls
+    elif plain:
         from .plain import PlainPipeline as cls
     else:
         cls = Pipeline
