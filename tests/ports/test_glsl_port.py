@@ -56,8 +56,11 @@ def llvmpipe():
 
 
 #: The reflection methods the GLSL port implements; it declares the others in ported.json.
-PORTED_METHODS = ("walk", "hierarchy")
-DECLARED_METHODS = ["ldt", "envmap"]
+PORTED_METHODS = ("walk", "hierarchy", "envmap")
+DECLARED_METHODS = ["ldt"]
+#: The stages each method's frames time (stats.json), besides ``total``.
+STAGES = {"walk": {"main", "gbuffer", "search", "virtual", "composite"},
+          "envmap": {"main", "envmap_build", "envmap_lookup", "composite"}}
 
 
 def _doc_commands():
@@ -90,7 +93,8 @@ def golden(golden_set, llvmpipe):
     method = {c["name"]: c["options"].get("method", "walk") for c in manifest["cases"]}
     names = [n for n, m in method.items() if m in PORTED_METHODS]
     declared = [n for n, m in method.items() if m in DECLARED_METHODS]
-    assert len(names) >= 21 and len(declared) >= 7 and len(names) + len(declared) == len(method), method
+    assert len(names) >= 23 and len(declared) >= 5 and len(names) + len(declared) == len(method), method
+    assert "touching_envmap" in names and "cube_edge_envmap" in names, names
     return golden_set, names, declared
 
 
@@ -198,16 +202,14 @@ def test_exact_variant_passes_the_default_rules_with_no_tie(golden, exact, tmp_p
 
 
 def test_a_case_missing_without_a_declaration_fails(golden, exact, tmp_path):
-    """The same candidate with a ported.json that no longer declares ``envmap``: its cases are
-    missing, and check fails; the ``ldt`` ones stay not ported."""
+    """The port's candidate without its ``touching_envmap`` folder (a method its ported.json does
+    not declare): that case is missing and check fails; the declared ``ldt`` case stays not
+    ported."""
     golden_dir, names, declared = golden
-    envmap = [n for n in declared if n.endswith("_envmap")]
-    ldt = [n for n in declared if n not in envmap]
-    assert envmap and ldt, declared
+    envmap, ldt = ["touching_envmap"], declared
     cand = tmp_path / "cand"
     shutil.copytree(exact / names[0], cand / names[0])
-    (cand / "ported.json").write_text(json.dumps({"format": "refsoft-ported-1",
-                                                  "not_ported": {"methods": ["ldt"], "kinds": ["images"]}}))
+    shutil.copy(exact / "ported.json", cand / "ported.json")
     cases = [arg for n in (names[0], envmap[0], ldt[0]) for arg in ("--case", n)]
     proc = _refsoft("check", str(golden_dir), str(cand), "--out", str(tmp_path / "report"), *cases)
     assert proc.returncode == 1, _why(proc)
@@ -228,7 +230,8 @@ def test_stats_record_the_renderer_and_per_stage_milliseconds(golden, exact, llv
         assert [f"frame_{f['frame']:04d}.npz" for f in stats["frames"]] == _frames(golden_dir, name)
         for f in stats["frames"]:
             t = f["time_ms"]
-            assert {"main", "gbuffer", "search", "virtual", "composite", "total"} <= set(t), name
+            method = "envmap" if stats["options"]["method"] == "envmap" else "walk"
+            assert STAGES[method] | {"total"} <= set(t), name
             assert t["total"] > 0 and t["total"] >= max(v for k, v in t.items() if k != "total")
 
 
@@ -261,3 +264,34 @@ def test_plain_variant_is_judged_by_the_gpu_profile(golden, plain, tmp_path):
     assert by_key["gbuffer_mask_"] and set(by_key["gbuffer_mask_"]) == {"pass"}, by_key["gbuffer_mask_"]
     assert by_key["object_id"] and set(by_key["object_id"]) <= {"pass", "accepted"}  # reported, not judged
     assert "fail" in by_key["gbuffer_position_"]  # GL's interpolation, not refsoft's
+
+
+def test_plain_environment_map_is_gl_s_own_cube(golden, plain):
+    """The plain variant's cube maps are GL's raster (its interpolation, not refsoft's): their
+    colours differ from the oracle's somewhere; the exact variant's are the oracle's (above)."""
+    golden_dir = golden[0]
+    for name in ("touching_envmap", "cube_edge_envmap"):
+        want, got = np.load(golden_dir / name / "frame_0000.npz"), np.load(plain / name / "frame_0000.npz")
+        assert want["envmap_color_1"].shape == got["envmap_color_1"].shape, name
+        assert not np.array_equal(want["envmap_color_1"], got["envmap_color_1"]), name
+
+
+def test_a_cube_face_with_its_axes_swapped_is_caught(golden, tmp_path):
+    """A mutant of the exact variant whose +Y face (the only face the box is seen in) is rendered
+    with its s and t axes swapped (the build's face table; the lookup keeps GL's): ``refsoft
+    check`` fails its ids."""
+    golden_dir = golden[0]
+    out = tmp_path / "mutant"
+    code = ("import sys; from refsoft_glsl import cli, envmap; t = list(envmap.FACE_TABLE); "
+            "t[2] = (t[2][1], t[2][0], t[2][2]); envmap.FACE_TABLE = tuple(t); "
+            "sys.exit(cli.main(sys.argv[1:]))")
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(REPO / "ports" / "glsl"), env.get("PYTHONPATH")) if p)
+    proc = _run([sys.executable, "-c", code, "run", str(golden_dir), "--out", str(out), "--quiet",
+                 "--case", "touching_envmap"], env=env)
+    assert proc.returncode == 0, _why(proc)
+    proc = _refsoft("check", str(golden_dir), str(out), "--out", str(tmp_path / "report"), "--case", "touching_envmap")
+    assert proc.returncode == 1, _why(proc)
+    summary = json.loads((tmp_path / "report" / "summary.json").read_text())
+    failed = {f["key"] for f in summary["findings"] if f["status"] == "fail"}
+    assert "envmap_id_1" in failed, failed

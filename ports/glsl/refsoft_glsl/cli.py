@@ -1,6 +1,7 @@
 """``refsoft-glsl run GOLDEN --out CANDIDATE [--case NAME ...] [--plain]``: the GLSL port of
-the main method on Mesa llvmpipe, run on a golden set's inputs. ``refsoft-glsl info``: the
-renderer, Mesa and LLVM versions it runs on (exit 2 when no llvmpipe EGL context can be made).
+the main method and the environment map on Mesa llvmpipe, run on a golden set's inputs.
+``refsoft-glsl info``: the renderer, Mesa and LLVM versions it runs on (exit 2 when no llvmpipe
+EGL context can be made).
 
 ``run`` declares what the port does not port in ``CANDIDATE/ported.json`` (refsoft's format
 ``refsoft-ported-1``) and skips the cases of the methods it declares, one line each; it exits 0
@@ -80,7 +81,8 @@ def main(argv=None) -> int:
             print(f"refsoft-glsl: error: {exc}", file=sys.stderr)
             return 2
     if log:
-        log(f"{len(chosen) - len(failed) - skipped} cases in {time.perf_counter() - t0:.1f} s into {os.fspath(args.out)}")
+        done = len(chosen) - len(failed) - skipped
+        log(f"{done} cases in {time.perf_counter() - t0:.1f} s into {os.fspath(args.out)}")
     return 1 if failed else 0
 
 

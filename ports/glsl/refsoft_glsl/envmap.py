@@ -201,3 +201,55 @@ def _mesh(gl, mesh, k) -> MeshData:
     n = mesh.n_vertices
     return MeshData(gl, mesh.vertices, mesh.normals, mesh.faces, np.full(mesh.n_faces, k, np.int32),
                     np.full(n, k, np.int32))
+
+
+class PlainEnvmapPipeline(EnvmapPipeline):
+    """The plain variant of :class:`EnvmapPipeline` (``--plain``), written the way a port usually
+    is: the cube's faces and the reflector drawn by GL itself (float32 vertices and matrices,
+    GL's clipping, coverage and ``smooth`` interpolation; ``plain.vert`` / ``plain.frag``), the
+    reflected direction with GLSL's ``normalize`` and ``dot``, and the texel found by GL's own
+    cube-map sampling (``textureLod`` of an integer cube texture, nearest), so GL's face
+    selection and face coordinates."""
+
+    exact = False
+
+    def __init__(self, gl, case):
+        super().__init__(gl, case)
+        self.gl_rasters = {}
+
+    def gl_raster(self, w, h, mode):
+        from .plain import GLRaster
+
+        r = self.gl_rasters.get((w, h, mode))
+        if r is None:
+            r = self.gl_rasters[(w, h, mode)] = GLRaster(self.gl, w, h, mode)
+        return r
+
+    def cube_map(self, frame, data, k) -> dict:
+        gl, R = self.gl, self.resolution
+        c = self.cube_centre(frame, k)
+        colour = np.zeros((6, R, R, 3), np.float32)
+        ids = np.zeros((6, R, R), np.int32)
+        vertices, normals, faces, _ = data.reflected.host
+        if len(faces):
+            d = vertices - c
+            far = FAR_MARGIN * float(np.sqrt(np.max(np.sum(d * d, axis=1))))
+            far = far if far > 0 else 1.0
+            r = self.gl_raster(R, R, 1)
+            for f in range(6):
+                col, obj = r.draw(face_matrix(f, NEAR_RATIO * far, far), d.astype(np.float32),
+                                  normals.astype(np.float32), data.reflected.vertex_object, faces, self.shading)
+                colour[f], ids[f] = col[:, :, :3], obj
+        index = np.arange(6 * R * R, dtype=np.int32).reshape(6, R, R)
+        # GL's cube-map images start at t = 0, the bottom row (row R - 1 here)
+        tex = gl.ctx.texture_cube((R, R), 1, np.ascontiguousarray(index[:, ::-1]).tobytes(), dtype="i4")
+        tex.filter = (gl.moderngl.NEAREST, gl.moderngl.NEAREST)
+        return {"colour": gl.buffer(colour), "id": gl.buffer(ids), "center": c, "index": tex}
+
+    def lookup(self, frame, view, cube, k, face, texel):
+        cube["index"].use(location=0)
+        prog = self.gl.compute("envmap", DOUBLE=int(self.double), EXACT=0)
+        prog["texel_index"].value = 0
+        out = super().lookup(frame, view, cube, k, face, texel)
+        cube["index"].release()
+        return out

@@ -93,7 +93,8 @@ def shading_buffer(gl, case, background=None):
     table = np.zeros((len(case.objects) + 1, 3))
     table[1:] = [o["color"] for o in case.objects]
     bg = s["background"] if background is None else background
-    return gl.buffer(np.concatenate([s["light"], [s["ambient"], s["diffuse"]], bg, table.reshape(-1)]).astype(np.float32))
+    values = np.concatenate([s["light"], [s["ambient"], s["diffuse"]], bg, table.reshape(-1)])
+    return gl.buffer(values.astype(np.float32))
 
 
 class Pipeline:

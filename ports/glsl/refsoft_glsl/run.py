@@ -62,7 +62,9 @@ def run_case(gl, golden, name, out, plain=False, log=None) -> dict:
 
     case = read_case(os.path.join(golden, name, "inputs"))
     if case.options.get("method") == "envmap":
-        from .envmap import EnvmapPipeline as cls
+        from .envmap import EnvmapPipeline, PlainEnvmapPipeline
+
+        cls = PlainEnvmapPipeline if plain else EnvmapPipeline
     elif plain:
         from .plain import PlainPipeline as cls
     else:
@@ -89,9 +91,9 @@ def run_case(gl, golden, name, out, plain=False, log=None) -> dict:
 
 
 #: What the port does not port (refsoft's ``ported.json``, format ``refsoft-ported-1``): the
-#: comparison methods (every case of them), and every image of every vertex (kind ``images``:
-#: the per-image arrays and the flag SEVERAL).
-NOT_PORTED = {"methods": ["ldt", "envmap"], "kinds": ["images"]}
+#: layered depth textures (every case of method ``ldt``), and every image of every vertex (kind
+#: ``images``: the per-image arrays and the flag SEVERAL).
+NOT_PORTED = {"methods": ["ldt"], "kinds": ["images"]}
 
 
 def write_ported(out):
