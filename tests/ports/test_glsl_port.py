@@ -295,3 +295,26 @@ def test_a_cube_face_with_its_axes_swapped_is_caught(golden, tmp_path):
     summary = json.loads((tmp_path / "report" / "summary.json").read_text())
     failed = {f["key"] for f in summary["findings"] if f["status"] == "fail"}
     assert "envmap_id_1" in failed, failed
+
+
+@pytest.mark.parametrize("scene", ["touching", "balls"])
+def test_exported_environment_map_frames_are_refsofts_bit_for_bit(llvmpipe, scene, tmp_path):
+    """Two coherent frames exported by ``refsoft export`` into a folder without a manifest (the
+    port reads ``CASE/inputs/``): on ``touching`` nothing moves and both peers keep the cube map
+    of frame 0, on ``balls`` the objects move and both rebuild it; every array of both frames is
+    refsoft's."""
+    opts = ["--method", "envmap", "--frames", "2", "--width", "64", "--height", "48", "--envmap-resolution", "16"]
+    name = f"{scene}_envmap"
+    proc = _refsoft("export", scene, *opts, "--out", str(tmp_path / "cases" / name / "inputs"))
+    assert proc.returncode == 0, _why(proc)
+    proc = _refsoft("render", scene, *opts, "--out", str(tmp_path / "ref"))
+    assert proc.returncode == 0, _why(proc)
+    reused = [f["cube_maps_reused"] for f in json.loads((tmp_path / "ref" / "stats.json").read_text())["frames"]]
+    assert reused == ([[], [1]] if scene == "touching" else [[], []]), reused
+    proc = _glsl("run", str(tmp_path / "cases"), "--out", str(tmp_path / "port"), "--quiet")
+    assert proc.returncode == 0, _why(proc)
+    for f in ("frame_0000.npz", "frame_0001.npz"):
+        want, got = np.load(tmp_path / "ref" / f), np.load(tmp_path / "port" / name / f)
+        assert sorted(want.files) == sorted(got.files), (f, want.files, got.files)
+        for key in want.files:
+            assert want[key].dtype == got[key].dtype and want[key].tobytes() == got[key].tobytes(), (f, key)

@@ -20,7 +20,8 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="refsoft-glsl", description=__doc__.split("\n\n")[0].replace("``", ""))
     sub = parser.add_subparsers(dest="command", required=True)
     run = sub.add_parser("run", help="render golden cases from their inputs into a candidate folder")
-    run.add_argument("golden", help="a golden set (refsoft golden --out GOLDEN): each CASE/inputs/ is read")
+    run.add_argument("golden", help="a golden set (refsoft golden --out GOLDEN), or a folder of cases exported by "
+                     "refsoft export --out GOLDEN/CASE/inputs: each CASE/inputs/ is read")
     run.add_argument("--out", required=True, help="the candidate folder (CASE/frame_NNNN.npz, CASE/stats.json)")
     run.add_argument("--case", action="append", dest="cases", metavar="NAME",
                      help="render only this case (repeatable; default every case of the set)")

@@ -78,6 +78,7 @@ class EnvmapPipeline(Pipeline):
         self.cache = Cache()
         self.shading = shading_buffer(gl, case)
         self.cube_shading = shading_buffer(gl, case, background=(0.0, 0.0, 0.0))  # empty texels: colour 0
+        self.cubes = {}  # reflector -> (its meshes' identities, its last cube map)
 
     def render(self, frame):
         """Render one frame; returns ``(arrays, time_ms, iterations)`` (no iterations)."""
@@ -96,7 +97,18 @@ class EnvmapPipeline(Pipeline):
         arrays = {}
         for k in case.reflector_ids:
             t = time.perf_counter()
-            cube = self.cube_map(frame, data, k)
+            # the cube map depends on the world meshes only: kept while they are the same files
+            key = (tuple(id(frame.meshes[o["id"]]) for o in case.objects), id(frame.proxies.get(k)))
+            last = self.cubes.get(k)
+            if last is not None and last[0] == key:
+                cube = last[1]
+            else:
+                if last is not None:
+                    for v in last[1].values():
+                        if hasattr(v, "release"):
+                            v.release()
+                cube = self.cube_map(frame, data, k)
+            self.cubes[k] = (key, cube)
             gl.finish()
             times["envmap_build"] += _ms(t)
             t = time.perf_counter()
@@ -205,17 +217,26 @@ def _mesh(gl, mesh, k) -> MeshData:
 
 class PlainEnvmapPipeline(EnvmapPipeline):
     """The plain variant of :class:`EnvmapPipeline` (``--plain``), written the way a port usually
-    is: the cube's faces and the reflector drawn by GL itself (float32 vertices and matrices,
+    is: the main view and the cube's faces drawn by GL itself (float32 vertices and matrices,
     GL's clipping, coverage and ``smooth`` interpolation; ``plain.vert`` / ``plain.frag``), the
     reflected direction with GLSL's ``normalize`` and ``dot``, and the texel found by GL's own
     cube-map sampling (``textureLod`` of an integer cube texture, nearest), so GL's face
-    selection and face coordinates."""
+    selection and face coordinates. The reflector's surface (the rays' positions and normals)
+    is the exact variant's: ``refsoft check`` judges the texels against the oracle's own rays,
+    with ties of a few float32 ULP only (docs/ports.md section 7)."""
 
     exact = False
 
     def __init__(self, gl, case):
         super().__init__(gl, case)
         self.gl_rasters = {}
+        self.view_ids = None
+
+    def main_view(self, frame, data) -> dict:
+        """The main view drawn by GL itself, as the plain variant of the vertex search draws it."""
+        from .plain import PlainPipeline
+
+        return PlainPipeline.main_view(self, frame, data)
 
     def gl_raster(self, w, h, mode):
         from .plain import GLRaster
@@ -250,6 +271,4 @@ class PlainEnvmapPipeline(EnvmapPipeline):
         cube["index"].use(location=0)
         prog = self.gl.compute("envmap", DOUBLE=int(self.double), EXACT=0)
         prog["texel_index"].value = 0
-        out = super().lookup(frame, view, cube, k, face, texel)
-        cube["index"].release()
-        return out
+        return super().lookup(frame, view, cube, k, face, texel)

@@ -50,10 +50,24 @@ def write_json(path, data):
 
 
 def case_methods(golden) -> dict:
-    """Each case of a golden set (manifest order) -> its reflection method (its options')."""
-    with open(os.path.join(golden, "manifest.json")) as fh:
+    """Each case of a golden set (manifest order) -> its reflection method (its options'). A
+    folder without ``manifest.json`` is read as cases exported by ``refsoft export`` into
+    ``FOLDER/CASE/inputs/`` (name order)."""
+    path = os.path.join(golden, "manifest.json")
+    if not os.path.exists(path):
+        names = sorted(n for n in os.listdir(golden) if os.path.isfile(os.path.join(golden, n, "inputs", "case.json")))
+        if not names:
+            raise ValueError("neither a manifest.json nor CASE/inputs/case.json folders")
+        return {n: read_case_options(os.path.join(golden, n, "inputs")).get("method", "walk") for n in names}
+    with open(path) as fh:
         manifest = json.load(fh)
     return {c["name"]: c["options"].get("method", "walk") for c in manifest["cases"]}
+
+
+def read_case_options(folder) -> dict:
+    """The ``options`` of ``folder/case.json``."""
+    with open(os.path.join(folder, "case.json")) as fh:
+        return json.load(fh)["options"]
 
 
 def run_case(gl, golden, name, out, plain=False, log=None) -> dict:
