@@ -297,13 +297,14 @@ def test_a_cube_face_with_its_axes_swapped_is_caught(golden, tmp_path):
     assert "envmap_id_1" in failed, failed
 
 
-@pytest.mark.parametrize("scene", ["touching", "balls"])
-def test_exported_environment_map_frames_are_refsofts_bit_for_bit(llvmpipe, scene, tmp_path):
+@pytest.mark.parametrize("scene, precision", [("touching", "float32"), ("balls", "float32"), ("touching", "float64")])
+def test_exported_environment_map_frames_are_refsofts_bit_for_bit(llvmpipe, scene, precision, tmp_path):
     """Two coherent frames exported by ``refsoft export`` into a folder without a manifest (the
     port reads ``CASE/inputs/``): on ``touching`` nothing moves and both peers keep the cube map
     of frame 0, on ``balls`` the objects move and both rebuild it; every array of both frames is
-    refsoft's."""
-    opts = ["--method", "envmap", "--frames", "2", "--width", "64", "--height", "48", "--envmap-resolution", "16"]
+    refsoft's, in float32 and in float64 (the golden set's cases are float32)."""
+    opts = ["--method", "envmap", "--frames", "2", "--width", "64", "--height", "48", "--envmap-resolution", "16",
+            "--precision", precision]
     name = f"{scene}_envmap"
     proc = _refsoft("export", scene, *opts, "--out", str(tmp_path / "cases" / name / "inputs"))
     assert proc.returncode == 0, _why(proc)
