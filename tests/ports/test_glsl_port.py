@@ -319,3 +319,41 @@ def test_exported_environment_map_frames_are_refsofts_bit_for_bit(llvmpipe, scen
         assert sorted(want.files) == sorted(got.files), (f, want.files, got.files)
         for key in want.files:
             assert want[key].dtype == got[key].dtype and want[key].tobytes() == got[key].tobytes(), (f, key)
+
+
+def test_layered_depth_textures_built_by_peeling_are_the_golden_ones(golden, tmp_path):
+    """The LDT build of the port (``ldt_build.py``: depth peeling through the exact raster, not
+    yet in ``refsoft-glsl run``) on every reflected object of the golden set's ``ldt`` cases:
+    every array of ``ldt_J.npz`` bit for bit (one, two and four layers; closed and open meshes)."""
+    golden_dir, _, declared = golden
+    code = """
+import json, sys, numpy as np
+from refsoft_glsl.context import context
+from refsoft_glsl.inputs import read_ply
+from refsoft_glsl.ldt_build import build_textures
+gl, golden, out = context(), sys.argv[1], sys.argv[2]
+for case in sys.argv[3:]:
+    d = json.load(open(f"{golden}/{case}/inputs/case.json"))
+    layers = 8 if d["options"].get("ldt_layers", "all") == "all" else 1
+    for o in d["objects"]:
+        if "model" in o:
+            got = build_textures(gl, read_ply(f"{golden}/{case}/inputs/{o['model']}"), d["options"]["ldt_resolution"],
+                                 layers)
+            np.savez(f"{out}/{case}_ldt_{o['id']}.npz", **got)
+"""
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(REPO / "ports" / "glsl"), env.get("PYTHONPATH")) if p)
+    proc = _run([sys.executable, "-c", code, str(golden_dir), str(tmp_path), *declared], env=env)
+    assert proc.returncode == 0, _why(proc)
+    wanted = sorted(f"{case}_{p.name}" for case in declared for p in (golden_dir / case).glob("ldt_*.npz"))
+    assert len(wanted) >= 9 and sorted(p.name for p in tmp_path.glob("*.npz")) == wanted, wanted
+    layers = set()
+    for name in wanted:
+        case, file = name.rsplit("_ldt_", 1)
+        want, got = np.load(golden_dir / case / f"ldt_{file}"), np.load(tmp_path / name)
+        assert sorted(want.files) == sorted(got.files), name
+        for key in want.files:
+            assert want[key].dtype == got[key].dtype and want[key].shape == got[key].shape, (name, key)
+            assert want[key].tobytes() == got[key].tobytes(), (name, key)
+        layers.add(int(want["depth"].shape[1]))
+    assert 1 in layers and max(layers) >= 4, layers
