@@ -56,11 +56,12 @@ def llvmpipe():
 
 
 #: The reflection methods the GLSL port implements; it declares the others in ported.json.
-PORTED_METHODS = ("walk", "hierarchy", "envmap")
-DECLARED_METHODS = ["ldt"]
+PORTED_METHODS = ("walk", "hierarchy", "envmap", "ldt")
+DECLARED_METHODS = []
 #: The stages each method's frames time (stats.json), besides ``total``.
 STAGES = {"walk": {"main", "gbuffer", "search", "virtual", "composite"},
-          "envmap": {"main", "envmap_build", "envmap_lookup", "composite"}}
+          "envmap": {"main", "envmap_build", "envmap_lookup", "composite"},
+          "ldt": {"main", "ldt_build", "regions", "ldt_search", "composite"}}
 
 
 def _doc_commands():
@@ -93,8 +94,8 @@ def golden(golden_set, llvmpipe):
     method = {c["name"]: c["options"].get("method", "walk") for c in manifest["cases"]}
     names = [n for n, m in method.items() if m in PORTED_METHODS]
     declared = [n for n, m in method.items() if m in DECLARED_METHODS]
-    assert len(names) >= 23 and len(declared) >= 5 and len(names) + len(declared) == len(method), method
-    assert "touching_envmap" in names and "cube_edge_envmap" in names, names
+    assert len(names) >= 28 and not declared and len(names) == len(method), method
+    assert "touching_envmap" in names and "balls_ldt" in names, names
     return golden_set, names, declared
 
 
@@ -147,11 +148,15 @@ def _check(golden, candidate, report, *flags):
 
 
 def _declared_not_ported(golden, proc, summary):
-    """Every case the port declares is reported not ported, in the summary and the output."""
+    """Every case the port declares is reported not ported, in the summary and the output (it
+    declares none: every case is judged)."""
     gaps = summary["not_ported"]["cases"]
     assert sorted(gaps) == sorted(golden[2]), gaps
     assert all("declared not ported" in why for why in gaps.values()), gaps
-    assert f"not ported: {len(golden[2])} case(s)" in proc.stdout, proc.stdout[-2000:]
+    if golden[2]:
+        assert f"not ported: {len(golden[2])} case(s)" in proc.stdout, proc.stdout[-2000:]
+    else:
+        assert "case(s), declared in" not in proc.stdout, proc.stdout[-2000:]
 
 
 def test_the_documented_commands_need_no_case_list():
@@ -169,12 +174,18 @@ def test_exact_variant_is_bit_identical_on_every_golden_case(golden, exact):
     golden_dir, names, _ = golden
     # every case it ports and its declaration, nothing else
     assert sorted(p.name for p in exact.iterdir()) == sorted(names + ["ported.json"])
-    assert json.loads((exact / "ported.json").read_text())["not_ported"] == {"methods": DECLARED_METHODS,
-                                                                          "kinds": ["images"]}
+    assert json.loads((exact / "ported.json").read_text())["not_ported"] == {"kinds": ["images"]}
     differ = []
     for name in names:
         frames = _frames(golden_dir, name)
         assert frames and _frames(exact, name) == frames, name
+        textures = sorted(p.name for p in (golden_dir / name).glob("ldt_*.npz"))
+        assert sorted(p.name for p in (exact / name).glob("ldt_*.npz")) == textures, name
+        for f in textures:  # the layered depth textures, once per case
+            want, got = np.load(golden_dir / name / f), np.load(exact / name / f)
+            assert sorted(want.files) == sorted(got.files), (name, f)
+            differ += [f"{name}/{f}:{k}" for k in want.files if want[k].dtype != got[k].dtype
+                       or want[k].shape != got[k].shape or want[k].tobytes() != got[k].tobytes()]
         for f in frames:
             want, got = np.load(golden_dir / name / f), np.load(exact / name / f)
             expected = [k for k in want.files if not k.startswith(ORACLE_ONLY + NOT_PORTED)]
@@ -202,14 +213,14 @@ def test_exact_variant_passes_the_default_rules_with_no_tie(golden, exact, tmp_p
 
 
 def test_a_case_missing_without_a_declaration_fails(golden, exact, tmp_path):
-    """The port's candidate without its ``touching_envmap`` folder (a method its ported.json does
-    not declare): that case is missing and check fails; the declared ``ldt`` case stays not
-    ported."""
+    """A candidate of the port's first case alone, whose ported.json declares method ``ldt``:
+    ``touching_envmap``, not declared, is missing and check fails; ``balls_ldt`` is not ported."""
     golden_dir, names, declared = golden
-    envmap, ldt = ["touching_envmap"], declared
+    envmap, ldt = ["touching_envmap"], ["balls_ldt"]
     cand = tmp_path / "cand"
     shutil.copytree(exact / names[0], cand / names[0])
-    shutil.copy(exact / "ported.json", cand / "ported.json")
+    (cand / "ported.json").write_text(json.dumps({"format": "refsoft-ported-1",
+                                                  "not_ported": {"methods": ["ldt"], "kinds": ["images"]}}))
     cases = [arg for n in (names[0], envmap[0], ldt[0]) for arg in ("--case", n)]
     proc = _refsoft("check", str(golden_dir), str(cand), "--out", str(tmp_path / "report"), *cases)
     assert proc.returncode == 1, _why(proc)
@@ -230,7 +241,7 @@ def test_stats_record_the_renderer_and_per_stage_milliseconds(golden, exact, llv
         assert [f"frame_{f['frame']:04d}.npz" for f in stats["frames"]] == _frames(golden_dir, name)
         for f in stats["frames"]:
             t = f["time_ms"]
-            method = "envmap" if stats["options"]["method"] == "envmap" else "walk"
+            method = stats["options"]["method"] if stats["options"]["method"] in STAGES else "walk"
             assert STAGES[method] | {"total"} <= set(t), name
             assert t["total"] > 0 and t["total"] >= max(v for k, v in t.items() if k != "total")
 
@@ -321,39 +332,22 @@ def test_exported_environment_map_frames_are_refsofts_bit_for_bit(llvmpipe, scen
             assert want[key].dtype == got[key].dtype and want[key].tobytes() == got[key].tobytes(), (f, key)
 
 
-def test_layered_depth_textures_built_by_peeling_are_the_golden_ones(golden, tmp_path):
-    """The LDT build of the port (``ldt_build.py``: depth peeling through the exact raster, not
-    yet in ``refsoft-glsl run``) on every reflected object of the golden set's ``ldt`` cases:
-    every array of ``ldt_J.npz`` bit for bit (one, two and four layers; closed and open meshes)."""
-    golden_dir, _, declared = golden
-    code = """
-import json, sys, numpy as np
-from refsoft_glsl.context import context
-from refsoft_glsl.inputs import read_ply
-from refsoft_glsl.ldt_build import build_textures
-gl, golden, out = context(), sys.argv[1], sys.argv[2]
-for case in sys.argv[3:]:
-    d = json.load(open(f"{golden}/{case}/inputs/case.json"))
-    layers = 8 if d["options"].get("ldt_layers", "all") == "all" else 1
-    for o in d["objects"]:
-        if "model" in o:
-            got = build_textures(gl, read_ply(f"{golden}/{case}/inputs/{o['model']}"), d["options"]["ldt_resolution"],
-                                 layers)
-            np.savez(f"{out}/{case}_ldt_{o['id']}.npz", **got)
-"""
+def test_an_ldt_face_with_its_axes_swapped_is_caught(golden, tmp_path):
+    """A mutant of the exact variant whose textures' +X face is built with its s and t axes
+    swapped (the build's face table; the search keeps refsoft's): ``refsoft check`` fails the
+    textures and the search."""
+    golden_dir = golden[0]
+    out = tmp_path / "mutant"
+    code = ("import sys; from refsoft_glsl import cli, ldt_build; t = list(ldt_build.FACE_TABLE); "
+            "t[0] = (t[0][2], t[0][3], t[0][0], t[0][1]); ldt_build.FACE_TABLE = tuple(t); "
+            "sys.exit(cli.main(sys.argv[1:]))")
     env = dict(os.environ)
     env["PYTHONPATH"] = os.pathsep.join(p for p in (str(REPO / "ports" / "glsl"), env.get("PYTHONPATH")) if p)
-    proc = _run([sys.executable, "-c", code, str(golden_dir), str(tmp_path), *declared], env=env)
+    proc = _run([sys.executable, "-c", code, "run", str(golden_dir), "--out", str(out), "--quiet",
+                 "--case", "balls_ldt"], env=env)
     assert proc.returncode == 0, _why(proc)
-    wanted = sorted(f"{case}_{p.name}" for case in declared for p in (golden_dir / case).glob("ldt_*.npz"))
-    assert len(wanted) >= 9 and sorted(p.name for p in tmp_path.glob("*.npz")) == wanted, wanted
-    layers = set()
-    for name in wanted:
-        case, file = name.rsplit("_ldt_", 1)
-        want, got = np.load(golden_dir / case / f"ldt_{file}"), np.load(tmp_path / name)
-        assert sorted(want.files) == sorted(got.files), name
-        for key in want.files:
-            assert want[key].dtype == got[key].dtype and want[key].shape == got[key].shape, (name, key)
-            assert want[key].tobytes() == got[key].tobytes(), (name, key)
-        layers.add(int(want["depth"].shape[1]))
-    assert 1 in layers and max(layers) >= 4, layers
+    proc = _refsoft("check", str(golden_dir), str(out), "--out", str(tmp_path / "report"), "--case", "balls_ldt")
+    assert proc.returncode == 1, _why(proc)
+    summary = json.loads((tmp_path / "report" / "summary.json").read_text())
+    failed = {f["kind"] for f in summary["findings"] if f["status"] == "fail"}
+    assert "ldt_texture" in failed, failed

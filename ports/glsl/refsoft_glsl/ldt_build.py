@@ -98,11 +98,12 @@ def _mirrored(a, f):
     return a[..., ::-1, :] if f // 2 == 1 else a[..., :, ::-1]
 
 
-def pair_back_depths(depth, count_raw, is_open):
-    """``back``, ``count`` and ``mismatch`` (refsoft's ``ldt.build.pair_back_depths``, float32)."""
+def pair_back_depths(depth, count_raw, is_open, dtype=np.float32):
+    """``back``, ``count`` and ``mismatch`` (refsoft's ``ldt.build.pair_back_depths``), ``back``
+    computed in ``dtype``."""
     L = depth.shape[1]
-    one = np.float32(1)
-    back = np.full(depth.shape, one, dtype=np.float32)
+    one = np.dtype(dtype).type(1)
+    back = np.full(depth.shape, one, dtype=dtype)
     if is_open:
         return back, count_raw.copy(), np.zeros(count_raw.shape, dtype=bool)
     count = np.empty_like(count_raw)
@@ -115,7 +116,7 @@ def pair_back_depths(depth, count_raw, is_open):
         mismatch[f] = own != lo
         for j in range(L):
             k = np.clip(lo - 1 - j, 0, L - 1)
-            d = np.take_along_axis(other, k[None], axis=0)[0]
+            d = np.take_along_axis(other, k[None], axis=0)[0].astype(dtype)
             back[f, j] = np.where(j < count[f], one - d, one)
     return back, count, mismatch
 

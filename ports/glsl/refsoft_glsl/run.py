@@ -75,7 +75,11 @@ def run_case(gl, golden, name, out, plain=False, log=None) -> dict:
     from .pipeline import Pipeline
 
     case = read_case(os.path.join(golden, name, "inputs"))
-    if case.options.get("method") == "envmap":
+    if case.options.get("method") == "ldt":
+        from .ldt import LdtPipeline, PlainLdtPipeline
+
+        cls = PlainLdtPipeline if plain else LdtPipeline
+    elif case.options.get("method") == "envmap":
         from .envmap import EnvmapPipeline, PlainEnvmapPipeline
 
         cls = PlainEnvmapPipeline if plain else EnvmapPipeline
@@ -93,6 +97,8 @@ def run_case(gl, golden, name, out, plain=False, log=None) -> dict:
                        "iterations": iterations})
         if log:
             log(f"{name} frame {fr.index}: {times['total']:.1f} ms")
+    for file, arrays in getattr(pipe, "run_files", dict)().items():
+        write_npz(os.path.join(folder, f"{file}.npz"), arrays)
     means = [np.mean([v["mean"] for v in f["iterations"].values()]) for f in frames if f["iterations"]]
     stats = {"port": "glsl", "variant": "plain" if plain else "exact", "gl": gl_versions(gl),
              "options": case.options, "frames": frames,
@@ -107,7 +113,7 @@ def run_case(gl, golden, name, out, plain=False, log=None) -> dict:
 #: What the port does not port (refsoft's ``ported.json``, format ``refsoft-ported-1``): the
 #: layered depth textures (every case of method ``ldt``), and every image of every vertex (kind
 #: ``images``: the per-image arrays and the flag SEVERAL).
-NOT_PORTED = {"methods": ["ldt"], "kinds": ["images"]}
+NOT_PORTED = {"kinds": ["images"]}
 
 
 def write_ported(out):
