@@ -308,24 +308,36 @@ def test_a_cube_face_with_its_axes_swapped_is_caught(golden, tmp_path):
     assert "envmap_id_1" in failed, failed
 
 
-@pytest.mark.parametrize("scene, precision", [("touching", "float32"), ("balls", "float32"), ("touching", "float64")])
-def test_exported_environment_map_frames_are_refsofts_bit_for_bit(llvmpipe, scene, precision, tmp_path):
+ENVMAP = ["--method", "envmap", "--envmap-resolution", "16"]
+LDT = ["--method", "ldt", "--ldt-resolution", "16"]
+
+
+@pytest.mark.parametrize("scene, options", [
+    ("touching", ENVMAP), ("balls", ENVMAP), ("touching", ENVMAP + ["--precision", "float64"]),
+    ("hollow_box", LDT + ["--ldt-linear", "texel", "--ldt-faces", "entry"]),
+    ("cup", LDT + ["--ldt-regions", "none", "--ldt-layers", "1", "--ldt-tau", "0.5"])])
+def test_exported_frames_of_the_comparison_methods_are_refsofts_bit_for_bit(llvmpipe, scene, options, tmp_path):
     """Two coherent frames exported by ``refsoft export`` into a folder without a manifest (the
-    port reads ``CASE/inputs/``): on ``touching`` nothing moves and both peers keep the cube map
-    of frame 0, on ``balls`` the objects move and both rebuild it; every array of both frames is
-    refsoft's, in float32 and in float64 (the golden set's cases are float32)."""
-    opts = ["--method", "envmap", "--frames", "2", "--width", "64", "--height", "48", "--envmap-resolution", "16",
-            "--precision", precision]
-    name = f"{scene}_envmap"
+    port reads ``CASE/inputs/``), with options the golden set does not hold: the environment map
+    on ``touching`` (nothing moves: both peers keep the cube map of frame 0), on ``balls`` (the
+    objects move: both rebuild it) and in float64; the LDT with one step per texel and the entry
+    face only, and without the cone test, with one layer and another tau. Every array of both
+    frames, and the LDT's textures, are refsoft's."""
+    opts = [*options, "--frames", "2", "--width", "64", "--height", "48"]
+    name = f"{scene}_case"
     proc = _refsoft("export", scene, *opts, "--out", str(tmp_path / "cases" / name / "inputs"))
     assert proc.returncode == 0, _why(proc)
     proc = _refsoft("render", scene, *opts, "--out", str(tmp_path / "ref"))
     assert proc.returncode == 0, _why(proc)
-    reused = [f["cube_maps_reused"] for f in json.loads((tmp_path / "ref" / "stats.json").read_text())["frames"]]
-    assert reused == ([[], [1]] if scene == "touching" else [[], []]), reused
+    if scene in ("touching", "balls"):
+        reused = [f["cube_maps_reused"] for f in json.loads((tmp_path / "ref" / "stats.json").read_text())["frames"]]
+        assert reused == ([[], [1]] if scene == "touching" else [[], []]), reused
     proc = _glsl("run", str(tmp_path / "cases"), "--out", str(tmp_path / "port"), "--quiet")
     assert proc.returncode == 0, _why(proc)
-    for f in ("frame_0000.npz", "frame_0001.npz"):
+    files = sorted(p.name for p in (tmp_path / "ref").glob("*.npz"))
+    assert "frame_0001.npz" in files and sorted(p.name for p in (tmp_path / "port" / name).glob("*.npz")) == files
+    assert any(f.startswith("ldt_") for f in files) == ("ldt" in options), files
+    for f in files:
         want, got = np.load(tmp_path / "ref" / f), np.load(tmp_path / "port" / name / f)
         assert sorted(want.files) == sorted(got.files), (f, want.files, got.files)
         for key in want.files:
