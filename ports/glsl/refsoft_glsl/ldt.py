@@ -15,9 +15,9 @@ import time
 
 import numpy as np
 
-from .envmap import EnvmapPipeline, _mesh
+from .envmap import _mesh
 from .ldt_build import MAX_LAYERS, build_textures, pair_back_depths
-from .pipeline import Cache, FrameData, _ms, shading_buffer
+from .pipeline import Cache, FrameData, Pipeline, _ms, shading_buffer
 from .plain import PlainPipeline
 from .raster import params_array
 
@@ -117,7 +117,7 @@ def _inv3(m):
     return adj / d
 
 
-class LdtPipeline(EnvmapPipeline):
+class LdtPipeline(Pipeline):
     """The layered depth textures on llvmpipe (exact): one case, frame after frame."""
 
     exact = True
