@@ -363,3 +363,26 @@ def test_an_ldt_face_with_its_axes_swapped_is_caught(golden, tmp_path):
     summary = json.loads((tmp_path / "report" / "summary.json").read_text())
     failed = {f["kind"] for f in summary["findings"] if f["status"] == "fail"}
     assert "ldt_texture" in failed, failed
+
+
+def test_a_declared_method_is_skipped_and_reported_not_ported(golden, tmp_path):
+    """The port with ``ldt`` added to its declaration (``run.NOT_PORTED``): ``refsoft-glsl run``
+    skips the ``ldt`` case with one line, writes the declaration and exits 0; ``refsoft check``
+    lists the case as not ported and passes."""
+    golden_dir, names, _ = golden
+    out = tmp_path / "cand"
+    code = ("import sys; from refsoft_glsl import cli, run; run.NOT_PORTED['methods'] = ['ldt']; "
+            "sys.exit(cli.main(sys.argv[1:]))")
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(REPO / "ports" / "glsl"), env.get("PYTHONPATH")) if p)
+    cases = [arg for n in (names[0], "balls_ldt") for arg in ("--case", n)]
+    proc = _run([sys.executable, "-c", code, "run", str(golden_dir), "--out", str(out), "--quiet", *cases], env=env)
+    assert proc.returncode == 0, _why(proc)
+    assert proc.stderr.splitlines() == ["case balls_ldt: method 'ldt' not ported (declared in ported.json)"], proc.stderr
+    assert sorted(p.name for p in out.iterdir()) == sorted([names[0], "ported.json"])
+    assert json.loads((out / "ported.json").read_text())["not_ported"] == {"kinds": ["images"], "methods": ["ldt"]}
+    proc = _refsoft("check", str(golden_dir), str(out), "--out", str(tmp_path / "report"), *cases)
+    assert proc.returncode == 0, _why(proc)
+    summary = json.loads((tmp_path / "report" / "summary.json").read_text())
+    assert list(summary["not_ported"]["cases"]) == ["balls_ldt"] and summary["counts"]["missing"] == 0, summary
+    assert "not ported: 1 case(s)" in proc.stdout, proc.stdout[-2000:]

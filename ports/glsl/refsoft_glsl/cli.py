@@ -1,5 +1,6 @@
 """``refsoft-glsl run GOLDEN --out CANDIDATE [--case NAME ...] [--plain]``: the GLSL port of
-the main method and the environment map on Mesa llvmpipe, run on a golden set's inputs.
+the main method and of both comparison methods (the layered depth textures, the environment map)
+on Mesa llvmpipe, run on a golden set's inputs.
 ``refsoft-glsl info``: the renderer, Mesa and LLVM versions it runs on (exit 2 when no llvmpipe
 EGL context can be made).
 

@@ -1,9 +1,8 @@
 """The layered depth textures' build (refsoft's ``docs/ldt.md``, "The build") on llvmpipe, by
 depth peeling through the exact raster (``raster.py``): the textures of ``ldt_J.npz``.
 
-Not yet part of ``refsoft-glsl run``: the port declares method ``ldt`` not ported until its
-search is ported too. :func:`build_textures` builds one object's textures from its model-space
-mesh (``model_J.ply`` of a case's inputs).
+:func:`build_textures` builds one object's textures from its model-space mesh
+(``model_J.ply`` of a case's inputs), once per case (:class:`refsoft_glsl.ldt.LdtPipeline`).
 
 Once per object: the cube around the mesh (the centre of its bounding box, half side
 ``0.5 Lmax R / (R - 2)``), the points ``q = (p - c) / half`` on the host in float64, and per face

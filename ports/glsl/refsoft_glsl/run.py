@@ -110,9 +110,9 @@ def run_case(gl, golden, name, out, plain=False, log=None) -> dict:
     return stats
 
 
-#: What the port does not port (refsoft's ``ported.json``, format ``refsoft-ported-1``): the
-#: layered depth textures (every case of method ``ldt``), and every image of every vertex (kind
-#: ``images``: the per-image arrays and the flag SEVERAL).
+#: What the port does not port (refsoft's ``ported.json``, format ``refsoft-ported-1``): every
+#: image of every vertex (kind ``images``: the per-image arrays and the flag SEVERAL). A method
+#: listed under ``"methods"`` here would have its cases skipped by ``refsoft-glsl run``.
 NOT_PORTED = {"kinds": ["images"]}
 
 
