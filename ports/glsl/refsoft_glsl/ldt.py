@@ -221,7 +221,7 @@ class LdtPipeline(Pipeline):
             rows, cols = np.nonzero(stencil)
             res = self.search(frame, surf, rows, cols, tri_map[rows, cols], table)
             vcol, vid = self.shade_hits(frame, res, rows, cols)
-            self.store(pixels, res, surf, rows, cols)
+            self.store(pixels, res, rows, cols)
             times["ldt_search"] += _ms(t)
             t = time.perf_counter()
             rho = float(case.objects[k - 1]["reflectivity"])
@@ -353,7 +353,8 @@ class LdtPipeline(Pipeline):
         vid[rows, cols] = ids
         return vcol, vid
 
-    def store(self, pixels, res, surf, rows, cols):
+    def store(self, pixels, res, rows, cols):
+        """The search's results into the frame-wide per-pixel arrays at ``rows``, ``cols``."""
         values = {"ldt_ray_origin": res["P"], "ldt_ray_dir": res["ray"], "ldt_hit_position": res["hit"],
                   "ldt_hit_distance": res["distance"], "ldt_face": res["face"], "ldt_layer": res["layer"],
                   "ldt_texel": np.stack([res["row"], res["col"]], axis=1), "ldt_residual": res["residual"],
