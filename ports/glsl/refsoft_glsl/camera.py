@@ -52,3 +52,46 @@ def gbuffer_camera(frame, options: dict):
         fov = math.degrees(2.0 * math.atan(widen * math.tan(math.radians(float(cam["fov_y"])) / 2.0)))
         proj = projection_matrix(cam, w, h, fov_y=fov)
     return proj @ frame.view, w, h
+
+
+def _inverse(matrix) -> list:
+    """The inverse of a 4x4 matrix by Gauss-Jordan elimination with partial pivoting (the first
+    of equal magnitudes), in Python floats: refsoft's ``linalg.inv``, operation for operation,
+    so that the result is the oracle's bit for bit."""
+    a = [[float(x) for x in row] for row in np.asarray(matrix, dtype=np.float64)]
+    n = len(a)
+    out = [[1.0 if i == j else 0.0 for j in range(n)] for i in range(n)]
+    for col in range(n):
+        pivot = max(range(col, n), key=lambda r: abs(a[r][col]))
+        if a[pivot][col] == 0.0 or not math.isfinite(a[pivot][col]):
+            raise ValueError("singular view-projection matrix")
+        a[col], a[pivot] = a[pivot], a[col]
+        out[col], out[pivot] = out[pivot], out[col]
+        p = a[col][col]
+        a[col] = [x / p for x in a[col]]
+        out[col] = [x / p for x in out[col]]
+        for r in range(n):
+            if r != col and a[r][col] != 0.0:
+                f = a[r][col]
+                a[r] = [x - f * y for x, y in zip(a[r], a[col])]
+                out[r] = [x - f * y for x, y in zip(out[r], out[col])]
+    return out
+
+
+def view_direction(view_proj, width: int, height: int) -> np.ndarray:
+    """An orthographic camera's unit view direction, float64 (3,), as refsoft's camera gives it
+    (the ray through pixel (0, 0)): the pixel's centre unprojected at window depth -1 and 1 by
+    the inverse view-projection (rows times columns summed left to right), the far point minus
+    the near one, divided by its length ``sqrt((x x + y y) + z z)``."""
+    x = (0.0 + 0.5) / width * 2.0 - 1.0
+    y = (height - 0.0 - 0.5) / height * 2.0 - 1.0
+    inv = _inverse(view_proj)
+
+    def unproject(z):
+        v = [x, y, z, 1.0]
+        h = [((v[0] * m[0] + v[1] * m[1]) + v[2] * m[2]) + v[3] * m[3] for m in inv]
+        return [h[i] / h[3] for i in range(3)]
+
+    near, far = unproject(-1.0), unproject(1.0)
+    d = np.array([far[i] - near[i] for i in range(3)])
+    return d / math.sqrt((d[0] * d[0] + d[1] * d[1]) + d[2] * d[2])

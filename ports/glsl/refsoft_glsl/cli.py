@@ -1,6 +1,12 @@
 """``refsoft-glsl run GOLDEN --out CANDIDATE [--case NAME ...] [--plain]``: the GLSL port of
-the main method on Mesa llvmpipe, run on a golden set's inputs. ``refsoft-glsl info``: the
-renderer, Mesa and LLVM versions it runs on (exit 2 when no llvmpipe EGL context can be made)."""
+the main method and of both comparison methods (the layered depth textures, the environment map)
+on Mesa llvmpipe, run on a golden set's inputs.
+``refsoft-glsl info``: the renderer, Mesa and LLVM versions it runs on (exit 2 when no llvmpipe
+EGL context can be made).
+
+``run`` declares what the port does not port in ``CANDIDATE/ported.json`` (refsoft's format
+``refsoft-ported-1``) and skips the cases of the methods it declares, one line each; it exits 0
+when every case it rendered succeeded."""
 
 from __future__ import annotations
 
@@ -15,7 +21,8 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(prog="refsoft-glsl", description=__doc__.split("\n\n")[0].replace("``", ""))
     sub = parser.add_subparsers(dest="command", required=True)
     run = sub.add_parser("run", help="render golden cases from their inputs into a candidate folder")
-    run.add_argument("golden", help="a golden set (refsoft golden --out GOLDEN): each CASE/inputs/ is read")
+    run.add_argument("golden", help="a golden set (refsoft golden --out GOLDEN), or a folder of cases exported by "
+                     "refsoft export --out GOLDEN/CASE/inputs: each CASE/inputs/ is read")
     run.add_argument("--out", required=True, help="the candidate folder (CASE/frame_NNNN.npz, CASE/stats.json)")
     run.add_argument("--case", action="append", dest="cases", metavar="NAME",
                      help="render only this case (repeatable; default every case of the set)")
@@ -26,7 +33,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     from .context import GLUnavailable, context
     from .inputs import InputError
-    from .run import case_names, gl_versions, run_case, write_ported
+    from .run import NOT_PORTED, case_methods, gl_versions, run_case, write_ported
 
     if args.command == "info":
         try:
@@ -39,14 +46,14 @@ def main(argv=None) -> int:
         return 0
 
     try:
-        names = case_names(args.golden)
+        methods = case_methods(args.golden)
     except (OSError, ValueError, KeyError) as exc:
         print(f"refsoft-glsl: error: {args.golden} is not a golden set ({exc})", file=sys.stderr)
         return 2
-    chosen = args.cases or names
-    unknown = [c for c in chosen if c not in names]
+    chosen = args.cases or list(methods)
+    unknown = [c for c in chosen if c not in methods]
     if unknown:
-        print(f"refsoft-glsl: error: unknown case {unknown[0]!r} (cases: {', '.join(names)})", file=sys.stderr)
+        print(f"refsoft-glsl: error: unknown case {unknown[0]!r} (cases: {', '.join(methods)})", file=sys.stderr)
         return 2
     try:
         gl = context()
@@ -60,7 +67,13 @@ def main(argv=None) -> int:
     t0 = time.perf_counter()
     failed = []
     write_ported(args.out)
+    skipped = 0
     for name in chosen:
+        if methods[name] in NOT_PORTED.get("methods", ()):
+            # declared, so refsoft check reports the case as not ported, not missing
+            print(f"case {name}: method {methods[name]!r} not ported (declared in ported.json)", file=sys.stderr)
+            skipped += 1
+            continue
         try:
             run_case(gl, args.golden, name, args.out, plain=args.plain, log=log)
         except NotImplementedError as exc:
@@ -70,7 +83,8 @@ def main(argv=None) -> int:
             print(f"refsoft-glsl: error: {exc}", file=sys.stderr)
             return 2
     if log:
-        log(f"{len(chosen) - len(failed)} cases in {time.perf_counter() - t0:.1f} s into {os.fspath(args.out)}")
+        done = len(chosen) - len(failed) - skipped
+        log(f"{done} cases in {time.perf_counter() - t0:.1f} s into {os.fspath(args.out)}")
     return 1 if failed else 0
 
 

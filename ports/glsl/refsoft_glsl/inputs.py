@@ -67,7 +67,8 @@ def read_ply(path) -> Mesh:
 @dataclass(eq=False)
 class Frame:
     """One frame of a case: its index, the view camera's record (``case.json``) and float64
-    matrices, the world mesh of every object and the closed proxies, by object id."""
+    matrices, the world mesh of every object and the closed proxies, by object id; for method
+    ``ldt`` each reflected object's transform and world-to-cube matrix."""
 
     index: int
     camera: dict
@@ -77,11 +78,14 @@ class Frame:
     eye: np.ndarray
     meshes: dict
     proxies: dict
+    transforms: dict = field(default_factory=dict)     # object id -> model to world (method ldt)
+    world_to_cube: dict = field(default_factory=dict)  # object id -> W_K, float64 (method ldt)
 
 
 @dataclass(eq=False)
 class Case:
-    """A case: its name, image size, options, shading, objects and frames (in render order)."""
+    """A case: its name, image size, options, shading, objects, frames (in render order) and the
+    reflected objects' model-space meshes (``model_K.ply``, cases of method ``ldt``)."""
 
     name: str
     width: int
@@ -90,6 +94,7 @@ class Case:
     shading: dict
     objects: list
     frames: list = field(default_factory=list)
+    models: dict = field(default_factory=dict)   # object id -> model-space Mesh (method ldt)
 
     @property
     def reflector_ids(self) -> list:
@@ -130,6 +135,7 @@ def read_case(folder) -> Case:
     if [o["id"] for o in objects] != list(range(1, len(objects) + 1)):
         raise InputError(f"{path}: object ids must be 1..{len(objects)}")
     case = Case(data["case"], int(data["width"]), int(data["height"]), data["options"], data["shading"], objects)
+    case.models = {int(o["id"]): mesh(o["model"]) for o in objects if "model" in o}
     for fr in data["frames"]:
         cam = fr["camera"]
         meshes = {int(k): mesh(n) for k, n in fr["meshes"].items()}
@@ -138,5 +144,7 @@ def read_case(folder) -> Case:
         case.frames.append(Frame(int(fr["frame"]), cam, _matrix(cam["view"], "view"),
                                  _matrix(cam["projection_matrix"], "projection_matrix"),
                                  _matrix(cam["view_proj"], "view_proj"), np.asarray(cam["eye"], dtype=np.float64),
-                                 meshes, {int(k): mesh(n) for k, n in fr.get("proxies", {}).items()}))
+                                 meshes, {int(k): mesh(n) for k, n in fr.get("proxies", {}).items()},
+                                 {int(k): _matrix(m, "transforms") for k, m in fr.get("transforms", {}).items()},
+                                 {int(k): _matrix(m, "world_to_cube") for k, m in fr.get("world_to_cube", {}).items()}))
     return case

@@ -85,6 +85,18 @@ def _concat(gl, meshes, ids):
     return MeshData(gl, v, n, f, fo, vo)
 
 
+def shading_buffer(gl, case, background=None):
+    """The float32 table ``interp.comp`` shades with: the light (3), ambient, diffuse, the
+    background colour (3; the case's unless given), then every object's colour by id (row 0
+    unused)."""
+    s = case.shading
+    table = np.zeros((len(case.objects) + 1, 3))
+    table[1:] = [o["color"] for o in case.objects]
+    bg = s["background"] if background is None else background
+    values = np.concatenate([s["light"], [s["ambient"], s["diffuse"]], bg, table.reshape(-1)])
+    return gl.buffer(values.astype(np.float32))
+
+
 class Pipeline:
     """The main method on llvmpipe, exact: one case, frame after frame (coherence between them).
 
@@ -119,11 +131,7 @@ class Pipeline:
         self.rasters = {}
         self.cache = Cache()
         self.previous = {}   # reflector -> (pixel buffer, count, G-buffer size)
-        s = case.shading
-        table = np.zeros((len(case.objects) + 1, 3))
-        table[1:] = [o["color"] for o in case.objects]
-        self.shading = gl.buffer(np.concatenate([s["light"], [s["ambient"], s["diffuse"]], s["background"],
-                                                 table.reshape(-1)]).astype(np.float32))
+        self.shading = shading_buffer(gl, case)
 
     def raster(self, w, h) -> Raster:
         r = self.rasters.get((w, h))
@@ -202,13 +210,14 @@ class Pipeline:
         r.draw(s)
         return self._shade(r, s, scene, params, mode=1)
 
-    def _shade(self, r, s, mesh, params, mode, view_id=None, reflector=0):
+    def _shade(self, r, s, mesh, params, mode, view_id=None, reflector=0, shading=None):
         gl, W, H = self.gl, r.width, r.height
         colour = gl.buffer(nbytes=W * H * 12)
         ids = gl.buffer(nbytes=W * H * 4)
         r.bind_setup(s)
         gl.run(gl.compute("interp", MODE=mode), W * H,
-               [None, None, None, None, None, mesh.faces, mesh.points, mesh.normals, params, self.shading,
+               [None, None, None, None, None, mesh.faces, mesh.points, mesh.normals, params,
+                self.shading if shading is None else shading,
                 mesh.face_object, view_id, colour, ids], width=W, height=H, reflector=reflector, region=(0, H, 0, W))
         return {"colour": colour, "id": ids}
 

@@ -59,11 +59,13 @@ class Raster:
         self._release()
 
     # --- steps 1 and 2 ---------------------------------------------------------------------------
-    def setup(self, points, n_points, faces, n_faces, params, flags=None, bad=0, region=None) -> Setup:
+    def setup(self, points, n_points, faces, n_faces, params, flags=None, bad=0, region=None, cull=0) -> Setup:
         """Transform and set up a mesh: ``points`` a buffer of (V, 3) float64 world points,
         ``faces`` (F, 3) int32, ``params`` (:func:`params_array`) as a buffer; ``flags`` (V,)
         uint32 per vertex and ``bad``: triangles with a vertex flag in ``bad`` are left out;
-        ``region`` (row0, row1, col0, col1), half-open: the pixels rasterized (default all)."""
+        ``region`` (row0, row1, col0, col1), half-open: the pixels rasterized (default all);
+        ``cull`` 0 both windings, 1 only clockwise triangles (snapped window area < 0, y up), 2
+        only counter-clockwise ones."""
         gl, w, h = self.gl, self.width, self.height
         b = {}
         b["clip"] = gl.buffer(nbytes=32 * n_points)
@@ -92,7 +94,7 @@ class Raster:
         gl.run(gl.compute("emit"), n_faces,
                [faces, b["clip"], b["win_xy"], b["win_zw"], offsets, clip_offsets, params, b["tri_xy"], b["tri_zw"],
                 b["tri_info"], b["tri_box"], b["tri_edge"], b["bary"]],
-               n=n_faces, width=w, height=h, region=(int(r0), int(r1) - 1, int(c0), int(c1) - 1))
+               n=n_faces, width=w, height=h, region=(int(r0), int(r1) - 1, int(c0), int(c1) - 1), cull=int(cull))
         for buf in (counts, clipped, offsets, clip_offsets):
             buf.release()
         return Setup(n_tri, b)
@@ -111,9 +113,10 @@ class Raster:
         return out
 
     # --- step 3 ------------------------------------------------------------------------------
-    def draw(self, setup: Setup):
+    def draw(self, setup: Setup, peel=None):
         """Visibility of ``setup``'s clip triangles: the index texture holds, per pixel, the
-        visible clip triangle + 1 (0: none)."""
+        visible clip triangle + 1 (0: none). ``peel``: a buffer of (H, W) float32 depths (rows
+        from the top): only fragments strictly behind them are drawn."""
         gl, ctx = self.gl, self.gl.ctx
         self.fbo.use()
         gl.clear_int_texture(self.index, 0)
@@ -125,6 +128,9 @@ class Raster:
         prog = self.vao.program
         prog["width"].value = self.width
         prog["height"].value = self.height
+        if peel is not None:
+            peel.bind_to_storage_buffer(5)
+        prog["use_peel"].value = peel is not None
         if setup.n:
             self.vao.render(mode=gl.moderngl.TRIANGLES, vertices=6 * setup.n)
         ctx.memory_barrier()

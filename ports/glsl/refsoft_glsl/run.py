@@ -49,11 +49,25 @@ def write_json(path, data):
     _atomic_write(path, write)
 
 
-def case_names(golden) -> list:
-    """The cases of a golden set, in its manifest's order (those with inputs)."""
-    with open(os.path.join(golden, "manifest.json")) as fh:
+def case_methods(golden) -> dict:
+    """Each case of a golden set (manifest order) -> its reflection method (its options'). A
+    folder without ``manifest.json`` is read as cases exported by ``refsoft export`` into
+    ``FOLDER/CASE/inputs/`` (name order)."""
+    path = os.path.join(golden, "manifest.json")
+    if not os.path.exists(path):
+        names = sorted(n for n in os.listdir(golden) if os.path.isfile(os.path.join(golden, n, "inputs", "case.json")))
+        if not names:
+            raise ValueError("neither a manifest.json nor CASE/inputs/case.json folders")
+        return {n: read_case_options(os.path.join(golden, n, "inputs")).get("method", "walk") for n in names}
+    with open(path) as fh:
         manifest = json.load(fh)
-    return [c["name"] for c in manifest["cases"]]
+    return {c["name"]: c["options"].get("method", "walk") for c in manifest["cases"]}
+
+
+def read_case_options(folder) -> dict:
+    """The ``options`` of ``folder/case.json``."""
+    with open(os.path.join(folder, "case.json")) as fh:
+        return json.load(fh)["options"]
 
 
 def run_case(gl, golden, name, out, plain=False, log=None) -> dict:
@@ -61,7 +75,15 @@ def run_case(gl, golden, name, out, plain=False, log=None) -> dict:
     from .pipeline import Pipeline
 
     case = read_case(os.path.join(golden, name, "inputs"))
-    if plain:
+    if case.options.get("method") == "ldt":
+        from .ldt import LdtPipeline, PlainLdtPipeline
+
+        cls = PlainLdtPipeline if plain else LdtPipeline
+    elif case.options.get("method") == "envmap":
+        from .envmap import EnvmapPipeline, PlainEnvmapPipeline
+
+        cls = PlainEnvmapPipeline if plain else EnvmapPipeline
+    elif plain:
         from .plain import PlainPipeline as cls
     else:
         cls = Pipeline
@@ -75,6 +97,8 @@ def run_case(gl, golden, name, out, plain=False, log=None) -> dict:
                        "iterations": iterations})
         if log:
             log(f"{name} frame {fr.index}: {times['total']:.1f} ms")
+    for file, arrays in getattr(pipe, "run_files", dict)().items():
+        write_npz(os.path.join(folder, f"{file}.npz"), arrays)
     means = [np.mean([v["mean"] for v in f["iterations"].values()]) for f in frames if f["iterations"]]
     stats = {"port": "glsl", "variant": "plain" if plain else "exact", "gl": gl_versions(gl),
              "options": case.options, "frames": frames,
@@ -87,7 +111,8 @@ def run_case(gl, golden, name, out, plain=False, log=None) -> dict:
 
 
 #: What the port does not port (refsoft's ``ported.json``, format ``refsoft-ported-1``): every
-#: image of every vertex (kind ``images``: the per-image arrays and the flag SEVERAL).
+#: image of every vertex (kind ``images``: the per-image arrays and the flag SEVERAL). A method
+#: listed under ``"methods"`` here would have its cases skipped by ``refsoft-glsl run``.
 NOT_PORTED = {"kinds": ["images"]}
 
 

@@ -23,6 +23,7 @@ uniform int n;
 uniform int width;
 uniform int height;
 uniform ivec4 region;   // rows region.x..region.y, cols region.z..region.w (inclusive)
+uniform int cull;       // 0 both windings; 1 only clockwise (snapped a2 < 0, y up); 2 only counter-clockwise
 
 const int64_t ONE = 256l;
 const int64_t HALF = 128l;
@@ -31,6 +32,7 @@ const int64_t HALF = 128l;
 bool emit(int t, int f, int64_t x0, int64_t y0, dvec2 zw0, int64_t x1, int64_t y1, dvec2 zw1,
           int64_t x2, int64_t y2, dvec2 zw2) {
     int64_t a2 = (x1 - x0) * (y2 - y0) - (y1 - y0) * (x2 - x0);
+    bool kept = cull == 0 || (cull == 1 && a2 < 0l) || (cull == 2 && a2 > 0l);   // a culled one: stored, not valid
     bool swapped = a2 < 0l;
     if (swapped) {
         a2 = -a2;
@@ -59,7 +61,7 @@ bool emit(int t, int f, int64_t x0, int64_t y0, dvec2 zw0, int64_t x1, int64_t y
     int64_t bottom = min(int64_t(height - 1) - j0, int64_t(region.y));
     k0 = max(k0, int64_t(region.z));
     k1 = min(k1, int64_t(region.w));
-    bool valid = a2 != 0l && k0 <= k1 && top <= bottom;
+    bool valid = kept && a2 != 0l && k0 <= k1 && top <= bottom;
     tri_box[t] = ivec4(int(k0), int(k1), int(top), int(bottom));
     tri_info[t] = ivec4(f, 0, valid ? 1 : 0, 0);
     return swapped;
