@@ -91,7 +91,7 @@ SKIPS = ("cull_reflectors", "reuse", "cull_virtual", "crop_virtual")
 MAX_TESSELLATION_LEVEL = 8
 #: The kinds of output ``refsoft check --kinds`` selects (refsoft.conformance.check.output_kind).
 CHECK_KINDS = ("coverage", "gbuffer", "pixel", "virtual", "flags", "vertex_object", "iterations", "score", "margin",
-               "images", "image", "ids", "trace", "ldt_texture", "ldt_region", "ldt_ray", "ldt_pixel", "ldt_counts", "envmap_cube",
+               "images", "bounces", "image", "ids", "trace", "ldt_texture", "ldt_region", "ldt_ray", "ldt_pixel", "ldt_counts", "envmap_cube",
                "envmap_pixel")
 
 # --- Camera validation ---------------------------------------------------------------------

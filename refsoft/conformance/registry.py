@@ -31,10 +31,10 @@ agree).
 from __future__ import annotations
 
 from .. import constants
-from .rules import envmap, gbuffer, image, images, ldt, ldt_texture, search, virtual
+from .rules import bounces, envmap, gbuffer, image, images, ldt, ldt_texture, search, virtual
 
 #: The rule modules, in the order they judge a frame.
-RULES = (ldt, ldt_texture, envmap, gbuffer, search, virtual, images, image)
+RULES = (ldt, ldt_texture, envmap, gbuffer, search, virtual, images, bounces, image)
 
 #: Every kind of output a rule module judges (each once, in the modules' order).
 OWNED = tuple(dict.fromkeys(kind for module in RULES for kind in module.KINDS))

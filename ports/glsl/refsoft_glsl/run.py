@@ -111,9 +111,10 @@ def run_case(gl, golden, name, out, plain=False, log=None) -> dict:
 
 
 #: What the port does not port (refsoft's ``ported.json``, format ``refsoft-ported-1``): every
-#: image of every vertex (kind ``images``: the per-image arrays and the flag SEVERAL). A method
-#: listed under ``"methods"`` here would have its cases skipped by ``refsoft-glsl run``.
-NOT_PORTED = {"kinds": ["images"]}
+#: image of every vertex (kind ``images``: the per-image arrays and the flag SEVERAL) and several
+#: bounces (kind ``bounces``: it draws the first, and writes no ``bounce_depth``). A method listed
+#: under ``"methods"`` here would have its cases skipped by ``refsoft-glsl run``.
+NOT_PORTED = {"kinds": ["images", "bounces"]}
 
 
 def write_ported(out):

@@ -31,13 +31,17 @@ def drawn_from_every_image(G) -> bool:
 
 def judge(ctx, G, C, usable) -> None:
     """The image (against ``ctx.reference`` when the oracle was run on the candidate's inputs)
-    and the ids. A port that declares kind ``images`` not ported draws one image per vertex: on a
-    frame the oracle drew from every image, its picture and reflected ids are ``not_ported``."""
-    if "images" in ctx.not_ported_kinds and drawn_from_every_image(G):
+    and the ids. A port that declares kind ``images`` not ported draws one image per vertex, one
+    that declares ``bounces`` one bounce: on a frame the oracle drew from every image, or with
+    several bounces, its picture and reflected ids are ``not_ported``."""
+    lacking = [(kind, why) for kind, why, drawn in (
+        ("images", "drawn from every image of every vertex", drawn_from_every_image(G)),
+        ("bounces", "drawn with several bounces", keys.BOUNCE_DEPTH in G)) if drawn and kind in ctx.not_ported_kinds]
+    if lacking:
+        kind, why = lacking[0]
         for key in (keys.IMAGE, keys.REFLECTED_ID):
             if usable(key):
-                ctx.finding(key, "image", "not_ported", "drawn from every image of every vertex: kind 'images' "
-                            "declared not ported", kind="images")
+                ctx.finding(key, "image", "not_ported", f"{why}: kind {kind!r} declared not ported", kind=kind)
         if usable(keys.OBJECT_ID):
             d = int((G[keys.OBJECT_ID] != C[keys.OBJECT_ID]).sum())
             ctx.finding(keys.OBJECT_ID, "ids (reported)", "pass" if d == 0 else "accepted",
