@@ -118,22 +118,13 @@ def clip_at_silhouette(gbuffer, eye, vertices, normals, faces, face_obj, pixel, 
     hid = np.where(hidden[a], a, b)[cross]
     key = _distinct(np.sort(vis * np.int64(n) + hid))
     vis, hid = key // n, key % n
-    lo_t = np.zeros(len(key))
-    hi_t = np.ones(len(key))
     p_vis, p_hid = vertices[vis], vertices[hid]
-    start = pixel[vis].astype(np.int64)
-    got_pixel = pixel[vis].astype(np.int32)
-    got_flags = flags[vis].astype(np.uint8)
-    for _ in range(iterations):
-        t = 0.5 * (lo_t + hi_t)
-        mid = p_vis + t[:, None] * (p_hid - p_vis)
-        res = search(gbuffer, eye, mid, neighbourhood, "discard", start, cap, method=method)
-        seen = (res.flags & (HIDDEN | CULLED)) == 0
-        lo_t = np.where(seen, t, lo_t)
-        hi_t = np.where(seen, hi_t, t)
-        start = np.where(seen[:, None], res.pixel, start)
-        got_pixel = np.where(seen[:, None], res.pixel, got_pixel)
-        got_flags = np.where(seen, res.flags, got_flags).astype(np.uint8)
+    if method == "walk":
+        lo_t, got_pixel, got_flags = _bisect(gbuffer, eye, p_vis, p_hid, pixel[vis], flags[vis], neighbourhood, cap,
+                                             iterations)
+    else:
+        lo_t, got_pixel, got_flags = _bisect_searches(gbuffer, eye, p_vis, p_hid, pixel[vis], flags[vis],
+                                                      neighbourhood, cap, method, iterations)
     cut_v = p_vis + lo_t[:, None] * (p_hid - p_vis)
     cut_n = normalize_rows(normals[vis] + lo_t[:, None] * (normals[hid] - normals[vis]))
     parts, per_face = _visible_parts(f, hidden, key, n)
@@ -147,6 +138,57 @@ def clip_at_silhouette(gbuffer, eye, vertices, normals, faces, face_obj, pixel, 
     out[np.repeat(is_mixed, counts)] = parts
     return Clip(cut_v, cut_n, got_pixel, got_flags, out, out_obj, len(key), len(key) * iterations,
                 np.c_[vis, hid], lo_t)
+
+
+def _bisect(gbuffer, eye, p_vis, p_hid, pixel, flags, neighbourhood, cap, iterations):
+    """The walk's bisection of every cut edge in one kernel pass (:mod:`refsoft.search._silhouette`):
+    the results of :func:`_bisect_searches` bit for bit, without a search call and array
+    bookkeeping per step. Returns (t (M,) float64, pixel (M, 2) int32, flags (M,) uint8)."""
+    from . import _check_options, _packed, start_pixel
+    from . import _kernels as _search_kernels
+    from . import _silhouette
+    from .._parallel import parallel_range
+    from ..constants import NEIGHBOURHOODS
+
+    dt, cap = _check_options(gbuffer, neighbourhood, "discard", cap)
+    m = len(p_vis)
+    cut_t = np.empty(m)
+    got_pixel = np.ascontiguousarray(pixel, dtype=np.int32).copy()
+    got_flags = np.ascontiguousarray(flags, dtype=np.uint8).copy()
+    default = start_pixel(gbuffer.mask)
+    G, mask, fp, (r0, c0) = _packed(gbuffer, eye)
+
+    def work():
+        return (np.empty(3, dtype=dt), np.empty((2, 9), dtype=dt), np.zeros((2, 9), dtype=bool),
+                np.zeros((0, _search_kernels.RECORD_WIDTH)))
+
+    parallel_range(_silhouette.bisect_cuts, m, G, mask, r0, c0, np.ascontiguousarray(gbuffer.mask),
+                   np.asarray(gbuffer.origin, dtype=np.float64), np.ascontiguousarray(p_vis, dtype=np.float64),
+                   np.ascontiguousarray(p_hid, dtype=np.float64), got_pixel.astype(np.int64), default[0], default[1],
+                   NEIGHBOURHOODS[neighbourhood], cap, int(iterations), fp, cut_t, got_pixel, got_flags, work=work)
+    return cut_t, got_pixel, got_flags
+
+
+def _bisect_searches(gbuffer, eye, p_vis, p_hid, pixel, flags, neighbourhood, cap, method, iterations):
+    """The bisection of every cut edge, one :func:`refsoft.search.search` of every edge per step
+    (any search method). Returns (t (M,) float64, pixel (M, 2) int32, flags (M,) uint8)."""
+    m = len(p_vis)
+    lo_t = np.zeros(m)
+    hi_t = np.ones(m)
+    start = pixel.astype(np.int64)
+    got_pixel = pixel.astype(np.int32)
+    got_flags = flags.astype(np.uint8)
+    for _ in range(iterations):
+        t = 0.5 * (lo_t + hi_t)
+        mid = p_vis + t[:, None] * (p_hid - p_vis)
+        res = search(gbuffer, eye, mid, neighbourhood, "discard", start, cap, method=method)
+        seen = (res.flags & (HIDDEN | CULLED)) == 0
+        lo_t = np.where(seen, t, lo_t)
+        hi_t = np.where(seen, hi_t, t)
+        start = np.where(seen[:, None], res.pixel, start)
+        got_pixel = np.where(seen[:, None], res.pixel, got_pixel)
+        got_flags = np.where(seen, res.flags, got_flags).astype(np.uint8)
+    return lo_t, got_pixel, got_flags
 
 
 def _visible_parts(f, hidden, key, n):
