@@ -5,6 +5,9 @@ the median frame time of each preset, their ratio and the accurate frame's stage
 tessellation and the silhouette cut timed apart.
 
 Run: ``python benchmarks/accurate_price.py [--sizes 1024x768 640x480] [--frames 3] [SCENE ...]``.
+With ``--cut``: instead, the silhouette cut of one accurate frame (frame 1 after frame 0), its
+steps predicted (the preset's) against plain bisection, timed alternately in one process (median
+of 7), with the searches each ran.
 """
 
 from __future__ import annotations
@@ -57,12 +60,52 @@ def measure(name, size, frames):
     return med, st
 
 
+def measure_cut(name, size, rounds=7):
+    """Median ms of frame 1's silhouette cuts (every reflector) with predicted steps and with
+    plain bisection, and the searches of each."""
+    calls = []
+    clip = silhouette.clip_at_silhouette
+
+    def spy(*args, **kwargs):
+        calls.append((args, kwargs))
+        return clip(*args, **kwargs)
+
+    silhouette.clip_at_silhouette = spy
+    try:
+        scene = refsoft.load_scene(name, width=size[0], height=size[1])
+        driver = FrameDriver(scene, RenderOptions(preset="accurate"))
+        driver.render_frame(0)
+        calls.clear()
+        driver.render_frame(min(1, scene.n_frames - 1))
+    finally:
+        silhouette.clip_at_silhouette = clip
+    times = {True: [], False: []}
+    searched = {}
+    for _ in range(rounds):
+        for predict in (True, False):
+            t = time.perf_counter()
+            out = [clip(*a, **{**k, "predict": predict}) for a, k in calls]
+            times[predict].append(1000 * (time.perf_counter() - t))
+            searched[predict] = sum(c.searched for c in out)
+    edges = sum(c.cut for c in out)
+    return {p: statistics.median(v) for p, v in times.items()}, searched, edges
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("scenes", nargs="*", default=SCENES)
     ap.add_argument("--sizes", nargs="+", default=["1024x768", "640x480"])
     ap.add_argument("--frames", type=int, default=3)
+    ap.add_argument("--cut", action="store_true", help="time the silhouette cut alone, predicted against bisection")
     args = ap.parse_args(argv)
+    if args.cut:
+        print("scene size edges | predicted: ms searches | bisection: ms searches")
+        for size in args.sizes:
+            w, h = (int(x) for x in size.split("x"))
+            for name in args.scenes:
+                ms, n, edges = measure_cut(name, (w, h))
+                print(f"{name} {size} {edges} | {ms[True]:.1f} {n[True]} | {ms[False]:.1f} {n[False]}", flush=True)
+        return
     print("scene size paper_ms accurate_ms ratio | accurate stages (ms)")
     for size in args.sizes:
         w, h = (int(x) for x in size.split("x"))
