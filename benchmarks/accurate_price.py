@@ -113,8 +113,8 @@ def main(argv=None):
             med, st = measure(name, (w, h), args.frames)
             keys = ("gbuffer", "search", "tessellate_only", "clip", "virtual", "main")
             parts = " ".join(f"{k}={st.get(k, 0.0):.0f}" for k in keys)
-            print(f"{name} {size} {med['paper']:.0f} {med['accurate']:.0f} {med['accurate'] / med['paper']:.2f} | {parts}",
-                  flush=True)
+            ratio = med["accurate"] / med["paper"]
+            print(f"{name} {size} {med['paper']:.0f} {med['accurate']:.0f} {ratio:.2f} | {parts}", flush=True)
 
 
 if __name__ == "__main__":
