@@ -4,7 +4,8 @@ so the kernels are compiled and the searches coherent), and the script prints pe
 the median frame time of each preset, their ratio and the accurate frame's stages, the
 tessellation and the silhouette cut timed apart.
 
-Run: ``python benchmarks/accurate_price.py [--sizes 1024x768 640x480] [--frames 3] [SCENE ...]``.
+Run: ``python benchmarks/accurate_price.py [SCENE ...] [--sizes 1024x768 640x480] [--frames 3]`` (the
+scenes first: ``--sizes`` takes every word after it).
 With ``--cut``: instead, the silhouette cut of one accurate frame (frame 1 after frame 0), its
 steps predicted (the preset's) against plain bisection, timed alternately in one process (median
 of 7), with the searches each ran.
