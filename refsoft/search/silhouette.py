@@ -6,8 +6,10 @@ hidden ones (``inverse="plane"`` or ``"search"``: wrong triangles over the mirro
 (``"discard"``: a gap along the reflector's rim, where the truth shows the reflection reaching the
 rim). Here each edge from a visible vertex ``A`` to a hidden vertex ``B`` is cut where its
 reflection reaches the silhouette: points ``A + t (B - A)`` are searched (from the last visible
-point's pixel) and ``t`` bisected ``iterations`` times on whether the point is HIDDEN; the last
-visible point ``X`` becomes a new vertex (its own search result and virtual vertex; normal the
+point's pixel) and a bracket of ``t``, visible at its low end and HIDDEN at its high end, shrunk
+to ``2**-iterations`` of the edge: by bisection, or (``predict``, the accurate preset's) with its
+steps at the predicted cut where the bracket's ends reflect at the same or neighbouring texels
+(:func:`refsoft.search._silhouette.cut_edges`); the last visible point ``X`` becomes a new vertex (its own search result and virtual vertex; normal the
 renormalised interpolation of the end normals). The triangle is replaced by its visible part:
 
 - one hidden corner (``a, b`` visible, ``h`` hidden, in the triangle's order): ``(a, b, X_bh)``
