@@ -51,7 +51,7 @@ class Clip:
     cut : int
         Edges cut.
     searched : int
-        Searches run by the bisection.
+        Searches run by the cut.
     ends : ndarray (M, 2) int64
         Each cut edge's visible and hidden end (vertex indices).
     t : ndarray (M,) float64
