@@ -182,6 +182,8 @@ SPHERE_FACTOR = 2.0
 #: Bisection steps per cut edge: the cut lies within ``2**-iterations`` of the edge's length of
 #: where the vertex search's classification changes.
 CLIP_ITERATIONS = 10
+#: Regula falsi steps of the predicted silhouette cut where two neighbouring texels' scores tie.
+CLIP_TIE_STEPS = 8
 #: Extra pixels around a stencil box before an object's virtual triangles count as outside it:
 #: more than the 1/512 px a snapped window coordinate can move (spec section 2).
 BOX_MARGIN_PIXELS = 2.0

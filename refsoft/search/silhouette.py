@@ -6,8 +6,10 @@ hidden ones (``inverse="plane"`` or ``"search"``: wrong triangles over the mirro
 (``"discard"``: a gap along the reflector's rim, where the truth shows the reflection reaching the
 rim). Here each edge from a visible vertex ``A`` to a hidden vertex ``B`` is cut where its
 reflection reaches the silhouette: points ``A + t (B - A)`` are searched (from the last visible
-point's pixel) and ``t`` bisected ``iterations`` times on whether the point is HIDDEN; the last
-visible point ``X`` becomes a new vertex (its own search result and virtual vertex; normal the
+point's pixel) and a bracket of ``t``, visible at its low end and HIDDEN at its high end, shrunk
+to ``2**-iterations`` of the edge: by bisection, or (``predict``, the accurate preset's) with its
+steps at the predicted cut where the bracket's ends reflect at the same or neighbouring texels
+(:func:`refsoft.search._silhouette.cut_edges`); the last visible point ``X`` becomes a new vertex (its own search result and virtual vertex; normal the
 renormalised interpolation of the end normals). The triangle is replaced by its visible part:
 
 - one hidden corner (``a, b`` visible, ``h`` hidden, in the triangle's order): ``(a, b, X_bh)``
@@ -27,7 +29,7 @@ import numpy as np
 from ..scene.mesh import normalize_rows
 from . import CULLED, HIDDEN, search
 from .tessellate import _distinct
-from ..constants import CLIP_ITERATIONS
+from ..constants import CLIP_ITERATIONS, CLIP_TIE_STEPS
 
 
 @dataclass(frozen=True, eq=False)
@@ -49,7 +51,7 @@ class Clip:
     cut : int
         Edges cut.
     searched : int
-        Searches run by the bisection.
+        Searches run by the cut.
     ends : ndarray (M, 2) int64
         Each cut edge's visible and hidden end (vertex indices).
     t : ndarray (M,) float64
@@ -80,7 +82,7 @@ def mixed_faces(faces, flags) -> np.ndarray:
 
 
 def clip_at_silhouette(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, neighbourhood="cross",
-                       cap=None, method="walk", iterations: int = CLIP_ITERATIONS) -> Clip:
+                       cap=None, method="walk", iterations: int = CLIP_ITERATIONS, predict: bool = False) -> Clip:
     """Cut the reflected triangles of one reflector at its silhouette (see the module's text).
 
     Parameters
@@ -96,7 +98,12 @@ def clip_at_silhouette(gbuffer, eye, vertices, normals, faces, face_obj, pixel, 
     neighbourhood, cap, method
         The search's options (the bisection's searches use them).
     iterations : int
-        Bisection steps per cut edge.
+        Bisection steps per cut edge: the cut lies within ``2**-iterations`` of the edge of
+        where the search's classification changes.
+    predict : bool
+        Place the steps at the predicted cut where the bracket's ends reflect at the same or
+        neighbouring texels (:func:`refsoft.search._silhouette.cut_edges`; the walk only): the
+        bracket is closed to the same width with fewer searches, the cut point moves within it.
 
     Returns
     -------
@@ -118,22 +125,14 @@ def clip_at_silhouette(gbuffer, eye, vertices, normals, faces, face_obj, pixel, 
     hid = np.where(hidden[a], a, b)[cross]
     key = _distinct(np.sort(vis * np.int64(n) + hid))
     vis, hid = key // n, key % n
-    lo_t = np.zeros(len(key))
-    hi_t = np.ones(len(key))
     p_vis, p_hid = vertices[vis], vertices[hid]
-    start = pixel[vis].astype(np.int64)
-    got_pixel = pixel[vis].astype(np.int32)
-    got_flags = flags[vis].astype(np.uint8)
-    for _ in range(iterations):
-        t = 0.5 * (lo_t + hi_t)
-        mid = p_vis + t[:, None] * (p_hid - p_vis)
-        res = search(gbuffer, eye, mid, neighbourhood, "discard", start, cap, method=method)
-        seen = (res.flags & (HIDDEN | CULLED)) == 0
-        lo_t = np.where(seen, t, lo_t)
-        hi_t = np.where(seen, hi_t, t)
-        start = np.where(seen[:, None], res.pixel, start)
-        got_pixel = np.where(seen[:, None], res.pixel, got_pixel)
-        got_flags = np.where(seen, res.flags, got_flags).astype(np.uint8)
+    if method == "walk":
+        lo_t, got_pixel, got_flags, searched = _bisect(gbuffer, eye, p_vis, p_hid, pixel[vis], pixel[hid], flags[vis],
+                                                       neighbourhood, cap, iterations, predict)
+    else:
+        lo_t, got_pixel, got_flags = _bisect_searches(gbuffer, eye, p_vis, p_hid, pixel[vis], flags[vis],
+                                                      neighbourhood, cap, method, iterations)
+        searched = len(key) * iterations
     cut_v = p_vis + lo_t[:, None] * (p_hid - p_vis)
     cut_n = normalize_rows(normals[vis] + lo_t[:, None] * (normals[hid] - normals[vis]))
     parts, per_face = _visible_parts(f, hidden, key, n)
@@ -145,8 +144,64 @@ def clip_at_silhouette(gbuffer, eye, vertices, normals, faces, face_obj, pixel, 
     is_mixed = np.zeros(len(faces), dtype=bool)
     is_mixed[mixed] = True
     out[np.repeat(is_mixed, counts)] = parts
-    return Clip(cut_v, cut_n, got_pixel, got_flags, out, out_obj, len(key), len(key) * iterations,
-                np.c_[vis, hid], lo_t)
+    return Clip(cut_v, cut_n, got_pixel, got_flags, out, out_obj, len(key), searched, np.c_[vis, hid], lo_t)
+
+
+def _bisect(gbuffer, eye, p_vis, p_hid, pixel, end, flags, neighbourhood, cap, iterations, predict=False):
+    """Every cut edge in one kernel pass (:func:`refsoft.search._silhouette.cut_edges`): without
+    ``predict``, :func:`_bisect_searches`'s results bit for bit (without a search call and array
+    bookkeeping per step); with it, the bracket closed to the same width with the steps placed
+    at the predicted cut. ``end``: the hidden ends' pixels. Returns (t (M,) float64, pixel (M, 2)
+    int32, flags (M,) uint8, searches run)."""
+    from . import _check_options, _packed, start_pixel
+    from . import _kernels as _search_kernels
+    from . import _silhouette
+    from .._parallel import parallel_range
+    from ..constants import NEIGHBOURHOODS
+
+    dt, cap = _check_options(gbuffer, neighbourhood, "discard", cap)
+    m = len(p_vis)
+    cut_t = np.empty(m)
+    searched = np.zeros(m, dtype=np.int64)
+    got_pixel = np.ascontiguousarray(pixel, dtype=np.int32).copy()
+    got_flags = np.ascontiguousarray(flags, dtype=np.uint8).copy()
+    default = start_pixel(gbuffer.mask)
+    G, mask, fp, (r0, c0) = _packed(gbuffer, eye)
+
+    def work():
+        return (np.empty(3, dtype=dt), np.empty((2, 9), dtype=dt), np.zeros((2, 9), dtype=bool),
+                np.zeros((0, _search_kernels.RECORD_WIDTH)))
+
+    parallel_range(_silhouette.cut_edges, m, G, mask, r0, c0, np.ascontiguousarray(gbuffer.position),
+                   np.ascontiguousarray(gbuffer.normal), np.ascontiguousarray(gbuffer.mask),
+                   np.asarray(gbuffer.origin, dtype=np.float64), np.asarray(eye, dtype=np.float64),
+                   np.ascontiguousarray(p_vis, dtype=np.float64), np.ascontiguousarray(p_hid, dtype=np.float64),
+                   got_pixel.astype(np.int64), np.ascontiguousarray(end, dtype=np.int64), default[0], default[1],
+                   NEIGHBOURHOODS[neighbourhood], cap, 2.0 ** -int(iterations), bool(predict), CLIP_TIE_STEPS, fp,
+                   cut_t, got_pixel, got_flags, searched, work=work)
+    return cut_t, got_pixel, got_flags, int(searched.sum())
+
+
+def _bisect_searches(gbuffer, eye, p_vis, p_hid, pixel, flags, neighbourhood, cap, method, iterations):
+    """The bisection of every cut edge, one :func:`refsoft.search.search` of every edge per step
+    (any search method). Returns (t (M,) float64, pixel (M, 2) int32, flags (M,) uint8)."""
+    m = len(p_vis)
+    lo_t = np.zeros(m)
+    hi_t = np.ones(m)
+    start = pixel.astype(np.int64)
+    got_pixel = pixel.astype(np.int32)
+    got_flags = flags.astype(np.uint8)
+    for _ in range(iterations):
+        t = 0.5 * (lo_t + hi_t)
+        mid = p_vis + t[:, None] * (p_hid - p_vis)
+        res = search(gbuffer, eye, mid, neighbourhood, "discard", start, cap, method=method)
+        seen = (res.flags & (HIDDEN | CULLED)) == 0
+        lo_t = np.where(seen, t, lo_t)
+        hi_t = np.where(seen, hi_t, t)
+        start = np.where(seen[:, None], res.pixel, start)
+        got_pixel = np.where(seen[:, None], res.pixel, got_pixel)
+        got_flags = np.where(seen, res.flags, got_flags).astype(np.uint8)
+    return lo_t, got_pixel, got_flags
 
 
 def _visible_parts(f, hidden, key, n):

@@ -99,7 +99,7 @@ def refined_parts(scene, meshes, refl, verts, opt, eye, reflected=None):
                                   "triangles": int(len(t.faces))}
     if opt.silhouette == "clip":
         c = clip_at_silhouette(gb, eye, vertices, normals, faces, face_obj, pixel, flags, opt.neighbourhood, opt.cap,
-                               opt.method)
+                               opt.method, predict=True)
         new_surface = None
         if opt.refine and len(c.vertices):
             from .refine import refine as refine_points

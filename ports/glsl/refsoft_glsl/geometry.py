@@ -17,8 +17,11 @@ from dataclasses import dataclass
 import numpy as np
 
 HIDDEN, CULLED = 1, 16
-#: Bisection steps per cut edge (refsoft.constants.CLIP_ITERATIONS).
+#: Bisection steps per cut edge (refsoft.constants.CLIP_ITERATIONS): the cut's bracket is closed
+#: to ``2**-CLIP_ITERATIONS`` of the edge.
 CLIP_ITERATIONS = 10
+#: Regula falsi steps of a predicted cut's score tie (refsoft.constants.CLIP_TIE_STEPS).
+CLIP_TIE_STEPS = 8
 #: Undirected edge keys ``min * KEY_BASE + max``.
 KEY_BASE = np.int64(1) << 31
 
@@ -37,6 +40,11 @@ class Shaders:
 
     def edge_errors(self, vertices, pixel, offset, e0, e1):
         """The edge errors (E,) float64 of edges ``(vertices[e0], vertices[e1])``."""
+        raise NotImplementedError
+
+    def texels(self):
+        """``(P, N, origin, eye)``: the G-buffer's positions and normals (h, w, 3), read back
+        (relative to ``origin``), its origin and the eye (3,) float64."""
         raise NotImplementedError
 
 
@@ -71,6 +79,123 @@ class Reflected:
         self.flags = np.concatenate([self.flags, flags.astype(np.uint32)])
         if self.surface is not None:
             self.surface = tuple(np.concatenate([a, b]) for a, b in zip(self.surface, surface))
+
+
+def _dot_texel(x, p, n, origin):
+    """``dot(x - (P + origin), N)`` per row, its three terms added to 0.0 in order (the
+    oracle's loop)."""
+    d = np.zeros(len(x))
+    for k in range(3):
+        d = d + (x[:, k] - (p[:, k] + origin[k])) * n[:, k]
+    return d
+
+
+def _unit3(x, y, z):
+    n = np.sqrt((x * x + y * y) + z * z)
+    ok = n > 0.0
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(ok, x / n, x), np.where(ok, y / n, y), np.where(ok, z / n, z)
+
+
+def _score(P, N, origin, eye, x, r, c):
+    """The search's score of points ``x`` (M, 3) at texels (r, c), in float64 (the oracle's
+    ``_silhouette._score``)."""
+    p = P[r, c].astype(np.float64)
+    n = N[r, c].astype(np.float64)
+    px, py, pz = p[:, 0] + origin[0], p[:, 1] + origin[1], p[:, 2] + origin[2]
+    ux, uy, uz = _unit3(eye[0] - px, eye[1] - py, eye[2] - pz)
+    vx, vy, vz = _unit3(x[:, 0] - px, x[:, 1] - py, x[:, 2] - pz)
+    hx, hy, hz = _unit3(ux + vx, uy + vy, uz + vz)
+    return (n[:, 0] * hx + n[:, 1] * hy) + n[:, 2] * hz
+
+
+def _predict(gpu, p_vis, p_hid, a, b, lo_px, hi_px):
+    """The oracle's predicted cut (``refsoft.search._silhouette._predict``) of each edge's
+    bracket [a, b] whose ends reflect at texels ``lo_px`` and ``hi_px`` (M, 2); -1 for none."""
+    P, N, origin, eye = gpu.texels()
+    mask = gpu.mask
+    h, w = mask.shape
+    r1, c1, r2, c2 = lo_px[:, 0], lo_px[:, 1], hi_px[:, 0], hi_px[:, 1]
+    ok = (np.abs(r1 - r2) <= 1) & (np.abs(c1 - c2) <= 1)
+    ok &= (r1 >= 0) & (r1 < h) & (c1 >= 0) & (c1 < w) & (r2 >= 0) & (r2 < h) & (c2 >= 0) & (c2 < w)
+    r1, c1, r2, c2 = (np.where(ok, x, 0) for x in (r1, c1, r2, c2))
+    ok &= mask[r1, c1] & mask[r2, c2]
+
+    def point(t):
+        return p_vis + t[:, None] * (p_hid - p_vis)
+
+    p1, n1 = P[r1, c1].astype(np.float64), N[r1, c1].astype(np.float64)
+    d0, d1 = _dot_texel(point(a), p1, n1, origin), _dot_texel(point(b), p1, n1, origin)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        t = np.where((d0 > 0.0) & (d1 < 0.0), a + (b - a) * (d0 / (d0 - d1)), -1.0)
+    t = np.where((d0 <= 0.0) & (d1 < 0.0), a, t)
+    other = ok & ((r1 != r2) | (c1 != c2))
+
+    def g(x):
+        return _score(P, N, origin, eye, x, r1, c1) - _score(P, N, origin, eye, x, r2, c2)
+
+    ta, tb = a.copy(), b.copy()
+    g0, g1 = g(point(ta)), g(point(tb))
+    tie_ok = other & (g0 >= 0.0) & (g1 < 0.0)
+    side = np.zeros(len(a), dtype=np.int8)
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        for _ in range(CLIP_TIE_STEPS):
+            tt = ta + (tb - ta) * (g0 / (g0 - g1))
+            gt = g(point(np.where(tie_ok, tt, ta)))
+            up = gt >= 0.0
+            g1n = np.where(up, np.where(side == 1, g1 * 0.5, g1), gt)
+            g0n = np.where(up, gt, np.where(side == -1, g0 * 0.5, g0))
+            ta, tb = np.where(up, tt, ta), np.where(up, tb, tt)
+            g0, g1 = g0n, g1n
+            side = np.where(up, 1, -1).astype(np.int8)
+    tie = np.where(tie_ok, ta, -1.0)
+    t = np.where(tie_ok & ((t < 0.0) | (tie < t)), tie, t)
+    return np.where(ok, t, -1.0)
+
+
+def _cut(gpu, p_vis, p_hid, lo_px, hi_px, flags, tolerance):
+    """The oracle's cut (``refsoft.search._silhouette.cut_edges`` with ``predict``): per edge a
+    bracket [a, b] of t, seen at a, hidden at b, shrunk to ``tolerance``; each step searches, from
+    the last seen point's pixel, the points tolerance / 2 either side of the predicted cut
+    (:func:`_predict`), the second only when the first is seen, or the midpoint where there is no
+    prediction or the last step did not halve the bracket. Returns (a, pixel, flags)."""
+    m = len(p_vis)
+    a, b = np.zeros(m), np.ones(m)
+    lo_px, hi_px = lo_px.astype(np.int64).copy(), hi_px.astype(np.int64).copy()
+    got_flags = flags.copy()
+    halved = np.ones(m, dtype=bool)
+    while True:
+        todo = np.flatnonzero(b - a > tolerance)
+        if len(todo) == 0:
+            break
+        ta, tb = a[todo], b[todo]
+        width = tb - ta
+        t1, t2 = 0.5 * (ta + tb), np.full(len(todo), -1.0)
+        tp = np.full(len(todo), -1.0)
+        pred = np.flatnonzero(halved[todo])
+        if len(pred):
+            e = todo[pred]
+            tp[pred] = _predict(gpu, p_vis[e], p_hid[e], a[e], b[e], lo_px[e], hi_px[e])
+        use = tp >= 0.0
+        t1 = np.where(use, np.maximum(tp - 0.5 * tolerance, ta), t1)
+        t2 = np.where(use, np.minimum(tp + 0.5 * tolerance, tb), t2)
+        stop = np.zeros(len(todo), dtype=bool)  # a probe found the hidden side: no second probe
+        for t in (t1, t2):
+            cur_a, cur_b = a[todo], b[todo]
+            go = np.flatnonzero(~stop & (t >= 0.0) & (t > cur_a) & (t < cur_b))
+            if len(go) == 0:
+                continue
+            e, te = todo[go], t[go]
+            pixel, fl = gpu.search(p_vis[e] + te[:, None] * (p_hid[e] - p_vis[e]), lo_px[e], False)
+            seen = (fl & (HIDDEN | CULLED)) == 0
+            a[e] = np.where(seen, te, a[e])
+            b[e] = np.where(seen, b[e], te)
+            lo_px[e] = np.where(seen[:, None], pixel, lo_px[e])
+            hi_px[e] = np.where(seen[:, None], hi_px[e], pixel)
+            got_flags[e] = np.where(seen, fl, got_flags[e])
+            stop[go] = ~seen
+        halved[todo] = (b[todo] - a[todo]) <= 0.5 * width
+    return a, lo_px.astype(np.int32), got_flags
 
 
 def edge_keys(u, v) -> np.ndarray:
@@ -174,8 +299,8 @@ def tessellate(geo: Reflected, gpu: Shaders, mask, threshold, max_level, min_spa
 
 def clip_at_silhouette(geo: Reflected, gpu: Shaders, iterations=CLIP_ITERATIONS):
     """Cut each edge from a visible to a hidden vertex of the mixed faces (a hidden and a visible
-    corner, none CULLED) where its reflection reaches the silhouette (bisection on HIDDEN, each
-    step a search from the last visible point's pixel), and replace each mixed face by its
+    corner, none CULLED) where its reflection reaches the silhouette (:func:`_cut`, each step a
+    search from the last visible point's pixel), and replace each mixed face by its
     visible part, in place: one hidden corner ``z`` (after ``x, y``): ``(x, y, X_yz)``,
     ``(x, X_yz, X_xz)``; two (``x`` visible): ``(x, X_xy, X_xz)``. Returns
     ``(new vertices (M, 3), their pixels, flags, edges cut)``; ``geo`` gets the new vertices'
@@ -193,18 +318,9 @@ def clip_at_silhouette(geo: Reflected, gpu: Shaders, iterations=CLIP_ITERATIONS)
     vis, hid = np.where(hidden[a], b, a)[cross], np.where(hidden[a], a, b)[cross]
     key = np.unique(vis * np.int64(n) + hid)
     vis, hid = key // n, key % n
-    lo, hi = np.zeros(len(key)), np.ones(len(key))
     p_vis, p_hid = geo.vertices[vis], geo.vertices[hid]
-    start = geo.pixel[vis].astype(np.int64)
-    got_pixel, got_flags = geo.pixel[vis].copy(), geo.flags[vis].copy()
-    for _ in range(iterations):
-        t = 0.5 * (lo + hi)
-        pixel, fl = gpu.search(p_vis + t[:, None] * (p_hid - p_vis), start, False)
-        seen = (fl & (HIDDEN | CULLED)) == 0
-        lo, hi = np.where(seen, t, lo), np.where(seen, hi, t)
-        start = np.where(seen[:, None], pixel, start)
-        got_pixel = np.where(seen[:, None], pixel, got_pixel)
-        got_flags = np.where(seen, fl, got_flags)
+    lo, got_pixel, got_flags = _cut(gpu, p_vis, p_hid, geo.pixel[vis], geo.pixel[hid], geo.flags[vis],
+                                    2.0 ** -iterations)
     cut_v = p_vis + lo[:, None] * (p_hid - p_vis)
     cut_n = unit_rows(geo.normals[vis] + lo[:, None] * (geo.normals[hid] - geo.normals[vis]))
 

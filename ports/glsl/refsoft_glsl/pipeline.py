@@ -382,6 +382,15 @@ class _GeometryShaders:
         self.pipe, self.gb, self.gl = pipe, gb, pipe.gl
         self.mask = self.gl.read(gb["mask"], np.int32, (gb["height"], gb["width"])) != 0
 
+    def texels(self):
+        if not hasattr(self, "_texels"):
+            gl, gb = self.gl, self.gb
+            shape = (gb["height"], gb["width"], 3)
+            params = gl.read(gb["params"], np.float64, (24,))
+            self._texels = (gl.read(gb["P"], self.pipe.real, shape), gl.read(gb["N"], self.pipe.real, shape),
+                            params[18:21].copy(), params[21:24].copy())
+        return self._texels
+
     def search(self, points, starts, inverse_search):
         gl, pipe, gb = self.gl, self.pipe, self.gb
         m = len(points)

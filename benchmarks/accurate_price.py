@@ -1,0 +1,122 @@
+"""The accurate preset's price over the paper preset, per built-in convex scene: both presets
+render the same frames alternately in one process (frame 0 once each first, outside the timing,
+so the kernels are compiled and the searches coherent), and the script prints per scene and size
+the median frame time of each preset, their ratio and the accurate frame's stages, the
+tessellation and the silhouette cut timed apart.
+
+Run: ``python benchmarks/accurate_price.py [SCENE ...] [--sizes 1024x768 640x480] [--frames 3]`` (the
+scenes first: ``--sizes`` takes every word after it).
+With ``--cut``: instead, the silhouette cut of one accurate frame (frame 1 after frame 0), its
+steps predicted (the preset's) against plain bisection, timed alternately in one process (median
+of 7), with the searches each ran.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+
+import refsoft
+from refsoft.frame import FrameDriver, RenderOptions
+from refsoft.search import silhouette, virtual
+
+SCENES = ["sphere", "ellipsoid", "quad", "kitchen", "ufo", "ants", "planar"]
+_SPLIT = {"tessellate_only": 0.0, "clip": 0.0}
+
+
+def _timed(fn, name):
+    def wrapper(*args, **kwargs):
+        t = time.perf_counter()
+        try:
+            return fn(*args, **kwargs)
+        finally:
+            _SPLIT[name] += 1000 * (time.perf_counter() - t)
+    return wrapper
+
+
+virtual.tessellate = _timed(virtual.tessellate, "tessellate_only")
+silhouette.clip_at_silhouette = _timed(silhouette.clip_at_silhouette, "clip")
+
+
+def measure(name, size, frames):
+    """Median frame ms of each preset and the accurate frames' median stage times."""
+    scene = refsoft.load_scene(name, width=size[0], height=size[1])
+    drivers = {p: FrameDriver(scene, RenderOptions(preset=p)) for p in ("paper", "accurate")}
+    for d in drivers.values():
+        d.render_frame(0)
+    totals = {p: [] for p in drivers}
+    stages = []
+    picks = [1 + (i % max(1, scene.n_frames - 1)) for i in range(frames)]
+    for f in picks:
+        for p, d in drivers.items():
+            for key in _SPLIT:
+                _SPLIT[key] = 0.0
+            fr = d.render_frame(f)
+            totals[p].append(fr.time_ms["total"])
+            if p == "accurate":
+                stages.append({**fr.time_ms, **_SPLIT})
+    med = {p: statistics.median(v) for p, v in totals.items()}
+    st = {k: statistics.median(s.get(k, 0.0) for s in stages) for k in stages[0]}
+    return med, st
+
+
+def measure_cut(name, size, rounds=7):
+    """Median ms of frame 1's silhouette cuts (every reflector) with predicted steps and with
+    plain bisection, and the searches of each."""
+    calls = []
+    clip = silhouette.clip_at_silhouette
+
+    def spy(*args, **kwargs):
+        calls.append((args, kwargs))
+        return clip(*args, **kwargs)
+
+    silhouette.clip_at_silhouette = spy
+    try:
+        scene = refsoft.load_scene(name, width=size[0], height=size[1])
+        driver = FrameDriver(scene, RenderOptions(preset="accurate"))
+        driver.render_frame(0)
+        calls.clear()
+        driver.render_frame(min(1, scene.n_frames - 1))
+    finally:
+        silhouette.clip_at_silhouette = clip
+    times = {True: [], False: []}
+    searched = {}
+    for _ in range(rounds):
+        for predict in (True, False):
+            t = time.perf_counter()
+            out = [clip(*a, **{**k, "predict": predict}) for a, k in calls]
+            times[predict].append(1000 * (time.perf_counter() - t))
+            searched[predict] = sum(c.searched for c in out)
+    edges = sum(c.cut for c in out)
+    return {p: statistics.median(v) for p, v in times.items()}, searched, edges
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("scenes", nargs="*", default=SCENES)
+    ap.add_argument("--sizes", nargs="+", default=["1024x768", "640x480"])
+    ap.add_argument("--frames", type=int, default=3)
+    ap.add_argument("--cut", action="store_true", help="time the silhouette cut alone, predicted against bisection")
+    args = ap.parse_args(argv)
+    if args.cut:
+        print("scene size edges | predicted: ms searches | bisection: ms searches")
+        for size in args.sizes:
+            w, h = (int(x) for x in size.split("x"))
+            for name in args.scenes:
+                ms, n, edges = measure_cut(name, (w, h))
+                print(f"{name} {size} {edges} | {ms[True]:.1f} {n[True]} | {ms[False]:.1f} {n[False]}", flush=True)
+        return
+    print("scene size paper_ms accurate_ms ratio | accurate stages (ms)")
+    for size in args.sizes:
+        w, h = (int(x) for x in size.split("x"))
+        for name in args.scenes:
+            med, st = measure(name, (w, h), args.frames)
+            keys = ("gbuffer", "search", "tessellate_only", "clip", "virtual", "main")
+            parts = " ".join(f"{k}={st.get(k, 0.0):.0f}" for k in keys)
+            ratio = med["accurate"] / med["paper"]
+            print(f"{name} {size} {med['paper']:.0f} {med['accurate']:.0f} {ratio:.2f} | {parts}", flush=True)
+
+
+if __name__ == "__main__":
+    main()
