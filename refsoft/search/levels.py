@@ -37,6 +37,35 @@ BOUNCE_DEPTH = keys.BOUNCE_DEPTH
 
 
 # --- exact acceptance -----------------------------------------------------------------------
+def _faces(meshes, ids):
+    """The faces of objects ``ids`` as rows of their vertices concatenated in that order (T, 3)
+    int64, each face's object (T,) int32 and local row (T,) int64, and the normals concatenated
+    (V, 3) float64; the last few answers kept (the meshes of static objects are the same frame
+    after frame)."""
+    key = tuple(id(meshes[k - 1]) for k in ids)
+    hit = _FACES.get(key)
+    if hit is not None and all(a is meshes[k - 1] for a, k in zip(hit[0], ids)):
+        return hit[1]
+    faces, owner, local, normals, start = [], [], [], [], 0
+    for k in ids:
+        mesh = meshes[k - 1]
+        faces.append(mesh.faces.astype(np.int64) + start)
+        owner.append(np.full(mesh.n_faces, k, np.int32))
+        local.append(np.arange(mesh.n_faces, dtype=np.int64))
+        normals.append(np.asarray(mesh.normals, np.float64))
+        start += mesh.n_vertices
+    cat = (lambda x, shape, dt: np.concatenate(x) if x else np.zeros(shape, dt))
+    out = (cat(faces, (0, 3), np.int64), cat(owner, (0,), np.int32), cat(local, (0,), np.int64),
+           cat(normals, (0, 3), np.float64))
+    if len(_FACES) >= 8:
+        _FACES.pop(next(iter(_FACES)))
+    _FACES[key] = (tuple(meshes[k - 1] for k in ids), out)
+    return out
+
+
+_FACES = {}
+
+
 def _candidates(meshes, groups, near=None):
     """Candidates of :func:`refsoft.search.several.draw` from ``groups``: (object ids, their
     vertices (n, 3) world, virtual vertices (n, 3), flags (n,)) each, the objects' vertices
@@ -49,25 +78,21 @@ def _candidates(meshes, groups, near=None):
 
     virtual, real, normals, obj, tri, counts = [], [], [], [], [], []
     for ids, verts, virt, flags in groups:
-        virt = np.where(((flags & np.uint8(HIDDEN)) != 0)[:, None], np.nan, virt)
-        verts = np.asarray(verts, np.float64)
-        xy = None if near is None else _pixels(virt, near[0])
-        start, n = 0, 0
-        for k in ids:
-            mesh = meshes[k - 1]
-            f = mesh.faces.astype(np.int64)
-            keep = ~np.any((flags[f + start] & np.uint8(CULLED)) != 0, axis=1)
-            if near is not None:
-                keep &= _near(xy[f + start], near[1])
-            f = f[keep]
-            virtual.append(virt[f + start])
-            real.append(verts[f + start])
-            normals.append(np.asarray(mesh.normals, np.float64)[f])
-            obj.append(np.full(len(f), k, np.int32))
-            tri.append(np.flatnonzero(keep))
-            start += mesh.n_vertices
-            n += len(f)
-        counts.append(n)
+        f, owner, local, nrm = _faces(meshes, ids)
+        keep = ~np.any((flags[f] & np.uint8(CULLED)) != 0, axis=1)
+        if near is not None and keep.any():
+            virt_h = np.where(((flags & np.uint8(HIDDEN)) != 0)[:, None], np.nan, virt)
+            keep[keep] = _near(_pixels(virt_h, near[0])[f[keep]], near[1])
+        f = f[keep]
+        hidden = (flags & np.uint8(HIDDEN)) != 0
+        v = np.asarray(virt, np.float64)[f]
+        v[hidden[f]] = np.nan
+        virtual.append(v)
+        real.append(np.asarray(verts, np.float64)[f])
+        normals.append(nrm[f])
+        obj.append(owner[keep])
+        tri.append(local[keep])
+        counts.append(len(f))
     cat = (lambda x, shape: np.ascontiguousarray(np.concatenate(x)) if x else np.zeros(shape))
     cand = Candidates(cat(virtual, (0, 3, 3)), cat(real, (0, 3, 3)), cat(normals, (0, 3, 3)),
                       cat(obj, (0,)).astype(np.int32), cat(tri, (0,)).astype(np.int64), 0)
@@ -113,6 +138,33 @@ def _bounds(cand, camera, box):
     rows = np.clip(bbox[:, 0:2] + r0, r0, r1)  # the draw's rows are the box's, its columns the view's
     cols = np.clip(bbox[:, 2:4], c0, c1)
     return screen, bbox, dilate, np.concatenate([rows, cols], axis=1)
+
+
+def _towards(rays, spheres):
+    """(h, w) bool: the rays that pass through one of ``spheres`` ((centre (3,), radius) each) ahead
+    of their origin or start inside it (a ray that meets a triangle inside a sphere does; the
+    radius is widened by 1e-9 of itself and of the distance for rounding)."""
+    valid, origin, direction = rays
+    out = np.zeros(valid.shape, bool)
+    d = direction / np.maximum(np.linalg.norm(direction, axis=-1, keepdims=True), 1e-300)
+    for centre, radius in spheres:
+        cp = centre - origin
+        dist = np.linalg.norm(cp, axis=-1)
+        t = np.maximum(np.sum(cp * d, axis=-1), 0.0)
+        miss = np.linalg.norm(cp - t[..., None] * d, axis=-1)
+        out |= miss <= radius * (1.0 + 1e-9) + 1e-9 * dist
+    return out & valid
+
+
+def _reached(meshes, group, rays):
+    """``group`` (:func:`_candidates`) with the vertices of every object whose bounding sphere no
+    ray of ``rays`` meets flagged CULLED (none of its triangles can be hit)."""
+    ids, verts, virtual, flags = group
+    sizes = [meshes[k - 1].n_vertices for k in ids]
+    hit = [bool(_towards(rays, [bounding_sphere(meshes[k - 1])]).any()) for k in ids]
+    if all(hit):
+        return group
+    return ids, verts, virtual, np.where(np.repeat(hit, sizes), flags, np.uint8(CULLED)).astype(np.uint8)
 
 
 def _joined(a, b):
@@ -173,9 +225,11 @@ def exact_level(scene, meshes, groups, camera, box, rays, reflectors_only=False)
     colour, rid, drawn = np.zeros((h, w, 3), np.float32), np.zeros((h, w), np.int32), np.zeros((h, w), bool)
     sub = box
     valid, origin, direction = rays
+    groups = [_reached(meshes, g, rays) for g in groups]
     if reflectors_only:  # the pixels whose rays meet a reflector, then what is nearest there
         ref, _ = _candidates(meshes, groups[1:], near=(camera, box))
-        meet = nearest_hits(ref, camera, box, rays)[0] >= 0
+        towards = _towards(rays, [bounding_sphere(meshes[k - 1]) for ids, *_ in groups[1:] for k in ids])
+        meet = nearest_hits(ref, camera, box, (valid & towards, origin, direction))[0] >= 0
         if not meet.any():
             return colour, rid, drawn, {}
         rows, cols = np.flatnonzero(meet.any(axis=1)), np.flatnonzero(meet.any(axis=0))
@@ -254,7 +308,12 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report):
     t0 = time.perf_counter()
     gb = gbuffer_of(bounce, camera, opt.precision)
     ids = [k for k, o in enumerate(scene.objects, start=1) if not o.reflector]
-    reach = (lambda k: may_see(bounce.position, bounce.normal, bounce.eye, bounce.mask, *bounding_sphere(meshes[k - 1])))
+    if opt.images == "all":  # drawn by each pixel's ray: what no ray meets cannot be drawn
+        rays = level_rays(bounce)
+        reach = (lambda k: bool(_towards(rays, [bounding_sphere(meshes[k - 1])]).any()))
+    else:
+        reach = (lambda k: may_see(bounce.position, bounce.normal, bounce.eye, bounce.mask,
+                                   *bounding_sphere(meshes[k - 1])))
     # only the objects a reflected ray of this level can reach are searched; the others' vertices
     # are CULLED (their triangles are not drawn)
     seen = np.repeat([reach(k) for k in ids], [meshes[k - 1].n_vertices for k in ids]).astype(bool)
@@ -275,7 +334,6 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report):
         found.append(([k], verts, unfolded(bounce, r, verts), r.flags))
         entry["searched"] += len(verts)
     if opt.images == "all":  # each pixel's reflected ray decides among the virtual triangles over it
-        rays = level_rays(bounce)
         colour, rid, covered, refl = exact_level(scene, meshes, [(ids, vertices, virtual, flags)] + found, camera,
                                                  bounce.box, rays)
         nxt = exact_bounces(bounce.level + 1, refl, rays, bounce.path, bounce.direction, bounce.origin, bounce.box,
@@ -335,9 +393,16 @@ def deepen(scene, view, k, stencil, box, out, refl, parts, opt, search_first):
     depth = np.where(stencil[r0:r1, c0:c1], np.int8(1), np.int8(0)).astype(np.int8)
     found = []  # the other reflectors' vertices searched on this one: (ids, vertices, virtual, flags)
     gb = refl.gbuffer
-    position = np.where(gb.mask[..., None], gb.position.astype(np.float64) + gb.origin, 0.0)
+    if opt.images == "all":  # drawn by each pixel's ray: a reflector no ray meets cannot be seen
+        from .several import pixel_rays
+
+        rays = pixel_rays(camera, view.meshes[k - 1], view.view.triangle, stencil, box)
+        reach = (lambda b: bool(_towards(rays, [bounding_sphere(view.meshes[b - 1])]).any()))
+    else:
+        position = np.where(gb.mask[..., None], gb.position.astype(np.float64) + gb.origin, 0.0)
+        reach = (lambda b: may_see(position, gb.normal, eye, gb.mask, *bounding_sphere(view.meshes[b - 1])))
     for b in scene.reflector_ids:
-        if b == k or not may_see(position, gb.normal, eye, gb.mask, *bounding_sphere(view.meshes[b - 1])):
+        if b == k or not reach(b):
             continue  # no reflected ray of this reflector comes near b
         virtual, flags = search_first(view.meshes[b - 1].vertices)
         first["searched"] += int(len(virtual))
@@ -345,9 +410,6 @@ def deepen(scene, view, k, stencil, box, out, refl, parts, opt, search_first):
     if not found:
         bounces = []
     elif opt.images == "all":  # the reflectors seen where each pixel's reflected ray meets them first
-        from .several import pixel_rays
-
-        rays = pixel_rays(camera, view.meshes[k - 1], view.view.triangle, stencil, box)
         ids = [j for j, o in enumerate(scene.objects, start=1) if not o.reflector]
         virtual = refl.virtual64 if refl.virtual64 is not None else refl.virtual.astype(np.float64)
         *_, seen = exact_level(scene, view.meshes, [(ids, view.vertices, virtual, refl.result.flags)] + found, camera,
