@@ -50,6 +50,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="--method ldt: list the bisection steps too")
     t.add_argument("--reflector", type=int, default=None, metavar="ID",
                    help="object id of the reflector (default: the first)")
+    t.add_argument("--through", default=None, metavar="A,B[,C...]",
+                   help="a later bounce's search: the reflectors of the path, the first bounce's first (reflector B "
+                        "as seen in A, ...; the render's --bounces is their count)")
     t.set_defaults(func=commands.cmd_trace)
 
     r = sub.add_parser("render", parents=[scene, frame_range_options(), methods, render_options(), ldt_options(), memory,

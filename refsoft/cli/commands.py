@@ -133,6 +133,8 @@ def cmd_trace(args) -> int:
     opts = search_kwargs(args)
     coherence = opts.pop("coherence", True)
     neighbourhood = RenderOptions(**opts).neighbourhood
+    if args.through is not None:
+        return _trace_bounce(args, scene, opts, coherence)
     rp = trace_vertex(scene, args.vertex, args.reflector, args.frame, coherence, **opts)
     name = lambda k: scene.object_by_id(k).name  # noqa: E731
     tr = rp.trace
@@ -162,6 +164,35 @@ def cmd_trace(args) -> int:
     print(f"wrote {args.out}/trace.json, trace.png (score field -log10(1 - s), path, start green, end red{beside}), "
           f"trace.gif ({len(tr.steps)} steps) and trace.html (open it in a browser to step through the search"
           + ("" if found is None else "; every image circled") + ")")
+    return 0
+
+
+def _trace_bounce(args, scene, opts, coherence) -> int:
+    """``refsoft trace --vertex I --through A,B[,C...]``: a later bounce's search."""
+    from ..search.pictures import write_trace
+    from ..search.trace import trace_vertex_bounce
+    from ..viewer import write_trace_page
+
+    if args.reflector is not None:
+        raise RefsoftError("--through names the reflectors of the path; leave out --reflector")
+    try:
+        through = [int(x) for x in args.through.split(",")]
+    except ValueError:
+        raise RefsoftError(f"--through must be reflector ids separated by commas, got {args.through!r}") from None
+    rp = trace_vertex_bounce(scene, args.vertex, through, args.frame, coherence, **opts)
+    name = lambda k: scene.object_by_id(k).name  # noqa: E731
+    tr = rp.trace
+    r0, r1, c0, c1 = rp.gbuffer_box
+    print(f"vertex {rp.vertex} (object {rp.vertex_object} {name(rp.vertex_object)!r}, its vertex {rp.local_index}), "
+          f"frame {rp.frame}, bounce {len(through)}: reflector {through[-1]} ({name(through[-1])!r}) as seen via "
+          f"{' -> '.join(f'{k} ({name(k)!r})' for k in through[:-1])}; its G-buffer covers view rows {r0}..{r1 - 1}, "
+          f"columns {c0}..{c1 - 1} (pixels below are relative to ({r0}, {c0})); each pixel's eye is the previous "
+          f"bounce point; start ({tr.start[0]}, {tr.start[1]}): the best of up to 64 covered pixels")
+    print(tr.table())
+    os.makedirs(args.out, exist_ok=True)
+    write_trace(args.out, rp)
+    write_trace_page(args.out, rp)
+    print(f"wrote {args.out}/trace.json, trace.png, trace.gif ({len(tr.steps)} steps) and trace.html")
     return 0
 
 

@@ -285,7 +285,7 @@ def exact_bounces(level, reflectors, rays, path, direction, camera_eye, box, sha
 
 
 # --- the levels --------------------------------------------------------------------------------
-def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report):
+def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report, path=(), keep=None):
     """Level ``bounce.level``'s picture in its stencil, and the later levels' inside it.
 
     Parameters
@@ -299,6 +299,11 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report):
         Read: ``neighbourhood``, ``cap``, ``precision``, ``images``, ``bounces`` (the last level).
     report : list
         Receives one dict per bounce drawn (level, reflector, pixels, vertices searched, ms).
+    path : tuple of int
+        The reflectors of the path before this one (the first reflector first).
+    keep : dict, optional
+        Receives each bounce drawn by its path (reflector ids, this one's last): what a trace of a
+        later bounce's search replays.
 
     Returns
     -------
@@ -306,6 +311,9 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report):
         Over ``bounce.box``.
     """
     t0 = time.perf_counter()
+    path = tuple(path) + (bounce.reflector,)
+    if keep is not None:
+        keep[path] = bounce
     gb = gbuffer_of(bounce, camera, opt.precision)
     ids = [k for k, o in enumerate(scene.objects, start=1) if not o.reflector]
     if opt.images == "all":  # drawn by each pixel's ray: what no ray meets cannot be drawn
@@ -345,8 +353,8 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report):
         rparts = sum((object_parts(meshes, k, v, fl) for k, _, v, fl in found), [])
         nxt = later_bounces(bounce, seen_reflectors(parts, rparts, camera, stencil, bounce.box), meshes) if found else []
     for b in nxt:
-        blend(colour, rid, covered, depth, bounce.box, b, draw_bounce(scene, meshes, b, camera, vertices, opt, report),
-              scene)
+        blend(colour, rid, covered, depth, bounce.box, b,
+              draw_bounce(scene, meshes, b, camera, vertices, opt, report, path, keep), scene)
     entry["ms"] = 1000 * (time.perf_counter() - t0)
     return colour, rid, covered, depth
 
@@ -371,13 +379,14 @@ def blend(colour, rid, covered, depth, box, bounce: Bounce, deeper, scene):
     depth[sl][m] = dep2[m]
 
 
-def deepen(scene, view, k, stencil, box, out, refl, parts, opt, search_first):
+def deepen(scene, view, k, stencil, box, out, refl, parts, opt, search_first, keep=None):
     """After level 1 of reflector ``k`` (its :class:`~refsoft.seam.ReflectorResult` ``out`` over
     ``box``, its reflection ``refl`` and virtual ``parts``): the reflectors seen in its image and
     every later level, composited into ``out`` in place, with the per-pixel depth.
 
     ``search_first(vertices)`` gives the first level's virtual vertices (N, 3) float64 and flags
-    of other vertices (the reflectors'), as the method computes its own.
+    of other vertices (the reflectors'), as the method computes its own; ``keep`` (a dict)
+    receives every later bounce by its path (:func:`draw_bounce`).
 
     Returns
     -------
@@ -425,7 +434,7 @@ def deepen(scene, view, k, stencil, box, out, refl, parts, opt, search_first):
     colour, rid, covered = out.colour.copy(), out.reflected_id.copy(), out.covered.copy()
     for bounce in bounces:
         blend(colour, rid, covered, depth, box, bounce,
-              draw_bounce(scene, view.meshes, bounce, camera, view.vertices, opt, report), scene)
+              draw_bounce(scene, view.meshes, bounce, camera, view.vertices, opt, report, (k,), keep), scene)
     out.colour, out.reflected_id, out.covered = colour, rid, covered
     out.pixels = {**out.pixels, BOUNCE_DEPTH: depth}
     out.pixel_mask = stencil[r0:r1, c0:c1].copy()

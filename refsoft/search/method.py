@@ -124,6 +124,9 @@ class VertexSearch:
         if options.bounces > 1:  # the reflections taken per pixel, and the later levels' time
             self.pixel_arrays = {levels.BOUNCE_DEPTH: ((), np.int8, 0)}
             self.stages = self.stages + ("bounces",)
+        #: The last frame's later bounces by path (reflector ids, the first reflector first):
+        #: :class:`refsoft.search.bounces.Bounce` s, what a trace of a later bounce replays.
+        self.kept_bounces, self._kept_frame = {}, None
         self.previous = {}
         self._last = {}
         self._reflected = None  # the concatenated non-reflector meshes (reflected_mesh)
@@ -164,8 +167,11 @@ class VertexSearch:
             times["virtual"] = 1000 * (time.perf_counter() - t)
             if opt.bounces > 1 and drawn is None:  # the reflectors seen in this image, level by level
                 t = time.perf_counter()
+                if self._kept_frame != view.frame:  # the bounces of this frame only
+                    self.kept_bounces, self._kept_frame = {}, view.frame
                 report["bounces"] = levels.deepen(self.scene, view, k, stencil, box, out, refl, parts, opt,
-                                                   lambda v: self._first_level(refl.gbuffer, view.camera.eye, v))
+                                                  lambda v: self._first_level(refl.gbuffer, view.camera.eye, v),
+                                                  self.kept_bounces)
                 times["bounces"] = 1000 * (time.perf_counter() - t)
         out.arrays = {**gbuffer_outputs(refl.gbuffer, k), **vertex_outputs(refl, view.vertex_object, k)}
         return out

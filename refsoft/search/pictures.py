@@ -213,6 +213,9 @@ def _has_inverse(trace):
 
 def _title(trace, replay=None, images=()):
     where = "" if replay is None else f"{replay.scene} frame {replay.frame}, vertex {replay.vertex}: "
+    if replay is not None and getattr(replay, "through", ()):  # a later bounce: its path and box
+        r0, _, c0, _ = replay.gbuffer_box
+        where += f"bounce {len(replay.through)} via {'->'.join(map(str, replay.through))} (box at ({r0}, {c0})): "
     several = f"; SEVERAL: {len(images)} images" if len(images) > 1 else ""
     return (f"{where}score field -log10(1 - s), s = N . bisector; {len(trace.steps)} steps, "
             f"{trace.stop}{several}")

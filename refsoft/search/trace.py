@@ -135,19 +135,7 @@ def trace_search(gbuffer, eye, vertex, neighbourhood="cross", inverse="plane", p
     record[:n_rec, 2] += c0
     if restarted:
         fl |= _kernels.RESTARTED
-    steps = []
-    for row in record[:n_rec]:
-        pr, pc = int(row[1]), int(row[2])
-        cands = []
-        for k in range(n_cand):
-            status = int(row[4 + k])
-            pix = [pr + int(_kernels.OFFSETS[k, 0]), pc + int(_kernels.OFFSETS[k, 1])]
-            cands.append({"name": CANDIDATE_NAMES[k], "pixel": pix, "status": _STATUS[status],
-                          "score": float(row[4 + 9 + k]) if status == _kernels.EVALUATED else None})
-        chosen = int(row[3])
-        move = None if chosen < 0 else cands[chosen]["pixel"]
-        steps.append({"phase": "standard" if row[0] == 0 else "inverse", "pixel": [pr, pc], "candidates": cands,
-                      "move_to": move})
+    steps = _steps(record[:n_rec], n_cand)
     capped_last = bool(steps) and steps[-1]["move_to"] is not None
     field_std = np.full((h, w), np.nan, dtype=dt)
     parallel_range(_kernels.score_field, M.shape[0], G, M, v_rel, False, fp,
@@ -160,6 +148,60 @@ def trace_search(gbuffer, eye, vertex, neighbourhood="cross", inverse="plane", p
     return Trace(v, e, neighbourhood, inverse, cap, [int(start[0]), int(start[1])], restarted, steps,
                  [int(r), int(c)], float(s), float(m), int(it), int(fl), "capped" if capped_last else "converged",
                  field_std, field_inv)
+
+
+def _steps(record, n_cand):
+    """The steps of a search's record (``_kernels.walk``'s rows) as :class:`Trace` steps."""
+    steps = []
+    for row in record:
+        pr, pc = int(row[1]), int(row[2])
+        cands = []
+        for k in range(n_cand):
+            status = int(row[4 + k])
+            pix = [pr + int(_kernels.OFFSETS[k, 0]), pc + int(_kernels.OFFSETS[k, 1])]
+            cands.append({"name": CANDIDATE_NAMES[k], "pixel": pix, "status": _STATUS[status],
+                          "score": float(row[4 + 9 + k]) if status == _kernels.EVALUATED else None})
+        chosen = int(row[3])
+        move = None if chosen < 0 else cands[chosen]["pixel"]
+        steps.append({"phase": "standard" if row[0] == 0 else "inverse", "pixel": [pr, pc], "candidates": cands,
+                      "move_to": move})
+    return steps
+
+
+def trace_bounce(bounce, gb, vertex, neighbourhood="cross", cap=None) -> Trace:
+    """Replay one vertex's search at a later bounce (:func:`refsoft.search.bounces.search_bounce`,
+    each pixel's eye its own) on the bounce's G-buffer ``gb``
+    (:func:`refsoft.search.bounces.gbuffer_of`): the same walk and start, recorded. Pixels are
+    the G-buffer's (the bounce's box); ``eye`` is the eye of the pixel the search ended at."""
+    from .. import validate
+    from . import NEIGHBOURHOODS, default_cap
+    from . import _bounces
+    from .bounces import _starts
+
+    v = validate.point(vertex, "vertex")
+    if not gb.mask.any():
+        raise RefsoftError("the bounce covers no pixel: there is nothing to search")
+    dt = gb.position.dtype.type
+    fp = dt(0)
+    h, w = gb.mask.shape
+    cap = default_cap((h, w)) if cap is None else int(cap)
+    G = np.zeros((h, w, 9), dtype=dt)
+    eye_rel = np.ascontiguousarray((bounce.eye - gb.origin).astype(dt))
+    parallel_range(_bounces.pack_eyes, h, gb.position, gb.normal, gb.mask, eye_rel, fp, G)
+    v_rel = (v - gb.origin).astype(dt)
+    start = _starts(G, gb.mask, v_rel[None])[0]
+    record = np.zeros((2 * cap + 2, _kernels.RECORD_WIDTH), dtype=np.float64)
+    n_cand = NEIGHBOURHOODS[neighbourhood]
+    r, c, s, m, it, fl, n_rec = _kernels.search_one(G, gb.mask, v_rel, int(start[0]), int(start[1]), n_cand, cap,
+                                                    False, fp, record, np.empty((2, 9), dtype=dt),
+                                                    np.zeros((2, 9), dtype=bool))
+    steps = _steps(record[:n_rec], n_cand)
+    capped_last = bool(steps) and steps[-1]["move_to"] is not None
+    field = np.full((h, w), np.nan, dtype=dt)
+    parallel_range(_kernels.score_field, h, G, gb.mask, v_rel, False, fp, field)
+    return Trace(v, np.asarray(bounce.eye[r, c], np.float64), neighbourhood, "discard", cap,
+                 [int(start[0]), int(start[1])], False, steps, [int(r), int(c)], float(s), float(m), int(it), int(fl),
+                 "capped" if capped_last else "converged", field, None)
 
 
 @dataclass
@@ -218,7 +260,11 @@ class VertexReplay:
     gbuffer : GBuffer
         The G-buffer searched.
     eye, position : ndarray, shape (3,), float64
-        The eye and the vertex, world space, at the frame (what the viewer's side view draws).
+        The eye and the vertex, world space, at the frame (what the viewer's side view draws; at a
+        later bounce the eye of the pixel the search ended at).
+    through : tuple of int
+        At a later bounce (:func:`trace_vertex_bounce`), the reflectors of the path, the first
+        reflector first and ``reflector`` last; empty for the first bounce.
     """
 
     scene: str
@@ -232,6 +278,7 @@ class VertexReplay:
     gbuffer: object
     eye: np.ndarray = field(default=None, repr=False)
     position: np.ndarray = field(default=None, repr=False)
+    through: tuple = ()
 
     def to_dict(self) -> dict:
         """``trace.json``: the trace's fields and where it comes from."""
@@ -240,7 +287,16 @@ class VertexReplay:
                     vertex_object=self.vertex_object)
         if self.method == "hierarchy":
             data["method"] = "hierarchy"
+        if self.through:
+            data["through"] = list(self.through)
+            data["box"] = list(self.gbuffer_box)
         return data
+
+    @property
+    def gbuffer_box(self):
+        """At a later bounce, the view pixels (r0, r1, c0, c1) its G-buffer covers (its pixels are
+        relative to r0, c0)."""
+        return getattr(self, "_box", None)
 
 
 def trace_vertex(scene, vertex: int, reflector=None, frame: int = 0, coherence: bool = True,
@@ -298,6 +354,67 @@ def trace_vertex(scene, vertex: int, reflector=None, frame: int = 0, coherence: 
             previous = res.pixel[0]
     tr = trace_search(gb, eye, verts[vertex], previous=previous, **walk)
     return VertexReplay(scene.name, k, frame, vertex, obj, local, "walk", tr, gb, eye, verts[vertex])
+
+
+def trace_vertex_bounce(scene, vertex: int, through, frame: int = 0, coherence: bool = True,
+                        **options) -> VertexReplay:
+    """Replay one vertex's search at a later bounce (spec section 5.1): on the G-buffer of the
+    last reflector of ``through`` as seen along that path of reflectors, as a render of
+    ``frame`` with ``bounces = len(through)`` runs it (frames ``0 .. frame`` rendered first with
+    coherence, as the render's first level starts from them).
+
+    Parameters
+    ----------
+    scene : Scene
+    vertex : int
+        Index into the vertices of the non-reflector objects, in scene order.
+    through : sequence of int
+        Reflector ids, the first reflector first (at least two).
+    frame : int
+    coherence : bool
+    **options
+        :class:`refsoft.RenderOptions` fields (``bounces`` is ``len(through)``).
+
+    Returns
+    -------
+    VertexReplay
+        Pixels in the bounce's G-buffer (its box, ``gbuffer_box``).
+    """
+    from .. import validate
+    from ..frame.driver import FrameDriver
+    from ..options import RenderOptions
+    from ..scene.model import scene_vertices
+    from .bounces import gbuffer_of
+    from .reflect import check_reflector
+
+    path = tuple(check_reflector(scene, k) for k in through)
+    if len(path) < 2 or len(path) > 8:
+        raise RefsoftError(f"through must name 2 to 8 reflectors (the first bounce's first), got {list(through)}")
+    if any(a == b for a, b in zip(path, path[1:])):
+        raise RefsoftError(f"through names one reflector twice in a row ({list(path)}): a reflector seeing itself "
+                           "is not drawn at a later bounce")
+    validate.integer(frame, "frame", 0, None if scene.animation is None else scene.n_frames - 1)
+    opts = RenderOptions(coherence=coherence, bounces=len(path), **options)
+    verts, owner = scene_vertices(scene, frame)
+    validate.integer(vertex, "vertex", 0, len(verts) - 1)
+    driver = FrameDriver(scene, opts)
+    for f in range(frame + 1 if coherence else 0):
+        driver.render_frame(f)
+    if not coherence:
+        driver.render_frame(frame)
+    kept = driver.method.kept_bounces
+    bounce = kept.get(path)
+    if bounce is None:
+        seen = ", ".join("->".join(str(k) for k in p) for p in sorted(kept)) or "none"
+        raise RefsoftError(f"frame {frame} shows no bounce along {'->'.join(map(str, path))} (paths drawn: {seen})")
+    camera = scene.camera_at(frame)
+    gb = gbuffer_of(bounce, camera, opts.precision)
+    tr = trace_bounce(bounce, gb, verts[vertex], opts.neighbourhood, opts.cap)
+    obj = int(owner[vertex])
+    local = vertex - int(np.argmax(owner == obj))
+    rp = VertexReplay(scene.name, path[-1], frame, vertex, obj, local, "walk", tr, gb, tr.eye, verts[vertex], path)
+    rp._box = bounce.box
+    return rp
 
 
 def trace_vertex_images(scene, replay: VertexReplay):

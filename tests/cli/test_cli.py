@@ -134,7 +134,22 @@ def test_trace_command_coherent_frame_starts_at_previous_pixel(tmp_path, capsys)
     assert data["result"]["iterations"] == r2[1].result.iterations[vertex]
 
 
+def test_trace_command_replays_a_later_bounce(tmp_path, capsys):
+    import json
+
+    out = tmp_path / "b"
+    assert cli.main(["trace", "mirrors", "--vertex", "1500", "--through", "1,2", "--width", "160", "--height", "120",
+                     "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "bounce 2: reflector 2 ('ball_2') as seen via 1 ('ball_1')" in text and "result: pixel" in text
+    data = json.loads((out / "trace.json").read_text())
+    assert data["through"] == [1, 2] and data["reflector"] == 2 and len(data["box"]) == 4
+    assert (out / "trace.png").exists() and (out / "trace.html").exists()
+
+
 @pytest.mark.parametrize("args, message", [
+    (["trace", "mirrors", "--vertex", "1", "--through", "1,x"], "--through must be reflector ids"),
+    (["trace", "mirrors", "--vertex", "1", "--through", "1,2", "--reflector", "1"], "leave out --reflector"),
     (["trace", "sphere", "--vertex", "999999"], "vertex must be an integer in [0, "),
     (["trace", "sphere", "--vertex", "1", "--reflector", "3"], "not a reflector"),
     (["trace", "ellipsoid", "--vertex", "1", "--frame", "99"], "frame must be an integer in [0, "),

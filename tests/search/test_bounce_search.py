@@ -197,3 +197,31 @@ def test_the_reach_test_on_a_plane_mirror():
     assert may_see(pos, nrm, eye, mask, (0.0, 0.0, 2.0), 0.2)  # straight back up the eye's way
     assert not may_see(pos, nrm, eye, mask, (0.0, 0.0, -2.0), 0.2)  # behind the mirror
     assert not may_see(pos, nrm, eye, mask, (20.0, 0.0, 1.0), 0.5)  # far to the side, low
+
+
+def test_the_trace_of_a_later_bounce_replays_the_renders_search():
+    """`refsoft trace --through 1,2`: the walk on ball 2 as ball 1 shows it, recorded; it ends
+    where the render's search of that vertex ended (the kept bounce, the same G-buffer)."""
+    from refsoft.search.bounces import gbuffer_of
+    from refsoft.search.trace import trace_vertex_bounce
+
+    scene = two_balls()
+    rp = trace_vertex_bounce(scene, 40, (1, 2), 0)
+    assert rp.through == (1, 2) and rp.reflector == 2 and rp.to_dict()["through"] == [1, 2]
+    driver = FrameDriver(scene, RenderOptions(bounces=2))
+    driver.render_frame(0)
+    bounce = driver.method.kept_bounces[(1, 2)]
+    assert rp.gbuffer_box == bounce.box
+    res = search_bounce(bounce, gbuffer_of(bounce, scene.camera), rp.position[None], "box")
+    assert rp.trace.pixel == res.pixel[0].tolist() and rp.trace.iterations == res.iterations[0]
+    assert rp.trace.steps[-1]["pixel"] == rp.trace.pixel and "bounce 2 via 1->2" in __import__(
+        "refsoft.search.pictures", fromlist=["_title"])._title(rp.trace, rp)
+
+
+@pytest.mark.parametrize("through, message", [((2, 2), "twice in a row"), ((1,), "2 to 8 reflectors"),
+                                               ((1, 3), "not a reflector")])
+def test_the_trace_of_a_later_bounce_refuses_a_path_it_cannot_replay(through, message):
+    from refsoft.search.trace import trace_vertex_bounce
+
+    with pytest.raises(RefsoftError, match=message):
+        trace_vertex_bounce(two_balls(), 40, through, 0)
