@@ -295,3 +295,7 @@ BOUNCE_START_SAMPLES = 64
 #: reach its bounding sphere: its radius widened by this many times the spread of the rays of a
 #: texel's covered neighbours (``refsoft.search.bounces.may_see``).
 BOUNCE_BOUND_FACTOR = 2.5
+#: Drawn by exact acceptance with at most this many rays, a level's candidates are first
+#: narrowed to the triangles one of the rays can meet (``refsoft.search.levels``): a cost
+#: choice, the picture is the same.
+BOUNCE_FEW_RAYS = 256

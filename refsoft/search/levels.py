@@ -39,24 +39,26 @@ BOUNCE_DEPTH = keys.BOUNCE_DEPTH
 # --- exact acceptance -----------------------------------------------------------------------
 def _faces(meshes, ids):
     """The faces of objects ``ids`` as rows of their vertices concatenated in that order (T, 3)
-    int64, each face's object (T,) int32 and local row (T,) int64, and the normals concatenated
-    (V, 3) float64; the last few answers kept (the meshes of static objects are the same frame
-    after frame)."""
+    int64, each face's object (T,) int32 and local row (T,) int64, the normals concatenated
+    (V, 3) float64 and each face's longest edge (T,) float64; the last few answers kept (the
+    meshes of static objects are the same frame after frame)."""
     key = tuple(id(meshes[k - 1]) for k in ids)
     hit = _FACES.get(key)
     if hit is not None and all(a is meshes[k - 1] for a, k in zip(hit[0], ids)):
         return hit[1]
-    faces, owner, local, normals, start = [], [], [], [], 0
+    faces, owner, local, normals, edge, start = [], [], [], [], [], 0
     for k in ids:
         mesh = meshes[k - 1]
         faces.append(mesh.faces.astype(np.int64) + start)
         owner.append(np.full(mesh.n_faces, k, np.int32))
         local.append(np.arange(mesh.n_faces, dtype=np.int64))
         normals.append(np.asarray(mesh.normals, np.float64))
+        corners = np.asarray(mesh.vertices, np.float64)[mesh.faces]
+        edge.append(np.max(np.linalg.norm(corners - corners[:, [1, 2, 0]], axis=2), axis=1))
         start += mesh.n_vertices
     cat = (lambda x, shape, dt: np.concatenate(x) if x else np.zeros(shape, dt))
     out = (cat(faces, (0, 3), np.int64), cat(owner, (0,), np.int32), cat(local, (0,), np.int64),
-           cat(normals, (0, 3), np.float64))
+           cat(normals, (0, 3), np.float64), cat(edge, (0,), np.float64))
     if len(_FACES) >= 8:
         _FACES.pop(next(iter(_FACES)))
     _FACES[key] = (tuple(meshes[k - 1] for k in ids), out)
@@ -66,20 +68,23 @@ def _faces(meshes, ids):
 _FACES = {}
 
 
-def _candidates(meshes, groups, near=None):
+def _candidates(meshes, groups, near=None, rays=None):
     """Candidates of :func:`refsoft.search.several.draw` from ``groups``: (object ids, their
     vertices (n, 3) world, virtual vertices (n, 3), flags (n,)) each, the objects' vertices
     consecutive in that order. A triangle with a CULLED corner is left out; one with a HIDDEN
     corner (its virtual vertex is where its walk stopped, not its image) is tried over the whole
     box (the draw's rule for a corner it cannot project). With ``near = (camera, box)`` only the
-    triangles whose dilated bounds may meet ``box`` (:func:`_near`) are kept. Returns the
-    candidates and, per group, how many it gave."""
+    triangles whose dilated bounds may meet ``box`` (:func:`_near`) are kept; with ``rays`` (the
+    valid ones, at most BOUNCE_FEW_RAYS) only those one of the rays can meet (:func:`_met`).
+    Returns the candidates and, per group, how many it gave."""
     from .several import Candidates
 
     virtual, real, normals, obj, tri, counts = [], [], [], [], [], []
     for ids, verts, virt, flags in groups:
-        f, owner, local, nrm = _faces(meshes, ids)
+        f, owner, local, nrm, edge = _faces(meshes, ids)
         keep = ~np.any((flags[f] & np.uint8(CULLED)) != 0, axis=1)
+        if rays is not None and keep.any():
+            keep &= _met(np.asarray(verts, np.float64), f, edge, rays)
         if near is not None and keep.any():
             virt_h = np.where(((flags & np.uint8(HIDDEN)) != 0)[:, None], np.nan, virt)
             keep[keep] = _near(_pixels(virt_h, near[0])[f[keep]], near[1])
@@ -97,6 +102,32 @@ def _candidates(meshes, groups, near=None):
     cand = Candidates(cat(virtual, (0, 3, 3)), cat(real, (0, 3, 3)), cat(normals, (0, 3, 3)),
                       cat(obj, (0,)).astype(np.int32), cat(tri, (0,)).astype(np.int64), 0)
     return cand, counts
+
+
+def _met(verts, faces, edge, rays):
+    """(T,) bool: the faces a ray can meet. A ray meeting a triangle passes within its longest
+    edge of each of its corners (the hit lies in the triangle), so a face is kept when each of
+    its corners lies within that distance (and 1e-9 of it) of one of the rays (origin (P, 3),
+    unit direction (P, 3), the part ahead of the origin)."""
+    origin, direction = rays
+    d = direction / np.maximum(np.linalg.norm(direction, axis=1, keepdims=True), 1e-300)
+    near = np.full(len(verts), np.inf)
+    for o, u in zip(origin, d):  # a few rays: one pass over the vertices each
+        cp = verts - o
+        t = np.maximum(cp @ u, 0.0)
+        near = np.minimum(near, np.linalg.norm(cp - t[:, None] * u, axis=1))
+    return np.all(near[faces] <= (edge * (1.0 + 1e-9))[:, None], axis=1)
+
+
+def _few(rays):
+    """The valid rays of ``rays`` as (origin (P, 3), direction (P, 3)) when there are at most
+    BOUNCE_FEW_RAYS of them, else None."""
+    from .. import constants
+
+    valid, origin, direction = rays
+    if valid.sum() > constants.BOUNCE_FEW_RAYS:
+        return None
+    return origin[valid], direction[valid]
 
 
 def _pixels(virtual, camera):
@@ -227,18 +258,18 @@ def exact_level(scene, meshes, groups, camera, box, rays, reflectors_only=False)
     valid, origin, direction = rays
     groups = [_reached(meshes, g, rays) for g in groups]
     if reflectors_only:  # the pixels whose rays meet a reflector, then what is nearest there
-        ref, _ = _candidates(meshes, groups[1:], near=(camera, box))
         towards = _towards(rays, [bounding_sphere(meshes[k - 1]) for ids, *_ in groups[1:] for k in ids])
+        ref, _ = _candidates(meshes, groups[1:], near=(camera, box), rays=_few((towards, origin, direction)))
         meet = nearest_hits(ref, camera, box, (valid & towards, origin, direction))[0] >= 0
         if not meet.any():
             return colour, rid, drawn, {}
         rows, cols = np.flatnonzero(meet.any(axis=1)), np.flatnonzero(meet.any(axis=0))
         sub = (r0 + int(rows[0]), r0 + int(rows[-1]) + 1, c0 + int(cols[0]), c0 + int(cols[-1]) + 1)
         valid = valid & meet
-        scene_cand, _ = _candidates(meshes, groups[:1], near=(camera, sub))
+        scene_cand, _ = _candidates(meshes, groups[:1], near=(camera, sub), rays=_few((valid, origin, direction)))
         cand = _joined(scene_cand, ref)
     else:
-        cand, _ = _candidates(meshes, groups, near=(camera, box))
+        cand, _ = _candidates(meshes, groups, near=(camera, box), rays=_few(rays))
     sl = (slice(sub[0] - r0, sub[1] - r0), slice(sub[2] - c0, sub[3] - c0))
     valid, origin, direction = valid[sl], origin[sl], direction[sl]
     best_c, best_t, best_uv = nearest_hits(cand, camera, sub, (valid, origin, direction))
