@@ -246,10 +246,21 @@ def may_see(position, normal, eye, mask, centre, radius) -> bool:
 
 
 def bounding_sphere(mesh):
-    """(centre (3,), radius) of a mesh's vertices: the centre of their box."""
+    """(centre (3,), radius) of a mesh's vertices: the centre of their box (the last answers kept
+    by mesh: a static object's world mesh is the same frame after frame)."""
+    hit = _SPHERES.get(id(mesh))
+    if hit is not None and hit[0] is mesh:
+        return hit[1]
     v = np.asarray(mesh.vertices, np.float64)
     c = 0.5 * (v.min(axis=0) + v.max(axis=0))
-    return c, float(np.sqrt(np.max(np.sum((v - c) ** 2, axis=1))))
+    out = c, float(np.sqrt(np.max(np.sum((v - c) ** 2, axis=1))))
+    if len(_SPHERES) >= 64:
+        _SPHERES.pop(next(iter(_SPHERES)))
+    _SPHERES[id(mesh)] = (mesh, out)
+    return out
+
+
+_SPHERES = {}
 
 
 # --- the paper preset: the reflectors seen, by rasterizing their virtual triangles ---------------
