@@ -1,8 +1,9 @@
 """Imports run one way: the pipeline's early stages (the scene, the rasterizer, the searches)
 never import the stages built on them (the frame driver, the truth, the conformance checks, the
-benchmarks, the viewer, the command line), not even inside a function. The one exception is a
-replay of a whole frame (``ldt/trace.py``'s ``trace_pixel`` renders the frame it replays through
-the frame driver): it is a driver itself, named here."""
+benchmarks, the viewer, the command line), not even inside a function. The exceptions are the
+replays of a whole frame (``ldt/trace.py``'s ``trace_pixel`` and ``search/trace.py``'s
+``trace_vertex_bounce`` render the frame they replay through the frame driver): drivers
+themselves, named here."""
 
 import ast
 import pathlib
@@ -15,7 +16,7 @@ ROOT = pathlib.Path(refsoft.__file__).parent
 EARLY = ("scene", "raster", "search", "ldt", "envmap")
 LATE = {"frame", "truth", "conformance", "bench", "viewer", "cli"}
 #: Modules that drive a whole frame, and what they may import of the later stages.
-DRIVERS = {"ldt/trace.py": {"frame"}}
+DRIVERS = {"ldt/trace.py": {"frame"}, "search/trace.py": {"frame"}}
 
 
 def _imported_packages(path):
