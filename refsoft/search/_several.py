@@ -365,3 +365,68 @@ def rays_near(lo, hi, real, origin, direction, first, last, ray, margin, paralle
             n += 1
         if not fill:
             start[f] = n
+
+
+@kernel
+def screen_bounds(lo, hi, clip, width, height, r0, r1, c0, c1, pixels, fraction, screen, bbox, dilate, odd):
+    """Candidates ``lo .. hi - 1`` (run by :func:`refsoft._parallel.parallel_range`; each writes
+    only its own rows): the view-pixel positions of its virtual vertices from their clip
+    coordinates, its dilated bounds and dilation, as ``refsoft.search.several._screen_numpy``
+    computes them (the same operations in the same order). A candidate with a vertex at or behind
+    the eye plane has zeros, the whole box and -1. ``odd[c]`` is set where a value is not finite
+    (the caller recomputes those rows with NumPy, whose NaN rules this does not copy).
+
+    Parameters
+    ----------
+    clip : (C, 3, 4) float64
+    width, height : float
+        The view's size.
+    r0, r1, c0, c1 : int
+        The box.
+    pixels, fraction : float
+        ``SEVERAL_DILATE_PIXELS``, ``SEVERAL_DILATE_FRACTION``.
+    screen : (C, 3, 2) float64
+    bbox : (C, 4) int64
+    dilate : (C,) float64
+    odd : (C,) bool
+    """
+    big = float(1 << 30)
+    for c in range(lo, hi):
+        good = clip[c, 0, 3] > 0.0 and clip[c, 1, 3] > 0.0 and clip[c, 2, 3] > 0.0
+        if not good:
+            for k in range(3):
+                screen[c, k, 0] = 0.0
+                screen[c, k, 1] = 0.0
+            bbox[c, 0], bbox[c, 1], bbox[c, 2], bbox[c, 3] = 0, r1 - r0, c0, c1
+            dilate[c] = -1.0
+            odd[c] = False
+            continue
+        bad = False
+        for k in range(3):
+            wv = clip[c, k, 3]
+            x = (clip[c, k, 0] / wv + 1.0) * 0.5 * width
+            y = (1.0 - clip[c, k, 1] / wv) * 0.5 * height
+            bad = bad or not (np.isfinite(x) and np.isfinite(y))
+            screen[c, k, 0] = x
+            screen[c, k, 1] = y
+        edge = 0.0
+        for k in range(3):
+            m = (k + 1) % 3
+            dx = screen[c, k, 0] - screen[c, m, 0]
+            dy = screen[c, k, 1] - screen[c, m, 1]
+            e = np.sqrt(dx * dx + dy * dy)
+            edge = e if k == 0 or e > edge else edge
+        d = pixels + fraction * edge
+        bad = bad or not np.isfinite(d)
+        odd[c] = bad
+        if bad:
+            continue
+        lo_x = min(screen[c, 0, 0], screen[c, 1, 0], screen[c, 2, 0]) - d
+        hi_x = max(screen[c, 0, 0], screen[c, 1, 0], screen[c, 2, 0]) + d
+        lo_y = min(screen[c, 0, 1], screen[c, 1, 1], screen[c, 2, 1]) - d
+        hi_y = max(screen[c, 0, 1], screen[c, 1, 1], screen[c, 2, 1]) + d
+        bbox[c, 0] = np.int64(np.floor(min(max(lo_y - 0.5, -big), big))) - r0
+        bbox[c, 1] = np.int64(np.ceil(min(max(hi_y - 0.5, -big), big))) + 1 - r0
+        bbox[c, 2] = np.int64(np.floor(min(max(lo_x - 0.5, -big), big)))
+        bbox[c, 3] = np.int64(np.ceil(min(max(hi_x - 0.5, -big), big))) + 1
+        dilate[c] = d

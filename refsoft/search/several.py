@@ -31,7 +31,7 @@ from ..errors import RefsoftError
 from ..raster import GBuffer, _setup, shade
 from ..raster.rays import primary_rays
 from . import search
-from ._several import accept, accept_near, linked_triples, nearest_image, rays_near
+from ._several import accept, accept_near, linked_triples, nearest_image, rays_near, screen_bounds
 from .images import Images, facing_gbuffer, find_images
 
 
@@ -281,7 +281,8 @@ class _Reach:
             parallel_range(rays_near, len(real), *args, n, np.zeros(0, np.int64), False)
         start = np.cumsum(n) - n
         out = np.empty(int(n.sum()), np.int64)
-        if len(out):
+        if len(out):  # the second pass skips the rays of the triangles without any
+            args = args[:4] + (np.where(n > 0, args[4], args[3]),) + args[5:]
             parallel_range(rays_near, len(real), *args, start, out, True)
         start += self.size
         self.lists.append(out)
@@ -624,29 +625,48 @@ def _spans(valid):
 
 
 def _screen(virtual, camera, box):
-    """View-pixel positions of the candidates' virtual vertices, their dilated bounds (box rows,
-    view columns) and dilations (-1: a vertex at or behind the eye plane, the whole box)."""
-    r0, r1, c0, c1 = box
+    """View-pixel positions (C, 3, 2) float64 of the candidates' virtual vertices (C, 3, 3), their
+    dilated bounds (C, 4) int64 (box rows, view columns) and dilations (C,) float64 (-1: a vertex
+    at or behind the eye plane, the whole box): kernel ``_several.screen_bounds``, and
+    :func:`_screen_numpy` for the rows with a value that is not finite."""
+    r0, r1, c0, c1 = (int(x) for x in box)
     c = len(virtual)
-    W, H = camera.width, camera.height
     clip = _setup.transform_points(virtual.reshape(-1, 3), camera.view_proj()).reshape(c, 3, 4)
+    clip = np.ascontiguousarray(clip, np.float64)
+    screen, bbox, dilate = np.empty((c, 3, 2)), np.empty((c, 4), np.int64), np.empty(c)
+    odd = np.zeros(c, bool)
+    if c:
+        parallel_range(screen_bounds, c, clip, float(camera.width), float(camera.height), r0, r1, c0, c1,
+                       float(constants.SEVERAL_DILATE_PIXELS), float(constants.SEVERAL_DILATE_FRACTION), screen, bbox,
+                       dilate, odd)
+    if odd.any():
+        screen[odd], bbox[odd], dilate[odd] = _screen_numpy(clip[odd], camera, box)
+    return screen, bbox, dilate
+
+
+def _screen_numpy(clip, camera, box):
+    """:func:`_screen` from the clip coordinates (C, 3, 4) float64, in NumPy (a bound from a value
+    that is not finite is whatever NumPy's cast makes of it; its dilation is -1)."""
+    r0, r1, c0, c1 = box
+    c = len(clip)
+    W, H = camera.width, camera.height
     wv = clip[..., 3]
     good = np.all(wv > 0, axis=1)
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         x = (clip[..., 0] / wv + 1.0) * 0.5 * W
         y = (1.0 - clip[..., 1] / wv) * 0.5 * H
-    screen = np.ascontiguousarray(np.stack([x, y], axis=2))
-    screen[~good] = 0.0
-    edge = np.max(np.sqrt(np.sum((screen - screen[:, [1, 2, 0]]) ** 2, axis=2)), axis=1)
-    dilate = constants.SEVERAL_DILATE_PIXELS + constants.SEVERAL_DILATE_FRACTION * edge
-    bbox = np.empty((c, 4), np.int64)
-    lo_x, hi_x = np.min(x, axis=1) - dilate, np.max(x, axis=1) + dilate
-    lo_y, hi_y = np.min(y, axis=1) - dilate, np.max(y, axis=1) + dilate
-    big = float(1 << 30)
-    bbox[:, 0] = np.floor(np.clip(lo_y - 0.5, -big, big)).astype(np.int64) - r0
-    bbox[:, 1] = np.ceil(np.clip(hi_y - 0.5, -big, big)).astype(np.int64) + 1 - r0
-    bbox[:, 2] = np.floor(np.clip(lo_x - 0.5, -big, big)).astype(np.int64)
-    bbox[:, 3] = np.ceil(np.clip(hi_x - 0.5, -big, big)).astype(np.int64) + 1
+        screen = np.ascontiguousarray(np.stack([x, y], axis=2))
+        screen[~good] = 0.0
+        edge = np.max(np.sqrt(np.sum((screen - screen[:, [1, 2, 0]]) ** 2, axis=2)), axis=1)
+        dilate = constants.SEVERAL_DILATE_PIXELS + constants.SEVERAL_DILATE_FRACTION * edge
+        bbox = np.empty((c, 4), np.int64)
+        lo_x, hi_x = np.min(x, axis=1) - dilate, np.max(x, axis=1) + dilate
+        lo_y, hi_y = np.min(y, axis=1) - dilate, np.max(y, axis=1) + dilate
+        big = float(1 << 30)
+        bbox[:, 0] = np.floor(np.clip(lo_y - 0.5, -big, big)).astype(np.int64) - r0
+        bbox[:, 1] = np.ceil(np.clip(hi_y - 0.5, -big, big)).astype(np.int64) + 1 - r0
+        bbox[:, 2] = np.floor(np.clip(lo_x - 0.5, -big, big)).astype(np.int64)
+        bbox[:, 3] = np.ceil(np.clip(hi_x - 0.5, -big, big)).astype(np.int64) + 1
     bbox[~good] = (0, r1 - r0, c0, c1)
     dilate = np.where(good & np.isfinite(dilate), dilate, -1.0)
     return screen, bbox, dilate

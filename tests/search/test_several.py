@@ -434,3 +434,31 @@ def test_acceptance_over_ray_lists_matches_the_plain_loop():
             for a, b in zip(got[:3], want[:3]):
                 assert np.array_equal(a, b)
             assert np.array_equal(got[3], want[3]) if same_tested else not np.any(got[3] & ~want[3])
+
+
+def test_screen_bounds_match_the_numpy_version(drawn):
+    """The candidates' screen positions, dilated bounds and dilations (kernel, on one thread and
+    several) are the NumPy version's bit for bit: triangles in view, partly off screen, with a
+    vertex behind the eye, and far aside (positions or edges too large to be finite: NumPy's own
+    rows)."""
+    scene, frame, view, k, stencil, out, truth = drawn
+    rng = np.random.default_rng(2)
+    cam = view.camera
+    eye, target = np.asarray(cam.eye, float), np.asarray(cam.target, float)
+    ahead = (target - eye) / np.linalg.norm(target - eye)
+    virtual = target + rng.normal(0, 2.0, (400, 3, 3))
+    virtual[::9, 1] = eye - ahead  # behind the eye
+    side = np.cross(ahead, [0.0, 1.0, 0.0])
+    side /= np.linalg.norm(side)
+    far = eye + 2.0 * ahead + np.array([1e150, 1e306, 1e307, 1e308])[:, None] * side
+    virtual[::13, 2] = far[np.arange(len(virtual[::13])) % 4]  # too far aside: overflows
+    box = (3, H - 2, 5, W - 1)
+    want = naive.screen(virtual, cam, box)
+    assert 0 < want[3].sum() < len(virtual) and np.sum(want[2] < 0) > 40
+    fine = want[3]  # (a bound cast from a value that is not finite is NumPy's own)
+    for threads in (True, False):
+        with one_thread(not threads):
+            got = several._screen(virtual, cam, box)
+        for a, b in zip(got, want[:3]):
+            assert a.dtype == b.dtype and np.array_equal(a[fine], b[fine])
+        assert np.array_equal(got[0], want[0], equal_nan=True) and np.array_equal(got[2], want[2])
