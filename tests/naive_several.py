@@ -103,7 +103,8 @@ def rays_near(real, origin, direction, first, last, ray, margin, parallel):
     """The rays of ``ray[first[f]:last[f]]`` not clearly off each triangle of ``real`` (F, 3, 3),
     as lists, in the arithmetic of ``refsoft.search._several.rays_near`` written out in NumPy: a
     ray is off when its Moller-Trumbore barycentrics leave [-margin, 1 + margin] or its t is below
-    ``-margin * (|e1| + |e2|)``, unless it lies within ``parallel`` of the plane."""
+    ``-margin * (|e1| + |e2|)``, unless it lies within ``parallel`` of the plane
+    (``|det| <= parallel * (|e1| |e2|) * |d|``)."""
     out = []
     for f in range(len(real)):
         r = np.asarray(ray[first[f]:last[f]])
@@ -126,7 +127,7 @@ def rays_near(real, origin, direction, first, last, ray, margin, parallel):
             t = ((e2[0] * qx + e2[1] * qy) + e2[2] * qz) * inv
             off = (u < -margin) | (u > 1.0 + margin) | (v < -margin) | (u + v > 1.0 + margin)
             off |= t < -margin * (l1 + l2)
-            off &= ~(np.abs(det) <= parallel * (ld * l1 * l2))
+            off &= ~(np.abs(det) <= parallel * (l1 * l2) * ld)
         out.append(r[~off].tolist())
     return out
 

@@ -305,13 +305,13 @@ def nearest_image(lo, hi, end, target, start, count, pixel, reach, out):
 
 
 @kernel
-def rays_near(lo, hi, real, origin, direction, first, last, ray, margin, parallel, start, out, fill):
+def rays_near(lo, hi, real, origin, direction, length, first, last, ray, margin, parallel, start, out, fill):
     """Triangles ``lo .. hi - 1`` (run by :func:`refsoft._parallel.parallel_range`; each writes
     only its own outputs): the rays among ``ray[first[f]:last[f]]`` that may hit triangle ``f``,
     in order. A ray is left out only when Moller-Trumbore (float64, :func:`accept`'s arithmetic)
     puts it clearly off the triangle: ``u`` or ``v`` below ``-margin``, ``u + v`` above
     ``1 + margin``, or ``t`` below ``-margin * (|e1| + |e2|)``; a ray within ``parallel`` of the
-    plane (``|det| <= parallel * |d| |e1| |e2|``) or with a non-finite value is kept.
+    plane (``|det| <= parallel * (|d| (|e1| |e2|))``) or with a non-finite value is kept.
 
     Parameters
     ----------
@@ -319,6 +319,8 @@ def rays_near(lo, hi, real, origin, direction, first, last, ray, margin, paralle
         The triangles (world space).
     origin, direction : (R, 3) float64
         The rays.
+    length : (R,) float64
+        ``|direction|``: ``sqrt((dx * dx + dy * dy) + dz * dz)``.
     first, last : (F,) int64
         Each triangle's rays to test: ``ray[first[f]:last[f]]``.
     ray : (K,) int64
@@ -332,39 +334,100 @@ def rays_near(lo, hi, real, origin, direction, first, last, ray, margin, paralle
         ``fill`` True: the kept ray indices, triangle by triangle.
     """
     for f in range(lo, hi):
-        p0x, p0y, p0z = real[f, 0, 0], real[f, 0, 1], real[f, 0, 2]
-        e1x, e1y, e1z = real[f, 1, 0] - p0x, real[f, 1, 1] - p0y, real[f, 1, 2] - p0z
-        e2x, e2y, e2z = real[f, 2, 0] - p0x, real[f, 2, 1] - p0y, real[f, 2, 2] - p0z
-        l1 = np.sqrt((e1x * e1x + e1y * e1y) + e1z * e1z)
-        l2 = np.sqrt((e2x * e2x + e2y * e2y) + e2z * e2z)
-        t_min = -margin * (l1 + l2)
         n = 0
         pos = start[f] if fill else 0
+        tri = _triangle(real, f, margin, parallel)
         for q in range(first[f], last[f]):
             r = ray[q]
-            dx, dy, dz = direction[r, 0], direction[r, 1], direction[r, 2]
-            px, py, pz = dy * e2z - dz * e2y, dz * e2x - dx * e2z, dx * e2y - dy * e2x
-            det = (e1x * px + e1y * py) + e1z * pz
-            ld = np.sqrt((dx * dx + dy * dy) + dz * dz)
-            # the tests say "clearly off": a NaN fails them and the ray is kept
-            if not abs(det) <= parallel * (ld * l1 * l2):
-                inv = 1.0 / det
-                sx, sy, sz = origin[r, 0] - p0x, origin[r, 1] - p0y, origin[r, 2] - p0z
-                u = ((sx * px + sy * py) + sz * pz) * inv
-                if u < -margin or u > 1.0 + margin:
-                    continue
-                qx, qy, qz = sy * e1z - sz * e1y, sz * e1x - sx * e1z, sx * e1y - sy * e1x
-                v = ((dx * qx + dy * qy) + dz * qz) * inv
-                if v < -margin or u + v > 1.0 + margin:
-                    continue
-                t = ((e2x * qx + e2y * qy) + e2z * qz) * inv
-                if t < t_min:
-                    continue
+            if not _may_hit(tri, origin[r, 0], origin[r, 1], origin[r, 2], direction[r, 0], direction[r, 1],
+                            direction[r, 2], length[r], margin):
+                continue
             if fill:
                 out[pos + n] = r
             n += 1
         if not fill:
             start[f] = n
+
+
+#: Rays per block of :func:`rays_near_every` (its seven float64 columns stay in the cache while
+#: every triangle of a part is tested against them).
+RAY_BLOCK = 2048
+
+
+@kernel
+def rays_near_every(lo, hi, real, rays, margin, parallel, count, start, at, out, fill):
+    """:func:`rays_near` with every ray for every triangle (the same test, the same lists), the
+    rays taken a block at a time for all triangles ``lo .. hi - 1``.
+
+    Parameters
+    ----------
+    rays : (7, R) float64
+        Origins (x, y, z), directions (x, y, z) and direction lengths, one row each.
+    count : (F,) int64
+        ``fill`` False: written, each triangle's number of rays kept; True: read (a triangle
+        without any is skipped).
+    start : (F,) int64
+        ``fill`` True: where each triangle's rays go in ``out``.
+    at : (F,) int64
+        Work: each triangle's next place in ``out`` (or count).
+    real, margin, parallel, out, fill
+        As :func:`rays_near`.
+    """
+    n_rays = rays.shape[1]
+    for f in range(lo, hi):
+        at[f] = start[f] if fill else 0
+    for b0 in range(0, n_rays, RAY_BLOCK):
+        b1 = min(n_rays, b0 + RAY_BLOCK)
+        for f in range(lo, hi):
+            if fill and count[f] == 0:
+                continue
+            n = at[f]
+            tri = _triangle(real, f, margin, parallel)
+            for r in range(b0, b1):
+                if not _may_hit(tri, rays[0, r], rays[1, r], rays[2, r], rays[3, r], rays[4, r], rays[5, r],
+                                rays[6, r], margin):
+                    continue
+                if fill:
+                    out[n] = r
+                n += 1
+            at[f] = n
+    if not fill:
+        for f in range(lo, hi):
+            count[f] = at[f]
+
+
+@kernel(inline=True)
+def _triangle(real, f, margin, parallel):
+    """Triangle ``f``'s corner, edges and the two limits of :func:`_may_hit`."""
+    p0x, p0y, p0z = real[f, 0, 0], real[f, 0, 1], real[f, 0, 2]
+    e1x, e1y, e1z = real[f, 1, 0] - p0x, real[f, 1, 1] - p0y, real[f, 1, 2] - p0z
+    e2x, e2y, e2z = real[f, 2, 0] - p0x, real[f, 2, 1] - p0y, real[f, 2, 2] - p0z
+    l1 = np.sqrt((e1x * e1x + e1y * e1y) + e1z * e1z)
+    l2 = np.sqrt((e2x * e2x + e2y * e2y) + e2z * e2z)
+    return p0x, p0y, p0z, e1x, e1y, e1z, e2x, e2y, e2z, parallel * (l1 * l2), -margin * (l1 + l2)
+
+
+@kernel(inline=True)
+def _may_hit(tri, ox, oy, oz, dx, dy, dz, length, margin):
+    """:func:`rays_near`'s test of one ray against a triangle (:func:`_triangle`): False when
+    clearly off."""
+    p0x, p0y, p0z, e1x, e1y, e1z, e2x, e2y, e2z, flat, t_min = tri
+    px, py, pz = dy * e2z - dz * e2y, dz * e2x - dx * e2z, dx * e2y - dy * e2x
+    det = (e1x * px + e1y * py) + e1z * pz
+    # the tests say "clearly off": a NaN fails them and the ray is kept
+    if abs(det) <= flat * length:
+        return True
+    inv = 1.0 / det
+    sx, sy, sz = ox - p0x, oy - p0y, oz - p0z
+    u = ((sx * px + sy * py) + sz * pz) * inv
+    if u < -margin or u > 1.0 + margin:
+        return False
+    qx, qy, qz = sy * e1z - sz * e1y, sz * e1x - sx * e1z, sx * e1y - sy * e1x
+    v = ((dx * qx + dy * qy) + dz * qz) * inv
+    if v < -margin or u + v > 1.0 + margin:
+        return False
+    t = ((e2x * qx + e2y * qy) + e2z * qz) * inv
+    return not t < t_min
 
 
 @kernel

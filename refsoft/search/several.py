@@ -31,7 +31,8 @@ from ..errors import RefsoftError
 from ..raster import GBuffer, _setup, shade
 from ..raster.rays import primary_rays
 from . import search
-from ._several import accept, accept_near, linked_triples, nearest_image, rays_near, screen_bounds
+from ._several import (accept, accept_near, linked_triples, nearest_image, rays_near, rays_near_every,
+                       screen_bounds)
 from .images import Images, facing_gbuffer, find_images
 
 
@@ -196,7 +197,7 @@ def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, n
     reach = None if rays is None else _Reach(*rays)
     alive = span = None
     if reach is not None:
-        span = reach.test(pool.corners(faces), *reach.every(len(faces)))
+        span = reach.test_every(pool.corners(faces))
         alive = span[1] > span[0]
         keep = pool.needed(faces, alive, max_level > 0, gb, eye, find, neighbourhood, cap)
         todo_faces, todo_src, alive, span = faces[keep], todo_src[keep], alive[keep], _take(span, keep)
@@ -255,6 +256,9 @@ class _Reach:
     def __init__(self, origin, direction):
         self.origin = np.ascontiguousarray(origin, np.float64).reshape(-1, 3)
         self.direction = np.ascontiguousarray(direction, np.float64).reshape(-1, 3)
+        d = self.direction
+        self.length = np.sqrt((d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1]) + d[:, 2] * d[:, 2])
+        self.columns = np.ascontiguousarray(np.concatenate([self.origin.T, d.T, self.length[None]]))
         self.lists = [np.arange(len(self.origin), dtype=np.int64)]  # the first: every ray
         self.size = len(self.origin)
         self._ray = None
@@ -269,11 +273,30 @@ class _Reach:
         """``(first, last)``: every ray for each of ``n`` triangles."""
         return np.zeros(n, np.int64), np.full(n, len(self.origin), np.int64)
 
+    def test_every(self, real):
+        """``(first, last)``: the rays of every ray that may hit each triangle of ``real`` (F, 3,
+        3) float64 (:func:`test` of :meth:`every`, the rays a block at a time:
+        :func:`._several.rays_near_every`)."""
+        real = np.ascontiguousarray(real, np.float64)
+        args = (real, self.columns, float(constants.SEVERAL_PRUNE_MARGIN), float(constants.SEVERAL_PRUNE_PARALLEL))
+        n = np.zeros(len(real), np.int64)
+        at = np.zeros(len(real), np.int64)
+        if len(real):
+            parallel_range(rays_near_every, len(real), *args, n, n, at, np.zeros(0, np.int64), False)
+        start = np.cumsum(n) - n
+        out = np.empty(int(n.sum()), np.int64)
+        if len(out):
+            parallel_range(rays_near_every, len(real), *args, n, start, at, out, True)
+        start += self.size
+        self.lists.append(out)
+        self.size += len(out)
+        return start, start + n
+
     def test(self, real, first, last):
         """``(first, last)``: the rays of ``ray()[first:last]`` that may hit each triangle of
         ``real`` (F, 3, 3) float64 (a new list each)."""
         real = np.ascontiguousarray(real, np.float64)
-        args = (real, self.origin, self.direction, np.ascontiguousarray(first, np.int64),
+        args = (real, self.origin, self.direction, self.length, np.ascontiguousarray(first, np.int64),
                 np.ascontiguousarray(last, np.int64), self.ray(), float(constants.SEVERAL_PRUNE_MARGIN),
                 float(constants.SEVERAL_PRUNE_PARALLEL))
         n = np.zeros(len(real), np.int64)
@@ -282,7 +305,7 @@ class _Reach:
         start = np.cumsum(n) - n
         out = np.empty(int(n.sum()), np.int64)
         if len(out):  # the second pass skips the rays of the triangles without any
-            args = args[:4] + (np.where(n > 0, args[4], args[3]),) + args[5:]
+            args = args[:5] + (np.where(n > 0, args[5], args[4]),) + args[6:]
             parallel_range(rays_near, len(real), *args, start, out, True)
         start += self.size
         self.lists.append(out)

@@ -462,3 +462,26 @@ def test_screen_bounds_match_the_numpy_version(drawn):
         for a, b in zip(got, want[:3]):
             assert a.dtype == b.dtype and np.array_equal(a[fine], b[fine])
         assert np.array_equal(got[0], want[0], equal_nan=True) and np.array_equal(got[2], want[2])
+
+
+def test_rays_near_every_gives_the_lists_of_every_ray():
+    """The test of every ray a block at a time (rays_near_every, on one thread and several) keeps
+    each triangle the rays that rays_near keeps of every ray, in order, over several blocks."""
+    from refsoft.search._several import RAY_BLOCK
+
+    rng = np.random.default_rng(17)
+    real = rng.uniform(-1.0, 1.0, (30, 3, 3))
+    real[:, :, 2] = rng.uniform(-0.3, 0.3, (30, 1))
+    real[3] = [[0, 0, 0], [1, 0, 0], [2, 0, 0]]
+    n = 2 * RAY_BLOCK + 77
+    o = np.concatenate([rng.uniform(-1.2, 1.2, (n, 2)), np.full((n, 1), 2.0)], axis=1)
+    d = np.concatenate([rng.normal(0, 0.1, (n, 2)), np.full((n, 1), -1.0)], axis=1)
+    want = several._Reach(o, d)
+    span = want.test(real, *want.every(len(real)))
+    lists = [want.ray()[a:b].tolist() for a, b in zip(*span)]
+    assert 0 < sum(map(len, lists)) < n * len(real) / 4 and any(x and x[-1] >= 2 * RAY_BLOCK for x in lists)
+    for threads in (True, False):
+        with one_thread(not threads):
+            got = several._Reach(o, d)
+            span = got.test_every(real)
+        assert [got.ray()[a:b].tolist() for a, b in zip(*span)] == lists
