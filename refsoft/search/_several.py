@@ -48,94 +48,106 @@ def accept(lo, hi, r0, c0, valid, span, origin, direction, screen, bbox, dilate,
     seen : (h, w) int64
         Work per box pixel, -1 on entry: the run that last tested its ray.
     """
-    n = screen.shape[0]
-    for c in range(n):
-        row0, row1 = max(lo, bbox[c, 0]), min(hi, bbox[c, 1])
-        if row0 >= row1:
+    for c in range(screen.shape[0]):
+        _raster_one(c, lo, hi, r0, c0, valid, span, origin, direction, screen, bbox, dilate, real, run, best_t,
+                    best_c, best_uv, tested, seen)
+
+
+@kernel(inline=True)
+def _raster_one(c, lo, hi, r0, c0, valid, span, origin, direction, screen, bbox, dilate, real, run, best_t, best_c,
+                best_uv, tested, seen):
+    """:func:`accept` for candidate ``c`` on box rows ``lo .. hi - 1``."""
+    row0, row1 = max(lo, bbox[c, 0]), min(hi, bbox[c, 1])
+    if row0 >= row1:
+        return
+    ax, ay = screen[c, 0, 0], screen[c, 0, 1]
+    bx, by = screen[c, 1, 0], screen[c, 1, 1]
+    cx, cy = screen[c, 2, 0], screen[c, 2, 1]
+    area = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
+    sign = 1.0 if area >= 0.0 else -1.0
+    lab = np.sqrt((bx - ax) * (bx - ax) + (by - ay) * (by - ay))
+    lbc = np.sqrt((cx - bx) * (cx - bx) + (cy - by) * (cy - by))
+    lca = np.sqrt((ax - cx) * (ax - cx) + (ay - cy) * (ay - cy))
+    d = dilate[c]
+    # a sliver or an unusable projection: the dilated box alone
+    plain = d < 0.0 or abs(area) <= 1e-12 * (lab + lbc + lca) * (lab + lbc + lca)
+    p0x, p0y, p0z = real[c, 0, 0], real[c, 0, 1], real[c, 0, 2]
+    e1x, e1y, e1z = real[c, 1, 0] - p0x, real[c, 1, 1] - p0y, real[c, 1, 2] - p0z
+    e2x, e2y, e2z = real[c, 2, 0] - p0x, real[c, 2, 1] - p0y, real[c, 2, 2] - p0z
+    for r in range(row0, row1):
+        y = r + r0 + 0.5
+        # only the row's valid columns
+        col0, col1 = max(bbox[c, 2], c0 + span[r, 0]), min(bbox[c, 3], c0 + span[r, 1])
+        if col0 >= col1:
             continue
-        ax, ay = screen[c, 0, 0], screen[c, 0, 1]
-        bx, by = screen[c, 1, 0], screen[c, 1, 1]
-        cx, cy = screen[c, 2, 0], screen[c, 2, 1]
-        area = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
-        sign = 1.0 if area >= 0.0 else -1.0
-        lab = np.sqrt((bx - ax) * (bx - ax) + (by - ay) * (by - ay))
-        lbc = np.sqrt((cx - bx) * (cx - bx) + (cy - by) * (cy - by))
-        lca = np.sqrt((ax - cx) * (ax - cx) + (ay - cy) * (ay - cy))
-        d = dilate[c]
-        # a sliver or an unusable projection: the dilated box alone
-        plain = d < 0.0 or abs(area) <= 1e-12 * (lab + lbc + lca) * (lab + lbc + lca)
-        p0x, p0y, p0z = real[c, 0, 0], real[c, 0, 1], real[c, 0, 2]
-        e1x, e1y, e1z = real[c, 1, 0] - p0x, real[c, 1, 1] - p0y, real[c, 1, 2] - p0z
-        e2x, e2y, e2z = real[c, 2, 0] - p0x, real[c, 2, 1] - p0y, real[c, 2, 2] - p0z
-        for r in range(row0, row1):
-            y = r + r0 + 0.5
-            # only the row's valid columns
-            col0, col1 = max(bbox[c, 2], c0 + span[r, 0]), min(bbox[c, 3], c0 + span[r, 1])
-            if col0 >= col1:
+        if not plain:
+            col0, col1 = _narrow(col0, col1, y, ax, ay, bx, by, sign, -d * lab)
+            col0, col1 = _narrow(col0, col1, y, bx, by, cx, cy, sign, -d * lbc)
+            col0, col1 = _narrow(col0, col1, y, cx, cy, ax, ay, sign, -d * lca)
+        for col in range(col0, col1):
+            j = col - c0
+            if not valid[r, j] or seen[r, j] == run[c]:  # tested by this run: nothing to change
                 continue
             if not plain:
-                col0, col1 = _narrow(col0, col1, y, ax, ay, bx, by, sign, -d * lab)
-                col0, col1 = _narrow(col0, col1, y, bx, by, cx, cy, sign, -d * lbc)
-                col0, col1 = _narrow(col0, col1, y, cx, cy, ax, ay, sign, -d * lca)
-            for col in range(col0, col1):
-                j = col - c0
-                if not valid[r, j] or seen[r, j] == run[c]:  # tested by this run: nothing to change
+                x = col + 0.5
+                # signed distances to the three edges, inside positive
+                fab = sign * ((bx - ax) * (y - ay) - (by - ay) * (x - ax))
+                fbc = sign * ((cx - bx) * (y - by) - (cy - by) * (x - bx))
+                fca = sign * ((ax - cx) * (y - cy) - (ay - cy) * (x - cx))
+                if fab < -d * lab or fbc < -d * lbc or fca < -d * lca:
                     continue
-                if not plain:
-                    x = col + 0.5
-                    # signed distances to the three edges, inside positive
-                    fab = sign * ((bx - ax) * (y - ay) - (by - ay) * (x - ax))
-                    fbc = sign * ((cx - bx) * (y - by) - (cy - by) * (x - bx))
-                    fca = sign * ((ax - cx) * (y - cy) - (ay - cy) * (x - cx))
-                    if fab < -d * lab or fbc < -d * lbc or fca < -d * lca:
-                        continue
-                tested[r, j] = True
-                seen[r, j] = run[c]
-                dx, dy, dz = direction[r, j, 0], direction[r, j, 1], direction[r, j, 2]
-                px, py, pz = dy * e2z - dz * e2y, dz * e2x - dx * e2z, dx * e2y - dy * e2x
-                det = (e1x * px + e1y * py) + e1z * pz
-                if det == 0.0:
-                    continue
-                inv = 1.0 / det
-                sx, sy, sz = origin[r, j, 0] - p0x, origin[r, j, 1] - p0y, origin[r, j, 2] - p0z
-                u = ((sx * px + sy * py) + sz * pz) * inv
-                if u < 0.0 or u > 1.0:
-                    continue
-                qx, qy, qz = sy * e1z - sz * e1y, sz * e1x - sx * e1z, sx * e1y - sy * e1x
-                v = ((dx * qx + dy * qy) + dz * qz) * inv
-                if v < 0.0 or u + v > 1.0:
-                    continue
-                t = ((e2x * qx + e2y * qy) + e2z * qz) * inv
-                if t > 0.0 and t < best_t[r, j]:
-                    best_t[r, j] = t
-                    best_c[r, j] = c
-                    best_uv[r, j, 0] = u
-                    best_uv[r, j, 1] = v
+            tested[r, j] = True
+            seen[r, j] = run[c]
+            dx, dy, dz = direction[r, j, 0], direction[r, j, 1], direction[r, j, 2]
+            px, py, pz = dy * e2z - dz * e2y, dz * e2x - dx * e2z, dx * e2y - dy * e2x
+            det = (e1x * px + e1y * py) + e1z * pz
+            if det == 0.0:
+                continue
+            inv = 1.0 / det
+            sx, sy, sz = origin[r, j, 0] - p0x, origin[r, j, 1] - p0y, origin[r, j, 2] - p0z
+            u = ((sx * px + sy * py) + sz * pz) * inv
+            if u < 0.0 or u > 1.0:
+                continue
+            qx, qy, qz = sy * e1z - sz * e1y, sz * e1x - sx * e1z, sx * e1y - sy * e1x
+            v = ((dx * qx + dy * qy) + dz * qz) * inv
+            if v < 0.0 or u + v > 1.0:
+                continue
+            t = ((e2x * qx + e2y * qy) + e2z * qz) * inv
+            if t > 0.0 and t < best_t[r, j]:
+                best_t[r, j] = t
+                best_c[r, j] = c
+                best_uv[r, j, 0] = u
+                best_uv[r, j, 1] = v
 
 
 @kernel
-def accept_near(lo, hi, r0, c0, ray_row, ray_col, origin, direction, screen, bbox, dilate, real, run, first, last,
-                ray, best_t, best_c, best_uv, tested, seen):
+def accept_near(lo, hi, r0, c0, valid, span, origin, direction, ray_row, ray_col, ray_origin, ray_direction, screen,
+                bbox, dilate, real, run, first, last, ray, best_t, best_c, best_uv, tested, seen):
     """:func:`accept` over each candidate's rays that may hit its real triangle (``ray[first[c]:
     last[c]]``, ascending) instead of every pixel it covers: the same cover test, the same ray
     test and the same order of candidates per pixel, so where the lists hold every ray that
     can hit, ``best_t``, ``best_c`` and ``best_uv`` are :func:`accept`'s bit for bit (``tested``
-    marks only the pixels of the lists that a candidate covers).
+    marks only the pixels of the lists that a candidate covers). A candidate without a list
+    (``first[c] < 0``) is tested at every pixel it covers, as :func:`accept` does.
 
     Parameters
     ----------
     ray_row, ray_col : (R,) int64
         Each ray's box pixel, in row-major order.
-    origin, direction : (R, 3) float64
-        The rays.
+    ray_origin, ray_direction : (R, 3) float64
+        The rays (``origin``, ``direction`` at those pixels).
     first, last : (C,) int64
     ray : (K,) int64
         Ray indices, ascending within each candidate's list.
-    r0, c0, screen, bbox, dilate, real, run, best_t, best_c, best_uv, tested, seen
+    r0, c0, valid, span, origin, direction, screen, bbox, dilate, real, run, best_t, best_c, best_uv, tested, seen
         As :func:`accept`.
     """
     n = screen.shape[0]
     for c in range(n):
+        if first[c] < 0:
+            _raster_one(c, lo, hi, r0, c0, valid, span, origin, direction, screen, bbox, dilate, real, run, best_t,
+                        best_c, best_uv, tested, seen)
+            continue
         row0, row1 = max(lo, bbox[c, 0]), min(hi, bbox[c, 1])
         if row0 >= row1:
             continue
@@ -172,13 +184,13 @@ def accept_near(lo, hi, r0, c0, ray_row, ray_col, origin, direction, screen, bbo
                     continue
             tested[r, j] = True
             seen[r, j] = run[c]
-            dx, dy, dz = direction[k, 0], direction[k, 1], direction[k, 2]
+            dx, dy, dz = ray_direction[k, 0], ray_direction[k, 1], ray_direction[k, 2]
             px, py, pz = dy * e2z - dz * e2y, dz * e2x - dx * e2z, dx * e2y - dy * e2x
             det = (e1x * px + e1y * py) + e1z * pz
             if det == 0.0:
                 continue
             inv = 1.0 / det
-            sx, sy, sz = origin[k, 0] - p0x, origin[k, 1] - p0y, origin[k, 2] - p0z
+            sx, sy, sz = ray_origin[k, 0] - p0x, ray_origin[k, 1] - p0y, ray_origin[k, 2] - p0z
             u = ((sx * px + sy * py) + sz * pz) * inv
             if u < 0.0 or u > 1.0:
                 continue

@@ -134,7 +134,8 @@ class Candidates:
         With the reflected rays given to :func:`candidates`: each candidate's rays that may hit
         its real triangle, ``ray[first[c]:last[c]]`` ascending, as ``(first (C,) int64, last (C,)
         int64, ray (K,) int64)``; a ray is the index of a valid pixel of :func:`pixel_rays` in
-        row-major order. None: every pixel is tested.
+        row-major order; ``first[c] < 0``: none made (every pixel the candidate covers is
+        tested). None: every pixel is tested.
     """
 
     virtual: np.ndarray
@@ -197,8 +198,13 @@ def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, n
     reach = None if rays is None else _Reach(*rays)
     alive = span = None
     if reach is not None:
-        span = reach.test_every(pool.corners(faces))
-        alive = span[1] > span[0]
+        # the scene triangles matched are neither cut nor tested (their candidates are few, each
+        # tested at every pixel it covers); the others only if a ray comes near them
+        t, owner = pool.triples(faces)
+        rest = ~pool.matched(faces, t, owner)
+        span = np.full(len(faces), -1, np.int64), np.full(len(faces), -1, np.int64)
+        span[0][rest], span[1][rest] = reach.test_every(pool.corners(faces[rest]))
+        alive = ~rest | (span[1] > span[0])
         keep = pool.needed(faces, alive, max_level > 0, gb, eye, find, neighbourhood, cap)
         todo_faces, todo_src, alive, span = faces[keep], todo_src[keep], alive[keep], _take(span, keep)
     for level in range(max_level + 1):
@@ -610,9 +616,9 @@ def draw(cand: Candidates, camera, reflector_mesh, triangle, stencil, box, color
         else:  # each candidate's pixels whose rays may hit it, not every pixel it covers
             rows, cols = np.nonzero(valid)
             first, last, ray = (np.ascontiguousarray(a, np.int64) for a in cand.rays)
-            parallel_range(accept_near, h, r0, c0, rows, cols, np.ascontiguousarray(origin[valid]),
-                           np.ascontiguousarray(direction[valid]), screen, bbox, dilate, real, _runs(real), first,
-                           last, ray, best_t, best_c, best_uv, tested, seen)
+            parallel_range(accept_near, h, r0, c0, valid, _spans(valid), origin, direction, rows, cols,
+                           np.ascontiguousarray(origin[valid]), np.ascontiguousarray(direction[valid]), screen, bbox,
+                           dilate, real, _runs(real), first, last, ray, best_t, best_c, best_uv, tested, seen)
     covered = best_c >= 0
     rid = np.zeros((h, w), np.int32)
     colour = np.zeros((h, w, 3), np.float32)

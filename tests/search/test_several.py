@@ -369,7 +369,7 @@ def test_pruned_candidates_draw_the_same_bits(drawn, max_level):
     full, _ = several.candidates(*args[:-1], counted, max_level=max_level)
     n_full, points[:] = sum(points), []
     pruned, _ = several.candidates(*args[:-1], counted, max_level=max_level, rays=(origin[valid], direction[valid]))
-    assert 0 < len(pruned.triangle) < len(full.triangle) / 2
+    assert 0 < len(pruned.triangle) < len(full.triangle)
     assert max_level == 0 or 0 < sum(points) < n_full
     # a subsequence: every pruned candidate is the next equal full one
     rows = np.concatenate([full.virtual.reshape(len(full.triangle), -1), full.real.reshape(len(full.triangle), -1)], 1)
@@ -392,8 +392,9 @@ def test_pruned_candidates_draw_the_same_bits(drawn, max_level):
 def test_acceptance_over_ray_lists_matches_the_plain_loop():
     """The acceptance over each candidate's rays (accept_near) gives the plain pixel-by-candidate
     loop's nearest hits bit for bit, on one thread and on several: with every ray in every list
-    (and then its covered pixels too), and with the lists of the rays that may hit each real
-    triangle (rays_near), which leave out rays and pixels that cannot change the result."""
+    (and then its covered pixels too), with the lists of the rays that may hit each real
+    triangle (rays_near), which leave out rays and pixels that cannot change the result, and with
+    every third candidate without a list (tested at every pixel it covers)."""
     import naive_several_pool
 
     from refsoft._parallel import parallel_range
@@ -423,12 +424,14 @@ def test_acceptance_over_ray_lists_matches_the_plain_loop():
     near = reach.test(real, *reach.every(n))
     every = reach.every(n)
     assert np.sum(near[1] - near[0]) < np.sum(every[1] - every[0]) / 5  # the lists are short
-    for lists, same_tested in ((every, True), (near, False)):
+    mixed = (np.where(np.arange(n) % 3 == 0, -1, near[0]), np.where(np.arange(n) % 3 == 0, -1, near[1]))
+    for lists, same_tested in ((every, True), (near, False), (mixed, False)):
         for threads in (True, False):
             got = (np.full((h, w), np.inf), np.full((h, w), -1, np.int64), np.zeros((h, w, 2)),
                    np.zeros((h, w), bool))
-            args = (accept_near, h, r0, c0, rows, cols, o, d, screen, bbox, dilate, real, several._runs(real),
-                    *lists, reach.ray(), *got, np.full((h, w), -1, np.int64))
+            args = (accept_near, h, r0, c0, valid, several._spans(valid), origin, direction, rows, cols, o, d,
+                    screen, bbox, dilate, real, several._runs(real), *lists, reach.ray(), *got,
+                    np.full((h, w), -1, np.int64))
             with one_thread(not threads):
                 parallel_range(*args)
             for a, b in zip(got[:3], want[:3]):
