@@ -1,6 +1,9 @@
-"""Kernel of :mod:`refsoft.search.several`: the per-pixel acceptance of candidate virtual
-triangles (float64). Its references: ``tests/naive_several_pool.py`` (``accept``, the plain
-pixel-by-candidate loop, bit for bit) and ``tests/naive_images.py`` (``trace_reflections``, the
+"""Kernels of :mod:`refsoft.search.several` (float64): the per-pixel acceptance of candidate
+virtual triangles (``accept``, and ``accept_near`` over the pruning's ray lists), the pruning's ray
+tests (``rays_near``, ``rays_near_every``), the candidates' screen bounds (``screen_bounds``), the
+linked triples and the walks' nearest images. Their references: ``tests/naive_several_pool.py``
+(``accept``, the plain pixel-by-candidate loop, bit for bit), ``tests/naive_several.py``
+(``rays_near``, ``screen``, in NumPy) and ``tests/naive_images.py`` (``trace_reflections``, the
 same ray test over every scene triangle)."""
 
 import numpy as np

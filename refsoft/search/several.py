@@ -8,13 +8,17 @@ triangles, and their exact per-pixel acceptance.
    vertices linked along its three edges; a triangle with a vertex without an image, or with no
    linked triple, is cut at its edge midpoints (whose images are found) and its parts are tried
    again, up to ``constants.SEVERAL_MAX_LEVEL``; a part still without a linked triple at the last
-   level gives every triple (the acceptance below decides).
+   level gives every triple (the acceptance below decides). Given the reflected rays of step 3, a
+   triangle to be cut that no ray comes near (kernels ``rays_near_every``, ``rays_near``) gives no
+   candidate and is not cut, with what the others do not depend on (``_Pool.needed``).
 3. :func:`draw`: each candidate is rasterized conservatively (dilated) in the reflector's stencil;
    at each covered pixel the eye ray is reflected about the reflector's interpolated normal at its
    visible point (as the ray-traced truth does) and intersected with the candidate's *real* scene
    triangle; the nearest hit with ``t > 0`` inside the triangle wins. A candidate across a tear or
    beyond a fold is never drawn where it does not reflect, and a pixel whose reflected ray hits no
-   candidate stays empty.
+   candidate stays empty. A candidate with the pruning's ray list is tested at those rays' pixels
+   alone (``accept_near``): the others miss its triangle. The picture is the same bits as without
+   the pruning.
 
 See ``docs/sheets.md``.
 """
