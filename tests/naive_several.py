@@ -103,7 +103,8 @@ def rays_near(real, origin, direction, first, last, ray, margin, parallel):
     """The rays of ``ray[first[f]:last[f]]`` not clearly off each triangle of ``real`` (F, 3, 3),
     as lists, in the arithmetic of ``refsoft.search._several.rays_near`` written out in NumPy: a
     ray is off when its Moller-Trumbore barycentrics leave [-margin, 1 + margin] or its t is below
-    ``-margin * (|e1| + |e2|)``, unless it lies within ``parallel`` of the plane."""
+    ``-margin * (|e1| + |e2|)``, unless it lies within ``parallel`` of the plane
+    (``|det| <= parallel * (|e1| |e2|) * |d|``)."""
     out = []
     for f in range(len(real)):
         r = np.asarray(ray[first[f]:last[f]])
@@ -126,6 +127,39 @@ def rays_near(real, origin, direction, first, last, ray, margin, parallel):
             t = ((e2[0] * qx + e2[1] * qy) + e2[2] * qz) * inv
             off = (u < -margin) | (u > 1.0 + margin) | (v < -margin) | (u + v > 1.0 + margin)
             off |= t < -margin * (l1 + l2)
-            off &= ~(np.abs(det) <= parallel * (ld * l1 * l2))
+            off &= ~(np.abs(det) <= parallel * (l1 * l2) * ld)
         out.append(r[~off].tolist())
     return out
+
+
+def screen(virtual, camera, box):
+    """The candidates' screen positions (C, 3, 2), dilated bounds (C, 4) int64 and dilations (C,)
+    of ``refsoft.search.several._screen``, written out in NumPy over every candidate at once."""
+    from refsoft import constants
+    from refsoft.raster import _setup
+
+    r0, r1, c0, c1 = box
+    c = len(virtual)
+    W, H = camera.width, camera.height
+    clip = _setup.transform_points(virtual.reshape(-1, 3), camera.view_proj()).reshape(c, 3, 4)
+    wv = clip[..., 3]
+    good = np.all(wv > 0, axis=1)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        x = (clip[..., 0] / wv + 1.0) * 0.5 * W
+        y = (1.0 - clip[..., 1] / wv) * 0.5 * H
+        out = np.ascontiguousarray(np.stack([x, y], axis=2))
+        out[~good] = 0.0
+        edge = np.max(np.sqrt(np.sum((out - out[:, [1, 2, 0]]) ** 2, axis=2)), axis=1)
+        dilate = constants.SEVERAL_DILATE_PIXELS + constants.SEVERAL_DILATE_FRACTION * edge
+        bbox = np.empty((c, 4), np.int64)
+        lo_x, hi_x = np.min(x, axis=1) - dilate, np.max(x, axis=1) + dilate
+        lo_y, hi_y = np.min(y, axis=1) - dilate, np.max(y, axis=1) + dilate
+        big = float(1 << 30)
+        fine = good & np.isfinite(dilate) & np.all(np.isfinite(out), axis=(1, 2))
+        bbox[:, 0] = np.floor(np.clip(np.where(fine, lo_y, 0) - 0.5, -big, big)).astype(np.int64) - r0
+        bbox[:, 1] = np.ceil(np.clip(np.where(fine, hi_y, 0) - 0.5, -big, big)).astype(np.int64) + 1 - r0
+        bbox[:, 2] = np.floor(np.clip(np.where(fine, lo_x, 0) - 0.5, -big, big)).astype(np.int64)
+        bbox[:, 3] = np.ceil(np.clip(np.where(fine, hi_x, 0) - 0.5, -big, big)).astype(np.int64) + 1
+    bbox[~good] = (0, r1 - r0, c0, c1)
+    dilate = np.where(good & np.isfinite(dilate), dilate, -1.0)
+    return out, bbox, dilate, fine | ~good

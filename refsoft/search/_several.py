@@ -1,6 +1,9 @@
-"""Kernel of :mod:`refsoft.search.several`: the per-pixel acceptance of candidate virtual
-triangles (float64). Its references: ``tests/naive_several_pool.py`` (``accept``, the plain
-pixel-by-candidate loop, bit for bit) and ``tests/naive_images.py`` (``trace_reflections``, the
+"""Kernels of :mod:`refsoft.search.several` (float64): the per-pixel acceptance of candidate
+virtual triangles (``accept``, and ``accept_near`` over the pruning's ray lists), the pruning's ray
+tests (``rays_near``, ``rays_near_every``), the candidates' screen bounds (``screen_bounds``), the
+linked triples and the walks' nearest images. Their references: ``tests/naive_several_pool.py``
+(``accept``, the plain pixel-by-candidate loop, bit for bit), ``tests/naive_several.py``
+(``rays_near``, ``screen``, in NumPy) and ``tests/naive_images.py`` (``trace_reflections``, the
 same ray test over every scene triangle)."""
 
 import numpy as np
@@ -48,94 +51,106 @@ def accept(lo, hi, r0, c0, valid, span, origin, direction, screen, bbox, dilate,
     seen : (h, w) int64
         Work per box pixel, -1 on entry: the run that last tested its ray.
     """
-    n = screen.shape[0]
-    for c in range(n):
-        row0, row1 = max(lo, bbox[c, 0]), min(hi, bbox[c, 1])
-        if row0 >= row1:
+    for c in range(screen.shape[0]):
+        _raster_one(c, lo, hi, r0, c0, valid, span, origin, direction, screen, bbox, dilate, real, run, best_t,
+                    best_c, best_uv, tested, seen)
+
+
+@kernel(inline=True)
+def _raster_one(c, lo, hi, r0, c0, valid, span, origin, direction, screen, bbox, dilate, real, run, best_t, best_c,
+                best_uv, tested, seen):
+    """:func:`accept` for candidate ``c`` on box rows ``lo .. hi - 1``."""
+    row0, row1 = max(lo, bbox[c, 0]), min(hi, bbox[c, 1])
+    if row0 >= row1:
+        return
+    ax, ay = screen[c, 0, 0], screen[c, 0, 1]
+    bx, by = screen[c, 1, 0], screen[c, 1, 1]
+    cx, cy = screen[c, 2, 0], screen[c, 2, 1]
+    area = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
+    sign = 1.0 if area >= 0.0 else -1.0
+    lab = np.sqrt((bx - ax) * (bx - ax) + (by - ay) * (by - ay))
+    lbc = np.sqrt((cx - bx) * (cx - bx) + (cy - by) * (cy - by))
+    lca = np.sqrt((ax - cx) * (ax - cx) + (ay - cy) * (ay - cy))
+    d = dilate[c]
+    # a sliver or an unusable projection: the dilated box alone
+    plain = d < 0.0 or abs(area) <= 1e-12 * (lab + lbc + lca) * (lab + lbc + lca)
+    p0x, p0y, p0z = real[c, 0, 0], real[c, 0, 1], real[c, 0, 2]
+    e1x, e1y, e1z = real[c, 1, 0] - p0x, real[c, 1, 1] - p0y, real[c, 1, 2] - p0z
+    e2x, e2y, e2z = real[c, 2, 0] - p0x, real[c, 2, 1] - p0y, real[c, 2, 2] - p0z
+    for r in range(row0, row1):
+        y = r + r0 + 0.5
+        # only the row's valid columns
+        col0, col1 = max(bbox[c, 2], c0 + span[r, 0]), min(bbox[c, 3], c0 + span[r, 1])
+        if col0 >= col1:
             continue
-        ax, ay = screen[c, 0, 0], screen[c, 0, 1]
-        bx, by = screen[c, 1, 0], screen[c, 1, 1]
-        cx, cy = screen[c, 2, 0], screen[c, 2, 1]
-        area = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
-        sign = 1.0 if area >= 0.0 else -1.0
-        lab = np.sqrt((bx - ax) * (bx - ax) + (by - ay) * (by - ay))
-        lbc = np.sqrt((cx - bx) * (cx - bx) + (cy - by) * (cy - by))
-        lca = np.sqrt((ax - cx) * (ax - cx) + (ay - cy) * (ay - cy))
-        d = dilate[c]
-        # a sliver or an unusable projection: the dilated box alone
-        plain = d < 0.0 or abs(area) <= 1e-12 * (lab + lbc + lca) * (lab + lbc + lca)
-        p0x, p0y, p0z = real[c, 0, 0], real[c, 0, 1], real[c, 0, 2]
-        e1x, e1y, e1z = real[c, 1, 0] - p0x, real[c, 1, 1] - p0y, real[c, 1, 2] - p0z
-        e2x, e2y, e2z = real[c, 2, 0] - p0x, real[c, 2, 1] - p0y, real[c, 2, 2] - p0z
-        for r in range(row0, row1):
-            y = r + r0 + 0.5
-            # only the row's valid columns
-            col0, col1 = max(bbox[c, 2], c0 + span[r, 0]), min(bbox[c, 3], c0 + span[r, 1])
-            if col0 >= col1:
+        if not plain:
+            col0, col1 = _narrow(col0, col1, y, ax, ay, bx, by, sign, -d * lab)
+            col0, col1 = _narrow(col0, col1, y, bx, by, cx, cy, sign, -d * lbc)
+            col0, col1 = _narrow(col0, col1, y, cx, cy, ax, ay, sign, -d * lca)
+        for col in range(col0, col1):
+            j = col - c0
+            if not valid[r, j] or seen[r, j] == run[c]:  # tested by this run: nothing to change
                 continue
             if not plain:
-                col0, col1 = _narrow(col0, col1, y, ax, ay, bx, by, sign, -d * lab)
-                col0, col1 = _narrow(col0, col1, y, bx, by, cx, cy, sign, -d * lbc)
-                col0, col1 = _narrow(col0, col1, y, cx, cy, ax, ay, sign, -d * lca)
-            for col in range(col0, col1):
-                j = col - c0
-                if not valid[r, j] or seen[r, j] == run[c]:  # tested by this run: nothing to change
+                x = col + 0.5
+                # signed distances to the three edges, inside positive
+                fab = sign * ((bx - ax) * (y - ay) - (by - ay) * (x - ax))
+                fbc = sign * ((cx - bx) * (y - by) - (cy - by) * (x - bx))
+                fca = sign * ((ax - cx) * (y - cy) - (ay - cy) * (x - cx))
+                if fab < -d * lab or fbc < -d * lbc or fca < -d * lca:
                     continue
-                if not plain:
-                    x = col + 0.5
-                    # signed distances to the three edges, inside positive
-                    fab = sign * ((bx - ax) * (y - ay) - (by - ay) * (x - ax))
-                    fbc = sign * ((cx - bx) * (y - by) - (cy - by) * (x - bx))
-                    fca = sign * ((ax - cx) * (y - cy) - (ay - cy) * (x - cx))
-                    if fab < -d * lab or fbc < -d * lbc or fca < -d * lca:
-                        continue
-                tested[r, j] = True
-                seen[r, j] = run[c]
-                dx, dy, dz = direction[r, j, 0], direction[r, j, 1], direction[r, j, 2]
-                px, py, pz = dy * e2z - dz * e2y, dz * e2x - dx * e2z, dx * e2y - dy * e2x
-                det = (e1x * px + e1y * py) + e1z * pz
-                if det == 0.0:
-                    continue
-                inv = 1.0 / det
-                sx, sy, sz = origin[r, j, 0] - p0x, origin[r, j, 1] - p0y, origin[r, j, 2] - p0z
-                u = ((sx * px + sy * py) + sz * pz) * inv
-                if u < 0.0 or u > 1.0:
-                    continue
-                qx, qy, qz = sy * e1z - sz * e1y, sz * e1x - sx * e1z, sx * e1y - sy * e1x
-                v = ((dx * qx + dy * qy) + dz * qz) * inv
-                if v < 0.0 or u + v > 1.0:
-                    continue
-                t = ((e2x * qx + e2y * qy) + e2z * qz) * inv
-                if t > 0.0 and t < best_t[r, j]:
-                    best_t[r, j] = t
-                    best_c[r, j] = c
-                    best_uv[r, j, 0] = u
-                    best_uv[r, j, 1] = v
+            tested[r, j] = True
+            seen[r, j] = run[c]
+            dx, dy, dz = direction[r, j, 0], direction[r, j, 1], direction[r, j, 2]
+            px, py, pz = dy * e2z - dz * e2y, dz * e2x - dx * e2z, dx * e2y - dy * e2x
+            det = (e1x * px + e1y * py) + e1z * pz
+            if det == 0.0:
+                continue
+            inv = 1.0 / det
+            sx, sy, sz = origin[r, j, 0] - p0x, origin[r, j, 1] - p0y, origin[r, j, 2] - p0z
+            u = ((sx * px + sy * py) + sz * pz) * inv
+            if u < 0.0 or u > 1.0:
+                continue
+            qx, qy, qz = sy * e1z - sz * e1y, sz * e1x - sx * e1z, sx * e1y - sy * e1x
+            v = ((dx * qx + dy * qy) + dz * qz) * inv
+            if v < 0.0 or u + v > 1.0:
+                continue
+            t = ((e2x * qx + e2y * qy) + e2z * qz) * inv
+            if t > 0.0 and t < best_t[r, j]:
+                best_t[r, j] = t
+                best_c[r, j] = c
+                best_uv[r, j, 0] = u
+                best_uv[r, j, 1] = v
 
 
 @kernel
-def accept_near(lo, hi, r0, c0, ray_row, ray_col, origin, direction, screen, bbox, dilate, real, run, first, last,
-                ray, best_t, best_c, best_uv, tested, seen):
+def accept_near(lo, hi, r0, c0, valid, span, origin, direction, ray_row, ray_col, ray_origin, ray_direction, screen,
+                bbox, dilate, real, run, first, last, ray, best_t, best_c, best_uv, tested, seen):
     """:func:`accept` over each candidate's rays that may hit its real triangle (``ray[first[c]:
     last[c]]``, ascending) instead of every pixel it covers: the same cover test, the same ray
     test and the same order of candidates per pixel, so where the lists hold every ray that
     can hit, ``best_t``, ``best_c`` and ``best_uv`` are :func:`accept`'s bit for bit (``tested``
-    marks only the pixels of the lists that a candidate covers).
+    marks only the pixels of the lists that a candidate covers). A candidate without a list
+    (``first[c] < 0``) is tested at every pixel it covers, as :func:`accept` does.
 
     Parameters
     ----------
     ray_row, ray_col : (R,) int64
         Each ray's box pixel, in row-major order.
-    origin, direction : (R, 3) float64
-        The rays.
+    ray_origin, ray_direction : (R, 3) float64
+        The rays (``origin``, ``direction`` at those pixels).
     first, last : (C,) int64
     ray : (K,) int64
         Ray indices, ascending within each candidate's list.
-    r0, c0, screen, bbox, dilate, real, run, best_t, best_c, best_uv, tested, seen
+    r0, c0, valid, span, origin, direction, screen, bbox, dilate, real, run, best_t, best_c, best_uv, tested, seen
         As :func:`accept`.
     """
     n = screen.shape[0]
     for c in range(n):
+        if first[c] < 0:
+            _raster_one(c, lo, hi, r0, c0, valid, span, origin, direction, screen, bbox, dilate, real, run, best_t,
+                        best_c, best_uv, tested, seen)
+            continue
         row0, row1 = max(lo, bbox[c, 0]), min(hi, bbox[c, 1])
         if row0 >= row1:
             continue
@@ -172,13 +187,13 @@ def accept_near(lo, hi, r0, c0, ray_row, ray_col, origin, direction, screen, bbo
                     continue
             tested[r, j] = True
             seen[r, j] = run[c]
-            dx, dy, dz = direction[k, 0], direction[k, 1], direction[k, 2]
+            dx, dy, dz = ray_direction[k, 0], ray_direction[k, 1], ray_direction[k, 2]
             px, py, pz = dy * e2z - dz * e2y, dz * e2x - dx * e2z, dx * e2y - dy * e2x
             det = (e1x * px + e1y * py) + e1z * pz
             if det == 0.0:
                 continue
             inv = 1.0 / det
-            sx, sy, sz = origin[k, 0] - p0x, origin[k, 1] - p0y, origin[k, 2] - p0z
+            sx, sy, sz = ray_origin[k, 0] - p0x, ray_origin[k, 1] - p0y, ray_origin[k, 2] - p0z
             u = ((sx * px + sy * py) + sz * pz) * inv
             if u < 0.0 or u > 1.0:
                 continue
@@ -305,13 +320,13 @@ def nearest_image(lo, hi, end, target, start, count, pixel, reach, out):
 
 
 @kernel
-def rays_near(lo, hi, real, origin, direction, first, last, ray, margin, parallel, start, out, fill):
+def rays_near(lo, hi, real, origin, direction, length, first, last, ray, margin, parallel, start, out, fill):
     """Triangles ``lo .. hi - 1`` (run by :func:`refsoft._parallel.parallel_range`; each writes
     only its own outputs): the rays among ``ray[first[f]:last[f]]`` that may hit triangle ``f``,
     in order. A ray is left out only when Moller-Trumbore (float64, :func:`accept`'s arithmetic)
     puts it clearly off the triangle: ``u`` or ``v`` below ``-margin``, ``u + v`` above
     ``1 + margin``, or ``t`` below ``-margin * (|e1| + |e2|)``; a ray within ``parallel`` of the
-    plane (``|det| <= parallel * |d| |e1| |e2|``) or with a non-finite value is kept.
+    plane (``|det| <= parallel * (|d| (|e1| |e2|))``) or with a non-finite value is kept.
 
     Parameters
     ----------
@@ -319,6 +334,8 @@ def rays_near(lo, hi, real, origin, direction, first, last, ray, margin, paralle
         The triangles (world space).
     origin, direction : (R, 3) float64
         The rays.
+    length : (R,) float64
+        ``|direction|``: ``sqrt((dx * dx + dy * dy) + dz * dz)``.
     first, last : (F,) int64
         Each triangle's rays to test: ``ray[first[f]:last[f]]``.
     ray : (K,) int64
@@ -332,36 +349,162 @@ def rays_near(lo, hi, real, origin, direction, first, last, ray, margin, paralle
         ``fill`` True: the kept ray indices, triangle by triangle.
     """
     for f in range(lo, hi):
-        p0x, p0y, p0z = real[f, 0, 0], real[f, 0, 1], real[f, 0, 2]
-        e1x, e1y, e1z = real[f, 1, 0] - p0x, real[f, 1, 1] - p0y, real[f, 1, 2] - p0z
-        e2x, e2y, e2z = real[f, 2, 0] - p0x, real[f, 2, 1] - p0y, real[f, 2, 2] - p0z
-        l1 = np.sqrt((e1x * e1x + e1y * e1y) + e1z * e1z)
-        l2 = np.sqrt((e2x * e2x + e2y * e2y) + e2z * e2z)
-        t_min = -margin * (l1 + l2)
         n = 0
         pos = start[f] if fill else 0
+        tri = _triangle(real, f, margin, parallel)
         for q in range(first[f], last[f]):
             r = ray[q]
-            dx, dy, dz = direction[r, 0], direction[r, 1], direction[r, 2]
-            px, py, pz = dy * e2z - dz * e2y, dz * e2x - dx * e2z, dx * e2y - dy * e2x
-            det = (e1x * px + e1y * py) + e1z * pz
-            ld = np.sqrt((dx * dx + dy * dy) + dz * dz)
-            # the tests say "clearly off": a NaN fails them and the ray is kept
-            if not abs(det) <= parallel * (ld * l1 * l2):
-                inv = 1.0 / det
-                sx, sy, sz = origin[r, 0] - p0x, origin[r, 1] - p0y, origin[r, 2] - p0z
-                u = ((sx * px + sy * py) + sz * pz) * inv
-                if u < -margin or u > 1.0 + margin:
-                    continue
-                qx, qy, qz = sy * e1z - sz * e1y, sz * e1x - sx * e1z, sx * e1y - sy * e1x
-                v = ((dx * qx + dy * qy) + dz * qz) * inv
-                if v < -margin or u + v > 1.0 + margin:
-                    continue
-                t = ((e2x * qx + e2y * qy) + e2z * qz) * inv
-                if t < t_min:
-                    continue
+            if not _may_hit(tri, origin[r, 0], origin[r, 1], origin[r, 2], direction[r, 0], direction[r, 1],
+                            direction[r, 2], length[r], margin):
+                continue
             if fill:
                 out[pos + n] = r
             n += 1
         if not fill:
             start[f] = n
+
+
+#: Rays per block of :func:`rays_near_every` (its seven float64 columns stay in the cache while
+#: every triangle of a part is tested against them).
+RAY_BLOCK = 2048
+
+
+@kernel
+def rays_near_every(lo, hi, real, rays, margin, parallel, count, start, at, out, fill):
+    """:func:`rays_near` with every ray for every triangle (the same test, the same lists), the
+    rays taken a block at a time for all triangles ``lo .. hi - 1``.
+
+    Parameters
+    ----------
+    rays : (7, R) float64
+        Origins (x, y, z), directions (x, y, z) and direction lengths, one row each.
+    count : (F,) int64
+        ``fill`` False: written, each triangle's number of rays kept; True: read (a triangle
+        without any is skipped).
+    start : (F,) int64
+        ``fill`` True: where each triangle's rays go in ``out``.
+    at : (F,) int64
+        Work: each triangle's next place in ``out`` (or count).
+    real, margin, parallel, out, fill
+        As :func:`rays_near`.
+    """
+    n_rays = rays.shape[1]
+    for f in range(lo, hi):
+        at[f] = start[f] if fill else 0
+    for b0 in range(0, n_rays, RAY_BLOCK):
+        b1 = min(n_rays, b0 + RAY_BLOCK)
+        for f in range(lo, hi):
+            if fill and count[f] == 0:
+                continue
+            n = at[f]
+            tri = _triangle(real, f, margin, parallel)
+            for r in range(b0, b1):
+                if not _may_hit(tri, rays[0, r], rays[1, r], rays[2, r], rays[3, r], rays[4, r], rays[5, r],
+                                rays[6, r], margin):
+                    continue
+                if fill:
+                    out[n] = r
+                n += 1
+            at[f] = n
+    if not fill:
+        for f in range(lo, hi):
+            count[f] = at[f]
+
+
+@kernel(inline=True)
+def _triangle(real, f, margin, parallel):
+    """Triangle ``f``'s corner, edges and the two limits of :func:`_may_hit`."""
+    p0x, p0y, p0z = real[f, 0, 0], real[f, 0, 1], real[f, 0, 2]
+    e1x, e1y, e1z = real[f, 1, 0] - p0x, real[f, 1, 1] - p0y, real[f, 1, 2] - p0z
+    e2x, e2y, e2z = real[f, 2, 0] - p0x, real[f, 2, 1] - p0y, real[f, 2, 2] - p0z
+    l1 = np.sqrt((e1x * e1x + e1y * e1y) + e1z * e1z)
+    l2 = np.sqrt((e2x * e2x + e2y * e2y) + e2z * e2z)
+    return p0x, p0y, p0z, e1x, e1y, e1z, e2x, e2y, e2z, parallel * (l1 * l2), -margin * (l1 + l2)
+
+
+@kernel(inline=True)
+def _may_hit(tri, ox, oy, oz, dx, dy, dz, length, margin):
+    """:func:`rays_near`'s test of one ray against a triangle (:func:`_triangle`): False when
+    clearly off."""
+    p0x, p0y, p0z, e1x, e1y, e1z, e2x, e2y, e2z, flat, t_min = tri
+    px, py, pz = dy * e2z - dz * e2y, dz * e2x - dx * e2z, dx * e2y - dy * e2x
+    det = (e1x * px + e1y * py) + e1z * pz
+    # the tests say "clearly off": a NaN fails them and the ray is kept
+    if abs(det) <= flat * length:
+        return True
+    inv = 1.0 / det
+    sx, sy, sz = ox - p0x, oy - p0y, oz - p0z
+    u = ((sx * px + sy * py) + sz * pz) * inv
+    if u < -margin or u > 1.0 + margin:
+        return False
+    qx, qy, qz = sy * e1z - sz * e1y, sz * e1x - sx * e1z, sx * e1y - sy * e1x
+    v = ((dx * qx + dy * qy) + dz * qz) * inv
+    if v < -margin or u + v > 1.0 + margin:
+        return False
+    t = ((e2x * qx + e2y * qy) + e2z * qz) * inv
+    return not t < t_min
+
+
+@kernel
+def screen_bounds(lo, hi, clip, width, height, r0, r1, c0, c1, pixels, fraction, screen, bbox, dilate, odd):
+    """Candidates ``lo .. hi - 1`` (run by :func:`refsoft._parallel.parallel_range`; each writes
+    only its own rows): the view-pixel positions of its virtual vertices from their clip
+    coordinates, its dilated bounds and dilation, as ``refsoft.search.several._screen_numpy``
+    computes them (the same operations in the same order). A candidate with a vertex at or behind
+    the eye plane has zeros, the whole box and -1. ``odd[c]`` is set where a value is not finite
+    (the caller recomputes those rows with NumPy, whose NaN rules this does not copy).
+
+    Parameters
+    ----------
+    clip : (C, 3, 4) float64
+    width, height : float
+        The view's size.
+    r0, r1, c0, c1 : int
+        The box.
+    pixels, fraction : float
+        ``SEVERAL_DILATE_PIXELS``, ``SEVERAL_DILATE_FRACTION``.
+    screen : (C, 3, 2) float64
+    bbox : (C, 4) int64
+    dilate : (C,) float64
+    odd : (C,) bool
+    """
+    big = float(1 << 30)
+    for c in range(lo, hi):
+        good = clip[c, 0, 3] > 0.0 and clip[c, 1, 3] > 0.0 and clip[c, 2, 3] > 0.0
+        if not good:
+            for k in range(3):
+                screen[c, k, 0] = 0.0
+                screen[c, k, 1] = 0.0
+            bbox[c, 0], bbox[c, 1], bbox[c, 2], bbox[c, 3] = 0, r1 - r0, c0, c1
+            dilate[c] = -1.0
+            odd[c] = False
+            continue
+        bad = False
+        for k in range(3):
+            wv = clip[c, k, 3]
+            x = (clip[c, k, 0] / wv + 1.0) * 0.5 * width
+            y = (1.0 - clip[c, k, 1] / wv) * 0.5 * height
+            bad = bad or not (np.isfinite(x) and np.isfinite(y))
+            screen[c, k, 0] = x
+            screen[c, k, 1] = y
+        edge = 0.0
+        for k in range(3):
+            m = (k + 1) % 3
+            dx = screen[c, k, 0] - screen[c, m, 0]
+            dy = screen[c, k, 1] - screen[c, m, 1]
+            e = np.sqrt(dx * dx + dy * dy)
+            edge = e if k == 0 or e > edge else edge
+        d = pixels + fraction * edge
+        bad = bad or not np.isfinite(d)
+        odd[c] = bad
+        if bad:
+            continue
+        lo_x = min(screen[c, 0, 0], screen[c, 1, 0], screen[c, 2, 0]) - d
+        hi_x = max(screen[c, 0, 0], screen[c, 1, 0], screen[c, 2, 0]) + d
+        lo_y = min(screen[c, 0, 1], screen[c, 1, 1], screen[c, 2, 1]) - d
+        hi_y = max(screen[c, 0, 1], screen[c, 1, 1], screen[c, 2, 1]) + d
+        bbox[c, 0] = np.int64(np.floor(min(max(lo_y - 0.5, -big), big))) - r0
+        bbox[c, 1] = np.int64(np.ceil(min(max(hi_y - 0.5, -big), big))) + 1 - r0
+        bbox[c, 2] = np.int64(np.floor(min(max(lo_x - 0.5, -big), big)))
+        bbox[c, 3] = np.int64(np.ceil(min(max(hi_x - 0.5, -big), big))) + 1
+        dilate[c] = d

@@ -8,13 +8,17 @@ triangles, and their exact per-pixel acceptance.
    vertices linked along its three edges; a triangle with a vertex without an image, or with no
    linked triple, is cut at its edge midpoints (whose images are found) and its parts are tried
    again, up to ``constants.SEVERAL_MAX_LEVEL``; a part still without a linked triple at the last
-   level gives every triple (the acceptance below decides).
+   level gives every triple (the acceptance below decides). Given the reflected rays of step 3, a
+   triangle to be cut that no ray comes near (kernels ``rays_near_every``, ``rays_near``) gives no
+   candidate and is not cut, with what the others do not depend on (``_Pool.needed``).
 3. :func:`draw`: each candidate is rasterized conservatively (dilated) in the reflector's stencil;
    at each covered pixel the eye ray is reflected about the reflector's interpolated normal at its
    visible point (as the ray-traced truth does) and intersected with the candidate's *real* scene
    triangle; the nearest hit with ``t > 0`` inside the triangle wins. A candidate across a tear or
    beyond a fold is never drawn where it does not reflect, and a pixel whose reflected ray hits no
-   candidate stays empty.
+   candidate stays empty. A candidate with the pruning's ray list is tested at those rays' pixels
+   alone (``accept_near``): the others miss its triangle. The picture is the same bits as without
+   the pruning.
 
 See ``docs/sheets.md``.
 """
@@ -31,7 +35,8 @@ from ..errors import RefsoftError
 from ..raster import GBuffer, _setup, shade
 from ..raster.rays import primary_rays
 from . import search
-from ._several import accept, accept_near, linked_triples, nearest_image, rays_near
+from ._several import (accept, accept_near, linked_triples, nearest_image, rays_near, rays_near_every,
+                       screen_bounds)
 from .images import Images, facing_gbuffer, find_images
 
 
@@ -133,7 +138,8 @@ class Candidates:
         With the reflected rays given to :func:`candidates`: each candidate's rays that may hit
         its real triangle, ``ray[first[c]:last[c]]`` ascending, as ``(first (C,) int64, last (C,)
         int64, ray (K,) int64)``; a ray is the index of a valid pixel of :func:`pixel_rays` in
-        row-major order. None: every pixel is tested.
+        row-major order; ``first[c] < 0``: none made (every pixel the candidate covers is
+        tested). None: every pixel is tested.
     """
 
     virtual: np.ndarray
@@ -196,8 +202,13 @@ def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, n
     reach = None if rays is None else _Reach(*rays)
     alive = span = None
     if reach is not None:
-        span = reach.test(pool.corners(faces), *reach.every(len(faces)))
-        alive = span[1] > span[0]
+        # the scene triangles matched are neither cut nor tested (their candidates are few, each
+        # tested at every pixel it covers); the others only if a ray comes near them
+        t, owner = pool.triples(faces)
+        rest = ~pool.matched(faces, t, owner)
+        span = np.full(len(faces), -1, np.int64), np.full(len(faces), -1, np.int64)
+        span[0][rest], span[1][rest] = reach.test_every(pool.corners(faces[rest]))
+        alive = ~rest | (span[1] > span[0])
         keep = pool.needed(faces, alive, max_level > 0, gb, eye, find, neighbourhood, cap)
         todo_faces, todo_src, alive, span = faces[keep], todo_src[keep], alive[keep], _take(span, keep)
     for level in range(max_level + 1):
@@ -255,6 +266,9 @@ class _Reach:
     def __init__(self, origin, direction):
         self.origin = np.ascontiguousarray(origin, np.float64).reshape(-1, 3)
         self.direction = np.ascontiguousarray(direction, np.float64).reshape(-1, 3)
+        d = self.direction
+        self.length = np.sqrt((d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1]) + d[:, 2] * d[:, 2])
+        self.columns = np.ascontiguousarray(np.concatenate([self.origin.T, d.T, self.length[None]]))
         self.lists = [np.arange(len(self.origin), dtype=np.int64)]  # the first: every ray
         self.size = len(self.origin)
         self._ray = None
@@ -269,11 +283,30 @@ class _Reach:
         """``(first, last)``: every ray for each of ``n`` triangles."""
         return np.zeros(n, np.int64), np.full(n, len(self.origin), np.int64)
 
+    def test_every(self, real):
+        """``(first, last)``: the rays of every ray that may hit each triangle of ``real`` (F, 3,
+        3) float64 (:func:`test` of :meth:`every`, the rays a block at a time:
+        :func:`._several.rays_near_every`)."""
+        real = np.ascontiguousarray(real, np.float64)
+        args = (real, self.columns, float(constants.SEVERAL_PRUNE_MARGIN), float(constants.SEVERAL_PRUNE_PARALLEL))
+        n = np.zeros(len(real), np.int64)
+        at = np.zeros(len(real), np.int64)
+        if len(real):
+            parallel_range(rays_near_every, len(real), *args, n, n, at, np.zeros(0, np.int64), False)
+        start = np.cumsum(n) - n
+        out = np.empty(int(n.sum()), np.int64)
+        if len(out):
+            parallel_range(rays_near_every, len(real), *args, n, start, at, out, True)
+        start += self.size
+        self.lists.append(out)
+        self.size += len(out)
+        return start, start + n
+
     def test(self, real, first, last):
         """``(first, last)``: the rays of ``ray()[first:last]`` that may hit each triangle of
         ``real`` (F, 3, 3) float64 (a new list each)."""
         real = np.ascontiguousarray(real, np.float64)
-        args = (real, self.origin, self.direction, np.ascontiguousarray(first, np.int64),
+        args = (real, self.origin, self.direction, self.length, np.ascontiguousarray(first, np.int64),
                 np.ascontiguousarray(last, np.int64), self.ray(), float(constants.SEVERAL_PRUNE_MARGIN),
                 float(constants.SEVERAL_PRUNE_PARALLEL))
         n = np.zeros(len(real), np.int64)
@@ -281,7 +314,8 @@ class _Reach:
             parallel_range(rays_near, len(real), *args, n, np.zeros(0, np.int64), False)
         start = np.cumsum(n) - n
         out = np.empty(int(n.sum()), np.int64)
-        if len(out):
+        if len(out):  # the second pass skips the rays of the triangles without any
+            args = args[:5] + (np.where(n > 0, args[5], args[4]),) + args[6:]
             parallel_range(rays_near, len(real), *args, start, out, True)
         start += self.size
         self.lists.append(out)
@@ -586,9 +620,9 @@ def draw(cand: Candidates, camera, reflector_mesh, triangle, stencil, box, color
         else:  # each candidate's pixels whose rays may hit it, not every pixel it covers
             rows, cols = np.nonzero(valid)
             first, last, ray = (np.ascontiguousarray(a, np.int64) for a in cand.rays)
-            parallel_range(accept_near, h, r0, c0, rows, cols, np.ascontiguousarray(origin[valid]),
-                           np.ascontiguousarray(direction[valid]), screen, bbox, dilate, real, _runs(real), first,
-                           last, ray, best_t, best_c, best_uv, tested, seen)
+            parallel_range(accept_near, h, r0, c0, valid, _spans(valid), origin, direction, rows, cols,
+                           np.ascontiguousarray(origin[valid]), np.ascontiguousarray(direction[valid]), screen, bbox,
+                           dilate, real, _runs(real), first, last, ray, best_t, best_c, best_uv, tested, seen)
     covered = best_c >= 0
     rid = np.zeros((h, w), np.int32)
     colour = np.zeros((h, w, 3), np.float32)
@@ -624,29 +658,48 @@ def _spans(valid):
 
 
 def _screen(virtual, camera, box):
-    """View-pixel positions of the candidates' virtual vertices, their dilated bounds (box rows,
-    view columns) and dilations (-1: a vertex at or behind the eye plane, the whole box)."""
-    r0, r1, c0, c1 = box
+    """View-pixel positions (C, 3, 2) float64 of the candidates' virtual vertices (C, 3, 3), their
+    dilated bounds (C, 4) int64 (box rows, view columns) and dilations (C,) float64 (-1: a vertex
+    at or behind the eye plane, the whole box): kernel ``_several.screen_bounds``, and
+    :func:`_screen_numpy` for the rows with a value that is not finite."""
+    r0, r1, c0, c1 = (int(x) for x in box)
     c = len(virtual)
-    W, H = camera.width, camera.height
     clip = _setup.transform_points(virtual.reshape(-1, 3), camera.view_proj()).reshape(c, 3, 4)
+    clip = np.ascontiguousarray(clip, np.float64)
+    screen, bbox, dilate = np.empty((c, 3, 2)), np.empty((c, 4), np.int64), np.empty(c)
+    odd = np.zeros(c, bool)
+    if c:
+        parallel_range(screen_bounds, c, clip, float(camera.width), float(camera.height), r0, r1, c0, c1,
+                       float(constants.SEVERAL_DILATE_PIXELS), float(constants.SEVERAL_DILATE_FRACTION), screen, bbox,
+                       dilate, odd)
+    if odd.any():
+        screen[odd], bbox[odd], dilate[odd] = _screen_numpy(clip[odd], camera, box)
+    return screen, bbox, dilate
+
+
+def _screen_numpy(clip, camera, box):
+    """:func:`_screen` from the clip coordinates (C, 3, 4) float64, in NumPy (a bound from a value
+    that is not finite is whatever NumPy's cast makes of it; its dilation is -1)."""
+    r0, r1, c0, c1 = box
+    c = len(clip)
+    W, H = camera.width, camera.height
     wv = clip[..., 3]
     good = np.all(wv > 0, axis=1)
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         x = (clip[..., 0] / wv + 1.0) * 0.5 * W
         y = (1.0 - clip[..., 1] / wv) * 0.5 * H
-    screen = np.ascontiguousarray(np.stack([x, y], axis=2))
-    screen[~good] = 0.0
-    edge = np.max(np.sqrt(np.sum((screen - screen[:, [1, 2, 0]]) ** 2, axis=2)), axis=1)
-    dilate = constants.SEVERAL_DILATE_PIXELS + constants.SEVERAL_DILATE_FRACTION * edge
-    bbox = np.empty((c, 4), np.int64)
-    lo_x, hi_x = np.min(x, axis=1) - dilate, np.max(x, axis=1) + dilate
-    lo_y, hi_y = np.min(y, axis=1) - dilate, np.max(y, axis=1) + dilate
-    big = float(1 << 30)
-    bbox[:, 0] = np.floor(np.clip(lo_y - 0.5, -big, big)).astype(np.int64) - r0
-    bbox[:, 1] = np.ceil(np.clip(hi_y - 0.5, -big, big)).astype(np.int64) + 1 - r0
-    bbox[:, 2] = np.floor(np.clip(lo_x - 0.5, -big, big)).astype(np.int64)
-    bbox[:, 3] = np.ceil(np.clip(hi_x - 0.5, -big, big)).astype(np.int64) + 1
+        screen = np.ascontiguousarray(np.stack([x, y], axis=2))
+        screen[~good] = 0.0
+        edge = np.max(np.sqrt(np.sum((screen - screen[:, [1, 2, 0]]) ** 2, axis=2)), axis=1)
+        dilate = constants.SEVERAL_DILATE_PIXELS + constants.SEVERAL_DILATE_FRACTION * edge
+        bbox = np.empty((c, 4), np.int64)
+        lo_x, hi_x = np.min(x, axis=1) - dilate, np.max(x, axis=1) + dilate
+        lo_y, hi_y = np.min(y, axis=1) - dilate, np.max(y, axis=1) + dilate
+        big = float(1 << 30)
+        bbox[:, 0] = np.floor(np.clip(lo_y - 0.5, -big, big)).astype(np.int64) - r0
+        bbox[:, 1] = np.ceil(np.clip(hi_y - 0.5, -big, big)).astype(np.int64) + 1 - r0
+        bbox[:, 2] = np.floor(np.clip(lo_x - 0.5, -big, big)).astype(np.int64)
+        bbox[:, 3] = np.ceil(np.clip(hi_x - 0.5, -big, big)).astype(np.int64) + 1
     bbox[~good] = (0, r1 - r0, c0, c1)
     dilate = np.where(good & np.isfinite(dilate), dilate, -1.0)
     return screen, bbox, dilate

@@ -369,7 +369,7 @@ def test_pruned_candidates_draw_the_same_bits(drawn, max_level):
     full, _ = several.candidates(*args[:-1], counted, max_level=max_level)
     n_full, points[:] = sum(points), []
     pruned, _ = several.candidates(*args[:-1], counted, max_level=max_level, rays=(origin[valid], direction[valid]))
-    assert 0 < len(pruned.triangle) < len(full.triangle) / 2
+    assert 0 < len(pruned.triangle) < len(full.triangle)
     assert max_level == 0 or 0 < sum(points) < n_full
     # a subsequence: every pruned candidate is the next equal full one
     rows = np.concatenate([full.virtual.reshape(len(full.triangle), -1), full.real.reshape(len(full.triangle), -1)], 1)
@@ -392,8 +392,9 @@ def test_pruned_candidates_draw_the_same_bits(drawn, max_level):
 def test_acceptance_over_ray_lists_matches_the_plain_loop():
     """The acceptance over each candidate's rays (accept_near) gives the plain pixel-by-candidate
     loop's nearest hits bit for bit, on one thread and on several: with every ray in every list
-    (and then its covered pixels too), and with the lists of the rays that may hit each real
-    triangle (rays_near), which leave out rays and pixels that cannot change the result."""
+    (and then its covered pixels too), with the lists of the rays that may hit each real
+    triangle (rays_near), which leave out rays and pixels that cannot change the result, and with
+    every third candidate without a list (tested at every pixel it covers)."""
     import naive_several_pool
 
     from refsoft._parallel import parallel_range
@@ -423,14 +424,67 @@ def test_acceptance_over_ray_lists_matches_the_plain_loop():
     near = reach.test(real, *reach.every(n))
     every = reach.every(n)
     assert np.sum(near[1] - near[0]) < np.sum(every[1] - every[0]) / 5  # the lists are short
-    for lists, same_tested in ((every, True), (near, False)):
+    mixed = (np.where(np.arange(n) % 3 == 0, -1, near[0]), np.where(np.arange(n) % 3 == 0, -1, near[1]))
+    for lists, same_tested in ((every, True), (near, False), (mixed, False)):
         for threads in (True, False):
             got = (np.full((h, w), np.inf), np.full((h, w), -1, np.int64), np.zeros((h, w, 2)),
                    np.zeros((h, w), bool))
-            args = (accept_near, h, r0, c0, rows, cols, o, d, screen, bbox, dilate, real, several._runs(real),
-                    *lists, reach.ray(), *got, np.full((h, w), -1, np.int64))
+            args = (accept_near, h, r0, c0, valid, several._spans(valid), origin, direction, rows, cols, o, d,
+                    screen, bbox, dilate, real, several._runs(real), *lists, reach.ray(), *got,
+                    np.full((h, w), -1, np.int64))
             with one_thread(not threads):
                 parallel_range(*args)
             for a, b in zip(got[:3], want[:3]):
                 assert np.array_equal(a, b)
             assert np.array_equal(got[3], want[3]) if same_tested else not np.any(got[3] & ~want[3])
+
+
+def test_screen_bounds_match_the_numpy_version(drawn):
+    """The candidates' screen positions, dilated bounds and dilations (kernel, on one thread and
+    several) are the NumPy version's bit for bit: triangles in view, partly off screen, with a
+    vertex behind the eye, and far aside (positions or edges too large to be finite: NumPy's own
+    rows)."""
+    scene, frame, view, k, stencil, out, truth = drawn
+    rng = np.random.default_rng(2)
+    cam = view.camera
+    eye, target = np.asarray(cam.eye, float), np.asarray(cam.target, float)
+    ahead = (target - eye) / np.linalg.norm(target - eye)
+    virtual = target + rng.normal(0, 2.0, (400, 3, 3))
+    virtual[::9, 1] = eye - ahead  # behind the eye
+    side = np.cross(ahead, [0.0, 1.0, 0.0])
+    side /= np.linalg.norm(side)
+    far = eye + 2.0 * ahead + np.array([1e150, 1e306, 1e307, 1e308])[:, None] * side
+    virtual[::13, 2] = far[np.arange(len(virtual[::13])) % 4]  # too far aside: overflows
+    box = (3, H - 2, 5, W - 1)
+    want = naive.screen(virtual, cam, box)
+    assert 0 < want[3].sum() < len(virtual) and np.sum(want[2] < 0) > 40
+    fine = want[3]  # (a bound cast from a value that is not finite is NumPy's own)
+    for threads in (True, False):
+        with one_thread(not threads):
+            got = several._screen(virtual, cam, box)
+        for a, b in zip(got, want[:3]):
+            assert a.dtype == b.dtype and np.array_equal(a[fine], b[fine])
+        assert np.array_equal(got[0], want[0], equal_nan=True) and np.array_equal(got[2], want[2])
+
+
+def test_rays_near_every_gives_the_lists_of_every_ray():
+    """The test of every ray a block at a time (rays_near_every, on one thread and several) keeps
+    each triangle the rays that rays_near keeps of every ray, in order, over several blocks."""
+    from refsoft.search._several import RAY_BLOCK
+
+    rng = np.random.default_rng(17)
+    real = rng.uniform(-1.0, 1.0, (30, 3, 3))
+    real[:, :, 2] = rng.uniform(-0.3, 0.3, (30, 1))
+    real[3] = [[0, 0, 0], [1, 0, 0], [2, 0, 0]]
+    n = 2 * RAY_BLOCK + 77
+    o = np.concatenate([rng.uniform(-1.2, 1.2, (n, 2)), np.full((n, 1), 2.0)], axis=1)
+    d = np.concatenate([rng.normal(0, 0.1, (n, 2)), np.full((n, 1), -1.0)], axis=1)
+    want = several._Reach(o, d)
+    span = want.test(real, *want.every(len(real)))
+    lists = [want.ray()[a:b].tolist() for a, b in zip(*span)]
+    assert 0 < sum(map(len, lists)) < n * len(real) / 4 and any(x and x[-1] >= 2 * RAY_BLOCK for x in lists)
+    for threads in (True, False):
+        with one_thread(not threads):
+            got = several._Reach(o, d)
+            span = got.test_every(real)
+        assert [got.ray()[a:b].tolist() for a, b in zip(*span)] == lists
