@@ -84,7 +84,7 @@ def _candidates(meshes, groups, near=None, rays=None):
         f, owner, local, nrm, edge = _faces(meshes, ids)
         keep = ~np.any((flags[f] & np.uint8(CULLED)) != 0, axis=1)
         if rays is not None and keep.any():
-            keep &= _met(np.asarray(verts, np.float64), f, edge, rays)
+            keep[keep] = _met(np.asarray(verts, np.float64), f[keep], edge[keep], rays)
         if near is not None and keep.any():
             virt_h = np.where(((flags & np.uint8(HIDDEN)) != 0)[:, None], np.nan, virt)
             keep[keep] = _near(_pixels(virt_h, near[0])[f[keep]], near[1])
@@ -111,12 +111,16 @@ def _met(verts, faces, edge, rays):
     unit direction (P, 3), the part ahead of the origin)."""
     origin, direction = rays
     d = direction / np.maximum(np.linalg.norm(direction, axis=1, keepdims=True), 1e-300)
-    near = np.full(len(verts), np.inf)
+    used = np.zeros(len(verts), bool)
+    used[faces] = True  # the faces' vertices only
+    index = np.cumsum(used) - 1
+    v = verts[used]
+    near = np.full(len(v), np.inf)
     for o, u in zip(origin, d):  # a few rays: one pass over the vertices each
-        cp = verts - o
+        cp = v - o
         t = np.maximum(cp @ u, 0.0)
         near = np.minimum(near, np.linalg.norm(cp - t[:, None] * u, axis=1))
-    return np.all(near[faces] <= (edge * (1.0 + 1e-9))[:, None], axis=1)
+    return np.all(near[index[faces]] <= (edge * (1.0 + 1e-9))[:, None], axis=1)
 
 
 def _few(rays):
