@@ -247,6 +247,12 @@ IMAGE_STEPS = 8
 #: Accepted maxima whose converged points lie closer than this many texels are one solution (a
 #: plateau, a tie, or two maxima of one solution): the best score is kept.
 IMAGE_MERGE = 1.0
+#: Beside a fold two solutions can share one peak of the score: at an accepted image whose 2x2
+#: Jacobian has ``|det|`` below this share of the sum of its squared entries (nearly singular),
+#: Newton's iteration also starts from texels 2 to IMAGE_SEED_STEPS texels along its null
+#: direction, both ways (``refsoft.search._images.seed_folds``).
+IMAGE_FOLD_RATIO = 0.1
+IMAGE_SEED_STEPS = 6
 #: The enumeration's per-texel bounds cover this many times the largest step (position and
 #: reflected direction) to a 3x3 neighbour: more than the 1.5 texels (up to sqrt(2) 1.5 along a
 #: diagonal) a solution may lie from a texel beside it.

@@ -148,6 +148,98 @@ def converge(P, N, U, mask, v_rel, r, c, reach=4.0, tol=0.75, steps=8, factor=2.
     return None
 
 
+def jacobian(P, N, U, mask, v_rel, r, c):
+    """The 2x2 Jacobian of the residual at texel (r, c) (columns: along the columns, along the
+    rows), as :func:`newton_step` makes it; None when an axis has no covered neighbour."""
+    h_, w_ = mask.shape
+    n = N[r, c].astype(np.float64)
+    a = np.abs(n)
+    e = np.eye(3)[0 if (a[0] <= a[1] and a[0] <= a[2]) else (1 if a[1] <= a[2] else 2)]
+    t0 = np.cross(n, e)
+    t0 = t0 / np.sqrt((t0[0] * t0[0] + t0[1] * t0[1]) + t0[2] * t0[2])
+    t = np.stack([t0, np.cross(n, t0)])
+
+    def res(rr, cc):
+        b = _unit64(np.asarray(v_rel, dtype=np.float64) - P[rr, cc].astype(np.float64))
+        d = _unit64(U[rr, cc].astype(np.float64) + b) - N[rr, cc].astype(np.float64)
+        return np.array([(d[0] * t[k, 0] + d[1] * t[k, 1]) + d[2] * t[k, 2] for k in range(2)])
+
+    def cov(rr, cc):
+        return 0 <= rr < h_ and 0 <= cc < w_ and mask[rr, cc]
+
+    r0 = res(r, c)
+    cols = []
+    for dr, dc in ((0, 1), (1, 0)):
+        fa, fb = cov(r + dr, c + dc), cov(r - dr, c - dc)
+        if fa and fb:
+            cols.append((res(r + dr, c + dc) - res(r - dr, c - dc)) * 0.5)
+        elif fa:
+            cols.append(res(r + dr, c + dc) - r0)
+        elif fb:
+            cols.append(r0 - res(r - dr, c - dc))
+        else:
+            return None
+    return cols
+
+
+def fold_seeds(P, N, U, mask, v_rel, cand, reach=4.0, merge=1.0, ratio=0.1, steps=6):
+    """The candidates (score, image row, col, converged row, col) beside a fold (spec section
+    4.9): from each candidate's image (in the order of image row, col, converged row, col) whose
+    Jacobian is nearly singular, Newton's iteration from
+    the texels 2 .. ``steps`` along its null direction (both ways), kept when accepted at least
+    ``merge`` from every candidate so far and on another texel."""
+    out = []
+    h, w = mask.shape
+    every = list(cand)
+    for _, ir, ic, lr, lc in sorted(cand, key=lambda e: (e[1], e[2], e[3], e[4])):  # image texel, then point
+        cols = jacobian(P, N, U, mask, v_rel, ir, ic)
+        if cols is None:
+            continue
+        (jc0, jc1), (jr0, jr1) = cols
+        aa, bb, cc = jc0 * jc0 + jc1 * jc1, jc0 * jr0 + jc1 * jr1, jr0 * jr0 + jr1 * jr1
+        det = jc0 * jr1 - jr0 * jc1
+        if not (aa + cc > 0.0 and abs(det) < ratio * (aa + cc)):
+            continue
+        half = (aa - cc) * 0.5
+        lam = (aa + cc) * 0.5 - np.sqrt(half * half + bb * bb)
+        x, y = (bb, lam - aa), (lam - cc, bb)
+        dc, dr = x if x[0] * x[0] + x[1] * x[1] >= y[0] * y[0] + y[1] * y[1] else y
+        n = np.sqrt(dc * dc + dr * dr)
+        if not n > 0.0:
+            continue
+        dc, dr = dc / n, dr / n
+        for k in range(2, steps + 1):
+            for sign in (1.0, -1.0):
+                sr, sc = int(np.floor(lr + sign * k * dr + 0.5)), int(np.floor(lc + sign * k * dc + 0.5))
+                if not (0 <= sr < h and 0 <= sc < w and mask[sr, sc]):
+                    continue
+                d = (np.asarray(v_rel) - P[sr, sc]).astype(P.dtype)
+                nn = N[sr, sc]
+                if not ((d[0] * nn[0] + d[1] * nn[1]) + d[2] * nn[2]) > 0:
+                    continue
+                if not reaches(P, N, U, mask, v_rel, sr, sc):
+                    continue
+                got = converge(P, N, U, mask, v_rel, sr, sc, reach)
+                if got is None:
+                    continue
+                (qr, qc), (pr, pc) = got
+                if any((qr, qc) == (e[1], e[2]) or (pr - e[3]) ** 2 + (pc - e[4]) ** 2 < merge * merge for e in every):
+                    continue
+                score = _score_at(P, N, U, v_rel, sr, sc)
+                entry = (score, qr, qc, pr, pc)
+                every.append(entry)
+                out.append(entry)
+    return out
+
+
+def _score_at(P, N, U, v_rel, r, c):
+    """Texel (r, c)'s score in P's precision (:func:`scores` at one texel)."""
+    b = _normalize((np.asarray(v_rel) - P[r, c]).astype(P.dtype)[None])[0]
+    h = _normalize((U[r, c] + b)[None])[0]
+    n = N[r, c]
+    return float((n[0] * h[0] + n[1] * h[1]) + n[2] * h[2])
+
+
 def images_of(P, N, mask, eye_rel, v_rel, first=(-1, -1), reach=4.0, merge=1.0):
     """Every image of one vertex, by judging every covered texel: a list of (row, col), the image
     of the walk's texel ``first`` first when it has one (``first`` covered, in front, its reflected
@@ -173,6 +265,7 @@ def images_of(P, N, mask, eye_rel, v_rel, first=(-1, -1), reach=4.0, merge=1.0):
         if got is not None:
             (ir, ic), (lr, lc) = got
             cand.append((float(s[r, c]), ir, ic, lr, lc))
+    cand = cand + fold_seeds(P, N, U, mask, v_rel, cand, reach, merge)
     kept = []
     fr, fc = first
     if fr >= 0 and mask[fr, fc] and front[fr, fc] and reaches(P, N, U, mask, v_rel, fr, fc):

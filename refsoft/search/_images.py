@@ -29,7 +29,7 @@ output's bits); scores are the search's own (``_evaluate``).
 import numpy as np
 
 from .._numba import kernel, like
-from ..constants import IMAGE_BOUND_FACTOR, IMAGE_CONVERGED, IMAGE_STEPS
+from ..constants import IMAGE_BOUND_FACTOR, IMAGE_CONVERGED, IMAGE_FOLD_RATIO, IMAGE_SEED_STEPS, IMAGE_STEPS
 from ._hierarchy import _contains
 from ._kernels import _evaluate
 
@@ -137,6 +137,26 @@ def newton(G, mask, r, c, v, t, work):
     """One Newton step on ``h - N = 0`` from texel (r, c): ``(ok, d_row, d_col)``; ``ok`` is False
     when the texel has no covered neighbour along an axis or the 2x2 Jacobian is singular.
     ``t`` (2, 3) and ``work`` (5, 2) float64 are work arrays."""
+    if not jacobian(G, mask, r, c, v, t, work):
+        return False, 0.0, 0.0
+    jc0, jc1, jr0, jr1 = work[1, 0], work[1, 1], work[2, 0], work[2, 1]
+    det = jc0 * jr1 - jr0 * jc1
+    if not det != 0.0:
+        return False, 0.0, 0.0
+    # J (d_col, d_row) = -r0, by Cramer's rule
+    d_col = (-work[0, 0] * jr1 + work[0, 1] * jr0) / det
+    d_row = (-work[0, 1] * jc0 + work[0, 0] * jc1) / det
+    if not (np.isfinite(d_col) and np.isfinite(d_row)):
+        return False, 0.0, 0.0
+    return True, d_row, d_col
+
+
+@kernel
+def jacobian(G, mask, r, c, v, t, work):
+    """The residual at texel (r, c) (``work[0]``) and the columns of its 2x2 Jacobian by central
+    differences, one-sided beside an uncovered texel (``work[1]`` along the columns,
+    ``work[2]`` along the rows), in the tangent basis ``t`` of the texel; False when an axis has
+    no covered neighbour."""
     h, w = mask.shape
     _tangent_basis(G[r, c], t)
     _residual(G, r, c, v, t, work[0])
@@ -161,17 +181,8 @@ def newton(G, mask, r, c, v, t, work):
             d[0] = work[0, 0] - work[4, 0]
             d[1] = work[0, 1] - work[4, 1]
         else:
-            return False, 0.0, 0.0
-    jc0, jc1, jr0, jr1 = work[1, 0], work[1, 1], work[2, 0], work[2, 1]
-    det = jc0 * jr1 - jr0 * jc1
-    if not det != 0.0:
-        return False, 0.0, 0.0
-    # J (d_col, d_row) = -r0, by Cramer's rule
-    d_col = (-work[0, 0] * jr1 + work[0, 1] * jr0) / det
-    d_row = (-work[0, 1] * jc0 + work[0, 0] * jc1) / det
-    if not (np.isfinite(d_col) and np.isfinite(d_row)):
-        return False, 0.0, 0.0
-    return True, d_row, d_col
+            return False
+    return True
 
 
 @kernel
@@ -248,12 +259,13 @@ def converge(G, mask, sph, cone, sizes0, r, c, v, reach, fp, t, work):
 
 
 @kernel
-def enumerate_one(G, mask, sph, cone, offsets, sizes, n_levels, v, reach, fp, stack, cand, t, work, record,
-                  n_record):
+def enumerate_one(G, mask, sph, cone, offsets, sizes, n_levels, v, reach, merge_dist, fp, stack, cand, t, work,
+                  record, n_record):
     """Every texel of one vertex that is an image (before merging), found by descending into
     every cell whose dilated cone meets the vertex (children in the order top-left, top-right,
-    bottom-left, bottom-right). Accepted texels go to ``cand`` (K, CAND_WIDTH) in the order
-    reached; ``record`` (may have no rows) receives every texel judged.
+    bottom-left, bottom-right), then the solutions beside a fold (:func:`seed_folds`). Accepted
+    texels go to ``cand`` (K, CAND_WIDTH) in the order reached; ``record`` (may have no rows)
+    receives every texel judged.
 
     Returns (accepted, visited cells, pruned cells, judged texels, n_record)."""
     one = like(1.0, fp)
@@ -315,7 +327,97 @@ def enumerate_one(G, mask, sph, cone, offsets, sizes, n_levels, v, reach, fp, st
                 sp += 1
             else:
                 pruned += 1
+    n_cand, n_record = seed_folds(G, mask, sph, cone, base, v, reach, merge_dist, fp, cand, n_cand, t, work, record,
+                                  n_record)
     return n_cand, visited, pruned, judged, n_record
+
+
+@kernel
+def seed_folds(G, mask, sph, cone, sizes0, v, reach, merge_dist, fp, cand, n_cand, t, work, record, n_record):
+    """Solutions without a maximum of their own: beside a fold two solutions can share one peak
+    of the score. At each accepted image (in the order of image row, col, converged row, col)
+    whose 2x2 Jacobian is nearly singular (``|det| <
+    IMAGE_FOLD_RATIO`` times the sum of its squared entries), Newton's iteration
+    (:func:`converge`) is started from the covered texels nearest the converged point moved 2 to
+    IMAGE_SEED_STEPS texels along the Jacobian's null direction, both ways; a start with the
+    vertex in front and within its bounds whose iteration is accepted, at least ``merge_dist``
+    texels from every candidate's point and on another texel, is one more candidate (its score the
+    start's). Returns ``(n_cand, n_record)``."""
+    h, w = mask.shape
+    n_first = n_cand
+    order = np.empty(n_first, dtype=np.int64)  # by image row, col, converged row, col
+    for a in range(n_first):
+        b = a - 1
+        while b >= 0 and (cand[order[b], 0], cand[order[b], 1], cand[order[b], 3], cand[order[b], 4]) > \
+                (cand[a, 0], cand[a, 1], cand[a, 3], cand[a, 4]):
+            order[b + 1] = order[b]
+            b -= 1
+        order[b + 1] = a
+    for m in range(n_first):
+        a = order[m]
+        ir, ic = int(cand[a, 0]), int(cand[a, 1])
+        if not jacobian(G, mask, ir, ic, v, t, work):
+            continue
+        jc0, jc1, jr0, jr1 = work[1, 0], work[1, 1], work[2, 0], work[2, 1]
+        aa = jc0 * jc0 + jc1 * jc1
+        bb = jc0 * jr0 + jc1 * jr1
+        cc = jr0 * jr0 + jr1 * jr1
+        det = jc0 * jr1 - jr0 * jc1
+        if not (aa + cc > 0.0 and abs(det) < IMAGE_FOLD_RATIO * (aa + cc)):
+            continue
+        # the null direction of J: the eigenvector of J^T J of the smaller eigenvalue, (col, row)
+        half = (aa - cc) * 0.5
+        lam = (aa + cc) * 0.5 - np.sqrt(half * half + bb * bb)
+        x0, x1 = bb, lam - aa
+        y0, y1 = lam - cc, bb
+        if x0 * x0 + x1 * x1 >= y0 * y0 + y1 * y1:
+            dc, dr = x0, x1
+        else:
+            dc, dr = y0, y1
+        n = np.sqrt(dc * dc + dr * dr)
+        if not n > 0.0:
+            continue
+        dc, dr = dc / n, dr / n
+        for k in range(2, IMAGE_SEED_STEPS + 1):
+            for sign in (1.0, -1.0):
+                sr = int(np.floor(cand[a, 3] + sign * k * dr + 0.5))
+                sc = int(np.floor(cand[a, 4] + sign * k * dc + 0.5))
+                if not (0 <= sr < h and 0 <= sc < w and mask[sr, sc]):
+                    continue
+                g = G[sr, sc]
+                if not ((v[0] - g[0]) * g[3] + (v[1] - g[1]) * g[4]) + (v[2] - g[2]) * g[5] > like(0.0, fp):
+                    continue
+                if not _contains(sph[sr * sizes0 + sc], cone[sr * sizes0 + sc], v, like(1.0, fp), like(1.0, fp), fp):
+                    continue
+                verdict, qr, qc, lr, lc = converge(G, mask, sph, cone, sizes0, sr, sc, v, reach, fp, t, work)
+                if verdict != ACCEPTED:
+                    continue
+                new = True
+                for b in range(n_cand):
+                    er, ec = cand[b, 3] - lr, cand[b, 4] - lc
+                    if (cand[b, 0] == qr and cand[b, 1] == qc) or er * er + ec * ec < merge_dist * merge_dist:
+                        new = False
+                        break
+                if not new or n_cand >= cand.shape[0]:
+                    continue
+                s = _evaluate(G, sr, sc, v, False, fp)
+                cand[n_cand, 0] = qr
+                cand[n_cand, 1] = qc
+                cand[n_cand, 2] = s
+                cand[n_cand, 3] = lr
+                cand[n_cand, 4] = lc
+                n_cand += 1
+                if n_record < record.shape[0]:
+                    record[n_record, 0] = sr
+                    record[n_record, 1] = sc
+                    record[n_record, 2] = ACCEPTED
+                    record[n_record, 3] = s
+                    record[n_record, 4] = lr
+                    record[n_record, 5] = lc
+                    record[n_record, 6] = qr
+                    record[n_record, 7] = qc
+                    n_record += 1
+    return n_cand, n_record
 
 
 @kernel
@@ -393,8 +495,8 @@ def enumerate_all(lo, hi, G, mask, sph, cone, offsets, sizes, n_levels, vertices
     for i in range(lo, hi):
         for k in range(3):
             v[k] = like(vertices[i, k] - origin[k], fp)
-        n_cand, visited, pruned, judged, _ = enumerate_one(G, mask, sph, cone, offsets, sizes, n_levels, v, reach, fp,
-                                                           stack, cand, t, work, empty, 0)
+        n_cand, visited, pruned, judged, _ = enumerate_one(G, mask, sph, cone, offsets, sizes, n_levels, v, reach,
+                                                           merge_dist, fp, stack, cand, t, work, empty, 0)
         fr, fc, flr, flc = first_walk(G, mask, sph, cone, sizes[0], first[i, 0], first[i, 1], v, reach, fp, t, work)
         n_keep = merge(cand, n_cand, fr, fc, flr, flc, merge_dist, keep, used)
         for m in range(n_keep):

@@ -13,7 +13,7 @@ import numpy as np
 
 from .. import validate
 from .._parallel import parallel_range
-from ..constants import IMAGE_MERGE, IMAGE_REACH, MAX_IMAGES
+from ..constants import IMAGE_MERGE, IMAGE_REACH, IMAGE_SEED_STEPS, MAX_IMAGES
 from ..errors import RefsoftError
 from ..raster import GBuffer
 
@@ -247,12 +247,12 @@ def trace_images(gbuffer, eye, vertex, walk_pixel=None, reach: float = IMAGE_REA
     G, mask, fp, (r0, c0), (sph, cone, offsets, sizes) = _prepared(gbuffer, e)
     v_rel = (v - np.asarray(gbuffer.origin, dtype=np.float64)).astype(dt)  # as find_images' kernel rounds it
     cand = np.empty((MAX_IMAGES * 4, _images.CAND_WIDTH))
-    record = np.zeros((int(mask.size) + 1, _images.RECORD_WIDTH))
+    record = np.zeros((int(mask.size) + 1 + 2 * IMAGE_SEED_STEPS * MAX_IMAGES * 4, _images.RECORD_WIDTH))
     stack = np.empty((3 * len(sizes) + 4, 3), dtype=np.int64)
     t, work = np.empty((2, 3)), np.empty((5, 2))
     n_cand, visited, pruned, judged, n_rec = _images.enumerate_one(G, mask, sph, cone, offsets, sizes, len(sizes),
-                                                                   v_rel, float(reach), fp, stack, cand, t, work,
-                                                                   record, 0)
+                                                                   v_rel, float(reach), float(merge), fp, stack, cand,
+                                                                   t, work, record, 0)
     fr = fc = -1
     if walk_pixel is not None and walk_pixel[0] >= 0:
         fr, fc = int(walk_pixel[0]) - r0, int(walk_pixel[1]) - c0

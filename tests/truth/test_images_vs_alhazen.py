@@ -147,13 +147,11 @@ def test_hypothesis_over_eyes_and_points(sphere_inside, seed, eye_r, eye_dir, lo
 
 
 def test_an_eye_near_the_wall_looking_along_it(sphere_inside):
-    """Eye (0, 0, 0.8125) looking along +y, near the wall: the one view found (by the test above,
-    random examples) where the counts fall short of the goal. 1,931 clear vertices of 2,000
-    (seed 0): counts agree on 99.79%; 4 vertices are one image short, none over. Three have
-    two exact images 2.5 to 6.8 pixels apart whose score forms one maximum (the third solution
-    has no maximum of its own, and Newton's iteration from the one maximum finds one of them);
-    one has a maximum 7 pixels from its solution, beyond IMAGE_REACH. Held at the measurement,
-    below the goal of 99.9%."""
+    """Eye (0, 0, 0.8125) looking along +y, near the wall: a view where solutions share a peak.
+    1,931 clear vertices of 2,000 (seed 0). Without the seeds beside a fold the counts agreed on
+    99.79%: three vertices had two exact images 2.5 to 6.8 pixels apart whose score forms one
+    maximum. With them (``_images.seed_folds``) 99.95%: one vertex stays one image short, its
+    maximum 7 pixels from its solution, beyond IMAGE_REACH. The goal, 99.9%."""
     eye = np.array([0.0, 0.0, 0.8125])
     cam = Camera(eye=eye, target=eye + [0.0, 1.0, 0.0], fov_y=120.0, width=W, height=H, near=0.01, far=10.0,
                  up=(1.0, 0.0, 0.0))
@@ -165,4 +163,4 @@ def test_an_eye_near_the_wall_looking_along_it(sphere_inside):
     pix, in_view, clear = exact_in_view(gb, eye, verts)
     want = in_view.sum(axis=1)
     assert np.all(im.count[clear] <= want[clear])
-    assert np.mean((im.count == want)[clear]) >= 0.9979
+    assert np.mean((im.count == want)[clear]) >= 0.999
