@@ -134,7 +134,7 @@ def rays_near(real, origin, direction, first, last, ray, margin, parallel):
 
 def screen(virtual, camera, box):
     """The candidates' screen positions (C, 3, 2), dilated bounds (C, 4) int64 and dilations (C,)
-    of ``refsoft.search.several._screen``, written out in NumPy over every candidate at once."""
+    of ``refsoft.search.acceptance._screen``, written out in NumPy over every candidate at once."""
     from refsoft import constants
     from refsoft.raster import _setup
 

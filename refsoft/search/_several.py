@@ -449,7 +449,7 @@ def _may_hit(tri, ox, oy, oz, dx, dy, dz, length, margin):
 def screen_bounds(lo, hi, clip, width, height, r0, r1, c0, c1, pixels, fraction, screen, bbox, dilate, odd):
     """Candidates ``lo .. hi - 1`` (run by :func:`refsoft._parallel.parallel_range`; each writes
     only its own rows): the view-pixel positions of its virtual vertices from their clip
-    coordinates, its dilated bounds and dilation, as ``refsoft.search.several._screen_numpy``
+    coordinates, its dilated bounds and dilation, as ``refsoft.search.acceptance._screen_numpy``
     computes them (the same operations in the same order). A candidate with a vertex at or behind
     the eye plane has zeros, the whole box and -1. ``odd[c]`` is set where a value is not finite
     (the caller recomputes those rows with NumPy, whose NaN rules this does not copy).

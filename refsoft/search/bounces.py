@@ -184,7 +184,7 @@ def unfolded(bounce: Bounce, result: SearchResult, vertices) -> np.ndarray:
 def level_rays(bounce: Bounce):
     """Each pixel's reflected ray at a bounce over its box: ``(valid (h, w) bool, origin (h, w,
     3), direction (h, w, 3))`` float64, the bounce point and the direction from the pixel's eye
-    reflected about the normal there (:func:`refsoft.search.several.draw`'s ``rays``)."""
+    reflected about the normal there (:func:`refsoft.search.acceptance.draw`'s ``rays``)."""
     valid = bounce.mask.copy()
     origin = np.where(valid[..., None], bounce.position, 0.0)
     n = bounce.normal

@@ -12,7 +12,7 @@ reflector's own shade``.
 Under the accurate preset (``images = "all"``) what a pixel shows at a level is decided by
 exact per-pixel acceptance (:func:`exact_level`): its reflected ray is met with the real
 triangles whose virtual triangles, from the level's search, cover it (dilated), the nearest hit
-drawn (:func:`refsoft.search.several.draw`'s rule). Under the paper preset the reflectors'
+drawn (:func:`refsoft.search.acceptance.draw`'s rule). Under the paper preset the reflectors'
 virtual triangles are rasterized with the scene's (:func:`refsoft.search.bounces.seen_reflectors`)
 and a later level drawn by the virtual pass.
 """
@@ -27,7 +27,8 @@ import numpy as np
 from .. import keys
 from .._parallel import parallel_range
 from ..raster import shade
-from . import CULLED, HIDDEN
+from . import CULLED, HIDDEN, acceptance
+from ._several import accept
 from .bounces import (Bounce, bounding_sphere, first_bounces, gbuffer_of, later_bounces, level_rays, make_bounce,
                       may_see, object_parts, search_bounce, seen_reflectors, unfolded)
 from .virtual import virtual_pass
@@ -69,7 +70,7 @@ _FACES = {}
 
 
 def _candidates(meshes, groups, near=None, rays=None):
-    """Candidates of :func:`refsoft.search.several.draw` from ``groups``: (object ids, their
+    """Candidates of :func:`refsoft.search.acceptance.draw` from ``groups``: (object ids, their
     vertices (n, 3) world, virtual vertices (n, 3), flags (n,)) each, the objects' vertices
     consecutive in that order. A triangle with a CULLED corner is left out; one with a HIDDEN
     corner (its virtual vertex is where its walk stopped, not its image) is tried over the whole
@@ -77,7 +78,7 @@ def _candidates(meshes, groups, near=None, rays=None):
     triangles whose dilated bounds may meet ``box`` (:func:`_near`) are kept; with ``rays`` (the
     valid ones, at most BOUNCE_FEW_RAYS) only those one of the rays can meet (:func:`_met`).
     Returns the candidates and, per group, how many it gave."""
-    from .several import Candidates
+    from .acceptance import Candidates
 
     virtual, real, normals, obj, tri, counts = [], [], [], [], [], []
     for ids, verts, virt, flags in groups:
@@ -165,11 +166,9 @@ def _near(corners, box):
 
 def _bounds(cand, camera, box):
     """The candidates' dilated bounds over ``box``: (C, 4) view rows and columns, clipped."""
-    from . import several
-
     r0, r1, c0, c1 = box
     with np.errstate(invalid="ignore"):  # the hidden corners' NaN bounds, replaced by the box
-        screen, bbox, dilate = several._screen(cand.virtual, camera, box)
+        screen, bbox, dilate = acceptance._screen(cand.virtual, camera, box)
     rows = np.clip(bbox[:, 0:2] + r0, r0, r1)  # the draw's rows are the box's, its columns the view's
     cols = np.clip(bbox[:, 2:4], c0, c1)
     return screen, bbox, dilate, np.concatenate([rows, cols], axis=1)
@@ -210,10 +209,8 @@ def _joined(a, b):
 
 def nearest_hits(cand, camera, box, rays):
     """Per pixel of ``box`` the candidate whose real triangle the pixel's ray meets nearest, among
-    those whose dilated virtual triangle covers it (:func:`refsoft.search.several.draw`'s
+    those whose dilated virtual triangle covers it (:func:`refsoft.search.acceptance.draw`'s
     acceptance): ``(candidate (h, w) int64, -1 none; t (h, w); barycentrics u, v (h, w, 2))``."""
-    from . import several
-
     r0, r1, c0, c1 = (int(x) for x in box)
     h, w = r1 - r0, c1 - c0
     valid, origin, direction = (np.ascontiguousarray(a) for a in rays)
@@ -223,8 +220,8 @@ def nearest_hits(cand, camera, box, rays):
     if len(cand.real) and valid.any():
         screen, bbox, dilate, _ = _bounds(cand, camera, (r0, r1, c0, c1))
         real = np.ascontiguousarray(cand.real)
-        parallel_range(several.accept, h, r0, c0, valid, several._spans(valid), origin, direction, screen, bbox,
-                       dilate, real, several._runs(real), best_t, best_c, best_uv, np.zeros((h, w), bool),
+        parallel_range(accept, h, r0, c0, valid, acceptance._spans(valid), origin, direction, screen, bbox,
+                       dilate, real, acceptance._runs(real), best_t, best_c, best_uv, np.zeros((h, w), bool),
                        np.full((h, w), -1, np.int64))
     return best_c, best_t, best_uv
 
@@ -232,7 +229,7 @@ def nearest_hits(cand, camera, box, rays):
 def exact_level(scene, meshes, groups, camera, box, rays, reflectors_only=False):
     """One level drawn by exact per-pixel acceptance: the nearest hit of each pixel's ray among
     the candidates of ``groups`` (:func:`_candidates`; the non-reflectors first, then the
-    reflectors searched at this level), shaded as :func:`refsoft.search.several.draw` shades it.
+    reflectors searched at this level), shaded as :func:`refsoft.search.acceptance.draw` shades it.
 
     Parameters
     ----------
@@ -438,7 +435,7 @@ def deepen(scene, view, k, stencil, box, out, refl, parts, opt, search_first, ke
     found = []  # the other reflectors' vertices searched on this one: (ids, vertices, virtual, flags)
     gb = refl.gbuffer
     if opt.images == "all":  # drawn by each pixel's ray: a reflector no ray meets cannot be seen
-        from .several import pixel_rays
+        from .acceptance import pixel_rays
 
         rays = pixel_rays(camera, view.meshes[k - 1], view.view.triangle, stencil, box)
         reach = (lambda b: bool(_towards(rays, [bounding_sphere(view.meshes[b - 1])]).any()))

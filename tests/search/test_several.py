@@ -10,7 +10,7 @@ from refsoft._parallel import one_thread
 from refsoft.errors import RefsoftError
 from refsoft.frame import FrameDriver, RenderOptions
 from refsoft.scene.builtin.shapes import bowl
-from refsoft.search import several
+from refsoft.search import acceptance, several
 from refsoft.search.images import Images
 from refsoft.search.method import VertexSearch
 from refsoft.search.virtual import reflected_mesh
@@ -90,16 +90,16 @@ def test_every_drawn_pixel_sees_what_it_draws(drawn):
 def _candidate_check(view, k, stencil, real, virtual):
     """Draw one candidate; return the pixels drawn, the pixels its dilated screen triangle covers
     and the pixels whose reflected ray hits its real triangle (naive)."""
-    cand = several.Candidates(virtual[None], real[None], np.tile([0.0, 1.0, 0.0], (1, 3, 1)), np.array([2], np.int32),
+    cand = acceptance.Candidates(virtual[None], real[None], np.tile([0.0, 1.0, 0.0], (1, 3, 1)), np.array([2], np.int32),
                               np.array([0]), 0)
     box = (0, H, 0, W)
     colors = np.ones((4, 3), np.float32)
-    _, rid, covered, counts = several.draw(cand, view.camera, view.meshes[k - 1], view.view.triangle, stencil, box,
+    _, rid, covered, counts = acceptance.draw(cand, view.camera, view.meshes[k - 1], view.view.triangle, stencil, box,
                                            colors)
     rows, cols, o, d = naive.reflected_rays(view.camera, stencil, view.meshes[k - 1], view.view.triangle)
     hits = np.zeros((H, W), bool)
     hits[rows, cols] = naive.first_hits(o, d, real[None]) == 0
-    screen, _, dil = several._screen(virtual[None], view.camera, box)
+    screen, _, dil = acceptance._screen(virtual[None], view.camera, box)
     inside = np.zeros((H, W), bool)
     a, b, c = screen[0]
     area = _cross(b - a, c - a)
@@ -298,8 +298,8 @@ def test_acceptance_kernel_matches_the_plain_loop():
     assert (want[1] >= 0).sum() > 20 and (want[2] > 0).any()
     for threads in (True, False):
         got = (np.full((h, w), np.inf), np.full((h, w), -1, np.int64), np.zeros((h, w, 2)), np.zeros((h, w), bool))
-        args = (accept, h, r0, c0, valid, several._spans(valid), origin, direction, screen, bbox, dilate, real,
-                several._runs(real), *got, np.full((h, w), -1, np.int64))
+        args = (accept, h, r0, c0, valid, acceptance._spans(valid), origin, direction, screen, bbox, dilate, real,
+                acceptance._runs(real), *got, np.full((h, w), -1, np.int64))
         if threads:
             parallel_range(*args)
         else:
@@ -358,7 +358,7 @@ def test_pruned_candidates_draw_the_same_bits(drawn, max_level):
     comb = reflected_mesh(scene, view.meshes)[1]
     args = (gb, eye, view.vertices, comb.normals, comb.faces, comb.face_object, images, find)
     box = (0, H, 0, W)
-    rays = several.pixel_rays(view.camera, view.meshes[k - 1], view.view.triangle, stencil, box)
+    rays = acceptance.pixel_rays(view.camera, view.meshes[k - 1], view.view.triangle, stencil, box)
     valid, origin, direction = rays
     points = []
 
@@ -382,8 +382,8 @@ def test_pruned_candidates_draw_the_same_bits(drawn, max_level):
         assert at < len(rows)
         at += 1
     colors = np.vstack([np.zeros(3), [o.color for o in scene.objects]]).astype(np.float32)
-    a = several.draw(full, view.camera, view.meshes[k - 1], view.view.triangle, stencil, box, colors)
-    b = several.draw(pruned, view.camera, view.meshes[k - 1], view.view.triangle, stencil, box, colors, rays)
+    a = acceptance.draw(full, view.camera, view.meshes[k - 1], view.view.triangle, stencil, box, colors)
+    b = acceptance.draw(pruned, view.camera, view.meshes[k - 1], view.view.triangle, stencil, box, colors, rays)
     for x, y in zip(a[:3], b[:3]):
         assert np.array_equal(x, y)
     assert a[3]["pixels_accepted"] == b[3]["pixels_accepted"] > 0
@@ -429,8 +429,8 @@ def test_acceptance_over_ray_lists_matches_the_plain_loop():
         for threads in (True, False):
             got = (np.full((h, w), np.inf), np.full((h, w), -1, np.int64), np.zeros((h, w, 2)),
                    np.zeros((h, w), bool))
-            args = (accept_near, h, r0, c0, valid, several._spans(valid), origin, direction, rows, cols, o, d,
-                    screen, bbox, dilate, real, several._runs(real), *lists, reach.ray(), *got,
+            args = (accept_near, h, r0, c0, valid, acceptance._spans(valid), origin, direction, rows, cols, o, d,
+                    screen, bbox, dilate, real, acceptance._runs(real), *lists, reach.ray(), *got,
                     np.full((h, w), -1, np.int64))
             with one_thread(not threads):
                 parallel_range(*args)
@@ -461,7 +461,7 @@ def test_screen_bounds_match_the_numpy_version(drawn):
     fine = want[3]  # (a bound cast from a value that is not finite is NumPy's own)
     for threads in (True, False):
         with one_thread(not threads):
-            got = several._screen(virtual, cam, box)
+            got = acceptance._screen(virtual, cam, box)
         for a, b in zip(got, want[:3]):
             assert a.dtype == b.dtype and np.array_equal(a[fine], b[fine])
         assert np.array_equal(got[0], want[0], equal_nan=True) and np.array_equal(got[2], want[2])

@@ -1,0 +1,219 @@
+"""Exact per-pixel acceptance (spec section 4.8's drawing of every image, and a later bounce's,
+spec section 5.1): candidate virtual triangles, each rasterized conservatively (dilated) in a
+stencil, and at each pixel it covers the pixel's reflected ray met with the candidate's *real*
+scene triangle; the nearest hit with ``t > 0`` inside the triangle wins. A candidate across a
+tear or beyond a fold is never drawn where it does not reflect, and a pixel whose reflected ray
+hits no candidate stays empty. A candidate with a ray list (:class:`Candidates`' ``rays``) is
+tested at those rays' pixels alone (``accept_near``): the others miss its triangle.
+
+See ``docs/sheets.md``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import constants
+from .._parallel import parallel_range
+from ..raster import _setup, shade
+from ..raster.rays import primary_rays
+from ._several import accept, accept_near, screen_bounds
+
+
+@dataclass(frozen=True, eq=False)
+class Candidates:
+    """Candidate virtual triangles of one reflector.
+
+    Attributes
+    ----------
+    virtual : (C, 3, 3) float64
+        The images of the triangle's corners (world space).
+    real : (C, 3, 3) float64
+        The scene triangle (or its part after subdivision), world space.
+    normals : (C, 3, 3) float64
+        Vertex normals at its corners.
+    object_id : (C,) int32
+    triangle : (C,) int64
+        The scene triangle (row of the faces given) each candidate comes from.
+    subdivided : int
+        Scene triangles cut at least once (with the reflected rays given to :func:`candidates`:
+        of those it makes and keeps).
+    rays : tuple or None
+        With the reflected rays given to :func:`candidates`: each candidate's rays that may hit
+        its real triangle, ``ray[first[c]:last[c]]`` ascending, as ``(first (C,) int64, last (C,)
+        int64, ray (K,) int64)``; a ray is the index of a valid pixel of :func:`pixel_rays` in
+        row-major order; ``first[c] < 0``: none made (every pixel the candidate covers is
+        tested). None: every pixel is tested.
+    """
+
+    virtual: np.ndarray
+    real: np.ndarray
+    normals: np.ndarray
+    object_id: np.ndarray
+    triangle: np.ndarray
+    subdivided: int
+    rays: tuple = None
+
+
+# --- drawing ----------------------------------------------------------------------------------
+def pixel_rays(camera, reflector_mesh, triangle, stencil, box):
+    """The reflected ray of every stencil pixel of the box (the truth's,
+    :func:`refsoft.raster.rays.primary_rays`).
+
+    Parameters
+    ----------
+    camera, reflector_mesh, triangle, stencil, box
+        As :func:`draw`.
+
+    Returns
+    -------
+    valid : (h, w) bool
+        Box pixels with a reflected ray.
+    origin, direction : (h, w, 3) float64
+        Each box pixel's reflected ray (zeros where not valid).
+    """
+    r0, r1, c0, c1 = (int(x) for x in box)
+    h, w = r1 - r0, c1 - c0
+    sten = np.ascontiguousarray(stencil[r0:r1, c0:c1], bool)
+    rows, cols = np.nonzero(sten)
+    hit, ray, ok = primary_rays(camera, reflector_mesh, rows + r0, cols + c0, triangle[rows + r0, cols + c0])
+    valid = np.zeros((h, w), bool)
+    origin = np.zeros((h, w, 3))
+    direction = np.zeros((h, w, 3))
+    valid[rows, cols] = ok
+    origin[rows, cols] = hit
+    direction[rows, cols] = ray
+    return valid, origin, direction
+
+
+def draw(cand: Candidates, camera, reflector_mesh, triangle, stencil, box, colors, rays=None):
+    """Draw the candidates at the reflector's stencil pixels by exact per-pixel acceptance
+    (module docstring, step 3).
+
+    Parameters
+    ----------
+    cand : Candidates
+    camera : Camera
+        The view camera.
+    reflector_mesh : Mesh
+        The reflector's world mesh (the main view's).
+    triangle : (H, W) int
+        The reflector's visible triangle per view pixel (the main view's).
+    stencil : (H, W) bool
+    box : (r0, r1, c0, c1)
+    colors : (K + 1, 3) float32
+        Object colours by id (row 0 unused).
+    rays : tuple, optional
+        :func:`pixel_rays` of these arguments (made here when not given).
+
+    Returns
+    -------
+    colour : (h, w, 3) float32
+    reflected_id : (h, w) int32
+    covered : (h, w) bool
+    counts : dict
+        ``pixels_accepted`` (a candidate's real triangle hit), ``pixels_empty`` (pixels with a
+        reflected ray where no candidate's triangle is hit: nothing drawn).
+    """
+    r0, r1, c0, c1 = (int(x) for x in box)
+    h, w = r1 - r0, c1 - c0
+    valid, origin, direction = pixel_rays(camera, reflector_mesh, triangle, stencil, box) if rays is None else rays
+    screen, bbox, dilate = _screen(cand.virtual, camera, box)
+    best_t = np.full((h, w), np.inf)
+    best_c = np.full((h, w), -1, np.int64)
+    best_uv = np.zeros((h, w, 2))
+    tested = np.zeros((h, w), bool)
+    if len(screen):
+        real = np.ascontiguousarray(cand.real)
+        seen = np.full((h, w), -1, np.int64)
+        if cand.rays is None:
+            parallel_range(accept, h, r0, c0, valid, _spans(valid), origin, direction, screen, bbox, dilate, real,
+                           _runs(real), best_t, best_c, best_uv, tested, seen)
+        else:  # each candidate's pixels whose rays may hit it, not every pixel it covers
+            rows, cols = np.nonzero(valid)
+            first, last, ray = (np.ascontiguousarray(a, np.int64) for a in cand.rays)
+            parallel_range(accept_near, h, r0, c0, valid, _spans(valid), origin, direction, rows, cols,
+                           np.ascontiguousarray(origin[valid]), np.ascontiguousarray(direction[valid]), screen, bbox,
+                           dilate, real, _runs(real), first, last, ray, best_t, best_c, best_uv, tested, seen)
+    covered = best_c >= 0
+    rid = np.zeros((h, w), np.int32)
+    colour = np.zeros((h, w, 3), np.float32)
+    if covered.any():
+        c = best_c[covered]
+        u, v = best_uv[covered, 0], best_uv[covered, 1]
+        nrm = cand.normals[c]
+        n = (1.0 - u - v)[:, None] * nrm[:, 0] + u[:, None] * nrm[:, 1] + v[:, None] * nrm[:, 2]
+        length = np.sqrt(np.sum(n * n, axis=1))[:, None]
+        n = np.divide(n, length, out=np.zeros_like(n), where=length > 0)
+        rid[covered] = cand.object_id[c]
+        colour[covered] = shade(n, np.asarray(colors, np.float32)[cand.object_id[c]])
+    counts = {"pixels_accepted": int(covered.sum()), "pixels_empty": int((valid & ~covered).sum())}
+    return colour, rid, covered, counts
+
+
+def _runs(real):
+    """(C,) int64: the run of each candidate, a new one wherever its real triangle (C, 3, 3) float64
+    differs in any bit from the previous one's."""
+    bits = real.reshape(len(real), -1).view(np.int64)
+    new = np.ones(len(real), bool)
+    new[1:] = np.any(bits[1:] != bits[:-1], axis=1)
+    return np.cumsum(new, dtype=np.int64)
+
+
+def _spans(valid):
+    """(h, 2) int64: per row of ``valid`` (h, w) its first True column and last plus one (0, 0:
+    none)."""
+    any_ = valid.any(axis=1)
+    first = np.where(any_, np.argmax(valid, axis=1), 0)
+    last = np.where(any_, valid.shape[1] - np.argmax(valid[:, ::-1], axis=1), 0)
+    return np.ascontiguousarray(np.stack([first, last], axis=1), np.int64)
+
+
+def _screen(virtual, camera, box):
+    """View-pixel positions (C, 3, 2) float64 of the candidates' virtual vertices (C, 3, 3), their
+    dilated bounds (C, 4) int64 (box rows, view columns) and dilations (C,) float64 (-1: a vertex
+    at or behind the eye plane, the whole box): kernel ``_several.screen_bounds``, and
+    :func:`_screen_numpy` for the rows with a value that is not finite."""
+    r0, r1, c0, c1 = (int(x) for x in box)
+    c = len(virtual)
+    clip = _setup.transform_points(virtual.reshape(-1, 3), camera.view_proj()).reshape(c, 3, 4)
+    clip = np.ascontiguousarray(clip, np.float64)
+    screen, bbox, dilate = np.empty((c, 3, 2)), np.empty((c, 4), np.int64), np.empty(c)
+    odd = np.zeros(c, bool)
+    if c:
+        parallel_range(screen_bounds, c, clip, float(camera.width), float(camera.height), r0, r1, c0, c1,
+                       float(constants.SEVERAL_DILATE_PIXELS), float(constants.SEVERAL_DILATE_FRACTION), screen, bbox,
+                       dilate, odd)
+    if odd.any():
+        screen[odd], bbox[odd], dilate[odd] = _screen_numpy(clip[odd], camera, box)
+    return screen, bbox, dilate
+
+
+def _screen_numpy(clip, camera, box):
+    """:func:`_screen` from the clip coordinates (C, 3, 4) float64, in NumPy (a bound from a value
+    that is not finite is whatever NumPy's cast makes of it; its dilation is -1)."""
+    r0, r1, c0, c1 = box
+    c = len(clip)
+    W, H = camera.width, camera.height
+    wv = clip[..., 3]
+    good = np.all(wv > 0, axis=1)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        x = (clip[..., 0] / wv + 1.0) * 0.5 * W
+        y = (1.0 - clip[..., 1] / wv) * 0.5 * H
+        screen = np.ascontiguousarray(np.stack([x, y], axis=2))
+        screen[~good] = 0.0
+        edge = np.max(np.sqrt(np.sum((screen - screen[:, [1, 2, 0]]) ** 2, axis=2)), axis=1)
+        dilate = constants.SEVERAL_DILATE_PIXELS + constants.SEVERAL_DILATE_FRACTION * edge
+        bbox = np.empty((c, 4), np.int64)
+        lo_x, hi_x = np.min(x, axis=1) - dilate, np.max(x, axis=1) + dilate
+        lo_y, hi_y = np.min(y, axis=1) - dilate, np.max(y, axis=1) + dilate
+        big = float(1 << 30)
+        bbox[:, 0] = np.floor(np.clip(lo_y - 0.5, -big, big)).astype(np.int64) - r0
+        bbox[:, 1] = np.ceil(np.clip(hi_y - 0.5, -big, big)).astype(np.int64) + 1 - r0
+        bbox[:, 2] = np.floor(np.clip(lo_x - 0.5, -big, big)).astype(np.int64)
+        bbox[:, 3] = np.ceil(np.clip(hi_x - 0.5, -big, big)).astype(np.int64) + 1
+    bbox[~good] = (0, r1 - r0, c0, c1)
+    dilate = np.where(good & np.isfinite(dilate), dilate, -1.0)
+    return screen, bbox, dilate
