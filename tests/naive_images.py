@@ -29,37 +29,10 @@ def _unit64(x):
 def newton_step(P, N, U, mask, v_rel, r, c):
     """One Newton step on ``h - N = 0`` from texel (r, c) (float64, as the kernel's): (d_row,
     d_col), or None when an axis has no covered neighbour or the Jacobian is singular."""
-    h_, w_ = mask.shape
-    n = N[r, c].astype(np.float64)
-    a = np.abs(n)
-    e = np.eye(3)[0 if (a[0] <= a[1] and a[0] <= a[2]) else (1 if a[1] <= a[2] else 2)]
-    t0 = np.cross(n, e)
-    t0 = t0 / np.sqrt((t0[0] * t0[0] + t0[1] * t0[1]) + t0[2] * t0[2])
-    t1 = np.cross(n, t0)
-    t = np.stack([t0, t1])
-
-    def res(rr, cc):
-        p = P[rr, cc].astype(np.float64)
-        b = _unit64(np.asarray(v_rel, dtype=np.float64) - p)
-        hh = _unit64(U[rr, cc].astype(np.float64) + b)
-        d = hh - N[rr, cc].astype(np.float64)
-        return np.array([(d[0] * t[k, 0] + d[1] * t[k, 1]) + d[2] * t[k, 2] for k in range(2)])
-
-    def cov(rr, cc):
-        return 0 <= rr < h_ and 0 <= cc < w_ and mask[rr, cc]
-
-    r0 = res(r, c)
-    cols = []
-    for dr, dc in ((0, 1), (1, 0)):
-        fa, fb = cov(r + dr, c + dc), cov(r - dr, c - dc)
-        if fa and fb:
-            cols.append((res(r + dr, c + dc) - res(r - dr, c - dc)) * 0.5)
-        elif fa:
-            cols.append(res(r + dr, c + dc) - r0)
-        elif fb:
-            cols.append(r0 - res(r - dr, c - dc))
-        else:
-            return None
+    got = jacobian(P, N, U, mask, v_rel, r, c, with_residual=True)
+    if got is None:
+        return None
+    r0, cols = got
     (jc0, jc1), (jr0, jr1) = cols
     det = jc0 * jr1 - jr0 * jc1
     if det == 0.0 or not np.isfinite(det):
@@ -148,9 +121,10 @@ def converge(P, N, U, mask, v_rel, r, c, reach=4.0, tol=0.75, steps=8, factor=2.
     return None
 
 
-def jacobian(P, N, U, mask, v_rel, r, c):
-    """The 2x2 Jacobian of the residual at texel (r, c) (columns: along the columns, along the
-    rows), as :func:`newton_step` makes it; None when an axis has no covered neighbour."""
+def jacobian(P, N, U, mask, v_rel, r, c, with_residual=False):
+    """The 2x2 Jacobian of the residual at texel (r, c) by central differences, one-sided beside
+    an uncovered texel (columns: along the columns, along the rows; with ``with_residual`` also
+    the residual there, first); None when an axis has no covered neighbour."""
     h_, w_ = mask.shape
     n = N[r, c].astype(np.float64)
     a = np.abs(n)
@@ -179,7 +153,7 @@ def jacobian(P, N, U, mask, v_rel, r, c):
             cols.append(r0 - res(r - dr, c - dc))
         else:
             return None
-    return cols
+    return (r0, cols) if with_residual else cols
 
 
 def fold_seeds(P, N, U, mask, v_rel, cand, reach=4.0, merge=1.0, ratio=0.1, steps=6):

@@ -4,7 +4,6 @@ eye, the option, and the first level left as it is."""
 import numpy as np
 import pytest
 
-from refsoft import search
 from refsoft._parallel import one_thread
 from refsoft.errors import RefsoftError
 from refsoft.frame.driver import FrameDriver
@@ -13,7 +12,7 @@ from refsoft.raster import gbuffer
 from refsoft.scene.camera import Camera
 from refsoft.scene.model import Scene, SceneObject, Transform
 from refsoft.scene.primitives import box, icosphere, plane_grid
-from refsoft.search import _bounces, _kernels, _packed
+from refsoft.search import _bounces, _packed
 from refsoft.search.bounces import gbuffer_of, make_bounce, search_bounce
 from refsoft.search.levels import BOUNCE_DEPTH
 from refsoft.truth.analytic import sphere_reflection_points
