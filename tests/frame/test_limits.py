@@ -210,3 +210,24 @@ def test_images_estimate_counts_the_enumeration_and_bounds_its_traced_peak():
         tracemalloc.stop()
     assert fr.report["images"], "the enumeration ran"
     assert peak < every["total"] < 3 * peak, (peak, every["total"])
+
+
+def test_reading_lazy_zeros_takes_no_memory():
+    """A lazily zeroed map only read (as the frame's writer reads a whole G-buffer) maps the
+    kernel's zero page: the process's resident memory does not grow by the map's size (a shared
+    anonymous mapping grows by all of it)."""
+    import os
+
+    from refsoft.limits import zeros
+
+    if not os.path.exists("/proc/self/statm"):
+        pytest.fail("needs Linux's /proc/self/statm")
+
+    def resident():
+        with open("/proc/self/statm") as fh:
+            return int(fh.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+
+    a = zeros((2048, 4096), np.float32)  # 32 MiB
+    before = resident()
+    assert float(a.sum()) == 0.0
+    assert resident() - before < a.nbytes // 8
