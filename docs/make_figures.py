@@ -212,6 +212,37 @@ def sheets_figure():
     write_png(os.path.join(FIG, "sheets_concave.png"), side_by_side(r["image"], t["image"], agree))
 
 
+def exact_figure():
+    """Kitchen frame 23 at 640x480 (rendered alone), a part of the bowl where the reflected
+    outlines run: the virtual triangles rasterized, drawn exactly (the accurate preset), and the
+    truth; below, each drawing's agreement map (green agrees with the truth, red not), 3x."""
+    from refsoft.frame import FrameDriver, RenderOptions
+    from refsoft.truth import metrics
+    from refsoft.truth.raytrace import TruthRenderer
+    from refsoft.visualize import agreement_map
+
+    scene = refsoft.load_scene("kitchen", width=640, height=480)
+    t = TruthRenderer(scene, exact=False).render_frame(23).arrays
+    got = {d: FrameDriver(scene, RenderOptions(draw=d)).render_frame(23).arrays for d in ("raster", "exact")}
+    holes = np.argwhere(metrics.holes(got["raster"]["reflected_id"], t["reflected_id"]))
+    # the 160x100 window holding the most of the raster's holes
+    best, corner = -1, (0, 0)
+    for r0 in range(0, 480 - 100, 10):
+        for c0 in range(0, 640 - 160, 10):
+            n = int(np.sum((holes[:, 0] >= r0) & (holes[:, 0] < r0 + 100) & (holes[:, 1] >= c0) & (holes[:, 1] < c0 + 160)))
+            if n > best:
+                best, corner = n, (r0, c0)
+    crop = (slice(corner[0], corner[0] + 100), slice(corner[1], corner[1] + 160))
+
+    def big(pic):
+        return np.repeat(np.repeat(pic[crop], 3, axis=0), 3, axis=1)
+
+    top = side_by_side(big(got["raster"]["image"]), big(got["exact"]["image"]), big(t["image"]))
+    maps = [big(agreement_map(got[d]["reflected_id"], t["reflected_id"], t["image"])) for d in ("raster", "exact")]
+    bottom = side_by_side(*maps, np.zeros_like(maps[0]))
+    write_png(os.path.join(FIG, "exact_draw.png"), np.concatenate([top, bottom], axis=0))
+
+
 def bounces_figure():
     """The mirrors scene at 640x480, frame 0, three bounces (the accurate preset): the render, the
     ray-traced truth with three bounces, and the reflections taken per pixel (the render's
@@ -378,6 +409,7 @@ elif __name__ == "__main__":
     accuracy_figure()
     refine_figure()
     sheets_figure()
+    exact_figure()
     bounces_figure()
     check_figure()
     try:

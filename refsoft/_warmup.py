@@ -22,6 +22,7 @@ import json
 import os
 import subprocess
 import sys
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -105,7 +106,11 @@ def warm(options: dict) -> None:
     meshes = [scene.world_mesh(j) for j in range(1, len(scene.objects) + 1)]
     transforms = {j: scene.transform_at(j, 0) for j in range(1, len(scene.objects) + 1)}
     camera = scene.camera_at(0)
-    view = FrameView(scene, 0, camera, meshes, None, transforms)
+    # no main view is rasterized here: the exact drawing's reflected rays start on the ball's
+    # first triangle, which gives its kernels the render's types
+    stencil = ball_gbuffer(scene.world_mesh(k, 0, proxy=True), camera, "float32", camera.eye).mask
+    main = SimpleNamespace(triangle=np.where(stencil, 0, -1).astype(np.int64))
+    view = FrameView(scene, 0, camera, meshes, main, transforms)
     proxy = scene.world_mesh(k, 0, proxy=True)
     gcam = gbuffer_camera(scene, 0, opts.widen, opts.gbuffer_size)
     gb = ball_gbuffer(proxy, gcam, opts.precision, gcam.eye)
@@ -119,7 +124,6 @@ def warm(options: dict) -> None:
         from .search.images import find_images
 
         find_images(gb, camera.eye, verts, res)
-    stencil = ball_gbuffer(proxy, camera, "float32", camera.eye).mask
     for _ in range(2):
         res = method.reflect(view, k, stencil)
     if res.box is not None:

@@ -232,6 +232,9 @@ TRUTH_SELF_OFFSET = 1e-5
 # --- Every reflection point of a vertex (spec section 4.8) ------------------------------------
 #: ``images`` option: every reflection point (``all``) or the walk's one (``one``, the papers).
 IMAGE_MODES = ("all", "one")
+#: How the virtual triangles are drawn (RenderOptions.draw): rasterized with a z-buffer (the papers)
+#: or by exact per-pixel acceptance of the candidates they give (refsoft.search.exact).
+DRAW_MODES = ("raster", "exact")
 #: A texel that is a local maximum of the score is an image when Newton's iteration solving
 #: "normal = bisector" from it, texel to texel, converges at most this many texels (Euclidean, in
 #: the texel grid) from it.

@@ -37,9 +37,9 @@ FROM_PRESET = _FromPreset()
 #: The presets: every option each one sets (the others keep their defaults).
 PRESETS = {
     "paper": dict(method="walk", neighbourhood="cross", inverse="plane", refine=False, tessellate=None,
-                  tessellate_span=0, virtual="mirror", silhouette="texel", images="one"),
+                  tessellate_span=0, virtual="mirror", silhouette="texel", images="one", draw="raster"),
     "accurate": dict(method="walk", neighbourhood="box", inverse="discard", refine=True, tessellate=1e-4,
-                     tessellate_span=1, virtual="unfold", silhouette="clip", images="all"),
+                     tessellate_span=1, virtual="unfold", silhouette="clip", images="all", draw="exact"),
 }
 
 #: The layered depth textures' options (``method="ldt"`` only) and their defaults.
@@ -109,6 +109,11 @@ class RenderOptions:
         Every reflection point of every vertex (spec section 4.8, :func:`refsoft.search.images.find_images`:
         flag SEVERAL and the per-image arrays, on reflectors that can give two points:
         :func:`refsoft.search.convex.several_possible`), or the walk's one (the papers; ``paper``).
+    draw : {"raster", "exact"}
+        How the virtual triangles are drawn in the stencil: rasterized with a z-buffer (the papers;
+        ``paper``), or used as candidates of exact per-pixel acceptance, each stencil pixel's
+        reflected ray met with the real triangles whose dilated virtual triangles cover it
+        (:mod:`refsoft.search.exact`, beyond the papers; ``accurate``).
     ldt_resolution, ldt_layers, ldt_faces, ldt_linear, ldt_tau, ldt_regions : optional
         ``method="ldt"`` only (default :data:`LDT_DEFAULTS`): texels per cube face edge (4 ..
         4096, a power of two keeps mirrored texels bit-exact); layers built ("all" or 1, the
@@ -145,6 +150,7 @@ class RenderOptions:
     virtual: str = FROM_PRESET
     silhouette: str = FROM_PRESET
     images: str = FROM_PRESET
+    draw: str = FROM_PRESET
     ldt_resolution: int | None = None
     ldt_layers: object = None
     ldt_faces: str | None = None
@@ -169,6 +175,7 @@ class RenderOptions:
         validate.choice(self.virtual, VIRTUAL_RULES, "virtual")
         validate.choice(self.silhouette, SILHOUETTE_RULES, "silhouette")
         validate.choice(self.images, constants.IMAGE_MODES, "images")
+        validate.choice(self.draw, constants.DRAW_MODES, "draw")
         validate.number(self.widen, "widen", minimum=1.0)
         if self.tessellate is not None:
             validate.number(self.tessellate, "tessellate", minimum=0.0, what="a threshold >= 0 (or None)")

@@ -95,6 +95,10 @@ def render_options() -> argparse.ArgumentParser:
     p.add_argument("--images", choices=constants.IMAGE_MODES, default=None,
                    help="beyond the papers: every reflection point of every vertex on mirrors that are not convex "
                         "(flag SEVERAL, per-image arrays), or the walk's one (paper: one, accurate: all)")
+    p.add_argument("--draw", choices=constants.DRAW_MODES, default=None,
+                   help="the virtual triangles rasterized with a z-buffer (the papers), or beyond them: each mirror "
+                        "pixel's reflected ray met exactly with the real triangles whose virtual triangles cover it "
+                        "(paper: raster, accurate: exact)")
     p.add_argument("--bounces", default=None, metavar="N",
                    help="beyond the papers: reflections followed per eye ray, 1 to 8 (default 1): mirrors that see "
                         "each other, searched and drawn level by level (the vertex search only)")
@@ -152,7 +156,7 @@ def ldt_kwargs(args) -> dict:
 
 #: The render options that only the vertex search reads (refused with ``--method ldt``).
 _VERTEX_SEARCH_FLAGS = ("neighbourhood", "inverse", "widen", "tessellate", "max_level", "tessellate_span", "refine",
-                        "virtual", "silhouette", "images", "bounces")
+                        "virtual", "silhouette", "images", "draw", "bounces")
 
 
 def _count(text, flag):
@@ -214,7 +218,7 @@ def render_kwargs(args) -> dict:
     line gives."""
     out = search_kwargs(args)
     given = dict(max_level=args.max_level, tessellate_span=args.tessellate_span, refine=args.refine,
-                 virtual=args.virtual, silhouette=args.silhouette, images=args.images,
+                 virtual=args.virtual, silhouette=args.silhouette, images=args.images, draw=args.draw,
                  bounces=None if args.bounces is None else _count(args.bounces, "--bounces"))
     out.update({k: v for k, v in given.items() if v is not None})
     if args.tessellate is not None:

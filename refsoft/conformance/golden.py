@@ -148,8 +148,8 @@ PER_PIXEL_METHODS = ("ldt", "envmap")
 #: The canonical cases: every built-in scene with the paper preset (three coherent frames of
 #: each animation), both neighbourhoods, every hidden-vertex mode, the wider frustum, float64,
 #: cold searches, the pixel-grid conformance scene, Szabo's hierarchy search, and the accurate
-#: preset (on the mirrors that are not convex with every image of every vertex; three mirror balls
-#: with three bounces); then the comparison methods at a small resolution R = 64: the layered depth textures
+#: preset (its virtual triangles rasterized, and drawn exactly; on the mirrors that are not
+#: convex with every image of every vertex; three mirror balls with three bounces); then the comparison methods at a small resolution R = 64: the layered depth textures
 #: (two coherent frames, a hollow object's two layers, float64, the tie scene, open sheets) and the
 #: environment map (an object touching the mirror, the tie scene). Each case names its preset,
 #: so a change of the default preset never changes a case.
@@ -173,11 +173,12 @@ CASES = (
     Case("kitchen_widen", "kitchen", (20, 21), {"preset": "paper", "widen": 1.3}),
     Case("planar_cold", "planar", (0, 1), {"preset": "paper", "coherence": False}),
     Case("sphere_hierarchy", "sphere", (0,), {"preset": "paper", "method": "hierarchy"}),
-    Case("sphere_accurate", "sphere", (0,), {"preset": "accurate"}),
-    Case("kitchen_accurate", "kitchen", (0, 1, 2), {"preset": "accurate"}),
-    Case("concave_accurate", "concave", (0, 1), {"preset": "accurate", "images": "all"}),
-    Case("torus_accurate", "torus", (0, 1), {"preset": "accurate", "images": "all"}),
-    Case("mirrors_bounces", "mirrors", (0, 1), {"preset": "accurate", "bounces": 3}),
+    Case("sphere_accurate", "sphere", (0,), {"preset": "accurate", "draw": "raster"}),
+    Case("kitchen_accurate", "kitchen", (0, 1, 2), {"preset": "accurate", "draw": "raster"}),
+    Case("kitchen_exact", "kitchen", (0, 1), {"preset": "accurate"}),
+    Case("concave_accurate", "concave", (0, 1), {"preset": "accurate", "images": "all", "draw": "raster"}),
+    Case("torus_accurate", "torus", (0, 1), {"preset": "accurate", "images": "all", "draw": "raster"}),
+    Case("mirrors_bounces", "mirrors", (0, 1), {"preset": "accurate", "bounces": 3, "draw": "raster"}),
     Case("balls_ldt", "balls", (0, 1), {"preset": "paper", "method": "ldt", "ldt_resolution": 64}),
     Case("hollow_box_ldt", "hollow_box", (0,), {"preset": "paper", "method": "ldt", "ldt_resolution": 64,
                                                 "ldt_layers": "all"}),

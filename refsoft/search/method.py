@@ -20,6 +20,7 @@ from ..raster import PRECISIONS, GBuffer, _setup, gbuffer
 from ..seam import ReflectorResult, stencil_box
 from . import CULLED, SEVERAL, SearchResult, levels, search, skips, virtual_vertices
 from .convex import several_possible
+from .exact import exact_pass
 from .images import facing_gbuffer, find_images
 from .reflect import Reflection, coherent_starts, gbuffer_camera
 from .refine import refine as refine_points
@@ -151,16 +152,20 @@ class VertexSearch:
                 report.update(extra)
                 refl = replace(refl, images=sheeted)  # the images with their sheets
                 out.state = refl
-            elif opt.tessellate is None and opt.silhouette != "clip":
+            elif opt.tessellate is None and opt.silhouette != "clip" and opt.draw == "raster":
                 parts = virtual_parts(self.scene, view.meshes, refl)
             else:
                 self._reflected = reflected_mesh(self.scene, view.meshes, self._reflected)
-                parts, counts = refined_parts(self.scene, view.meshes, refl, view.vertices, opt, view.camera.eye,
-                                              self._reflected[1])
+                parts, counts, real = refined_parts(self.scene, view.meshes, refl, view.vertices, opt,
+                                                    view.camera.eye, self._reflected[1], with_real=True)
                 report.update(counts)
                 times["tessellate"] = 1000 * (time.perf_counter() - t)
                 t = time.perf_counter()
-            if drawn is None:
+            if drawn is None and opt.draw == "exact":  # every stencil pixel's ray met exactly
+                out.colour, out.reflected_id, out.covered, report["exact"] = exact_pass(
+                    self.scene, parts[0], real, view.camera, view.meshes[k - 1], view.view.triangle, stencil, box,
+                    opt.inverse)
+            elif drawn is None:
                 out.colour, out.reflected_id, out.covered, report["virtual_objects_culled"] = virtual_pass(
                     self.scene, parts, view.camera, stencil, box, opt.inverse, opt.cull_virtual)
             out.box = box
@@ -200,13 +205,14 @@ class VertexSearch:
         left out), ``skipped`` (what the exact skips left out, and tessellation counts) and, with
         ``images="all"``, ``images``: per reflector where every image was enumerated, the
         vertices with 0, 1, 2 and 3 or more images and the enumeration's time (the others are
-        listed in ``skipped["images_convex"]``)."""
+        listed in ``skipped["images_convex"]``); with ``draw="exact"``, ``exact``: per reflector
+        drawn so, its candidate triangles and the pixels accepted and left empty."""
         iterations, images = {}, {}
         skipped = {"reflectors_outside_view": [], "gbuffers_reused": [], "searches_reused": {},
                    "virtual_objects_culled": {}, "widen_off": []}
         if self.options.images == "all":
             skipped["images_convex"] = []
-        tessellation, silhouette, drawn, later = {}, {}, {}, {}
+        tessellation, silhouette, drawn, later, exact = {}, {}, {}, {}, {}
         for k, r in results.items():
             rep = r.report
             if "bounces" in rep:
@@ -229,6 +235,8 @@ class VertexSearch:
                 skipped["images_convex"].append(k)
             if "several" in rep:
                 drawn[str(k)] = rep["several"]
+            if "exact" in rep:
+                exact[str(k)] = rep["exact"]
             res = r.state.result
             it = res.iterations[(res.flags & CULLED) == 0]
             iterations[str(k)] = {"mean": float(it.mean()) if len(it) else 0.0, "max": int(it.max()) if len(it) else 0}
@@ -241,6 +249,8 @@ class VertexSearch:
             out["images"] = images
         if drawn:  # every image drawn (search/several.py): candidates, subdivisions, pixels per reflector
             out["several"] = drawn
+        if exact:  # the virtual triangles drawn exactly (search/exact.py): candidates, pixels per reflector
+            out["exact"] = exact
         if self.options.bounces > 1:  # per first reflector, each later bounce drawn in its image
             out["bounces"] = later
         return out

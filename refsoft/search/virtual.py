@@ -66,7 +66,7 @@ def reflected_mesh(scene, meshes, last=None):
     return sources, concatenate(sources, ids)
 
 
-def refined_parts(scene, meshes, refl, verts, opt, eye, reflected=None):
+def refined_parts(scene, meshes, refl, verts, opt, eye, reflected=None, with_real=False):
     """One part holding the reflected geometry after the options that add vertices: Szabo's
     adaptive tessellation (``opt.tessellate``, :func:`refsoft.search.tessellate.tessellate`),
     then the cut at the silhouette (``opt.silhouette == "clip"``,
@@ -78,6 +78,9 @@ def refined_parts(scene, meshes, refl, verts, opt, eye, reflected=None):
     counts : dict
         ``tessellation`` (vertices searched, levels, triangles) and ``silhouette`` (edges cut,
         searches) when those ran.
+    real : (n, 3) float64
+        With ``with_real``: the part's vertices in the scene (the real positions whose images
+        its virtual vertices are).
     """
     from .silhouette import clip_at_silhouette
 
@@ -111,7 +114,8 @@ def refined_parts(scene, meshes, refl, verts, opt, eye, reflected=None):
         flags = np.concatenate([flags, c.flags])
         faces, face_obj = c.faces, c.face_obj
         counts["silhouette"] = {"edges_cut": int(c.cut), "vertices_searched": int(c.searched)}
-    return [(virtual, normals, faces, face_obj, flags)], counts
+    parts = [(virtual, normals, faces, face_obj, flags)]
+    return (parts, counts, np.asarray(vertices, np.float64)) if with_real else (parts, counts)
 
 
 def _result(like, pixel, flags):

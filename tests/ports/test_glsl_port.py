@@ -58,6 +58,8 @@ def llvmpipe():
 #: The reflection methods the GLSL port implements; it declares the others in ported.json.
 PORTED_METHODS = ("walk", "hierarchy", "envmap", "ldt")
 DECLARED_METHODS = []
+#: The drawings of the virtual triangles the port declares not ported (it rasterizes them).
+DECLARED_DRAWING = ["exact"]
 #: The stages each method's frames time (stats.json), besides ``total``.
 STAGES = {"walk": {"main", "gbuffer", "search", "virtual", "composite"},
           "envmap": {"main", "envmap_build", "envmap_lookup", "composite"},
@@ -91,10 +93,11 @@ def golden(golden_set, llvmpipe):
     """The session's golden set (tests/conftest.py: written once, shared with the conformance
     tests), the names of its cases the port implements and of those it declares not ported."""
     manifest = json.loads((golden_set / "manifest.json").read_text())
-    method = {c["name"]: c["options"].get("method", "walk") for c in manifest["cases"]}
-    names = [n for n, m in method.items() if m in PORTED_METHODS]
-    declared = [n for n, m in method.items() if m in DECLARED_METHODS]
-    assert len(names) >= 28 and not declared and len(names) == len(method), method
+    options = {c["name"]: c["options"] for c in manifest["cases"]}
+    declared = [n for n, o in options.items() if o.get("method", "walk") in DECLARED_METHODS
+                or o.get("draw") in DECLARED_DRAWING]
+    names = [n for n, o in options.items() if o.get("method", "walk") in PORTED_METHODS and n not in declared]
+    assert len(names) >= 28 and declared == ["kitchen_exact"] and len(names) + 1 == len(options), options
     assert "touching_envmap" in names and "balls_ldt" in names, names
     return golden_set, names, declared
 
@@ -120,7 +123,7 @@ def _candidate(golden, tmp_path_factory, variant):
     skipped = [ln for ln in proc.stderr.splitlines() if "not ported (declared in ported.json)" in ln]
     assert len(skipped) == len(golden[2]), proc.stderr
     for name in golden[2]:
-        assert any(ln.startswith(f"case {name}: method ") for ln in skipped), (name, proc.stderr)
+        assert f"case {name}: option draw='exact' not ported (declared in ported.json)" in skipped, (name, proc.stderr)
     return out
 
 
@@ -174,7 +177,8 @@ def test_exact_variant_is_bit_identical_on_every_golden_case(golden, exact):
     golden_dir, names, _ = golden
     # every case it ports and its declaration, nothing else
     assert sorted(p.name for p in exact.iterdir()) == sorted(names + ["ported.json"])
-    assert json.loads((exact / "ported.json").read_text())["not_ported"] == {"kinds": ["images", "bounces"]}
+    assert json.loads((exact / "ported.json").read_text())["not_ported"] == {"options": {"draw": ["exact"]},
+                                                                             "kinds": ["images", "bounces"]}
     differ = []
     for name in names:
         frames = _frames(golden_dir, name)
@@ -384,6 +388,7 @@ def test_a_declared_method_is_skipped_and_reported_not_ported(golden, tmp_path):
     assert proc.stderr.splitlines() == [skipped], proc.stderr
     assert sorted(p.name for p in out.iterdir()) == sorted([names[0], "ported.json"])
     assert json.loads((out / "ported.json").read_text())["not_ported"] == {"kinds": ["images", "bounces"],
+                                                                           "options": {"draw": ["exact"]},
                                                                            "methods": ["ldt"]}
     proc = _refsoft("check", str(golden_dir), str(out), "--out", str(tmp_path / "report"), *cases)
     assert proc.returncode == 0, _why(proc)

@@ -5,7 +5,8 @@ on Mesa llvmpipe, run on a golden set's inputs.
 EGL context can be made).
 
 ``run`` declares what the port does not port in ``CANDIDATE/ported.json`` (refsoft's format
-``refsoft-ported-1``) and skips the cases of the methods it declares, one line each; it exits 0
+``refsoft-ported-1``) and skips the cases of the methods and option values it declares, one line
+each; it exits 0
 when every case it rendered succeeded."""
 
 from __future__ import annotations
@@ -33,7 +34,7 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     from .context import GLUnavailable, context
     from .inputs import InputError
-    from .run import NOT_PORTED, case_methods, gl_versions, run_case, write_ported
+    from .run import case_options, declared, gl_versions, run_case, write_ported
 
     if args.command == "info":
         try:
@@ -46,14 +47,14 @@ def main(argv=None) -> int:
         return 0
 
     try:
-        methods = case_methods(args.golden)
+        options = case_options(args.golden)
     except (OSError, ValueError, KeyError) as exc:
         print(f"refsoft-glsl: error: {args.golden} is not a golden set ({exc})", file=sys.stderr)
         return 2
-    chosen = args.cases or list(methods)
-    unknown = [c for c in chosen if c not in methods]
+    chosen = args.cases or list(options)
+    unknown = [c for c in chosen if c not in options]
     if unknown:
-        print(f"refsoft-glsl: error: unknown case {unknown[0]!r} (cases: {', '.join(methods)})", file=sys.stderr)
+        print(f"refsoft-glsl: error: unknown case {unknown[0]!r} (cases: {', '.join(options)})", file=sys.stderr)
         return 2
     try:
         gl = context()
@@ -69,9 +70,10 @@ def main(argv=None) -> int:
     write_ported(args.out)
     skipped = 0
     for name in chosen:
-        if methods[name] in NOT_PORTED.get("methods", ()):
+        why = declared(options[name])
+        if why:
             # declared, so refsoft check reports the case as not ported, not missing
-            print(f"case {name}: method {methods[name]!r} not ported (declared in ported.json)", file=sys.stderr)
+            print(f"case {name}: {why} not ported (declared in ported.json)", file=sys.stderr)
             skipped += 1
             continue
         try:

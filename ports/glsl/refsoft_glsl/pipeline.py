@@ -113,7 +113,8 @@ class Pipeline:
         opt = case.options
         self.options = opt
         for name, allowed in (("method", ("walk", "hierarchy")), ("virtual", ("mirror", "unfold")),
-                              ("silhouette", ("texel", "clip")), ("adaptive_widen", (False,))):
+                              ("silhouette", ("texel", "clip")), ("adaptive_widen", (False,)),
+                              ("draw", (None, "raster"))):
             if opt.get(name) not in allowed:
                 raise NotImplementedError(f"case {case.name}: option {name}={opt.get(name)!r} is not ported")
         self.double = opt.get("precision", "float32") == "float64"

@@ -49,19 +49,19 @@ def write_json(path, data):
     _atomic_write(path, write)
 
 
-def case_methods(golden) -> dict:
-    """Each case of a golden set (manifest order) -> its reflection method (its options'). A
-    folder without ``manifest.json`` is read as cases exported by ``refsoft export`` into
+def case_options(golden) -> dict:
+    """Each case of a golden set (manifest order) -> its options. A folder without
+    ``manifest.json`` is read as cases exported by ``refsoft export`` into
     ``FOLDER/CASE/inputs/`` (name order)."""
     path = os.path.join(golden, "manifest.json")
     if not os.path.exists(path):
         names = sorted(n for n in os.listdir(golden) if os.path.isfile(os.path.join(golden, n, "inputs", "case.json")))
         if not names:
             raise ValueError("neither a manifest.json nor CASE/inputs/case.json folders")
-        return {n: read_case_options(os.path.join(golden, n, "inputs")).get("method", "walk") for n in names}
+        return {n: read_case_options(os.path.join(golden, n, "inputs")) for n in names}
     with open(path) as fh:
         manifest = json.load(fh)
-    return {c["name"]: c["options"].get("method", "walk") for c in manifest["cases"]}
+    return {c["name"]: c["options"] for c in manifest["cases"]}
 
 
 def read_case_options(folder) -> dict:
@@ -111,10 +111,22 @@ def run_case(gl, golden, name, out, plain=False, log=None) -> dict:
 
 
 #: What the port does not port (refsoft's ``ported.json``, format ``refsoft-ported-1``): every
-#: image of every vertex (kind ``images``: the per-image arrays and the flag SEVERAL) and several
-#: bounces (kind ``bounces``: it draws the first, and writes no ``bounce_depth``). A method listed
-#: under ``"methods"`` here would have its cases skipped by ``refsoft-glsl run``.
-NOT_PORTED = {"kinds": ["images", "bounces"]}
+#: image of every vertex (kind ``images``: the per-image arrays and the flag SEVERAL), several
+#: bounces (kind ``bounces``: it draws the first, and writes no ``bounce_depth``) and the exact
+#: drawing of the virtual triangles (option ``draw="exact"``: it rasterizes them). A case of a
+#: method or an option value listed here is skipped by ``refsoft-glsl run``.
+NOT_PORTED = {"options": {"draw": ["exact"]}, "kinds": ["images", "bounces"]}
+
+
+def declared(options) -> str | None:
+    """Why a case with these options is declared not ported (``NOT_PORTED``), or None."""
+    method = options.get("method", "walk")
+    if method in NOT_PORTED.get("methods", ()):
+        return f"method {method!r}"
+    for name, values in NOT_PORTED.get("options", {}).items():
+        if options.get(name) in values:
+            return f"option {name}={options[name]!r}"
+    return None
 
 
 def write_ported(out):

@@ -1,0 +1,110 @@
+"""The exact drawing of a reflector's virtual triangles (``draw="exact"``, beyond the papers).
+
+The virtual pass (:mod:`refsoft.search.virtual`) rasterizes the virtual triangles: between its
+vertices a virtual edge is straight, where the mirror bends the reflection of a straight edge, so
+along a reflected outline the pixel centres between the two show the object on the other side
+(the *specks* and *holes* of ``docs/accuracy.md``). Here the same triangles are candidates of
+exact per-pixel acceptance (:mod:`refsoft.search.acceptance`, the drawing of every image on a
+mirror that is not convex): each triangle is rasterized dilated (:data:`refsoft.constants.
+SEVERAL_DILATE_PIXELS` plus :data:`~refsoft.constants.SEVERAL_DILATE_FRACTION` of its longest
+edge) and, at each stencil pixel it covers, the pixel's reflected ray (the truth's,
+:mod:`refsoft.raster.rays`) is met with the triangle's *real* scene triangle; the nearest hit
+wins. The vertex search still decides which triangles are candidates where: a pixel's answer is
+exact whenever its true triangle's virtual triangle lies within the dilation.
+
+Input: one part of the reflected geometry after tessellation and the cut
+(:func:`refsoft.search.virtual.refined_parts`) with its real vertices; output, over the stencil's
+box, what :func:`refsoft.search.virtual.virtual_pass` gives.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .. import constants
+from ..raster import _setup
+from .._parallel import parallel_range
+from . import CULLED, HIDDEN
+from ._exact import reaching
+from .acceptance import Candidates, draw
+
+
+def exact_pass(scene, part, real, camera, reflector_mesh, triangle, stencil, box, inverse):
+    """Draw one reflector's virtual triangles by exact per-pixel acceptance.
+
+    Parameters
+    ----------
+    scene : Scene
+        For the objects' colours.
+    part : tuple
+        ``(virtual (n, 3) float64, normals (n, 3), faces (m, 3) int64, face_obj (m,) int32,
+        flags (n,) uint8)``, one part of :func:`refsoft.search.virtual.refined_parts`.
+    real : (n, 3) float64
+        The real (scene) position of each of the part's vertices.
+    camera : Camera
+        The view camera.
+    reflector_mesh : Mesh
+        The reflector's world mesh (the main view's).
+    triangle : (H, W) int
+        The visible triangle per view pixel (the main view's).
+    stencil : (H, W) bool
+        The reflector's pixels.
+    box : (r0, r1, c0, c1)
+        The pixels drawn.
+    inverse : str
+        The hidden-vertex mode: with ``discard`` a triangle with a HIDDEN vertex is no
+        candidate; a CULLED vertex's triangles never are.
+
+    Returns
+    -------
+    colour : (h, w, 3) float32
+    reflected_id : (h, w) int32
+    covered : (h, w) bool
+    counts : dict
+        ``candidates`` (triangles tested), ``pixels_accepted`` and ``pixels_empty``
+        (:func:`refsoft.search.acceptance.draw`).
+    """
+    virtual, normals, faces, face_obj, flags = part
+    lost = CULLED | (HIDDEN if inverse == "discard" else 0)
+    clip = _setup.transform_points(np.asarray(virtual, np.float64), camera.view_proj())
+    # the virtual pass's own leave-out (a vertex without V'), and the triangles whose dilated
+    # bounds stay off the box: the acceptance would test no pixel of theirs
+    keep = candidate_triangles(clip, faces, flags, lost, box, camera)
+    f = np.asarray(faces, np.int64)[keep]
+    cand = Candidates(np.asarray(virtual, np.float64)[f], np.asarray(real, np.float64)[f],
+                      np.asarray(normals, np.float64)[f], np.asarray(face_obj, np.int32)[keep], keep, 0)
+    colors = np.vstack([np.zeros(3), [o.color for o in scene.objects]]).astype(np.float32)
+    colour, rid, covered, counts = draw(cand, camera, reflector_mesh, triangle, stencil, box, colors)
+    return colour, rid, covered, {"candidates": int(len(keep)), **counts}
+
+
+def candidate_triangles(clip, faces, flags, lost, box, camera):
+    """The triangles that can be candidates of the box's acceptance (kernel
+    ``_exact.reaching``).
+
+    Parameters
+    ----------
+    clip : (n, 4) float64
+        The virtual vertices' clip coordinates.
+    faces : (m, 3) int64
+    flags : (n,) uint8
+        The vertices' search flags.
+    lost : int
+        The flags that leave a vertex's triangles out.
+    box : (r0, r1, c0, c1)
+    camera : Camera
+
+    Returns
+    -------
+    (k,) int64
+        The rows of ``faces`` kept, ascending: those with no vertex flagged ``lost`` whose screen
+        bounds, widened by the acceptance's dilation and one pixel, reach the box (and those with
+        a vertex at or behind the eye plane).
+    """
+    r0, r1, c0, c1 = (float(b) for b in box)
+    keep = np.empty(len(faces), bool)
+    parallel_range(reaching, len(faces), np.ascontiguousarray(clip, np.float64),
+                   np.ascontiguousarray(faces, np.int64), np.ascontiguousarray(flags, np.uint8), np.uint8(lost),
+                   float(camera.width), float(camera.height), r0, r1, c0, c1,
+                   float(constants.SEVERAL_DILATE_PIXELS), float(constants.SEVERAL_DILATE_FRACTION), keep)
+    return np.flatnonzero(keep)
