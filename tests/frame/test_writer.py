@@ -114,7 +114,8 @@ def test_npz_level_refuses_object_arrays(tmp_path):
 def _odd_arrays():
     """Arrays of every kind a frame's npz may hold, sized for pieces of 512 bytes and samples of
     64: runs of zero pieces, pieces of -0.0 (zero values, not zero bytes), a partial last piece,
-    stored (random float64) and deflated members, empty and 0-d arrays, Fortran order."""
+    stored (random float64) and deflated members, empty and 0-d arrays, Fortran order, a view
+    neither C- nor Fortran-contiguous."""
     rng = np.random.default_rng(7)
     gbuf = np.zeros((40, 30, 3), np.float32)
     gbuf[12:15, 5:9] = rng.random((3, 4, 3), dtype=np.float32)
@@ -126,7 +127,8 @@ def _odd_arrays():
             "f64": rng.random(900), "empty": np.zeros((0, 3), np.float32), "empty_bool": np.zeros(0, bool),
             "scalar": np.array(2.5), "fortran": np.asfortranarray(rng.integers(0, 9, (30, 20), dtype=np.int32)),
             "big_endian": np.arange(400, dtype=">i4"), "complex": (rng.random(300) + 1j).astype(np.complex64),
-            "uint16": np.arange(1000, dtype=np.uint16)}
+            "uint16": np.arange(1000, dtype=np.uint16),
+            "strided": rng.integers(0, 99, (40, 30), dtype=np.int64)[::3, 1::2]}
 
 
 @pytest.fixture
