@@ -32,6 +32,19 @@ MEMORY_LIMIT_BYTES = 4 << 30
 MAX_VERTICES = 1 << 26
 MAX_TRIANGLES = 1 << 26
 
+# --- Frame files (spec section 7; refsoft.io.write_npz_level) ---------------------------
+#: Bytes of an array a frame's ``.npz`` writer hands zlib at a time: a piece that is all zero
+#: bytes (most of a G-buffer: the pixels outside the reflector) is not compressed again but
+#: written as the deflate output of that many zeros, computed once.
+NPZ_PIECE_BYTES = 1 << 18
+#: Bytes of an array sampled (in 4 places) to decide whether deflating it pays; arrays smaller
+#: than 4 samples are always deflated.
+NPZ_SAMPLE_BYTES = 1 << 11
+#: An array whose samples deflate to more than this share of their size is stored as it is
+#: (zip's "stored"): high-entropy floats (virtual vertices, scores, margins) deflate to 0.6-0.9
+#: of their size at ~60 MB/s, where storing them costs nothing.
+NPZ_STORE_RATIO = 0.5
+
 # --- Shading (spec section 5) -----------------------------------------------------------
 #: Fixed world-space direction *towards* the light (normalised at import).
 LIGHT_DIRECTION = np.array([0.3, 0.8, 0.5]) / np.sqrt((0.3 * 0.3 + 0.8 * 0.8) + 0.5 * 0.5)  # no BLAS (refsoft.linalg)

@@ -237,10 +237,10 @@ def run_frames(renderer, indices, out=None, progress=False, desc="frames", keep=
     given) while the next one renders. With ``progress`` and several frames: a tqdm bar on a
     terminal, else (a log) a line every tenth of the run.
 
-    A frame's files are written by one background thread (compressing ``frame_NNNN.npz`` takes
-    about as long as rendering a frame, and zlib lets the renderer run meanwhile), one frame after
-    another, each file atomically; the run waits for a frame's files before it counts the frame as
-    done, and on an error or an interrupt it still waits for the files being written. The bytes
+    A frame's files are written by one background thread (zlib and Pillow's encoder release the
+    GIL, so the renderer runs meanwhile), one frame after another, each file atomically; the run
+    waits for a frame's files before it counts the frame as done, and on an error or an interrupt
+    it still waits for the files being written. The bytes
     are those of a write in the main thread. The write's own times go into the frame's ``time_ms``
     as ``write`` (wall milliseconds in the writer's thread) and ``write_cpu`` (that thread's CPU
     milliseconds: the compression's cost, whatever else the cores run); ``total`` stays the

@@ -11,10 +11,11 @@ from .. import keys
 from ..io import write_npz, write_npz_level, write_png
 
 #: zlib level of ``frame_NNNN.npz`` and ``frame_NNNN.png`` in a run's folder: level 1 costs half of
-#: level 6's CPU time (``np.savez_compressed``'s and Pillow's; kitchen at 1024x768: the npz ~60 ms
-#: against ~130 ms, the PNG ~10 ms against ~16 ms) for files ~10% and ~45% larger, so that the
-#: background write competes less with the next frame's render for the cores. (The golden set
-#: keeps level 6: :func:`refsoft.io.write_npz`.)
+#: level 6's CPU time for files ~10% (npz) and ~45% (PNG) larger, so that the background write
+#: competes less with the next frame's render for the cores. The npz writer
+#: (:func:`refsoft.io.write_npz_level`) also skips compressing the G-buffers' runs of zeros and
+#: stores the high-entropy floats. (The golden set keeps ``np.savez_compressed``'s level 6:
+#: :func:`refsoft.io.write_npz`.)
 FRAME_LEVEL = 1
 
 
@@ -24,8 +25,9 @@ def frame_basename(index: int) -> str:
 
 
 def write_frame(out_dir, frame):
-    """Write ``frame_NNNN.npz`` (every array, in the order the frame holds them) and
-    ``frame_NNNN.png`` atomically, both deflated at :data:`FRAME_LEVEL`."""
+    """Write ``frame_NNNN.npz`` (every array, in the order the frame holds them; the arrays
+    ``np.savez_compressed`` would hold, bit for bit) and ``frame_NNNN.png`` atomically, both at
+    zlib level :data:`FRAME_LEVEL`."""
     base = os.path.join(os.fspath(out_dir), frame_basename(frame.index))
     write_npz_level(base + ".npz", frame.arrays, FRAME_LEVEL)
     write_png(base + ".png", frame.arrays[keys.IMAGE], FRAME_LEVEL)

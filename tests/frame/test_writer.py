@@ -109,3 +109,104 @@ def test_npz_level_refuses_object_arrays(tmp_path):
     with pytest.raises(ValueError):
         write_npz_level(tmp_path / "o.npz", {"o": np.array([{}, None], dtype=object)}, 1)
     assert list(tmp_path.iterdir()) == []  # atomic: nothing left behind
+
+
+def _odd_arrays():
+    """Arrays of every kind a frame's npz may hold, sized for pieces of 512 bytes and samples of
+    64: runs of zero pieces, pieces of -0.0 (zero values, not zero bytes), a partial last piece,
+    stored (random float64) and deflated members, empty and 0-d arrays, Fortran order, a view
+    neither C- nor Fortran-contiguous."""
+    rng = np.random.default_rng(7)
+    gbuf = np.zeros((40, 30, 3), np.float32)
+    gbuf[12:15, 5:9] = rng.random((3, 4, 3), dtype=np.float32)
+    neg = np.zeros(700, np.float32)
+    neg[128:300] = -0.0
+    neg[650] = 1.5
+    return {"gbuffer": gbuf, "zeros": np.zeros(5000, np.uint8), "neg_zero": neg,
+            "mask": gbuf[..., 0] > 0, "int8": rng.integers(-128, 128, 3000, dtype=np.int8),
+            "f64": rng.random(900), "empty": np.zeros((0, 3), np.float32), "empty_bool": np.zeros(0, bool),
+            "scalar": np.array(2.5), "fortran": np.asfortranarray(rng.integers(0, 9, (30, 20), dtype=np.int32)),
+            "big_endian": np.arange(400, dtype=">i4"), "complex": (rng.random(300) + 1j).astype(np.complex64),
+            "uint16": np.arange(1000, dtype=np.uint16),
+            "strided": rng.integers(0, 99, (40, 30), dtype=np.int64)[::3, 1::2]}
+
+
+@pytest.fixture
+def small_pieces(monkeypatch):
+    import refsoft.io
+
+    monkeypatch.setattr(refsoft.io, "NPZ_PIECE_BYTES", 512)
+    monkeypatch.setattr(refsoft.io, "NPZ_SAMPLE_BYTES", 64)
+
+
+@pytest.mark.parametrize("level", [1, 6, 0])
+def test_npz_writer_holds_the_arrays_numpy_writes(tmp_path, small_pieces, level):
+    import zipfile
+
+    from refsoft.io import write_npz, write_npz_level
+
+    arrays = _odd_arrays()
+    write_npz_level(tmp_path / "a.npz", arrays, level)
+    write_npz(tmp_path / "np.npz", **arrays)
+    with zipfile.ZipFile(tmp_path / "a.npz") as zf:
+        assert zf.testzip() is None
+        kinds = {i.filename: i.compress_type for i in zf.infolist()}
+    assert list(kinds) == [k + ".npy" for k in arrays]
+    if level:  # random float64 stored, the G-buffer deflated
+        assert kinds["f64.npy"] == zipfile.ZIP_STORED and kinds["gbuffer.npy"] == zipfile.ZIP_DEFLATED
+    else:
+        assert set(kinds.values()) == {zipfile.ZIP_STORED}
+    with np.load(tmp_path / "a.npz") as a, np.load(tmp_path / "np.npz") as b:
+        assert list(a.keys()) == list(b.keys()) == list(arrays)
+        for k in a.keys():
+            x, y = a[k], b[k]
+            assert (x.dtype, x.shape, x.flags.f_contiguous) == (y.dtype, y.shape, y.flags.f_contiguous), k
+            assert x.tobytes("A") == y.tobytes("A") == arrays[k].tobytes("A"), k
+
+
+def test_zero_pieces_reuse_their_deflate_output(tmp_path, small_pieces, monkeypatch):
+    """Every piece of zero bytes (and only those: -0.0 is not one) is written as the one deflate
+    output of its size, and the member still reads back (its CRC checked by zipfile)."""
+    import zipfile
+
+    import refsoft.io
+
+    calls = []
+    real = refsoft.io._zero_piece
+    monkeypatch.setattr(refsoft.io, "_zero_piece", lambda n, level: calls.append(n) or real(n, level))
+    data = np.zeros(512 * 9 + 100, np.uint8)  # the header in its own write, then 10 pieces
+    data[512 * 3 + 7] = 1  # piece 3 is not zero; piece 9 is 100 zero bytes
+    # pieces 5 and 7 the same bytes: zlib may refer from 7 to 5 only if it saw what lies between
+    data[512 * 5:512 * 6] = data[512 * 7:512 * 8] = np.random.default_rng(3).integers(1, 256, 512)
+    neg = np.full(256, -0.0, np.float32)  # 2 pieces of 0x80000000 words
+    refsoft.io.write_npz_level(tmp_path / "z.npz", {"data": data, "neg": neg}, 1)
+    assert calls == [512] * 6 + [100]
+    with zipfile.ZipFile(tmp_path / "z.npz") as zf:
+        assert zf.testzip() is None
+        assert zf.read("data.npy")[-data.size:] == data.tobytes()
+        assert zf.read("neg.npy")[-neg.nbytes:] == neg.tobytes()
+
+
+def test_npz_writes_are_the_same_bytes_every_time(tmp_path, small_pieces, monkeypatch):
+    import time
+    import types
+
+    import refsoft.io
+
+    # a zip member's date is the time of the write: the same for both
+    monkeypatch.setattr(refsoft.io, "time", types.SimpleNamespace(time=lambda: 1.7e9, localtime=time.localtime))
+    arrays = _odd_arrays()
+    refsoft.io.write_npz_level(tmp_path / "a.npz", arrays, 1)
+    refsoft.io.write_npz_level(tmp_path / "b.npz", dict(reversed(list(arrays.items()))), 1)  # other pieces cached
+    refsoft.io.write_npz_level(tmp_path / "c.npz", arrays, 1)
+    assert (tmp_path / "a.npz").read_bytes() == (tmp_path / "c.npz").read_bytes()
+
+
+def test_a_failed_npz_write_leaves_the_old_file(tmp_path, small_pieces):
+    from refsoft.io import write_npz_level
+
+    (tmp_path / "f.npz").write_bytes(b"old")
+    arrays = {**_odd_arrays(), "o": np.array([{}, None], dtype=object)}
+    with pytest.raises(ValueError):
+        write_npz_level(tmp_path / "f.npz", arrays, 1)
+    assert [p.name for p in tmp_path.iterdir()] == ["f.npz"] and (tmp_path / "f.npz").read_bytes() == b"old"
