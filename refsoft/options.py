@@ -37,9 +37,10 @@ FROM_PRESET = _FromPreset()
 #: The presets: every option each one sets (the others keep their defaults).
 PRESETS = {
     "paper": dict(method="walk", neighbourhood="cross", inverse="plane", refine=False, tessellate=None,
-                  tessellate_span=0, virtual="mirror", silhouette="texel", images="one", draw="raster"),
+                  tessellate_span=0, virtual="mirror", silhouette="texel", images="one", draw="raster", border_restart=False),
     "accurate": dict(method="walk", neighbourhood="box", inverse="discard", refine=True, tessellate=1e-4,
-                     tessellate_span=1, virtual="unfold", silhouette="clip", images="all", draw="exact"),
+                     tessellate_span=1, virtual="unfold", silhouette="clip", images="all", draw="exact",
+                     border_restart=True),
 }
 
 #: The layered depth textures' options (``method="ldt"`` only) and their defaults.
@@ -75,6 +76,13 @@ class RenderOptions:
     precision : {"float32", "float64"}
     coherence : bool
         Start each search at the vertex's previous reflection pixel.
+    border_restart : bool
+        With coherence, a walk from the previous pixel that stops on the G-buffer's border
+        (BORDER) is walked again from the start without history (spec section 4.3) and the
+        higher score kept (beyond the papers; ``paper`` off, ``accurate`` on): a walk can stop at
+        a local maximum on the far border when its vertex's reflection has moved far since the
+        previous frame. Not with ``inverse="search"``, whose hidden vertices' scores are another
+        score's.
     cap : int, optional
         Iteration cap per search (default ``2 * (width + height)`` of the G-buffer).
     cull_reflectors, reuse, cull_virtual, crop_virtual : bool
@@ -151,6 +159,7 @@ class RenderOptions:
     silhouette: str = FROM_PRESET
     images: str = FROM_PRESET
     draw: str = FROM_PRESET
+    border_restart: bool = FROM_PRESET
     ldt_resolution: int | None = None
     ldt_layers: object = None
     ldt_faces: str | None = None
@@ -183,8 +192,11 @@ class RenderOptions:
         validate.integer(self.tessellate_span, "tessellate_span", 0)
         if self.cap is not None:
             validate.integer(self.cap, "cap", 1)
-        for name in SKIPS + ("adaptive_widen", "coherence", "refine"):
+        for name in SKIPS + ("adaptive_widen", "coherence", "refine", "border_restart"):
             validate.flag(getattr(self, name), name)
+        if self.border_restart and self.inverse == "search":
+            raise RefsoftError("border_restart compares the walks' scores, which inverse='search' replaces for hidden "
+                               "vertices: give border_restart=False or another inverse mode")
         validate.integer(self.bounces, "bounces", 1, constants.MAX_BOUNCES)
         if self.bounces > 1 and self.method in METHOD_DEFAULTS:
             raise RefsoftError(f"bounces > 1 needs the vertex search: method {self.method!r} follows one bounce "

@@ -95,6 +95,9 @@ def render_options() -> argparse.ArgumentParser:
     p.add_argument("--images", choices=constants.IMAGE_MODES, default=None,
                    help="beyond the papers: every reflection point of every vertex on mirrors that are not convex "
                         "(flag SEVERAL, per-image arrays), or the walk's one (paper: one, accurate: all)")
+    p.add_argument("--border-restart", action=argparse.BooleanOptionalAction, default=None,
+                   help="beyond the papers: a coherent walk that stops on the G-buffer's border is walked again "
+                        "from the start without history, the higher score kept (paper: off, accurate: on)")
     p.add_argument("--draw", choices=constants.DRAW_MODES, default=None,
                    help="the virtual triangles rasterized with a z-buffer (the papers), or beyond them: each mirror "
                         "pixel's reflected ray met exactly with the real triangles whose virtual triangles cover it "
@@ -156,7 +159,7 @@ def ldt_kwargs(args) -> dict:
 
 #: The render options that only the vertex search reads (refused with ``--method ldt``).
 _VERTEX_SEARCH_FLAGS = ("neighbourhood", "inverse", "widen", "tessellate", "max_level", "tessellate_span", "refine",
-                        "virtual", "silhouette", "images", "draw", "bounces")
+                        "virtual", "silhouette", "images", "draw", "border_restart", "bounces")
 
 
 def _count(text, flag):
@@ -219,6 +222,7 @@ def render_kwargs(args) -> dict:
     out = search_kwargs(args)
     given = dict(max_level=args.max_level, tessellate_span=args.tessellate_span, refine=args.refine,
                  virtual=args.virtual, silhouette=args.silhouette, images=args.images, draw=args.draw,
+                 border_restart=args.border_restart,
                  bounces=None if args.bounces is None else _count(args.bounces, "--bounces"))
     out.update({k: v for k, v in given.items() if v is not None})
     if args.tessellate is not None:

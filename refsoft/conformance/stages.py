@@ -17,7 +17,6 @@ import time
 import numpy as np
 
 from .. import keys
-from ..search import search
 from ..search.method import VertexSearch, virtual_relative
 from ..search.reflect import Reflection, coherent_starts
 
@@ -39,8 +38,7 @@ class GivenGBufferSearch(VertexSearch):
         opt = self.options
         t0 = time.perf_counter()
         prev = coherent_starts(self.previous.get(k) if opt.coherence else None, len(view.vertices), gb.mask.shape)
-        res = search(gb, view.camera.eye, view.vertices, opt.neighbourhood, opt.inverse, prev, opt.cap,
-                     method=opt.method)
+        res = self.search_vertices(gb, view.camera.eye, view.vertices, prev)  # with the restart at the border
         rel, surface = virtual_relative(gb, res, view.vertices, view.camera.eye, opt.refine, opt.virtual)
         world64 = rel.astype(np.float64) + gb.origin
         return Reflection(k, gb, res, world64.astype(rel.dtype), world64, surface), 0.0, 1000 * (

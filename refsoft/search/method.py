@@ -18,7 +18,7 @@ import numpy as np
 from .. import keys, limits
 from ..raster import PRECISIONS, GBuffer, _setup, gbuffer
 from ..seam import ReflectorResult, stencil_box
-from . import CULLED, SEVERAL, SearchResult, levels, search, skips, virtual_vertices
+from . import BORDER, CULLED, RESTARTED, SEVERAL, SearchResult, levels, search, skips, virtual_vertices
 from .convex import several_possible
 from .exact import exact_pass
 from .images import facing_gbuffer, find_images
@@ -291,11 +291,12 @@ class VertexSearch:
         eye = camera.eye
         if same:
             moved = [j for j, tr in view.transforms.items() if last.transforms.get(j) != tr]
-            reuse = ~np.isin(view.vertex_object, moved) & skips.reusable(last.result, opt.coherence, opt.inverse)
+            reuse = ~np.isin(view.vertex_object, moved) & skips.reusable(last.result, opt.coherence, opt.inverse,
+                                                                           opt.border_restart)
             res = self._merged_search(gb, eye, verts, prev, last.result, reuse)
             report["searches_reused"] = int(reuse.sum())
         else:
-            res = search(gb, eye, verts, opt.neighbourhood, opt.inverse, prev, opt.cap, method=opt.method)
+            res = self.search_vertices(gb, eye, verts, prev)
         rel, surface = virtual_relative(gb, res, verts, eye, opt.refine, opt.virtual)
         world64 = rel.astype(np.float64) + gb.origin
         images = None
@@ -320,6 +321,30 @@ class VertexSearch:
             self._several[k] = several_possible(obj.closed_proxy if obj.closed_proxy is not None else obj.mesh)
         return self._several[k]
 
+    def search_vertices(self, gb, eye, verts, prev):
+        """:func:`refsoft.search.search` with the options, from the starts ``prev`` (N, 2) or
+        None; with ``border_restart``, the walks from a previous pixel that stop on the border
+        walked again from the start without history, the higher score kept (a tie keeps the
+        first walk), their iterations the sum of both."""
+        opt = self.options
+        res = search(gb, eye, verts, opt.neighbourhood, opt.inverse, prev, opt.cap, method=opt.method)
+        if not (opt.border_restart and prev is not None and opt.method == "walk"):
+            return res
+        # a walk that restarted (its previous pixel not covered) already began without history
+        again = np.flatnonzero(((res.flags & BORDER) != 0) & (prev[:, 0] >= 0)
+                               & ((res.flags & (CULLED | RESTARTED)) == 0))
+        if len(again) == 0:
+            return res
+        fresh = search(gb, eye, verts[again], opt.neighbourhood, opt.inverse, None, opt.cap, method=opt.method)
+        better = fresh.score > res.score[again]
+        take = again[better]
+        pixel, score, margin = res.pixel.copy(), res.score.copy(), res.margin.copy()
+        iterations, flags = res.iterations.copy(), res.flags.copy()
+        pixel[take], score[take], margin[take] = fresh.pixel[better], fresh.score[better], fresh.margin[better]
+        flags[take] = fresh.flags[better]
+        iterations[again] += fresh.iterations
+        return replace(res, pixel=pixel, score=score, margin=margin, iterations=iterations, flags=flags)
+
     def _merged_search(self, gb, eye, verts, prev, last, reuse):
         """Search the vertices not in ``reuse``; the others keep ``last``'s pixel, score and
         margin with the iterations and flags the search would give them."""
@@ -329,8 +354,7 @@ class VertexSearch:
         pixel, score, margin = last.pixel.copy(), last.score.copy(), last.margin.copy()
         iterations, flags = it.copy(), fl.copy()
         if len(todo):
-            new = search(gb, eye, verts[todo], opt.neighbourhood, opt.inverse,
-                         None if prev is None else prev[todo], opt.cap, method=opt.method)
+            new = self.search_vertices(gb, eye, verts[todo], None if prev is None else prev[todo])
             pixel[todo], score[todo], margin[todo] = new.pixel, new.score, new.margin
             iterations[todo], flags[todo] = new.iterations, new.flags
             cap = new.cap

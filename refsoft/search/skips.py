@@ -56,14 +56,15 @@ def camera_key(camera) -> tuple:
             int(camera.width), int(camera.height))
 
 
-def reusable(result, coherence: bool, inverse: str) -> np.ndarray:
+def reusable(result, coherence: bool, inverse: str, border_restart: bool = False) -> np.ndarray:
     """Vertices whose last result a new search would repeat, given the same G-buffer, eye and
     vertex, shape (N,) bool.
 
     Without coherence every search starts at the same pixel, so every result repeats. With
     coherence a search starts at its last end pixel; the walk stops there at once (no neighbour
     scores strictly higher) unless it was CAPPED (not a local optimum) or was an inverse search
-    (``inverse="search"`` and HIDDEN: the standard search would restart from ``R*``, not ``R``).
+    (``inverse="search"`` and HIDDEN: the standard search would restart from ``R*``, not ``R``),
+    or stopped on the border with ``border_restart`` (walked twice: searched again).
     CULLED results repeat only without coherence (the G-buffer is the same empty one).
     """
     flags = result.flags
@@ -72,6 +73,8 @@ def reusable(result, coherence: bool, inverse: str) -> np.ndarray:
     ok = (flags & (CAPPED | CULLED)) == 0
     if inverse == "search":
         ok &= (flags & HIDDEN) == 0
+    if border_restart:
+        ok &= (flags & BORDER) == 0
     return ok
 
 

@@ -263,8 +263,42 @@ class Pipeline:
                 prev[0] if has_prev else out["pixel"], out["pixel"], out["score"], out["margin"], out["iterations"],
                 out["flags"]], n=n, cap=int(cap), has_previous=has_prev, inverse_search=self.inverse == "search",
                gwidth=w, gheight=h)
+        if has_prev and opt.get("border_restart", False):
+            out = self._border_restart(data, gb, out, n, cap)
         self.previous[k] = (out["pixel"], n, (w, h))
         return out
+
+    def _border_restart(self, data, gb, out, n, cap):
+        """Spec 4.3's restart beyond the papers (``border_restart``): the walks from a previous
+        pixel that stopped on the border (BORDER, not RESTARTED or CULLED) walked again from the
+        start without history; the higher score kept (a tie keeps the first walk), the
+        iterations summed."""
+        gl, real = self.gl, self.real
+        flags = gl.read(out["flags"], np.uint32, (n,))
+        again = np.flatnonzero(((flags & BORDER) != 0) & ((flags & (CULLED | RESTARTED)) == 0))
+        if len(again) == 0:
+            return out
+        m = len(again)
+        es = 8 if self.double else 4
+        fresh = {"pixel": gl.buffer(nbytes=8 * m), "score": gl.buffer(nbytes=es * m),
+                 "margin": gl.buffer(nbytes=es * m), "iterations": gl.buffer(nbytes=4 * m),
+                 "flags": gl.buffer(nbytes=4 * m)}
+        w, h = gb["width"], gb["height"]
+        gl.run(gl.compute("search", NB=self.nb, DOUBLE=int(self.double), EXACT=int(self.exact)), m,
+               [gb["P"], gb["N"], gb["mask"], gb["start"],
+                gl.buffer(np.asarray(data.reflected.vertices, np.float64)[again]), gb["params"], fresh["pixel"],
+                fresh["pixel"], fresh["score"], fresh["margin"], fresh["iterations"], fresh["flags"]],
+               n=m, cap=int(cap), has_previous=False, inverse_search=self.inverse == "search", gwidth=w, gheight=h)
+        shapes = {"pixel": (np.int32, (2,)), "score": (real, ()), "margin": (real, ()), "iterations": (np.int32, ()),
+                  "flags": (np.uint32, ())}
+        old = {key: gl.read(out[key], dt, (n,) + tail) for key, (dt, tail) in shapes.items()}
+        new = {key: gl.read(fresh[key], dt, (m,) + tail) for key, (dt, tail) in shapes.items()}
+        better = new["score"] > old["score"][again]
+        take = again[better]
+        for key in ("pixel", "score", "margin", "flags"):
+            old[key][take] = new[key][better]
+        old["iterations"][again] += new["iterations"]
+        return {key: gl.buffer(np.ascontiguousarray(v)) for key, v in old.items()}
 
     def virtual_vertices(self, frame, data, gb, res, surface=None) -> dict:
         return self._virtual(gb, data.reflected.points, data.reflected.n_vertices, res["pixel"], res["flags"],
