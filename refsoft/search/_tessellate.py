@@ -94,3 +94,80 @@ def edge_pixel_errors(lo, hi, P, N, mask, origin, eye, verts, pixel, offset, e0,
         t0 = min(max(t0, -lim), lim)
         t1 = min(max(t1, -lim), lim)
         out[i] = np.hypot((r + np.float64(t0)) - mr, (c + np.float64(t1)) - mc)
+
+
+@kernel
+def measured_edges(faces, pixel, flags, min_span, adaptive, culled_bit, hidden_bit, need, bad):
+    """For every triangle ``i`` of ``faces`` (C, 3): ``bad[i]`` when a corner is CULLED or (when
+    ``adaptive``) all three are HIDDEN; ``need[3 i + k]`` when edge k (corner k to k + 1) is to be
+    measured: its ends' pixels more than ``min_span`` apart along an axis (every edge when
+    ``min_span`` is 0). What :func:`refsoft.search.tessellate._triangle_errors` gathers with NumPy,
+    in one pass."""
+    for i in range(faces.shape[0]):
+        f0 = faces[i, 0]
+        f1 = faces[i, 1]
+        f2 = faces[i, 2]
+        b = ((flags[f0] | flags[f1] | flags[f2]) & culled_bit) != 0
+        if adaptive and (flags[f0] & flags[f1] & flags[f2] & hidden_bit) != 0:
+            b = True
+        bad[i] = b
+        for k in range(3):
+            a = faces[i, k]
+            c = faces[i, (k + 1) % 3]
+            if min_span > 0:
+                need[3 * i + k] = (abs(np.int64(pixel[a, 0]) - pixel[c, 0]) > min_span
+                                   or abs(np.int64(pixel[a, 1]) - pixel[c, 1]) > min_span)
+            else:
+                need[3 * i + k] = True
+
+
+@kernel
+def split_pattern(faces, keys, marked, mask, use_mask, pattern, slot):
+    """Which edges of each face of ``faces`` (T, 3) are split: ``pattern[i]`` bit k when edge k's
+    key (``min * 2^31 + max``) is in the sorted ``keys``, ``slot[i, k]`` its index there. Only faces
+    with two corners in ``marked`` (the split edges' ends) are looked up; ``use_mask``: and only
+    faces with ``mask[i]`` (the thesis's rule). :func:`refsoft.search.tessellate._split_some`'s
+    lookup."""
+    n = keys.shape[0]
+    for i in range(faces.shape[0]):
+        pattern[i] = 0
+        m0 = marked[faces[i, 0]]
+        m1 = marked[faces[i, 1]]
+        m2 = marked[faces[i, 2]]
+        if not ((m0 and m1) or (m2 and (m0 or m1))):
+            continue
+        if use_mask and not mask[i]:
+            continue
+        p = 0
+        for k in range(3):
+            a = faces[i, k]
+            b = faces[i, (k + 1) % 3]
+            key = min(a, b) * np.int64(2147483648) + max(a, b)
+            j = np.searchsorted(keys, key)
+            if j < n and keys[j] == key:
+                p |= 1 << k
+                slot[i, k] = j
+        pattern[i] = p
+
+
+@kernel
+def write_children(faces, face_obj, pattern, slot, mids, children, n_children, start, out_faces, out_obj, out_active):
+    """The children of every face (red-green, :data:`refsoft.search.tessellate._CHILDREN`), in the
+    faces' order from row ``start[i]``: a face not split is copied (inactive), a split face's
+    children are active (the next level's candidates)."""
+    for i in range(faces.shape[0]):
+        p = pattern[i]
+        at = start[i]
+        if p == 0:
+            out_faces[at, 0] = faces[i, 0]
+            out_faces[at, 1] = faces[i, 1]
+            out_faces[at, 2] = faces[i, 2]
+            out_obj[at] = face_obj[i]
+            out_active[at] = False
+            continue
+        for j in range(n_children[p]):
+            for k in range(3):
+                s = children[p, j, k]
+                out_faces[at + j, k] = faces[i, s] if s < 3 else mids[slot[i, s - 3]]
+            out_obj[at + j] = face_obj[i]
+            out_active[at + j] = True

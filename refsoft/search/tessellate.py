@@ -223,23 +223,28 @@ def _triangle_errors(gbuffer, eye, verts, pixel, flags, offset, f, threshold, mi
     (:func:`edge_pixel_errors`, which needs ``offset``). ``measured`` ((T, 3) bool): the edges
     measured, the others count 0."""
     errors = _edge_pixel_errors if metric == "pixels" else _edge_errors
+    if measured is None:  # one kernel pass: which edges are measured, which triangles are bad
+        f = np.ascontiguousarray(f, dtype=np.int64)
+        need = np.empty(3 * len(f), dtype=bool)
+        bad = np.empty(len(f), dtype=bool)
+        _kernels.measured_edges(f, np.ascontiguousarray(pixel, dtype=np.int32), np.ascontiguousarray(flags, np.uint8),
+                                int(min_span), threshold > 0, CULLED, HIDDEN, need, bad)
+        idx = np.flatnonzero(need)
+        err = np.zeros(3 * len(f))
+        if len(idx):
+            tri, k = idx // 3, idx % 3
+            err[idx] = errors(gbuffer, eye, verts, pixel, offset, f[tri, k], f[tri, (k + 1) % 3])
+        err = err.reshape(-1, 3)
+        return np.where(bad, -np.inf, np.maximum(np.maximum(err[:, 0], err[:, 1]), err[:, 2]))
+    # the outline's edges only (``measured``), those reflected within min_span pixels left out
     e0, e1 = f.reshape(-1), f[:, [1, 2, 0]].reshape(-1)
     err = np.zeros(len(e0))
-    if measured is not None:
-        need = np.flatnonzero(measured.reshape(-1))
-        if min_span > 0:
-            rows, cols = pixel[:, 0], pixel[:, 1]
-            a, b = e0[need], e1[need]
-            need = need[(np.abs(rows[a] - rows[b]) > min_span) | (np.abs(cols[a] - cols[b]) > min_span)]
-        err[need] = errors(gbuffer, eye, verts, pixel, offset, e0[need], e1[need])
-    elif min_span > 0:  # an edge reflected within min_span pixels: nothing to draw between its ends
-        # per axis, in the pixels' int32 (|differences| < 2^16): a tenth of the time of one
-        # (E, 2) int64 block on 1.3M triangles, whose temporaries outgrow the cache
+    need = np.flatnonzero(measured.reshape(-1))
+    if min_span > 0:
         rows, cols = pixel[:, 0], pixel[:, 1]
-        need = np.flatnonzero((np.abs(rows[e0] - rows[e1]) > min_span) | (np.abs(cols[e0] - cols[e1]) > min_span))
-        err[need] = errors(gbuffer, eye, verts, pixel, offset, e0[need], e1[need])
-    else:
-        err[:] = errors(gbuffer, eye, verts, pixel, offset, e0, e1)
+        a, b = e0[need], e1[need]
+        need = need[(np.abs(rows[a] - rows[b]) > min_span) | (np.abs(cols[a] - cols[b]) > min_span)]
+    err[need] = errors(gbuffer, eye, verts, pixel, offset, e0[need], e1[need])
     # per-vertex tests gathered per corner, and the maximum of three columns: axis-1
     # reductions over rows of three are several times slower
     f0, f1, f2 = f[:, 0], f[:, 1], f[:, 2]
@@ -261,9 +266,8 @@ def _apply_split(faces, face_obj, keys, mids, ea, eb, n_vertices, only=None):
     if only is not None:
         mask = np.zeros(len(faces), dtype=bool)
         mask[only] = True
-    new_faces, parent = _split_some(faces, keys, mids, ea, eb, n_vertices, mask)
-    touched = np.bincount(parent, minlength=len(faces)) > 1  # the faces split into several
-    return new_faces, face_obj[parent], touched[parent]
+    pattern, slot, count = _split_plan(faces, keys, ea, eb, n_vertices, mask)
+    return _write_children(faces, face_obj, pattern, slot, mids, count)
 
 
 def _split_edges(tris) -> np.ndarray:
@@ -295,24 +299,43 @@ def _midpoint_starts(mask, pa, pb) -> np.ndarray:
 
 
 def _split_some(faces, keys, mids, ea, eb, n_vertices, only=None):
-    """:func:`_split` of ``faces``, run on the faces with two corners among the split edges'
-    ends only (the others are kept whole, as :func:`_split` keeps them): the same faces and
-    parents in the same order."""
+    """:func:`_split` of ``faces``, looked up on the faces with two corners among the split
+    edges' ends only (the others are kept whole, as :func:`_split` keeps them): the same faces
+    and parents in the same order."""
+    faces = np.asarray(faces, dtype=np.int64)
+    pattern, slot, count = _split_plan(faces, keys, ea, eb, n_vertices, only)
+    out, _, _ = _write_children(faces, np.zeros(len(faces), np.int32), pattern, slot, mids, count)
+    return out, np.repeat(np.arange(len(faces)), count)
+
+
+def _split_plan(faces, keys, ea, eb, n_vertices, only=None):
+    """Each face's split pattern (T,) int8 (bit k: edge k is split), the split edges' indices in
+    ``keys`` (T, 3) (read where split) and its number of children (T,) int64; only the faces with
+    two corners among the split edges' ends ``ea``, ``eb`` are looked up (one kernel pass)."""
+    t = len(faces)
+    faces = np.ascontiguousarray(faces, dtype=np.int64)
     marked = np.zeros(n_vertices, dtype=bool)
     marked[ea] = True
     marked[eb] = True
-    m0, m1, m2 = marked[faces[:, 0]], marked[faces[:, 1]], marked[faces[:, 2]]
-    sel = np.flatnonzero((m0 & m1) | (m2 & (m0 | m1)))  # two or three corners marked
-    sub_faces, sub_counts = _children(faces[sel], keys, mids, KEY_BASE, None if only is None else only[sel])
-    counts = np.ones(len(faces), dtype=np.int64)
-    counts[sel] = sub_counts
-    parent = np.repeat(np.arange(len(faces)), counts)
-    out = np.repeat(faces, counts, axis=0)
-    # the children of the faces in ``sel``: the rows whose parent is one, in order
-    in_sel = np.zeros(len(faces), dtype=bool)
-    in_sel[sel] = True
-    out[in_sel[parent]] = sub_faces
-    return out, parent
+    pattern = np.empty(t, dtype=np.int8)
+    slot = np.empty((t, 3), dtype=np.int64)
+    use = only is not None
+    _kernels.split_pattern(faces, np.ascontiguousarray(keys, dtype=np.int64), marked,
+                           np.asarray(only, dtype=bool) if use else np.zeros(1, dtype=bool), use, pattern, slot)
+    return pattern, slot, _N_CHILDREN[pattern]
+
+
+def _write_children(faces, face_obj, pattern, slot, mids, count):
+    """The faces after the split planned by :func:`_split_plan`, children in their parents' order:
+    (faces (T', 3) int64, object ids (T',) int32, active (T',) bool: the children of split faces)."""
+    start = np.cumsum(count) - count
+    total = int(start[-1] + count[-1]) if len(count) else 0
+    out = np.empty((total, 3), dtype=np.int64)
+    obj = np.empty(total, dtype=np.int32)
+    active = np.empty(total, dtype=bool)
+    _kernels.write_children(faces, np.ascontiguousarray(face_obj, dtype=np.int32), pattern, slot,
+                            np.ascontiguousarray(mids, dtype=np.int64), _CHILDREN, _N_CHILDREN, start, out, obj, active)
+    return out, obj, active
 
 
 @dataclass(frozen=True, eq=False)
