@@ -171,3 +171,55 @@ def write_children(faces, face_obj, pattern, slot, mids, children, n_children, s
                 out_faces[at + j, k] = faces[i, s] if s < 3 else mids[slot[i, s - 3]]
             out_obj[at + j] = face_obj[i]
             out_active[at + j] = True
+
+
+@kernel
+def working_faces(faces, pixel, min_span, rings, marked, keep):
+    """``keep[i]`` for the faces a tessellation of ``rings`` levels can change: those with an edge
+    whose ends' pixels are more than ``min_span`` apart along an axis (the only ones a level can
+    split by their own error), then ``rings`` times every face sharing a vertex with a kept one
+    (each level splits, besides its candidates, the faces that share an edge with them).
+    ``marked``: (N,) bool scratch."""
+    t = faces.shape[0]
+    for i in range(t):
+        keep[i] = False
+        for k in range(3):
+            a = faces[i, k]
+            c = faces[i, (k + 1) % 3]
+            if abs(np.int64(pixel[a, 0]) - pixel[c, 0]) > min_span or abs(np.int64(pixel[a, 1]) - pixel[c, 1]) > min_span:
+                keep[i] = True
+    for _ in range(rings):
+        marked[:] = False
+        for i in range(t):
+            if keep[i]:
+                marked[faces[i, 0]] = True
+                marked[faces[i, 1]] = True
+                marked[faces[i, 2]] = True
+        for i in range(t):
+            if marked[faces[i, 0]] or marked[faces[i, 1]] or marked[faces[i, 2]]:
+                keep[i] = True
+
+
+@kernel
+def merge_faces(all_faces, all_obj, work, faces, face_obj, counts, out, out_obj):
+    """Every face in order: face ``i`` as it was where not ``work[i]``, else the next ``counts[w]``
+    rows of ``faces`` (its tessellated faces, ``w`` counting the work faces)."""
+    at = 0
+    j = 0
+    w = 0
+    for i in range(all_faces.shape[0]):
+        if work[i]:
+            for r in range(counts[w]):
+                out[at, 0] = faces[j, 0]
+                out[at, 1] = faces[j, 1]
+                out[at, 2] = faces[j, 2]
+                out_obj[at] = face_obj[j]
+                at += 1
+                j += 1
+            w += 1
+        else:
+            out[at, 0] = all_faces[i, 0]
+            out[at, 1] = all_faces[i, 1]
+            out[at, 2] = all_faces[i, 2]
+            out_obj[at] = all_obj[i]
+            at += 1

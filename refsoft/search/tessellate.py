@@ -22,6 +22,7 @@ import numpy as np
 
 from . import _tessellate as _kernels
 from .._parallel import parallel_range
+from ..raster._threads import SERIAL_MAX_TRIANGLES
 from ..errors import RefsoftError
 from ..scene.mesh import normalize_rows
 from . import CULLED, HIDDEN, search
@@ -61,7 +62,7 @@ def _edge_errors(gbuffer, eye, verts, pixel, offset, e0, e1):
                    np.asarray(gbuffer.origin, np.float64), np.asarray(eye, dtype=np.float64),
                    np.ascontiguousarray(verts, dtype=np.float64), np.ascontiguousarray(pixel, dtype=np.int64), off,
                    np.ascontiguousarray(e0, dtype=np.int64), np.ascontiguousarray(e1, dtype=np.int64), sub, dt.type(0),
-                   out)
+                   out, serial=len(e0) <= SERIAL_MAX_TRIANGLES)
     return out
 
 
@@ -106,7 +107,7 @@ def _edge_pixel_errors(gbuffer, eye, verts, pixel, offset, e0, e1):
                    np.asarray(gbuffer.origin, np.float64), np.asarray(eye, dtype=np.float64),
                    np.ascontiguousarray(verts, dtype=np.float64), np.ascontiguousarray(pixel, dtype=np.int64),
                    np.ascontiguousarray(offset, dtype=dt), np.ascontiguousarray(e0, dtype=np.int64),
-                   np.ascontiguousarray(e1, dtype=np.int64), dt.type(0), out)
+                   np.ascontiguousarray(e1, dtype=np.int64), dt.type(0), out, serial=len(e0) <= SERIAL_MAX_TRIANGLES)
     return out
 
 
@@ -257,17 +258,19 @@ def _triangle_errors(gbuffer, eye, verts, pixel, flags, offset, f, threshold, mi
     return np.where(bad, -np.inf, np.maximum(np.maximum(err[:, 0], err[:, 1]), err[:, 2]))
 
 
-def _apply_split(faces, face_obj, keys, mids, ea, eb, n_vertices, only=None):
+def _apply_split(faces, face_obj, keys, mids, ea, eb, n_vertices, only=None, parents=False):
     """One level's split of ``faces``: the neighbours of split triangles that share a split edge
     are split too (crack-free), unless ``only`` (the split triangles' indices) restricts the
     split to those (the thesis's rule). Returns the new faces, their object ids and which of
-    them the level touched (the next level's candidates)."""
+    them the level touched (the next level's candidates); ``parents``: and each new face's row in
+    ``faces``."""
     mask = None
     if only is not None:
         mask = np.zeros(len(faces), dtype=bool)
         mask[only] = True
     pattern, slot, count = _split_plan(faces, keys, ea, eb, n_vertices, mask)
-    return _write_children(faces, face_obj, pattern, slot, mids, count)
+    out = _write_children(faces, face_obj, pattern, slot, mids, count)
+    return (*out, np.repeat(np.arange(len(faces)), count)) if parents else out
 
 
 def _split_edges(tris) -> np.ndarray:
@@ -336,6 +339,62 @@ def _write_children(faces, face_obj, pattern, slot, mids, count):
     _kernels.write_children(faces, np.ascontiguousarray(face_obj, dtype=np.int32), pattern, slot,
                             np.ascontiguousarray(mids, dtype=np.int64), _CHILDREN, _N_CHILDREN, start, out, obj, active)
     return out, obj, active
+
+
+def _working(faces, pixel, min_span, max_level):
+    """The faces (T,) bool that ``max_level`` levels of tessellation can split
+    (:func:`refsoft.search._tessellate.working_faces`), or None when that is every face."""
+    if min_span <= 0 or max_level == 0:
+        return None
+    keep = np.empty(len(faces), dtype=bool)
+    marked = np.empty(len(pixel), dtype=bool)
+    _kernels.working_faces(np.ascontiguousarray(faces), np.ascontiguousarray(pixel, dtype=np.int32), int(min_span),
+                           int(max_level), marked, keep)
+    return None if keep.all() else keep
+
+
+def _merged(all_faces, all_obj, work, faces, face_obj, origin):
+    """Every face after a tessellation of the ``work`` faces alone: each face not in ``work`` as it
+    was, each one in ``work`` replaced by its tessellated faces (``faces``, ``face_obj``; ``origin``
+    their rows in ``all_faces[work]``, None when the tessellation split none), in face order."""
+    n_work = int(work.sum())
+    counts = np.ones(n_work, dtype=np.int64) if origin is None else np.bincount(origin, minlength=n_work)
+    total = len(all_faces) - n_work + len(faces)
+    out = np.empty((total, 3), dtype=np.int64)
+    obj = np.empty(total, dtype=np.int32)
+    _kernels.merge_faces(np.ascontiguousarray(all_faces), np.ascontiguousarray(all_obj), work,
+                         np.ascontiguousarray(faces), np.ascontiguousarray(face_obj, dtype=np.int32), counts, out, obj)
+    return out, obj
+
+
+class _Rows:
+    """Arrays of one row per vertex that grow together (their capacity doubled when full): a
+    level's new vertices are written after the others, not copied with them into new arrays."""
+
+    def __init__(self, arrays):
+        self.n = len(arrays[0])
+        self.buf = []
+        for a in arrays:
+            b = np.empty((max(2 * self.n, 16),) + a.shape[1:], dtype=a.dtype)
+            b[:self.n] = a
+            self.buf.append(b)
+
+    def view(self) -> list:
+        """The arrays' first ``n`` rows (views)."""
+        return [b[:self.n] for b in self.buf]
+
+    def append(self, arrays) -> None:
+        """Add rows (one array per buffer, in order, each of the same length)."""
+        m = len(arrays[0])
+        if self.n + m > len(self.buf[0]):
+            size = max(2 * len(self.buf[0]), self.n + m)
+            for i, b in enumerate(self.buf):
+                grown = np.empty((size,) + b.shape[1:], dtype=b.dtype)
+                grown[:self.n] = b[:self.n]
+                self.buf[i] = grown
+        for b, a in zip(self.buf, arrays):
+            b[self.n:self.n + m] = a
+        self.n += m
 
 
 @dataclass(frozen=True, eq=False)
@@ -427,24 +486,30 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
         validate.number(outline, "outline threshold", minimum=0.0)
     if (metric == "pixels" or outline is not None) and surface is None:
         raise RefsoftError("the tessellation's pixel metric needs the sub-texel points (surface)")
-    verts = [np.asarray(vertices, dtype=np.float64)]
-    norms = [np.asarray(normals, dtype=np.float64)]
-    pix = [np.asarray(pixel, dtype=np.int32)]
-    fl = [np.asarray(flags, dtype=np.uint8)]
-    surf = None if surface is None else [[np.asarray(a)] for a in surface]
+    # the vertices' arrays, grown in place as levels add vertices (no copy of all rows per level)
+    rows = _Rows([np.asarray(vertices, dtype=np.float64), np.asarray(normals, dtype=np.float64),
+                  np.asarray(pixel, dtype=np.int32), np.asarray(flags, dtype=np.uint8)]
+                 + ([] if surface is None else [np.asarray(a) for a in surface]))
+    refined = surface is not None
     faces = np.asarray(faces, dtype=np.int64)
     face_obj = np.asarray(face_obj, dtype=np.int32)
-    active = np.ones(len(faces), dtype=bool)  # triangles made by the last level (candidates)
-    n_total = len(verts[0])
+    # only the faces the levels can change take part (the others are copied at the end); the
+    # outline's test looks for every face's neighbours, so it sees them all
+    work = _working(faces, rows.view()[2], min_span, max_level) if outline is None else None
+    all_faces, all_obj = faces, face_obj
+    if work is not None:
+        faces, face_obj = np.compress(work, faces, axis=0), np.compress(work, face_obj)
+    active = None  # triangles made by the last level (candidates); None: every triangle
+    origin = None  # each face's row in the faces the loop started with; None: its own
     searched = 0
     levels = 0
     for _ in range(max_level):
-        allv, allp, allf = np.concatenate(verts), np.concatenate(pix), np.concatenate(fl)
-        cand = np.flatnonzero(active)
+        allv, alln, allp, allf = rows.view()[:4]
+        alloff = rows.view()[6] if refined else None
+        cand = np.arange(len(faces)) if active is None else np.flatnonzero(active)
         if len(cand) == 0:
             break
-        f = faces[cand]
-        alloff = None if surf is None else np.concatenate(surf[2])
+        f = faces if active is None else faces[cand]
         split = _triangle_errors(gbuffer, eye, allv, allp, allf, alloff, f, threshold, min_span, metric) > threshold
         if outline is not None:  # and the pixel metric on the edges that can draw an outline
             measured = outline_edges(faces, allp, alloff, cand)
@@ -455,24 +520,24 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
             break
         keys = _split_edges(faces[split_tri])
         ea, eb = keys // KEY_BASE, keys % KEY_BASE
-        mids = n_total + np.arange(len(keys), dtype=np.int64)
+        mids = rows.n + np.arange(len(keys), dtype=np.int64)
         new_v = 0.5 * (allv[ea] + allv[eb])
-        alln = np.concatenate(norms)
         new_n = normalize_rows(alln[ea] + alln[eb])
         start = _midpoint_starts(gbuffer.mask, allp[ea].astype(np.int64), allp[eb].astype(np.int64))
         res = search(gbuffer, eye, new_v, neighbourhood, inverse, start, cap, method=method)
-        for lst, a in zip((verts, norms, pix, fl), (new_v, new_n, res.pixel, res.flags)):
-            lst.append(a)
-        if surf is not None:
+        new = [new_v, new_n, res.pixel, res.flags]
+        if refined:
             from .refine import refine
 
-            for lst, a in zip(surf, refine(gbuffer, eye, new_v, res)):
-                lst.append(a)
+            new += list(refine(gbuffer, eye, new_v, res))
+        rows.append(new)
         searched += len(new_v)
-        n_total += len(new_v)
-        faces, face_obj, active = _apply_split(faces, face_obj, keys, mids, ea, eb, n_total,
-                                               None if crack_free else split_tri)
+        faces, face_obj, active, parent = _apply_split(faces, face_obj, keys, mids, ea, eb, rows.n,
+                                                       None if crack_free else split_tri, parents=True)
+        origin = parent if origin is None else origin[parent]
         levels += 1
-    return Tessellation(np.concatenate(verts), np.concatenate(norms), np.concatenate(pix), np.concatenate(fl), faces,
-                        face_obj, searched, levels,
-                        None if surf is None else tuple(np.concatenate(lst) for lst in surf))
+    if work is not None:
+        faces, face_obj = _merged(all_faces, all_obj, work, faces, face_obj, origin)
+    out = rows.view()
+    return Tessellation(out[0], out[1], out[2], out[3], faces, face_obj, searched, levels,
+                        tuple(out[4:]) if refined else None)
