@@ -12,6 +12,12 @@ Crack-free (the thesis's version leaves holes): an edge split for one triangle i
 neighbours too, which are then split 1-to-2, 1-to-3 or 1-to-4 by how many of their edges were
 split (red-green refinement), so no vertex lies on another triangle's edge. Every level splits
 only triangles created by the previous one, up to ``max_level`` levels.
+
+With ``min_span`` (edges reflected within that many pixels are not measured), only the faces a
+level can change take part: a face none of whose edges is measured is split only as the neighbour
+of a split face, so the levels run on the faces with a measured edge and ``max_level`` rings of
+faces around them (:func:`_working`), and the others are copied, in order, at the end: the same
+vertices and faces, bit for bit, as when every face takes part.
 """
 
 from __future__ import annotations
