@@ -122,13 +122,17 @@ def measured_edges(faces, pixel, flags, min_span, adaptive, culled_bit, hidden_b
 
 
 @kernel
-def split_pattern(faces, keys, marked, mask, use_mask, pattern, slot):
-    """Which edges of each face of ``faces`` (T, 3) are split: ``pattern[i]`` bit k when edge k's
-    key (``min * 2^31 + max``) is in the sorted ``keys``, ``slot[i, k]`` its index there. Only faces
-    with two corners in ``marked`` (the split edges' ends) are looked up; ``use_mask``: and only
-    faces with ``mask[i]`` (the thesis's rule). :func:`refsoft.search.tessellate._split_some`'s
-    lookup."""
-    n = keys.shape[0]
+def split_pattern(faces, ea, eb, first, marked, mask, use_mask, pattern, slot):
+    """Which edges of each face of ``faces`` (T, 3) are split: ``pattern[i]`` bit k when edge k is
+    one of the split edges (``ea[j] < eb[j]``, sorted by ``ea`` then ``eb``), ``slot[i, k]`` that
+    ``j``. Only faces with two corners in ``marked`` (the split edges' ends) are looked up;
+    ``use_mask``: and only faces with ``mask[i]`` (the thesis's rule). ``first`` (N,) int64
+    scratch: each vertex's first split edge, looked up along that vertex's run of split edges.
+    :func:`refsoft.search.tessellate._split_some`'s lookup."""
+    n = ea.shape[0]
+    first[:] = -1
+    for j in range(n - 1, -1, -1):
+        first[ea[j]] = j
     for i in range(faces.shape[0]):
         pattern[i] = 0
         m0 = marked[faces[i, 0]]
@@ -142,11 +146,17 @@ def split_pattern(faces, keys, marked, mask, use_mask, pattern, slot):
         for k in range(3):
             a = faces[i, k]
             b = faces[i, (k + 1) % 3]
-            key = min(a, b) * np.int64(2147483648) + max(a, b)
-            j = np.searchsorted(keys, key)
-            if j < n and keys[j] == key:
-                p |= 1 << k
-                slot[i, k] = j
+            lo = min(a, b)
+            hi = max(a, b)
+            j = first[lo]
+            if j < 0:
+                continue
+            while j < n and ea[j] == lo:
+                if eb[j] == hi:
+                    p |= 1 << k
+                    slot[i, k] = j
+                    break
+                j += 1
         pattern[i] = p
 
 

@@ -329,7 +329,8 @@ def _split_plan(faces, keys, ea, eb, n_vertices, only=None):
     pattern = np.empty(t, dtype=np.int8)
     slot = np.empty((t, 3), dtype=np.int64)
     use = only is not None
-    _kernels.split_pattern(faces, np.ascontiguousarray(keys, dtype=np.int64), marked,
+    keys = np.asarray(keys, dtype=np.int64)
+    _kernels.split_pattern(faces, keys // KEY_BASE, keys % KEY_BASE, np.empty(n_vertices, dtype=np.int64), marked,
                            np.asarray(only, dtype=bool) if use else np.zeros(1, dtype=bool), use, pattern, slot)
     return pattern, slot, _N_CHILDREN[pattern]
 
