@@ -46,18 +46,22 @@ def measure(name, size, frames):
     for d in drivers.values():
         d.render_frame(0)
     totals = {p: [] for p in drivers}
+    cpu = {p: [] for p in drivers}
     stages = []
     picks = [1 + (i % max(1, scene.n_frames - 1)) for i in range(frames)]
     for f in picks:
         for p, d in drivers.items():
             for key in _SPLIT:
                 _SPLIT[key] = 0.0
+            c = time.process_time()
             fr = d.render_frame(f)
+            cpu[p].append(1000 * (time.process_time() - c))
             totals[p].append(fr.time_ms["total"])
             if p == "accurate":
                 stages.append({**fr.time_ms, **_SPLIT})
     med = {p: statistics.median(v) for p, v in totals.items()}
     st = {k: statistics.median(s.get(k, 0.0) for s in stages) for k in stages[0]}
+    st["cpu_ratio"] = statistics.median(cpu["accurate"]) / statistics.median(cpu["paper"])
     return med, st
 
 
@@ -107,7 +111,7 @@ def main(argv=None):
                 ms, n, edges = measure_cut(name, (w, h))
                 print(f"{name} {size} {edges} | {ms[True]:.1f} {n[True]} | {ms[False]:.1f} {n[False]}", flush=True)
         return
-    print("scene size paper_ms accurate_ms ratio | accurate stages (ms)")
+    print("scene size paper_ms accurate_ms ratio cpu_ratio | accurate stages (ms)")
     for size in args.sizes:
         w, h = (int(x) for x in size.split("x"))
         for name in args.scenes:
@@ -115,7 +119,8 @@ def main(argv=None):
             keys = ("gbuffer", "search", "tessellate_only", "clip", "virtual", "main")
             parts = " ".join(f"{k}={st.get(k, 0.0):.0f}" for k in keys)
             ratio = med["accurate"] / med["paper"]
-            print(f"{name} {size} {med['paper']:.0f} {med['accurate']:.0f} {ratio:.2f} | {parts}", flush=True)
+            print(f"{name} {size} {med['paper']:.0f} {med['accurate']:.0f} {ratio:.2f} {st['cpu_ratio']:.2f} | {parts}",
+                  flush=True)
 
 
 if __name__ == "__main__":

@@ -3,8 +3,9 @@ convex scene at 1024x768 and 640x480. The two presets render the same frames alt
 one process (each driver renders frame 0 first, outside the timing: the kernels compiled and
 the searches coherent); the timed call is the accurate frame, the paper frame of the same frame
 number is timed just before it (in the untimed setup), and ``extra_info`` holds the paper
-median, the ratio of the medians and the accurate frame's median stage times (``tessellate``
-holds the tessellation and the silhouette cut).
+median, the ratio of the medians, the ratio of the two presets' median process CPU time per frame
+(``cpu_ratio``: every thread's; it varies less with a shared machine's load) and the accurate
+frame's median stage times (``tessellate`` holds the tessellation and the silhouette cut).
 
 Run: ``pytest benchmarks/test_bench_accurate.py --benchmark-columns=min,median,rounds``
 (``benchmarks/accurate_price.py`` prints the same ratios with the tessellation and the cut
@@ -32,17 +33,20 @@ def test_accurate_against_paper(benchmark, name, size):
     paper.render_frame(0)
     accurate.render_frame(0)
     benchmark.group = f"accurate against paper {size[0]}x{size[1]}"
-    state = {"f": 0, "paper": [], "stages": []}
+    state = {"f": 0, "paper": [], "stages": [], "cpu": {"paper": [], "accurate": []}}
 
     def paper_first():
         state["f"] = state["f"] % max(1, scene.n_frames - 1) + 1 if scene.n_frames > 1 else 0
-        t = time.perf_counter()
+        t, c = time.perf_counter(), time.process_time()
         paper.render_frame(state["f"])
         state["paper"].append(1000 * (time.perf_counter() - t))
+        state["cpu"]["paper"].append(time.process_time() - c)
         return (state["f"],), {}
 
     def accurate_frame(f):
+        c = time.process_time()
         fr = accurate.render_frame(f)
+        state["cpu"]["accurate"].append(time.process_time() - c)
         state["stages"].append(fr.time_ms)
         return fr
 
@@ -50,6 +54,8 @@ def test_accurate_against_paper(benchmark, name, size):
     paper_ms = statistics.median(state["paper"])
     accurate_ms = benchmark.stats.stats.median * 1000
     stages = {k: round(statistics.median(s.get(k, 0.0) for s in state["stages"]), 2) for k in state["stages"][0]}
+    cpu = {p: statistics.median(v) for p, v in state["cpu"].items()}
     benchmark.extra_info.update(paper_ms=round(paper_ms, 2), ratio=round(accurate_ms / paper_ms, 3),
+                                cpu_ratio=round(cpu["accurate"] / cpu["paper"], 3),
                                 **{f"{k}_ms": v for k, v in stages.items()})
     assert paper_ms > 0

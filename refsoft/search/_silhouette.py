@@ -175,3 +175,17 @@ def cut_edges(lo, hi, G, mask, r0, c0, P, N, full_mask, origin, eye, p_vis, p_hi
         pixel[i, 1] = sc
         flags[i] = fl
         searched[i] = n
+
+
+@kernel
+def mixed_faces(faces, flags, out):
+    """``out[i]``: face ``i`` has a HIDDEN and a visible corner and no CULLED corner
+    (:func:`refsoft.search.silhouette.mixed_faces`)."""
+    for i in range(faces.shape[0]):
+        a = flags[faces[i, 0]]
+        b = flags[faces[i, 1]]
+        c = flags[faces[i, 2]]
+        ha = (a & HIDDEN) != 0
+        hb = (b & HIDDEN) != 0
+        hc = (c & HIDDEN) != 0
+        out[i] = (ha != hb or ha != hc) and ((a | b | c) & CULLED) == 0

@@ -94,3 +94,142 @@ def edge_pixel_errors(lo, hi, P, N, mask, origin, eye, verts, pixel, offset, e0,
         t0 = min(max(t0, -lim), lim)
         t1 = min(max(t1, -lim), lim)
         out[i] = np.hypot((r + np.float64(t0)) - mr, (c + np.float64(t1)) - mc)
+
+
+@kernel
+def measured_edges(faces, pixel, flags, min_span, adaptive, culled_bit, hidden_bit, need, bad):
+    """For every triangle ``i`` of ``faces`` (C, 3): ``bad[i]`` when a corner is CULLED or (when
+    ``adaptive``) all three are HIDDEN; ``need[3 i + k]`` when edge k (corner k to k + 1) is to be
+    measured: its ends' pixels more than ``min_span`` apart along an axis (every edge when
+    ``min_span`` is 0). What :func:`refsoft.search.tessellate._triangle_errors` gathers with NumPy,
+    in one pass."""
+    for i in range(faces.shape[0]):
+        f0 = faces[i, 0]
+        f1 = faces[i, 1]
+        f2 = faces[i, 2]
+        b = ((flags[f0] | flags[f1] | flags[f2]) & culled_bit) != 0
+        if adaptive and (flags[f0] & flags[f1] & flags[f2] & hidden_bit) != 0:
+            b = True
+        bad[i] = b
+        for k in range(3):
+            a = faces[i, k]
+            c = faces[i, (k + 1) % 3]
+            if min_span > 0:
+                need[3 * i + k] = (abs(np.int64(pixel[a, 0]) - pixel[c, 0]) > min_span
+                                   or abs(np.int64(pixel[a, 1]) - pixel[c, 1]) > min_span)
+            else:
+                need[3 * i + k] = True
+
+
+@kernel
+def split_pattern(faces, ea, eb, first, marked, mask, use_mask, pattern, slot):
+    """Which edges of each face of ``faces`` (T, 3) are split: ``pattern[i]`` bit k when edge k is
+    one of the split edges (``ea[j] < eb[j]``, sorted by ``ea`` then ``eb``), ``slot[i, k]`` that
+    ``j``. Only faces with two corners in ``marked`` (the split edges' ends) are looked up;
+    ``use_mask``: and only faces with ``mask[i]`` (the thesis's rule). ``first`` (N,) int64
+    scratch: each vertex's first split edge, looked up along that vertex's run of split edges.
+    :func:`refsoft.search.tessellate._split_some`'s lookup."""
+    n = ea.shape[0]
+    first[:] = -1
+    for j in range(n - 1, -1, -1):
+        first[ea[j]] = j
+    for i in range(faces.shape[0]):
+        pattern[i] = 0
+        m0 = marked[faces[i, 0]]
+        m1 = marked[faces[i, 1]]
+        m2 = marked[faces[i, 2]]
+        if not ((m0 and m1) or (m2 and (m0 or m1))):
+            continue
+        if use_mask and not mask[i]:
+            continue
+        p = 0
+        for k in range(3):
+            a = faces[i, k]
+            b = faces[i, (k + 1) % 3]
+            lo = min(a, b)
+            hi = max(a, b)
+            j = first[lo]
+            if j < 0:
+                continue
+            while j < n and ea[j] == lo:
+                if eb[j] == hi:
+                    p |= 1 << k
+                    slot[i, k] = j
+                    break
+                j += 1
+        pattern[i] = p
+
+
+@kernel
+def write_children(faces, face_obj, pattern, slot, mids, children, n_children, start, out_faces, out_obj, out_active):
+    """The children of every face (red-green, :data:`refsoft.search.tessellate._CHILDREN`), in the
+    faces' order from row ``start[i]``: a face not split is copied (inactive), a split face's
+    children are active (the next level's candidates)."""
+    for i in range(faces.shape[0]):
+        p = pattern[i]
+        at = start[i]
+        if p == 0:
+            out_faces[at, 0] = faces[i, 0]
+            out_faces[at, 1] = faces[i, 1]
+            out_faces[at, 2] = faces[i, 2]
+            out_obj[at] = face_obj[i]
+            out_active[at] = False
+            continue
+        for j in range(n_children[p]):
+            for k in range(3):
+                s = children[p, j, k]
+                out_faces[at + j, k] = faces[i, s] if s < 3 else mids[slot[i, s - 3]]
+            out_obj[at + j] = face_obj[i]
+            out_active[at + j] = True
+
+
+@kernel
+def working_faces(faces, pixel, min_span, rings, marked, keep):
+    """``keep[i]`` for the faces a tessellation of ``rings`` levels can change: those with an edge
+    whose ends' pixels are more than ``min_span`` apart along an axis (the only ones a level can
+    split by their own error), then ``rings`` times every face sharing a vertex with a kept one
+    (each level splits, besides its candidates, the faces that share an edge with them).
+    ``marked``: (N,) bool scratch."""
+    t = faces.shape[0]
+    for i in range(t):
+        keep[i] = False
+        for k in range(3):
+            a = faces[i, k]
+            c = faces[i, (k + 1) % 3]
+            if abs(np.int64(pixel[a, 0]) - pixel[c, 0]) > min_span or abs(np.int64(pixel[a, 1]) - pixel[c, 1]) > min_span:
+                keep[i] = True
+    for _ in range(rings):
+        marked[:] = False
+        for i in range(t):
+            if keep[i]:
+                marked[faces[i, 0]] = True
+                marked[faces[i, 1]] = True
+                marked[faces[i, 2]] = True
+        for i in range(t):
+            if marked[faces[i, 0]] or marked[faces[i, 1]] or marked[faces[i, 2]]:
+                keep[i] = True
+
+
+@kernel
+def merge_faces(all_faces, all_obj, work, faces, face_obj, counts, out, out_obj):
+    """Every face in order: face ``i`` as it was where not ``work[i]``, else the next ``counts[w]``
+    rows of ``faces`` (its tessellated faces, ``w`` counting the work faces)."""
+    at = 0
+    j = 0
+    w = 0
+    for i in range(all_faces.shape[0]):
+        if work[i]:
+            for r in range(counts[w]):
+                out[at, 0] = faces[j, 0]
+                out[at, 1] = faces[j, 1]
+                out[at, 2] = faces[j, 2]
+                out_obj[at] = face_obj[j]
+                at += 1
+                j += 1
+            w += 1
+        else:
+            out[at, 0] = all_faces[i, 0]
+            out[at, 1] = all_faces[i, 1]
+            out[at, 2] = all_faces[i, 2]
+            out_obj[at] = all_obj[i]
+            at += 1

@@ -28,6 +28,7 @@ import numpy as np
 
 from ..scene.mesh import normalize_rows
 from . import CULLED, HIDDEN, search
+from ._tessellate import merge_faces
 from .tessellate import _distinct
 from ..constants import CLIP_ITERATIONS, CLIP_TIE_STEPS
 
@@ -72,13 +73,12 @@ class Clip:
 
 def mixed_faces(faces, flags) -> np.ndarray:
     """(T,) bool: faces with a hidden and a visible corner and no CULLED corner."""
-    faces = np.asarray(faces)
-    # per-vertex tests gathered per corner (axis-1 reductions over rows of three are slow)
-    hidden = (flags & HIDDEN) != 0
-    culled = (flags & CULLED) != 0
-    f0, f1, f2 = faces[:, 0], faces[:, 1], faces[:, 2]
-    h0, h1, h2 = hidden[f0], hidden[f1], hidden[f2]
-    return ((h0 != h1) | (h0 != h2)) & ~(culled[f0] | culled[f1] | culled[f2])
+    from . import _silhouette
+
+    faces = np.ascontiguousarray(faces, dtype=np.int64)
+    out = np.empty(len(faces), dtype=bool)
+    _silhouette.mixed_faces(faces, np.ascontiguousarray(flags, dtype=np.uint8), out)
+    return out
 
 
 def clip_at_silhouette(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, neighbourhood="cross",
@@ -136,14 +136,15 @@ def clip_at_silhouette(gbuffer, eye, vertices, normals, faces, face_obj, pixel, 
     cut_v = p_vis + lo_t[:, None] * (p_hid - p_vis)
     cut_n = normalize_rows(normals[vis] + lo_t[:, None] * (normals[hid] - normals[vis]))
     parts, per_face = _visible_parts(f, hidden, key, n)
-    counts = np.ones(len(faces), dtype=np.int64)
-    counts[mixed] = per_face
-    out = np.repeat(faces, counts, axis=0)
-    out_obj = np.repeat(np.asarray(face_obj), counts)
-    # the rows of the mixed faces' parts: those whose face is mixed, in face order
+    # every face in order, each mixed one replaced by its visible part
+    face_obj = np.ascontiguousarray(face_obj, dtype=np.int32)
     is_mixed = np.zeros(len(faces), dtype=bool)
     is_mixed[mixed] = True
-    out[np.repeat(is_mixed, counts)] = parts
+    total = len(faces) + int(per_face.sum()) - len(mixed)
+    out = np.empty((total, 3), dtype=np.int64)
+    out_obj = np.empty(total, dtype=np.int32)
+    merge_faces(np.ascontiguousarray(faces), face_obj, is_mixed, parts, np.repeat(face_obj[mixed], per_face),
+                per_face.astype(np.int64), out, out_obj)
     return Clip(cut_v, cut_n, got_pixel, got_flags, out, out_obj, len(key), searched, np.c_[vis, hid], lo_t)
 
 

@@ -12,6 +12,12 @@ Crack-free (the thesis's version leaves holes): an edge split for one triangle i
 neighbours too, which are then split 1-to-2, 1-to-3 or 1-to-4 by how many of their edges were
 split (red-green refinement), so no vertex lies on another triangle's edge. Every level splits
 only triangles created by the previous one, up to ``max_level`` levels.
+
+With ``min_span`` (edges reflected within that many pixels are not measured), only the faces a
+level can change take part: a face none of whose edges is measured is split only as the neighbour
+of a split face, so the levels run on the faces with a measured edge and ``max_level`` rings of
+faces around them (:func:`_working`), and the others are copied, in order, at the end: the same
+vertices and faces, bit for bit, as when every face takes part.
 """
 
 from __future__ import annotations
@@ -22,6 +28,7 @@ import numpy as np
 
 from . import _tessellate as _kernels
 from .._parallel import parallel_range
+from ..raster._threads import SERIAL_MAX_TRIANGLES
 from ..errors import RefsoftError
 from ..scene.mesh import normalize_rows
 from . import CULLED, HIDDEN, search
@@ -61,7 +68,7 @@ def _edge_errors(gbuffer, eye, verts, pixel, offset, e0, e1):
                    np.asarray(gbuffer.origin, np.float64), np.asarray(eye, dtype=np.float64),
                    np.ascontiguousarray(verts, dtype=np.float64), np.ascontiguousarray(pixel, dtype=np.int64), off,
                    np.ascontiguousarray(e0, dtype=np.int64), np.ascontiguousarray(e1, dtype=np.int64), sub, dt.type(0),
-                   out)
+                   out, serial=len(e0) <= SERIAL_MAX_TRIANGLES)
     return out
 
 
@@ -106,7 +113,7 @@ def _edge_pixel_errors(gbuffer, eye, verts, pixel, offset, e0, e1):
                    np.asarray(gbuffer.origin, np.float64), np.asarray(eye, dtype=np.float64),
                    np.ascontiguousarray(verts, dtype=np.float64), np.ascontiguousarray(pixel, dtype=np.int64),
                    np.ascontiguousarray(offset, dtype=dt), np.ascontiguousarray(e0, dtype=np.int64),
-                   np.ascontiguousarray(e1, dtype=np.int64), dt.type(0), out)
+                   np.ascontiguousarray(e1, dtype=np.int64), dt.type(0), out, serial=len(e0) <= SERIAL_MAX_TRIANGLES)
     return out
 
 
@@ -223,23 +230,28 @@ def _triangle_errors(gbuffer, eye, verts, pixel, flags, offset, f, threshold, mi
     (:func:`edge_pixel_errors`, which needs ``offset``). ``measured`` ((T, 3) bool): the edges
     measured, the others count 0."""
     errors = _edge_pixel_errors if metric == "pixels" else _edge_errors
+    if measured is None:  # one kernel pass: which edges are measured, which triangles are bad
+        f = np.ascontiguousarray(f, dtype=np.int64)
+        need = np.empty(3 * len(f), dtype=bool)
+        bad = np.empty(len(f), dtype=bool)
+        _kernels.measured_edges(f, np.ascontiguousarray(pixel, dtype=np.int32), np.ascontiguousarray(flags, np.uint8),
+                                int(min_span), threshold > 0, CULLED, HIDDEN, need, bad)
+        idx = np.flatnonzero(need)
+        err = np.zeros(3 * len(f))
+        if len(idx):
+            tri, k = idx // 3, idx % 3
+            err[idx] = errors(gbuffer, eye, verts, pixel, offset, f[tri, k], f[tri, (k + 1) % 3])
+        err = err.reshape(-1, 3)
+        return np.where(bad, -np.inf, np.maximum(np.maximum(err[:, 0], err[:, 1]), err[:, 2]))
+    # the outline's edges only (``measured``), those reflected within min_span pixels left out
     e0, e1 = f.reshape(-1), f[:, [1, 2, 0]].reshape(-1)
     err = np.zeros(len(e0))
-    if measured is not None:
-        need = np.flatnonzero(measured.reshape(-1))
-        if min_span > 0:
-            rows, cols = pixel[:, 0], pixel[:, 1]
-            a, b = e0[need], e1[need]
-            need = need[(np.abs(rows[a] - rows[b]) > min_span) | (np.abs(cols[a] - cols[b]) > min_span)]
-        err[need] = errors(gbuffer, eye, verts, pixel, offset, e0[need], e1[need])
-    elif min_span > 0:  # an edge reflected within min_span pixels: nothing to draw between its ends
-        # per axis, in the pixels' int32 (|differences| < 2^16): a tenth of the time of one
-        # (E, 2) int64 block on 1.3M triangles, whose temporaries outgrow the cache
+    need = np.flatnonzero(measured.reshape(-1))
+    if min_span > 0:
         rows, cols = pixel[:, 0], pixel[:, 1]
-        need = np.flatnonzero((np.abs(rows[e0] - rows[e1]) > min_span) | (np.abs(cols[e0] - cols[e1]) > min_span))
-        err[need] = errors(gbuffer, eye, verts, pixel, offset, e0[need], e1[need])
-    else:
-        err[:] = errors(gbuffer, eye, verts, pixel, offset, e0, e1)
+        a, b = e0[need], e1[need]
+        need = need[(np.abs(rows[a] - rows[b]) > min_span) | (np.abs(cols[a] - cols[b]) > min_span)]
+    err[need] = errors(gbuffer, eye, verts, pixel, offset, e0[need], e1[need])
     # per-vertex tests gathered per corner, and the maximum of three columns: axis-1
     # reductions over rows of three are several times slower
     f0, f1, f2 = f[:, 0], f[:, 1], f[:, 2]
@@ -252,18 +264,19 @@ def _triangle_errors(gbuffer, eye, verts, pixel, flags, offset, f, threshold, mi
     return np.where(bad, -np.inf, np.maximum(np.maximum(err[:, 0], err[:, 1]), err[:, 2]))
 
 
-def _apply_split(faces, face_obj, keys, mids, ea, eb, n_vertices, only=None):
+def _apply_split(faces, face_obj, keys, mids, ea, eb, n_vertices, only=None, parents=False):
     """One level's split of ``faces``: the neighbours of split triangles that share a split edge
     are split too (crack-free), unless ``only`` (the split triangles' indices) restricts the
     split to those (the thesis's rule). Returns the new faces, their object ids and which of
-    them the level touched (the next level's candidates)."""
+    them the level touched (the next level's candidates); ``parents``: and each new face's row in
+    ``faces``."""
     mask = None
     if only is not None:
         mask = np.zeros(len(faces), dtype=bool)
         mask[only] = True
-    new_faces, parent = _split_some(faces, keys, mids, ea, eb, n_vertices, mask)
-    touched = np.bincount(parent, minlength=len(faces)) > 1  # the faces split into several
-    return new_faces, face_obj[parent], touched[parent]
+    pattern, slot, count = _split_plan(faces, keys, ea, eb, n_vertices, mask)
+    out = _write_children(faces, face_obj, pattern, slot, mids, count)
+    return (*out, np.repeat(np.arange(len(faces)), count)) if parents else out
 
 
 def _split_edges(tris) -> np.ndarray:
@@ -295,24 +308,100 @@ def _midpoint_starts(mask, pa, pb) -> np.ndarray:
 
 
 def _split_some(faces, keys, mids, ea, eb, n_vertices, only=None):
-    """:func:`_split` of ``faces``, run on the faces with two corners among the split edges'
-    ends only (the others are kept whole, as :func:`_split` keeps them): the same faces and
-    parents in the same order."""
+    """:func:`_split` of ``faces``, looked up on the faces with two corners among the split
+    edges' ends only (the others are kept whole, as :func:`_split` keeps them): the same faces
+    and parents in the same order."""
+    faces = np.asarray(faces, dtype=np.int64)
+    pattern, slot, count = _split_plan(faces, keys, ea, eb, n_vertices, only)
+    out, _, _ = _write_children(faces, np.zeros(len(faces), np.int32), pattern, slot, mids, count)
+    return out, np.repeat(np.arange(len(faces)), count)
+
+
+def _split_plan(faces, keys, ea, eb, n_vertices, only=None):
+    """Each face's split pattern (T,) int8 (bit k: edge k is split), the split edges' indices in
+    ``keys`` (T, 3) (read where split) and its number of children (T,) int64; only the faces with
+    two corners among the split edges' ends ``ea``, ``eb`` are looked up (one kernel pass)."""
+    t = len(faces)
+    faces = np.ascontiguousarray(faces, dtype=np.int64)
     marked = np.zeros(n_vertices, dtype=bool)
     marked[ea] = True
     marked[eb] = True
-    m0, m1, m2 = marked[faces[:, 0]], marked[faces[:, 1]], marked[faces[:, 2]]
-    sel = np.flatnonzero((m0 & m1) | (m2 & (m0 | m1)))  # two or three corners marked
-    sub_faces, sub_counts = _children(faces[sel], keys, mids, KEY_BASE, None if only is None else only[sel])
-    counts = np.ones(len(faces), dtype=np.int64)
-    counts[sel] = sub_counts
-    parent = np.repeat(np.arange(len(faces)), counts)
-    out = np.repeat(faces, counts, axis=0)
-    # the children of the faces in ``sel``: the rows whose parent is one, in order
-    in_sel = np.zeros(len(faces), dtype=bool)
-    in_sel[sel] = True
-    out[in_sel[parent]] = sub_faces
-    return out, parent
+    pattern = np.empty(t, dtype=np.int8)
+    slot = np.empty((t, 3), dtype=np.int64)
+    use = only is not None
+    keys = np.asarray(keys, dtype=np.int64)
+    _kernels.split_pattern(faces, keys // KEY_BASE, keys % KEY_BASE, np.empty(n_vertices, dtype=np.int64), marked,
+                           np.asarray(only, dtype=bool) if use else np.zeros(1, dtype=bool), use, pattern, slot)
+    return pattern, slot, _N_CHILDREN[pattern]
+
+
+def _write_children(faces, face_obj, pattern, slot, mids, count):
+    """The faces after the split planned by :func:`_split_plan`, children in their parents' order:
+    (faces (T', 3) int64, object ids (T',) int32, active (T',) bool: the children of split faces)."""
+    start = np.cumsum(count) - count
+    total = int(start[-1] + count[-1]) if len(count) else 0
+    out = np.empty((total, 3), dtype=np.int64)
+    obj = np.empty(total, dtype=np.int32)
+    active = np.empty(total, dtype=bool)
+    _kernels.write_children(faces, np.ascontiguousarray(face_obj, dtype=np.int32), pattern, slot,
+                            np.ascontiguousarray(mids, dtype=np.int64), _CHILDREN, _N_CHILDREN, start, out, obj, active)
+    return out, obj, active
+
+
+def _working(faces, pixel, min_span, max_level):
+    """The faces (T,) bool that ``max_level`` levels of tessellation can split
+    (:func:`refsoft.search._tessellate.working_faces`), or None when that is every face."""
+    if min_span <= 0 or max_level == 0:
+        return None
+    keep = np.empty(len(faces), dtype=bool)
+    marked = np.empty(len(pixel), dtype=bool)
+    _kernels.working_faces(np.ascontiguousarray(faces), np.ascontiguousarray(pixel, dtype=np.int32), int(min_span),
+                           int(max_level), marked, keep)
+    return None if keep.all() else keep
+
+
+def _merged(all_faces, all_obj, work, faces, face_obj, origin):
+    """Every face after a tessellation of the ``work`` faces alone: each face not in ``work`` as it
+    was, each one in ``work`` replaced by its tessellated faces (``faces``, ``face_obj``; ``origin``
+    their rows in ``all_faces[work]``, None when the tessellation split none), in face order."""
+    n_work = int(work.sum())
+    counts = np.ones(n_work, dtype=np.int64) if origin is None else np.bincount(origin, minlength=n_work)
+    total = len(all_faces) - n_work + len(faces)
+    out = np.empty((total, 3), dtype=np.int64)
+    obj = np.empty(total, dtype=np.int32)
+    _kernels.merge_faces(np.ascontiguousarray(all_faces), np.ascontiguousarray(all_obj), work,
+                         np.ascontiguousarray(faces), np.ascontiguousarray(face_obj, dtype=np.int32), counts, out, obj)
+    return out, obj
+
+
+class _Rows:
+    """Arrays of one row per vertex that grow together (their capacity doubled when full): a
+    level's new vertices are written after the others, not copied with them into new arrays."""
+
+    def __init__(self, arrays):
+        self.n = len(arrays[0])
+        self.buf = []
+        for a in arrays:
+            b = np.empty((max(2 * self.n, 16),) + a.shape[1:], dtype=a.dtype)
+            b[:self.n] = a
+            self.buf.append(b)
+
+    def view(self) -> list:
+        """The arrays' first ``n`` rows (views)."""
+        return [b[:self.n] for b in self.buf]
+
+    def append(self, arrays) -> None:
+        """Add rows (one array per buffer, in order, each of the same length)."""
+        m = len(arrays[0])
+        if self.n + m > len(self.buf[0]):
+            size = max(2 * len(self.buf[0]), self.n + m)
+            for i, b in enumerate(self.buf):
+                grown = np.empty((size,) + b.shape[1:], dtype=b.dtype)
+                grown[:self.n] = b[:self.n]
+                self.buf[i] = grown
+        for b, a in zip(self.buf, arrays):
+            b[self.n:self.n + m] = a
+        self.n += m
 
 
 @dataclass(frozen=True, eq=False)
@@ -404,24 +493,30 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
         validate.number(outline, "outline threshold", minimum=0.0)
     if (metric == "pixels" or outline is not None) and surface is None:
         raise RefsoftError("the tessellation's pixel metric needs the sub-texel points (surface)")
-    verts = [np.asarray(vertices, dtype=np.float64)]
-    norms = [np.asarray(normals, dtype=np.float64)]
-    pix = [np.asarray(pixel, dtype=np.int32)]
-    fl = [np.asarray(flags, dtype=np.uint8)]
-    surf = None if surface is None else [[np.asarray(a)] for a in surface]
+    # the vertices' arrays, grown in place as levels add vertices (no copy of all rows per level)
+    rows = _Rows([np.asarray(vertices, dtype=np.float64), np.asarray(normals, dtype=np.float64),
+                  np.asarray(pixel, dtype=np.int32), np.asarray(flags, dtype=np.uint8)]
+                 + ([] if surface is None else [np.asarray(a) for a in surface]))
+    refined = surface is not None
     faces = np.asarray(faces, dtype=np.int64)
     face_obj = np.asarray(face_obj, dtype=np.int32)
-    active = np.ones(len(faces), dtype=bool)  # triangles made by the last level (candidates)
-    n_total = len(verts[0])
+    # only the faces the levels can change take part (the others are copied at the end); the
+    # outline's test looks for every face's neighbours, so it sees them all
+    work = _working(faces, rows.view()[2], min_span, max_level) if outline is None else None
+    all_faces, all_obj = faces, face_obj
+    if work is not None:
+        faces, face_obj = np.compress(work, faces, axis=0), np.compress(work, face_obj)
+    active = None  # triangles made by the last level (candidates); None: every triangle
+    origin = None  # each face's row in the faces the loop started with; None: its own
     searched = 0
     levels = 0
     for _ in range(max_level):
-        allv, allp, allf = np.concatenate(verts), np.concatenate(pix), np.concatenate(fl)
-        cand = np.flatnonzero(active)
+        allv, alln, allp, allf = rows.view()[:4]
+        alloff = rows.view()[6] if refined else None
+        cand = np.arange(len(faces)) if active is None else np.flatnonzero(active)
         if len(cand) == 0:
             break
-        f = faces[cand]
-        alloff = None if surf is None else np.concatenate(surf[2])
+        f = faces if active is None else faces[cand]
         split = _triangle_errors(gbuffer, eye, allv, allp, allf, alloff, f, threshold, min_span, metric) > threshold
         if outline is not None:  # and the pixel metric on the edges that can draw an outline
             measured = outline_edges(faces, allp, alloff, cand)
@@ -432,24 +527,24 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
             break
         keys = _split_edges(faces[split_tri])
         ea, eb = keys // KEY_BASE, keys % KEY_BASE
-        mids = n_total + np.arange(len(keys), dtype=np.int64)
+        mids = rows.n + np.arange(len(keys), dtype=np.int64)
         new_v = 0.5 * (allv[ea] + allv[eb])
-        alln = np.concatenate(norms)
         new_n = normalize_rows(alln[ea] + alln[eb])
         start = _midpoint_starts(gbuffer.mask, allp[ea].astype(np.int64), allp[eb].astype(np.int64))
         res = search(gbuffer, eye, new_v, neighbourhood, inverse, start, cap, method=method)
-        for lst, a in zip((verts, norms, pix, fl), (new_v, new_n, res.pixel, res.flags)):
-            lst.append(a)
-        if surf is not None:
+        new = [new_v, new_n, res.pixel, res.flags]
+        if refined:
             from .refine import refine
 
-            for lst, a in zip(surf, refine(gbuffer, eye, new_v, res)):
-                lst.append(a)
+            new += list(refine(gbuffer, eye, new_v, res))
+        rows.append(new)
         searched += len(new_v)
-        n_total += len(new_v)
-        faces, face_obj, active = _apply_split(faces, face_obj, keys, mids, ea, eb, n_total,
-                                               None if crack_free else split_tri)
+        faces, face_obj, active, parent = _apply_split(faces, face_obj, keys, mids, ea, eb, rows.n,
+                                                       None if crack_free else split_tri, parents=True)
+        origin = parent if origin is None else origin[parent]
         levels += 1
-    return Tessellation(np.concatenate(verts), np.concatenate(norms), np.concatenate(pix), np.concatenate(fl), faces,
-                        face_obj, searched, levels,
-                        None if surf is None else tuple(np.concatenate(lst) for lst in surf))
+    if work is not None:
+        faces, face_obj = _merged(all_faces, all_obj, work, faces, face_obj, origin)
+    out = rows.view()
+    return Tessellation(out[0], out[1], out[2], out[3], faces, face_obj, searched, levels,
+                        tuple(out[4:]) if refined else None)

@@ -138,3 +138,32 @@ def test_predicted_cut_is_the_same_on_one_thread(mixed_edges):
     both = silhouette._bisect(*args, predict=True)
     for a, b in zip(one, both):
         np.testing.assert_array_equal(a, b)
+
+
+def test_mixed_faces_and_the_faces_after_the_cut_equal_plain_numpy(mixed_edges):
+    """The mixed faces (a hidden and a visible corner, none CULLED) against a plain per-corner
+    test, with CULLED corners in the mix; the cut's faces against every face repeated with each
+    mixed one replaced by its visible part (plain NumPy)."""
+    scene, gb, verts, res, vis, hid, clip = mixed_edges
+    _, _, _, _, comb, _ = sphere_searched("discard")
+    f = comb.faces.astype(np.int64)
+    flags = res.flags.copy()
+    flags[::13] |= search.CULLED
+    fl = flags[f]
+    h, c = (fl & search.HIDDEN) != 0, (fl & search.CULLED) != 0
+    want = h.any(axis=1) & ~h.all(axis=1) & ~c.any(axis=1)
+    got = silhouette.mixed_faces(f, flags)
+    assert want.sum() > 10 and (h.any(axis=1) & ~h.all(axis=1) & c.any(axis=1)).any()
+    np.testing.assert_array_equal(got, want)
+    # the cut's faces: each mixed face (in order) replaced by its 1 or 2 visible parts
+    mixed = np.flatnonzero(silhouette.mixed_faces(f, res.flags))
+    hidden = (res.flags & search.HIDDEN) != 0
+    key = clip.ends[:, 0] * np.int64(len(verts)) + clip.ends[:, 1]
+    parts, per_face = silhouette._visible_parts(f[mixed], hidden, key, len(verts))
+    counts = np.ones(len(f), dtype=np.int64)
+    counts[mixed] = per_face
+    rows = np.repeat(np.isin(np.arange(len(f)), mixed), counts)
+    want_faces = np.repeat(f, counts, axis=0)
+    want_faces[rows] = parts
+    np.testing.assert_array_equal(clip.faces, want_faces)
+    np.testing.assert_array_equal(clip.face_obj, np.repeat(comb.face_object, counts))

@@ -309,3 +309,70 @@ def test_outline_edges_equal_a_plain_count_of_faces_and_windings(rng):
     assert want.any() and (~want).any()
     rows = np.array([5, 0, 130, 7, 7])
     np.testing.assert_array_equal(outline_edges(faces, pixel, offset, rows), want[rows])
+
+
+def _naive_working(faces, pixel, min_span, rings):
+    """Faces with an edge spanning more than ``min_span`` pixels along an axis, grown ``rings``
+    times by every face sharing a vertex with one kept: plain NumPy."""
+    span = np.zeros(len(faces), dtype=bool)
+    for k in range(3):
+        d = np.abs(pixel[faces[:, k]].astype(np.int64) - pixel[faces[:, (k + 1) % 3]])
+        span |= (d > min_span).any(axis=1)
+    keep = span
+    for _ in range(rings):
+        touched = np.isin(faces, np.unique(faces[keep])).any(axis=1)
+        keep = keep | touched
+    return keep
+
+
+def test_working_faces_equal_a_plain_ring_growth():
+    from scene_data import sphere_searched
+
+    from refsoft.search.tessellate import _working
+
+    _, _, _, _, comb, res = sphere_searched("discard")
+    f = comb.faces.astype(np.int64)
+    for rings in (1, 3):
+        want = _naive_working(f, res.pixel, 1, rings)
+        got = _working(f, res.pixel, 1, rings)
+        assert 0 < want.sum() < len(f)
+        np.testing.assert_array_equal(got, want)
+    assert _working(f, res.pixel, 0, 3) is None and _working(f, res.pixel, 1, 0) is None
+
+
+def test_tessellating_the_working_faces_alone_gives_every_face_s_result(monkeypatch):
+    """The faces outside the working set are copied, the others tessellated: the same vertices,
+    faces (in order) and object ids as when every face takes part."""
+    from scene_data import sphere_searched
+
+    from refsoft.search import tessellate as T
+    from refsoft.search.refine import refine
+
+    scene, gb, verts, _, comb, res = sphere_searched("discard", 320, 240)
+    eye = scene.camera.eye
+    args = (gb, eye, verts, comb.normals, comb.faces, comb.face_object, res.pixel, res.flags, 1e-4, 3, "cross",
+            "discard")
+    kw = dict(surface=refine(gb, eye, verts, res), min_span=1)
+    got = T.tessellate(*args, **kw)
+    work = T._working(comb.faces.astype(np.int64), res.pixel, 1, 3)
+    assert work is not None and work.sum() < len(comb.faces)
+    monkeypatch.setattr(T, "_working", lambda *a: None)
+    want = T.tessellate(*args, **kw)
+    assert got.searched == want.searched > 0 and got.levels == want.levels
+    for name in ("vertices", "normals", "pixel", "flags", "faces", "face_obj"):
+        np.testing.assert_array_equal(getattr(got, name), getattr(want, name))
+    for a, b in zip(got.surface, want.surface):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_rows_grow_and_keep_their_rows():
+    from refsoft.search.tessellate import _Rows
+
+    a, b = np.arange(6.0).reshape(3, 2), np.arange(3, dtype=np.int32)
+    rows = _Rows([a, b])
+    for m in (5, 40, 1):
+        rows.append([np.full((m, 2), float(m)), np.full(m, m, dtype=np.int32)])
+    va, vb = rows.view()
+    np.testing.assert_array_equal(va, np.concatenate([a] + [np.full((m, 2), float(m)) for m in (5, 40, 1)]))
+    np.testing.assert_array_equal(vb, np.concatenate([b] + [np.full(m, m, dtype=np.int32) for m in (5, 40, 1)]))
+    assert vb.dtype == np.int32 and rows.n == 49
