@@ -109,6 +109,8 @@ def refined_parts(scene, meshes, refl, verts, opt, eye, reflected=None, with_rea
 
             new_surface = refine_points(gb, eye, c.vertices, _result(res, c.pixel, c.flags))
         virtual = np.concatenate([virtual, _new_virtual(refl, opt, eye, c.vertices, c.pixel, c.flags, new_surface, 0)])
+        if with_real:  # the cut points' real positions (only the exact drawing reads them)
+            vertices = np.concatenate([vertices, c.vertices])
         normals = np.concatenate([normals, c.normals])
         flags = np.concatenate([flags, c.flags])
         faces, face_obj = c.faces, c.face_obj
