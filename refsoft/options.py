@@ -36,9 +36,10 @@ FROM_PRESET = _FromPreset()
 
 #: The presets: every option each one sets (the others keep their defaults).
 PRESETS = {
-    "paper": dict(method="walk", neighbourhood="cross", inverse="plane", refine=False, tessellate=None,
-                  tessellate_span=0, virtual="mirror", silhouette="texel", images="one", draw="raster", border_restart=False),
-    "accurate": dict(method="walk", neighbourhood="box", inverse="discard", refine=True, tessellate=1e-4,
+    "paper": dict(method="walk", neighbourhood="cross", inverse="plane", refine=False, tessellate=None, max_level=3,
+                  tessellate_span=0, virtual="mirror", silhouette="texel", images="one", draw="raster",
+                  border_restart=False),
+    "accurate": dict(method="walk", neighbourhood="box", inverse="discard", refine=True, tessellate=1e-3, max_level=1,
                      tessellate_span=1, virtual="unfold", silhouette="clip", images="all", draw="exact",
                      border_restart=True),
 }
@@ -82,7 +83,7 @@ class RenderOptions:
         higher score kept (beyond the papers; ``paper`` off, ``accurate`` on): a walk can stop at
         a local maximum on the far border when its vertex's reflection has moved far since the
         previous frame. Not with ``inverse="search"``, whose hidden vertices' scores are another
-        score's.
+        score's (the preset's value is then off; True is refused).
     cap : int, optional
         Iteration cap per search (default ``2 * (width + height)`` of the G-buffer).
     cull_reflectors, reuse, cull_virtual, crop_virtual : bool
@@ -99,6 +100,7 @@ class RenderOptions:
         (:mod:`refsoft.search.tessellate`): split triangles whose largest edge error exceeds
         this threshold (0: every triangle), crack-free, up to ``max_level`` levels. Default off.
     max_level : int
+        Tessellation levels at most (paper 3, accurate 1).
     tessellate_span : int
         Edges whose ends reflect at most this many pixels apart (along both axes) are not split
         (beyond the thesis; paper 0: every edge measured, accurate 1).
@@ -152,7 +154,7 @@ class RenderOptions:
     crop_virtual: bool = True
     adaptive_widen: bool = False
     tessellate: float | None = FROM_PRESET
-    max_level: int = 3
+    max_level: int = FROM_PRESET
     tessellate_span: int = FROM_PRESET
     refine: bool = FROM_PRESET
     virtual: str = FROM_PRESET
@@ -171,6 +173,8 @@ class RenderOptions:
 
     def __post_init__(self):
         validate.choice(self.preset, PRESET_NAMES, "preset")
+        if self.border_restart is FROM_PRESET and self.inverse == "search":
+            object.__setattr__(self, "border_restart", False)  # the preset's restart needs the walk's own scores
         for name, value in PRESETS[self.preset].items():
             if getattr(self, name) is FROM_PRESET:
                 object.__setattr__(self, name, value)

@@ -16,7 +16,7 @@ def test_full_tessellation_estimate_bounds_the_traced_peak(name):
     4 ** max_level triangles per reflected triangle (the frames make 21.5x on planar, 13.6x on
     sphere at this size; tracemalloc's peak is 2.0x and 1.3x an estimate of 4x)."""
     scene = refsoft.load_scene(name, width=320, height=240)
-    opts = RenderOptions(tessellate=0.0)
+    opts = RenderOptions(tessellate=0.0, max_level=3)
     FrameDriver(scene, opts).render_frame(0)  # compiled, caches warm
     tracemalloc.start()
     try:
@@ -35,7 +35,11 @@ def test_full_tessellation_estimate_bounds_the_traced_peak(name):
 
 def test_full_tessellation_counts_its_levels():
     scene = refsoft.load_scene("planar", width=160, height=120)
-    work = [frame_bytes(scene, RenderOptions(tessellate=0.0, max_level=m))["work"] for m in (1, 2, 3, 4)]
-    assert work[0] == frame_bytes(scene, RenderOptions(max_level=1))["work"]  # 4 triangles either way
+    raster = dict(draw="raster")  # the tessellation's own count (the exact drawing's grows with it too)
+    work = [frame_bytes(scene, RenderOptions(tessellate=0.0, max_level=m, **raster))["work"] for m in (1, 2, 3, 4)]
+    assert work[0] == frame_bytes(scene, RenderOptions(max_level=1, **raster))["work"]  # 4 triangles either way
     assert work[1] < work[2] < work[3]
-    assert frame_bytes(scene, RenderOptions(max_level=4))["work"] == frame_bytes(scene, RenderOptions())["work"]
+    assert (frame_bytes(scene, RenderOptions(max_level=4, **raster))["work"]
+            == frame_bytes(scene, RenderOptions(**raster))["work"])
+    exact = [frame_bytes(scene, RenderOptions(tessellate=0.0, max_level=m))["work"] for m in (1, 2, 3, 4)]
+    assert all(e > w for e, w in zip(exact, work)) and exact[1] - work[1] < exact[2] - work[2]

@@ -77,9 +77,9 @@ def render_options() -> argparse.ArgumentParser:
     p = _parser()
     p.add_argument("--tessellate", type=_threshold, default=None, metavar="THRESHOLD",
                    help="Szabo's adaptive tessellation of reflected triangles whose edge error exceeds THRESHOLD "
-                        "(e.g. 1e-3; 0 = full tessellation; 'off' = none), crack-free (paper: off, accurate: 1e-4)")
+                        "(e.g. 1e-3; 0 = full tessellation; 'off' = none), crack-free (paper: off, accurate: 1e-3)")
     p.add_argument("--max-level", type=int, default=None, metavar="L",
-                   help="tessellation levels at most (default 3)")
+                   help="tessellation levels at most (paper: 3, accurate: 1)")
     p.add_argument("--tessellate-span", type=int, default=None, metavar="PX",
                    help="beyond the thesis: edges whose ends reflect at most PX pixels apart are not split "
                         "(paper: 0, accurate: 1)")

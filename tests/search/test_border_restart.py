@@ -80,3 +80,4 @@ def test_border_restart_is_refused_with_the_inverse_search():
         RenderOptions(border_restart=True, inverse="search")
     assert RenderOptions(preset="paper").border_restart is False
     assert RenderOptions().border_restart is True
+    assert RenderOptions(inverse="search").border_restart is False  # the preset's value gives way

@@ -71,9 +71,11 @@ def test_all_skips_leave_outputs_unchanged(extra):
     n = len(frames[1].arrays["vertex_object_1"])
     owner = frames[1].arrays["vertex_object_1"]
     opt = RenderOptions(**extra)
-    reusable0 = skips.reusable(SimpleNamespace(flags=frames[0].arrays["flags_1"]), opt.coherence, opt.inverse)
+    reusable0 = skips.reusable(SimpleNamespace(flags=frames[0].arrays["flags_1"]), opt.coherence, opt.inverse,
+                                opt.border_restart)
     assert s1["searches_reused"]["1"] == int(reusable0.sum()) >= 0.8 * n
-    reusable2 = skips.reusable(SimpleNamespace(flags=frames[2].arrays["flags_1"]), opt.coherence, opt.inverse)
+    reusable2 = skips.reusable(SimpleNamespace(flags=frames[2].arrays["flags_1"]), opt.coherence, opt.inverse,
+                                opt.border_restart)
     assert s3["searches_reused"]["1"] == int(np.sum(reusable2 & (owner != 3))) > 0
     # the pillar's virtual vertices lie beyond the ball's stencil box (tessellated geometry is
     # one part, culled per triangle only)
