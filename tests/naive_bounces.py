@@ -100,3 +100,21 @@ def trace_paths(scene, meshes, camera, view, bounces, sees_itself=(), offset=0.0
             depth[r, c] = taken
     return rid, depth, hits
 
+
+
+def faces_met(verts, faces, edge, origin, direction):
+    """(T,) bool: the faces each of whose corners lies within the face's longest edge (and 1e-9
+    of it) of one of the rays (origin (P, 3), direction (P, 3), the part ahead of the origin):
+    every face a ray meets is among them. One ray and one corner at a time."""
+    out = np.zeros(len(faces), bool)
+    for i, (face, e) in enumerate(zip(faces, edge)):
+        ok = True
+        for c in face:
+            best = np.inf
+            for o, d in zip(origin, direction):
+                u = _unit(d)
+                t = max(float(np.dot(verts[c] - o, u)), 0.0)
+                best = min(best, float(np.linalg.norm(verts[c] - o - t * u)))
+            ok &= best <= e * (1.0 + 1e-9)
+        out[i] = ok
+    return out

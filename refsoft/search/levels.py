@@ -27,7 +27,8 @@ import numpy as np
 from .. import keys
 from .._parallel import parallel_range
 from ..raster import shade
-from . import CULLED, HIDDEN, acceptance
+from ..raster._threads import SERIAL_MAX_VERTICES
+from . import CULLED, HIDDEN, _bounces, acceptance
 from ._several import accept
 from .bounces import (Bounce, bounding_sphere, first_bounces, gbuffer_of, later_bounces, level_rays, make_bounce,
                       may_see, object_parts, search_bounce, seen_reflectors, unfolded)
@@ -87,8 +88,13 @@ def _candidates(meshes, groups, near=None, rays=None):
         if rays is not None and keep.any():
             keep[keep] = _met(np.asarray(verts, np.float64), f[keep], edge[keep], rays)
         if near is not None and keep.any():
-            virt_h = np.where(((flags & np.uint8(HIDDEN)) != 0)[:, None], np.nan, virt)
-            keep[keep] = _near(_pixels(virt_h, near[0])[f[keep]], near[1])
+            fk = f[keep]
+            used = np.zeros(len(virt), bool)
+            used[fk] = True  # the kept faces' corners only (each point's pixel is its own)
+            px = np.full((len(virt), 2), np.nan)
+            virt_h = np.where(((flags[used] & np.uint8(HIDDEN)) != 0)[:, None], np.nan, virt[used])
+            px[used] = _pixels(virt_h, near[0])
+            keep[keep] = _near(px[fk], near[1])
         f = f[keep]
         hidden = (flags & np.uint8(HIDDEN)) != 0
         v = np.asarray(virt, np.float64)[f]
@@ -115,13 +121,32 @@ def _met(verts, faces, edge, rays):
     used = np.zeros(len(verts), bool)
     used[faces] = True  # the faces' vertices only
     index = np.cumsum(used) - 1
-    v = verts[used]
-    near = np.full(len(v), np.inf)
-    for o, u in zip(origin, d):  # a few rays: one pass over the vertices each
-        cp = v - o
-        t = np.maximum(cp @ u, 0.0)
-        near = np.minimum(near, np.linalg.norm(cp - t[:, None] * u, axis=1))
+    v = np.ascontiguousarray(verts[used])
+    near = np.empty(len(v))
+    parallel_range(_bounces.ray_distances, len(v), v, np.ascontiguousarray(origin, np.float64),
+                   np.ascontiguousarray(d), near, serial=len(v) * len(origin) <= SERIAL_MAX_VERTICES)
     return np.all(near[index[faces]] <= (edge * (1.0 + 1e-9))[:, None], axis=1)
+
+
+def _needed(meshes, ids, verts, rays):
+    """(n,) bool: the vertices of objects ``ids`` (consecutive in ``verts`` (n, 3), in that order)
+    that are corners of a face one of the level's few rays can meet (:func:`_met`, the test
+    :func:`_candidates` applies), or None when the rays are not few (:func:`_few`): only those
+    vertices' images can be drawn."""
+    few = _few(rays)
+    if few is None:
+        return None
+    faces, *_, edge = _faces(meshes, ids)
+    out = np.zeros(len(verts), bool)
+    if len(faces) and len(few[0]):
+        out[faces[_met(np.asarray(verts, np.float64), faces, edge, few)]] = True
+    return out
+
+
+def _narrowed(meshes, ids, verts, rays, want):
+    """``want`` (n,) bool narrowed to :func:`_needed`'s vertices when the rays are few."""
+    need = _needed(meshes, ids, verts, rays)
+    return want if need is None else want & need
 
 
 def _few(rays):
@@ -357,6 +382,8 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report, pa
     # only the objects a reflected ray of this level can reach are searched; the others' vertices
     # are CULLED (their triangles are not drawn)
     seen = np.repeat([reach(k) for k in ids], [meshes[k - 1].n_vertices for k in ids]).astype(bool)
+    if opt.images == "all":  # with a few rays, only the corners of the faces they can meet
+        seen = _narrowed(meshes, ids, vertices, rays, seen)
     virtual = np.zeros((len(vertices), 3))
     flags = np.full(len(vertices), CULLED, np.uint8)
     res = search_bounce(bounce, gb, vertices[seen], opt.neighbourhood, opt.cap)
@@ -370,9 +397,14 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report, pa
     found = []  # the other reflectors' vertices searched at this level: (ids, vertices, virtual, flags)
     for k in others:
         verts = np.asarray(meshes[k - 1].vertices, np.float64)
-        r = search_bounce(bounce, gb, verts, opt.neighbourhood, opt.cap)
-        found.append(([k], verts, unfolded(bounce, r, verts), r.flags))
-        entry["searched"] += len(verts)
+        want = np.ones(len(verts), bool)
+        if opt.images == "all":
+            want = _narrowed(meshes, [k], verts, rays, want)
+        r = search_bounce(bounce, gb, verts[want], opt.neighbourhood, opt.cap)
+        virt, fl = np.zeros((len(verts), 3)), np.full(len(verts), CULLED, np.uint8)
+        virt[want], fl[want] = unfolded(bounce, r, verts[want]), r.flags
+        found.append(([k], verts, virt, fl))
+        entry["searched"] += int(want.sum())
     if opt.images == "all":  # each pixel's reflected ray decides among the virtual triangles over it
         colour, rid, covered, refl = exact_level(scene, meshes, [(ids, vertices, virtual, flags)] + found, camera,
                                                  bounce.box, rays)

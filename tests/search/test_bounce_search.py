@@ -226,3 +226,27 @@ def test_the_trace_of_a_later_bounce_refuses_a_path_it_cannot_replay(through, me
 
     with pytest.raises(RefsoftError, match=message):
         trace_vertex_bounce(two_balls(), 40, through, 0)
+
+
+def test_the_faces_a_few_rays_can_meet_are_the_naive_ones():
+    """levels._met (kernel ``_bounces.ray_distances``) keeps the faces the one-ray-at-a-time
+    reference keeps, keeps every face a ray meets, and is the same with one thread."""
+    from naive_bounces import faces_met, ray_all_triangles
+    from refsoft.search import levels
+
+    rng = np.random.default_rng(5)
+    verts = (rng.normal(size=(400, 1, 3)) + 0.1 * rng.normal(size=(400, 3, 3))).reshape(-1, 3)
+    faces = np.arange(1200).reshape(400, 3)  # small triangles scattered over a cloud
+    corners = verts[faces]
+    edge = np.max(np.linalg.norm(corners - corners[:, [1, 2, 0]], axis=2), axis=1)
+    origin = rng.normal(size=(9, 3)) * 3.0
+    direction = 2.0 * (corners[:9].mean(axis=1) - origin)  # through a triangle each, not unit
+    got = levels._met(verts, faces, edge, (origin, direction))
+    assert np.array_equal(got, faces_met(verts, faces, edge, origin, direction))
+    assert 0 < got.sum() < len(faces)
+    met = np.zeros(len(faces), bool)
+    for o, d in zip(origin, direction):
+        met |= ray_all_triangles(o, d / np.linalg.norm(d), corners)[3]
+    assert met[:9].all() and np.all(got[met])
+    with one_thread():
+        assert np.array_equal(got, levels._met(verts, faces, edge, (origin, direction)))
