@@ -66,3 +66,12 @@ def ray_distances(lo, hi, V, O, D, near):
             if d < best:
                 best = d
         near[i] = best
+
+
+@kernel
+def faces_within(lo, hi, faces, near, edge, out):
+    """Rows ``lo .. hi - 1`` of ``out`` (T,) bool: whether each corner of face ``faces[i]`` (T, 3)
+    lies within ``edge[i] * (1 + 1e-9)`` of a ray (``near`` (V,): :func:`ray_distances`)."""
+    for i in range(lo, hi):
+        e = edge[i] * (1.0 + 1e-9)
+        out[i] = near[faces[i, 0]] <= e and near[faces[i, 1]] <= e and near[faces[i, 2]] <= e

@@ -39,35 +39,32 @@ BOUNCE_DEPTH = keys.BOUNCE_DEPTH
 
 
 # --- exact acceptance -----------------------------------------------------------------------
-def _faces(meshes, ids):
-    """The faces of objects ``ids`` as rows of their vertices concatenated in that order (T, 3)
-    int64, each face's object (T,) int32 and local row (T,) int64, the normals concatenated
-    (V, 3) float64 and each face's longest edge (T,) float64; the last few answers kept (the
-    meshes of static objects are the same frame after frame)."""
-    key = tuple(id(meshes[k - 1]) for k in ids)
-    hit = _FACES.get(key)
-    if hit is not None and all(a is meshes[k - 1] for a, k in zip(hit[0], ids)):
+def _edges(mesh):
+    """Each face's longest edge (F,) float64 (the last answers kept by mesh: the meshes of static
+    objects are the same frame after frame)."""
+    hit = _EDGES.get(id(mesh))
+    if hit is not None and hit[0] is mesh:
         return hit[1]
-    faces, owner, local, normals, edge, start = [], [], [], [], [], 0
-    for k in ids:
-        mesh = meshes[k - 1]
-        faces.append(mesh.faces.astype(np.int64) + start)
-        owner.append(np.full(mesh.n_faces, k, np.int32))
-        local.append(np.arange(mesh.n_faces, dtype=np.int64))
-        normals.append(np.asarray(mesh.normals, np.float64))
-        corners = np.asarray(mesh.vertices, np.float64)[mesh.faces]
-        edge.append(np.max(np.linalg.norm(corners - corners[:, [1, 2, 0]], axis=2), axis=1))
-        start += mesh.n_vertices
-    cat = (lambda x, shape, dt: np.concatenate(x) if x else np.zeros(shape, dt))
-    out = (cat(faces, (0, 3), np.int64), cat(owner, (0,), np.int32), cat(local, (0,), np.int64),
-           cat(normals, (0, 3), np.float64), cat(edge, (0,), np.float64))
-    if len(_FACES) >= 8:
-        _FACES.pop(next(iter(_FACES)))
-    _FACES[key] = (tuple(meshes[k - 1] for k in ids), out)
+    corners = np.asarray(mesh.vertices, np.float64)[mesh.faces]
+    out = np.max(np.linalg.norm(corners - corners[:, [1, 2, 0]], axis=2), axis=1)
+    if len(_EDGES) >= 256:
+        _EDGES.pop(next(iter(_EDGES)))
+    _EDGES[id(mesh)] = (mesh, out)
     return out
 
 
-_FACES = {}
+_EDGES = {}
+
+
+def _objects(meshes, ids, *arrays):
+    """Per object of ``ids``: (id, mesh, its rows of each of ``arrays`` (the objects' vertices
+    consecutive in that order))."""
+    start = 0
+    for k in ids:
+        mesh = meshes[k - 1]
+        sl = slice(start, start + mesh.n_vertices)
+        start += mesh.n_vertices
+        yield (k, mesh) + tuple(a[sl] for a in arrays)
 
 
 def _candidates(meshes, groups, near=None, rays=None):
@@ -78,33 +75,41 @@ def _candidates(meshes, groups, near=None, rays=None):
     box (the draw's rule for a corner it cannot project). With ``near = (camera, box)`` only the
     triangles whose dilated bounds may meet ``box`` (:func:`_near`) are kept; with ``rays`` (the
     valid ones, at most BOUNCE_FEW_RAYS) only those one of the rays can meet (:func:`_met`).
-    Returns the candidates and, per group, how many it gave."""
+    Returns the candidates, in the order of the groups, their objects and faces, and, per group,
+    how many it gave."""
     from .acceptance import Candidates
 
     virtual, real, normals, obj, tri, counts = [], [], [], [], [], []
     for ids, verts, virt, flags in groups:
-        f, owner, local, nrm, edge = _faces(meshes, ids)
-        keep = ~np.any((flags[f] & np.uint8(CULLED)) != 0, axis=1)
-        if rays is not None and keep.any():
-            keep[keep] = _met(np.asarray(verts, np.float64), f[keep], edge[keep], rays)
-        if near is not None and keep.any():
-            fk = f[keep]
-            used = np.zeros(len(virt), bool)
-            used[fk] = True  # the kept faces' corners only (each point's pixel is its own)
-            px = np.full((len(virt), 2), np.nan)
-            virt_h = np.where(((flags[used] & np.uint8(HIDDEN)) != 0)[:, None], np.nan, virt[used])
-            px[used] = _pixels(virt_h, near[0])
-            keep[keep] = _near(px[fk], near[1])
-        f = f[keep]
-        hidden = (flags & np.uint8(HIDDEN)) != 0
-        v = np.asarray(virt, np.float64)[f]
-        v[hidden[f]] = np.nan
-        virtual.append(v)
-        real.append(np.asarray(verts, np.float64)[f])
-        normals.append(nrm[f])
-        obj.append(owner[keep])
-        tri.append(local[keep])
-        counts.append(len(f))
+        counts.append(0)
+        for k, mesh, vs, vt, fl in _objects(meshes, ids, np.asarray(verts, np.float64),
+                                             np.asarray(virt, np.float64), flags):
+            culled = (fl & np.uint8(CULLED)) != 0
+            if culled.all():
+                continue  # not searched, or out of every ray's reach
+            f = mesh.faces
+            keep = ~(culled[f[:, 0]] | culled[f[:, 1]] | culled[f[:, 2]])
+            if rays is not None and keep.any():
+                keep[keep] = _met(vs, f[keep], _edges(mesh)[keep], rays)
+            hidden = (fl & np.uint8(HIDDEN)) != 0
+            if near is not None and keep.any():
+                fk = f[keep]
+                used = np.zeros(len(vt), bool)
+                used[fk] = True  # the kept faces' corners only (each point's pixel is its own)
+                px = np.full((len(vt), 2), np.nan)
+                px[used] = _pixels(np.where(hidden[used][:, None], np.nan, vt[used]), near[0])
+                keep[keep] = _near(px[fk], near[1])
+            if not keep.any():
+                continue
+            f = f[keep]
+            v = vt[f]
+            v[hidden[f]] = np.nan
+            virtual.append(v)
+            real.append(vs[f])
+            normals.append(np.asarray(mesh.normals, np.float64)[f])
+            obj.append(np.full(len(f), k, np.int32))
+            tri.append(np.flatnonzero(keep))
+            counts[-1] += len(f)
     cat = (lambda x, shape: np.ascontiguousarray(np.concatenate(x)) if x else np.zeros(shape))
     cand = Candidates(cat(virtual, (0, 3, 3)), cat(real, (0, 3, 3)), cat(normals, (0, 3, 3)),
                       cat(obj, (0,)).astype(np.int32), cat(tri, (0,)).astype(np.int64), 0)
@@ -117,36 +122,42 @@ def _met(verts, faces, edge, rays):
     its corners lies within that distance (and 1e-9 of it) of one of the rays (origin (P, 3),
     unit direction (P, 3), the part ahead of the origin)."""
     origin, direction = rays
-    d = direction / np.maximum(np.linalg.norm(direction, axis=1, keepdims=True), 1e-300)
-    used = np.zeros(len(verts), bool)
-    used[faces] = True  # the faces' vertices only
-    index = np.cumsum(used) - 1
-    v = np.ascontiguousarray(verts[used])
-    near = np.empty(len(v))
-    parallel_range(_bounces.ray_distances, len(v), v, np.ascontiguousarray(origin, np.float64),
-                   np.ascontiguousarray(d), near, serial=len(v) * len(origin) <= SERIAL_MAX_VERTICES)
-    return np.all(near[index[faces]] <= (edge * (1.0 + 1e-9))[:, None], axis=1)
-
-
-def _needed(meshes, ids, verts, rays):
-    """(n,) bool: the vertices of objects ``ids`` (consecutive in ``verts`` (n, 3), in that order)
-    that are corners of a face one of the level's few rays can meet (:func:`_met`, the test
-    :func:`_candidates` applies), or None when the rays are not few (:func:`_few`): only those
-    vertices' images can be drawn."""
-    few = _few(rays)
-    if few is None:
-        return None
-    faces, *_, edge = _faces(meshes, ids)
-    out = np.zeros(len(verts), bool)
-    if len(faces) and len(few[0]):
-        out[faces[_met(np.asarray(verts, np.float64), faces, edge, few)]] = True
+    d = np.ascontiguousarray(direction / np.maximum(np.linalg.norm(direction, axis=1, keepdims=True), 1e-300))
+    origin = np.ascontiguousarray(origin, np.float64)
+    faces = np.asarray(faces)
+    if 3 * len(faces) < len(verts):  # a few faces of many vertices: their corners' distances only
+        used = np.zeros(len(verts), bool)
+        used[faces] = True
+        index = np.cumsum(used) - 1
+        verts, faces = verts[used], index[faces]
+    near = np.empty(len(verts))
+    parallel_range(_bounces.ray_distances, len(verts), np.ascontiguousarray(verts, np.float64), origin, d, near,
+                   serial=len(verts) * len(origin) <= SERIAL_MAX_VERTICES)
+    out = np.empty(len(faces), bool)
+    parallel_range(_bounces.faces_within, len(faces), np.ascontiguousarray(faces), near,
+                   np.ascontiguousarray(edge, np.float64), out, serial=len(faces) <= SERIAL_MAX_VERTICES)
     return out
 
 
 def _narrowed(meshes, ids, verts, rays, want):
-    """``want`` (n,) bool narrowed to :func:`_needed`'s vertices when the rays are few."""
-    need = _needed(meshes, ids, verts, rays)
-    return want if need is None else want & need
+    """``want`` (n,) bool over the vertices of objects ``ids`` (consecutive in ``verts`` (n, 3),
+    in that order), narrowed, when the level's rays are few (:func:`_few`), to the corners of
+    the faces with every corner wanted that one of the rays can meet (:func:`_met`, the test
+    :func:`_candidates` applies): no other vertex's image can be drawn."""
+    few = _few(rays)
+    if few is None:
+        return want
+    out = np.zeros(len(verts), bool)
+    parts = _objects(meshes, ids, np.asarray(verts, np.float64), want, out)
+    for k, mesh, vs, wa, ou in parts:
+        if not len(few[0]) or not wa.any():
+            continue
+        f = mesh.faces
+        keep = wa[f[:, 0]] & wa[f[:, 1]] & wa[f[:, 2]]
+        if keep.any():
+            keep[keep] = _met(vs, f[keep], _edges(mesh)[keep], few)
+            ou[f[keep]] = True  # a view of ``out``
+    return out
 
 
 def _few(rays):
@@ -282,19 +293,21 @@ def exact_level(scene, meshes, groups, camera, box, rays, reflectors_only=False)
     colour, rid, drawn = np.zeros((h, w, 3), np.float32), np.zeros((h, w), np.int32), np.zeros((h, w), bool)
     sub = box
     valid, origin, direction = rays
-    groups = [_reached(meshes, g, rays) for g in groups]
     if reflectors_only:  # the pixels whose rays meet a reflector, then what is nearest there
         towards = _towards(rays, [bounding_sphere(meshes[k - 1]) for ids, *_ in groups[1:] for k in ids])
+        groups = groups[:1] + [_reached(meshes, g, (towards, origin, direction)) for g in groups[1:]]
         ref, _ = _candidates(meshes, groups[1:], near=(camera, box), rays=_few((towards, origin, direction)))
         meet = nearest_hits(ref, camera, box, (valid & towards, origin, direction))[0] >= 0
         if not meet.any():
             return colour, rid, drawn, {}
         rows, cols = np.flatnonzero(meet.any(axis=1)), np.flatnonzero(meet.any(axis=0))
         sub = (r0 + int(rows[0]), r0 + int(rows[-1]) + 1, c0 + int(cols[0]), c0 + int(cols[-1]) + 1)
-        valid = valid & meet
-        scene_cand, _ = _candidates(meshes, groups[:1], near=(camera, sub), rays=_few((valid, origin, direction)))
+        valid = valid & meet  # the scene's objects only where these rays can reach them
+        scene_cand, _ = _candidates(meshes, [_reached(meshes, groups[0], (valid, origin, direction))],
+                                    near=(camera, sub), rays=_few((valid, origin, direction)))
         cand = _joined(scene_cand, ref)
     else:
+        groups = [_reached(meshes, g, rays) for g in groups]
         cand, _ = _candidates(meshes, groups, near=(camera, box), rays=_few(rays))
     sl = (slice(sub[0] - r0, sub[1] - r0), slice(sub[2] - c0, sub[3] - c0))
     valid, origin, direction = valid[sl], origin[sl], direction[sl]

@@ -248,5 +248,7 @@ def test_the_faces_a_few_rays_can_meet_are_the_naive_ones():
     for o, d in zip(origin, direction):
         met |= ray_all_triangles(o, d / np.linalg.norm(d), corners)[3]
     assert met[:9].all() and np.all(got[met])
+    few = levels._met(verts, faces[::9], edge[::9], (origin, direction))  # their corners' distances only
+    assert np.array_equal(few, got[::9])
     with one_thread():
         assert np.array_equal(got, levels._met(verts, faces, edge, (origin, direction)))
