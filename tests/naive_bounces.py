@@ -118,3 +118,15 @@ def faces_met(verts, faces, edge, origin, direction):
             ok &= best <= e * (1.0 + 1e-9)
         out[i] = ok
     return out
+
+
+def best_starts(samples, rel):
+    """Per vertex (n, 3) the sample (K, 9: P, N, U) of highest float64 score, the first among
+    equals: the halfway vector of the eye direction U and the normalized direction to the vertex,
+    normalized, dotted with N. All vertices and samples at once in NumPy. (n,) int64."""
+    g = samples.astype(np.float64)
+    d = rel.astype(np.float64)[:, None, :] - g[None, :, 0:3]
+    b = d / np.maximum(np.linalg.norm(d, axis=-1, keepdims=True), 1e-300)
+    hv = g[None, :, 6:9] + b
+    hv /= np.maximum(np.linalg.norm(hv, axis=-1, keepdims=True), 1e-300)
+    return np.argmax(np.sum(hv * g[None, :, 3:6], axis=-1), axis=1)

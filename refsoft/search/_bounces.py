@@ -75,3 +75,30 @@ def faces_within(lo, hi, faces, near, edge, out):
     for i in range(lo, hi):
         e = edge[i] * (1.0 + 1e-9)
         out[i] = near[faces[i, 0]] <= e and near[faces[i, 1]] <= e and near[faces[i, 2]] <= e
+
+
+@kernel
+def best_starts(lo, hi, S, V, out):
+    """Rows ``lo .. hi - 1`` of ``out`` (n,) int64: per vertex ``V[i]`` (n, 3) float64 (relative to
+    the G-buffer's origin) the sample of ``S`` (K, 9) float64 (P, N, U of K covered pixels) where
+    its score is highest, the first among equals (a NaN score counts as highest, as np.argmax
+    takes it). Score in float64: ``b = (V - P) / max(|V - P|, 1e-300)``, ``h = (U + b) / max(|U +
+    b|, 1e-300)``, ``s = (h.x N.x + h.y N.y) + h.z N.z``."""
+    for i in range(lo, hi):
+        best, top = -1, 0.0
+        for k in range(S.shape[0]):
+            dx, dy, dz = V[i, 0] - S[k, 0], V[i, 1] - S[k, 1], V[i, 2] - S[k, 2]
+            d = np.sqrt((dx * dx + dy * dy) + dz * dz)
+            if d < 1e-300:
+                d = 1e-300
+            hx, hy, hz = S[k, 6] + dx / d, S[k, 7] + dy / d, S[k, 8] + dz / d
+            m = np.sqrt((hx * hx + hy * hy) + hz * hz)
+            if m < 1e-300:
+                m = 1e-300
+            s = ((hx / m) * S[k, 3] + (hy / m) * S[k, 4]) + (hz / m) * S[k, 5]
+            if s != s:  # NaN
+                best = k
+                break
+            if best < 0 or s > top:
+                best, top = k, s
+        out[i] = best

@@ -25,6 +25,7 @@ from .. import constants
 from .._numba import readonly
 from .._parallel import parallel_range
 from ..raster import CULL_MODES, GBuffer, _setup, rasterize_trusted
+from ..raster._threads import SERIAL_MAX_VERTICES
 from ..raster.rays import primary_rays, ray_triangle
 from . import CULLED, HIDDEN, SearchResult, _bounces
 
@@ -154,17 +155,16 @@ def search_bounce(bounce: Bounce, gb: GBuffer, vertices, neighbourhood="cross", 
 
 def _starts(G, mask, rel):
     """Per vertex the covered pixel of highest score among up to BOUNCE_START_SAMPLES covered
-    pixels taken evenly in row-major order (ties: the first): a stencil seen in a curved mirror
+    pixels taken evenly in row-major order (ties: the first; kernel
+    :func:`refsoft.search._bounces.best_starts`, in float64): a stencil seen in a curved mirror
     can be small and split, and no projection of the vertex points into it. (N, 2) int64."""
     rows, cols = np.nonzero(mask)
     step = max(1, -(-len(rows) // constants.BOUNCE_START_SAMPLES))
     rows, cols = rows[::step], cols[::step]
-    g = G[rows, cols].astype(np.float64)  # (S, 9): P, N, U
-    d = rel.astype(np.float64)[:, None, :] - g[None, :, 0:3]
-    b = d / np.maximum(np.linalg.norm(d, axis=-1, keepdims=True), 1e-300)
-    hv = g[None, :, 6:9] + b
-    hv /= np.maximum(np.linalg.norm(hv, axis=-1, keepdims=True), 1e-300)
-    best = np.argmax(np.sum(hv * g[None, :, 3:6], axis=-1), axis=1)
+    g = np.ascontiguousarray(G[rows, cols], np.float64)  # (S, 9): P, N, U
+    best = np.empty(len(rel), np.int64)
+    parallel_range(_bounces.best_starts, len(rel), g, np.ascontiguousarray(rel, np.float64), best,
+                   serial=len(rel) * len(g) <= SERIAL_MAX_VERTICES)
     return np.ascontiguousarray(np.stack([rows[best], cols[best]], axis=1), np.int64)
 
 
@@ -199,7 +199,8 @@ def may_see(position, normal, eye, mask, centre, radius) -> bool:
     only when, at every covered texel, the ray reflected about its normal from its eye passes the
     sphere farther than ``radius`` plus BOUNCE_BOUND_FACTOR times the spread to its covered
     4-neighbours (the arc their rays' angle sweeps at the sphere's distance, and the distance
-    between their points), so that a ray from anywhere between texels misses it too.
+    between their points), so that a ray from anywhere between texels misses it too
+    (:func:`texel_reach` once per G-buffer, then :func:`reaches` per sphere).
 
     Parameters
     ----------
@@ -211,14 +212,28 @@ def may_see(position, normal, eye, mask, centre, radius) -> bool:
     centre : array_like (3,)
     radius : float
     """
+    return reaches(texel_reach(position, normal, eye, mask), centre, radius)
+
+
+def texel_reach(position, normal, eye, mask, origin=None):
+    """What :func:`may_see` tests of a G-buffer, for any number of spheres: per covered texel
+    (row-major order) its point (M, 3), its reflected ray's unit direction (M, 3), the largest
+    angle to its covered 4-neighbours' rays (M,) and distance to their points (M,), float64;
+    None when no texel is covered. Arguments as :func:`may_see`; with ``origin`` (3,) the
+    positions are relative to it (float32 or float64)."""
     rows, cols = np.nonzero(mask)
     if not len(rows):
-        return False
-    P = np.asarray(position, np.float64)
-    N = np.asarray(normal, np.float64)
+        return None
+    a0, a1, b0, b1 = int(rows[0]), int(rows[-1]) + 1, int(cols.min()), int(cols.max()) + 1
+    mask = mask[a0:a1, b0:b1]  # the covered texels' box: a neighbour outside it is not covered
+    rows, cols = rows - a0, cols - b0
+    P = np.asarray(position[a0:a1, b0:b1]).astype(np.float64)
+    if origin is not None:
+        P = np.where(mask[..., None], P + origin, 0.0)
+    N = np.asarray(normal[a0:a1, b0:b1], np.float64)
     E = np.asarray(eye, np.float64)
     p = P[rows, cols]
-    e = E if E.ndim == 1 else E[rows, cols]
+    e = E if E.ndim == 1 else E[a0:a1, b0:b1][rows, cols]
     i = p - e
     i /= np.maximum(np.linalg.norm(i, axis=1, keepdims=True), 1e-300)
     n = N[rows, cols]
@@ -238,10 +253,19 @@ def may_see(position, normal, eye, mask, centre, radius) -> bool:
         d = np.zeros(len(rows))
         d[ok] = np.linalg.norm(P[rr[ok], cc[ok]] - p[ok], axis=1)
         step = np.maximum(step, d)
+    return p, r, np.minimum(angle, np.pi), step
+
+
+def reaches(texels, centre, radius) -> bool:
+    """:func:`may_see`'s answer for a sphere from :func:`texel_reach`'s ``texels`` (False for
+    None)."""
+    if texels is None:
+        return False
+    p, r, angle, step = texels
     cp = np.asarray(centre, np.float64) - p
     t = np.maximum(np.sum(cp * r, axis=1), 0.0)
     miss = np.linalg.norm(cp - t[:, None] * r, axis=1)
-    spread = np.linalg.norm(cp, axis=1) * np.minimum(angle, np.pi) + step
+    spread = np.linalg.norm(cp, axis=1) * angle + step
     return bool(np.any(miss <= radius + constants.BOUNCE_BOUND_FACTOR * spread))
 
 
@@ -301,10 +325,41 @@ def seen_reflectors(parts, reflector_parts, camera, stencil, box):
     """
     if not reflector_parts:
         return {}
+    r0, r1, c0, c1 = (int(x) for x in box)
+    # the reflectors' triangles alone first: only a pixel one of them covers can show one
+    alone = _nearest(list(reflector_parts), camera, (r0, r1, c0, c1))
+    if alone is None:
+        return {}
+    sten = stencil[r0:r1, c0:c1] & (alone[0] >= 0)
+    rows, cols = np.flatnonzero(sten.any(axis=1)), np.flatnonzero(sten.any(axis=0))
+    if not len(rows):
+        return {}
+    sub = (r0 + int(rows[0]), r0 + int(rows[-1]) + 1, c0 + int(cols[0]), c0 + int(cols[-1]) + 1)
+    tri, face_obj, local = _nearest(list(parts) + list(reflector_parts), camera, sub)
+    obj = np.where(tri >= 0, face_obj[np.maximum(tri, 0)], 0)
+    sten = stencil[sub[0]:sub[1], sub[2]:sub[3]] & (tri >= 0)
+    reflectors = {int(p[3][0]) for p in reflector_parts if len(p[3])}
+    out = {}
+    sl = (slice(sub[0] - r0, sub[1] - r0), slice(sub[2] - c0, sub[3] - c0))
+    for b in (int(x) for x in np.unique(obj[sten])):
+        if b in reflectors:
+            m = np.zeros((r1 - r0, c1 - c0), bool)
+            face = np.full((r1 - r0, c1 - c0), -1, np.int64)
+            m[sl] = sten & (obj == b)
+            face[sl] = np.where(m[sl], local[np.maximum(tri, 0)], -1)
+            out[b] = (m, face)
+    return out
+
+
+def _nearest(parts, camera, box):
+    """The virtual triangles of ``parts`` (:func:`seen_reflectors`) in one z-buffer over ``box``,
+    those with a CULLED or HIDDEN corner left out: ``(triangle (h, w) int64 into the kept ones, -1
+    none; each kept one's object (T,) int32 and row in its part (T,) int64)``, or None when none
+    is kept."""
     vp = camera.view_proj()
     faces, face_obj, clips, flags, local = [], [], [], [], []
     offset = 0
-    for part in list(parts) + list(reflector_parts):
+    for part in parts:
         virtual, _, f, fobj, fl = part[:5]
         bad = ~np.all(np.isfinite(virtual), axis=1)
         clip = _setup.transform_points(np.where(bad[:, None], 0.0, virtual), vp)
@@ -319,20 +374,11 @@ def seen_reflectors(parts, reflector_parts, camera, stencil, box):
     keep = ~np.any((flags[faces] & np.uint8(CULLED | HIDDEN)) != 0, axis=1)
     faces, face_obj, local = faces[keep], face_obj[keep], local[keep]
     if not len(faces):
-        return {}
+        return None
     faces32 = readonly(np.ascontiguousarray(faces, np.int32))
-    r0, r1, c0, c1 = (int(x) for x in box)
-    frags = rasterize_trusted(clip, faces32, camera.width, camera.height, (r0, r1, c0, c1), None, CULL_MODES[None])
-    tri = frags.triangle
-    obj = np.where(tri >= 0, face_obj[np.maximum(tri, 0)], 0)
-    sten = stencil[r0:r1, c0:c1] & (tri >= 0)
-    reflectors = {int(p[3][0]) for p in reflector_parts if len(p[3])}
-    out = {}
-    for b in (int(x) for x in np.unique(obj[sten])):
-        if b in reflectors:
-            m = sten & (obj == b)
-            out[b] = (m, np.where(m, local[np.maximum(tri, 0)], -1))
-    return out
+    frags = rasterize_trusted(clip, faces32, camera.width, camera.height, tuple(int(x) for x in box), None,
+                              CULL_MODES[None])
+    return frags.triangle, face_obj, local
 
 
 def _arrive(mesh, face, origin, direction):

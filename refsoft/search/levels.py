@@ -31,7 +31,7 @@ from ..raster._threads import SERIAL_MAX_VERTICES
 from . import CULLED, HIDDEN, _bounces, acceptance
 from ._several import accept
 from .bounces import (Bounce, bounding_sphere, first_bounces, gbuffer_of, later_bounces, level_rays, make_bounce,
-                      may_see, object_parts, search_bounce, seen_reflectors, unfolded)
+                      object_parts, reaches, search_bounce, seen_reflectors, texel_reach, unfolded)
 from .virtual import virtual_pass
 
 #: The per-pixel array of the reflections taken (0 off reflectors).
@@ -390,8 +390,8 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report, pa
         rays = level_rays(bounce)
         reach = (lambda k: bool(_towards(rays, [bounding_sphere(meshes[k - 1])]).any()))
     else:
-        reach = (lambda k: may_see(bounce.position, bounce.normal, bounce.eye, bounce.mask,
-                                   *bounding_sphere(meshes[k - 1])))
+        texels = texel_reach(bounce.position, bounce.normal, bounce.eye, bounce.mask)
+        reach = (lambda k: reaches(texels, *bounding_sphere(meshes[k - 1])))
     # only the objects a reflected ray of this level can reach are searched; the others' vertices
     # are CULLED (their triangles are not drawn)
     seen = np.repeat([reach(k) for k in ids], [meshes[k - 1].n_vertices for k in ids]).astype(bool)
@@ -485,8 +485,8 @@ def deepen(scene, view, k, stencil, box, out, refl, parts, opt, search_first, ke
         rays = pixel_rays(camera, view.meshes[k - 1], view.view.triangle, stencil, box)
         reach = (lambda b: bool(_towards(rays, [bounding_sphere(view.meshes[b - 1])]).any()))
     else:
-        position = np.where(gb.mask[..., None], gb.position.astype(np.float64) + gb.origin, 0.0)
-        reach = (lambda b: may_see(position, gb.normal, eye, gb.mask, *bounding_sphere(view.meshes[b - 1])))
+        texels = texel_reach(gb.position, gb.normal, eye, gb.mask, gb.origin)
+        reach = (lambda b: reaches(texels, *bounding_sphere(view.meshes[b - 1])))
     for b in scene.reflector_ids:
         if b == k or not reach(b):
             continue  # no reflected ray of this reflector comes near b

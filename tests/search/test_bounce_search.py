@@ -163,7 +163,7 @@ def test_several_bounces_give_the_same_bits_with_one_thread(renders):
 @pytest.mark.parametrize("name", ["two_balls", "ants"])
 def test_the_reach_test_skips_nothing_that_is_drawn(monkeypatch, renders, name):
     """Reflectors and objects no reflected ray can reach are not searched at a later bounce
-    (``may_see``; drawn by exact acceptance, the rays of the pixels themselves: ``_towards``,
+    (``may_see``, ``reaches``; drawn by exact acceptance, the rays of the pixels themselves: ``_towards``,
     and with a few rays the triangles none of them can meet, ``_met``):
     the picture is the one searching everything gives (the ants' eyes: 8 reflectors among many
     objects, most out of each other's reach)."""
@@ -172,7 +172,7 @@ def test_the_reach_test_skips_nothing_that_is_drawn(monkeypatch, renders, name):
 
     scene = two_balls() if name == "two_balls" else refsoft.load_scene("ants", width=320, height=240)
     kept = renders[3] if name == "two_balls" else FrameDriver(scene, RenderOptions(bounces=3)).render_frame(0)
-    monkeypatch.setattr(levels, "may_see", lambda *a: True)
+    monkeypatch.setattr(levels, "reaches", lambda *a: True)
     monkeypatch.setattr(levels, "_towards", lambda rays, spheres: rays[0].copy())  # every ray meets everything
     monkeypatch.setattr(refsoft.constants, "BOUNCE_FEW_RAYS", -1)  # no triangle left out for a few rays
     every = FrameDriver(scene, RenderOptions(bounces=3)).render_frame(0)
@@ -252,3 +252,30 @@ def test_the_faces_a_few_rays_can_meet_are_the_naive_ones():
     assert np.array_equal(few, got[::9])
     with one_thread():
         assert np.array_equal(got, levels._met(verts, faces, edge, (origin, direction)))
+
+
+def test_the_start_of_a_later_bounce_is_the_naive_best_sample():
+    """_bounces.best_starts picks the sample the all-at-once NumPy reference picks, bit for bit
+    in its scores (ties included: two equal samples, the first wins), with any thread count."""
+    import naive_bounces
+    from refsoft.search import _bounces as kernels
+    from refsoft._parallel import parallel_range
+
+    rng = np.random.default_rng(7)
+    k = 40
+    p = rng.normal(size=(k, 3))
+    n = rng.normal(size=(k, 3))
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    u = rng.normal(size=(k, 3))
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    samples = np.concatenate([p, n, u], axis=1).astype(np.float32).astype(np.float64)
+    samples[11] = samples[3]  # a tie: the first of the two
+    rel = rng.normal(size=(500, 3)).astype(np.float32)
+    rel[0] = samples[5, 0:3]  # a vertex on a sample's point
+    want = naive_bounces.best_starts(samples, rel)
+    assert len(set(want.tolist())) > 10 and 11 not in want and 3 in want
+    for threads in (True, False):
+        got = np.empty(len(rel), np.int64)
+        with one_thread(threads):
+            parallel_range(kernels.best_starts, len(rel), samples, rel.astype(np.float64), got)
+        assert np.array_equal(got, want)
