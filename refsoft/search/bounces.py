@@ -371,7 +371,9 @@ def _nearest(parts, camera, box):
         offset += len(clip)
     faces, face_obj, clip = np.concatenate(faces), np.concatenate(face_obj), np.ascontiguousarray(np.concatenate(clips))
     flags, local = np.concatenate(flags), np.concatenate(local)
-    keep = ~np.any((flags[faces] & np.uint8(CULLED | HIDDEN)) != 0, axis=1)
+    out = (flags & np.uint8(CULLED | HIDDEN)) != 0
+    keep = ~(out[faces[:, 0]] | out[faces[:, 1]] | out[faces[:, 2]])
+    keep[keep] = _over(clip[faces[keep]], camera, box)
     faces, face_obj, local = faces[keep], face_obj[keep], local[keep]
     if not len(faces):
         return None
@@ -379,6 +381,22 @@ def _nearest(parts, camera, box):
     frags = rasterize_trusted(clip, faces32, camera.width, camera.height, tuple(int(x) for x in box), None,
                               CULL_MODES[None])
     return frags.triangle, face_obj, local
+
+
+def _over(clip, camera, box):
+    """(T,) bool: the triangles (T, 3, 4) clip space that may cover a pixel of ``box``: those with
+    a corner at or behind the eye plane (``w <= 0``: clipped, kept), and those whose projected
+    bounds, widened by a pixel (the snapping moves a corner by less), meet the box. A part of
+    a triangle that clipping keeps projects inside its projected bounds."""
+    w = clip[..., 3]
+    ahead = np.all(w > 0, axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x = (clip[..., 0] / w + 1.0) * 0.5 * camera.width
+        y = (1.0 - clip[..., 1] / w) * 0.5 * camera.height
+    r0, r1, c0, c1 = box
+    meets = ((x.max(axis=1) >= c0 - 1) & (x.min(axis=1) <= c1 + 1) & (y.max(axis=1) >= r0 - 1)
+             & (y.min(axis=1) <= r1 + 1))
+    return ~ahead | meets
 
 
 def _arrive(mesh, face, origin, direction):
