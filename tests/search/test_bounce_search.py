@@ -279,3 +279,25 @@ def test_the_start_of_a_later_bounce_is_the_naive_best_sample():
         with one_thread(threads):
             parallel_range(kernels.best_starts, len(rel), samples, rel.astype(np.float64), got)
         assert np.array_equal(got, want)
+
+
+def test_the_paper_presets_reflectors_seen_skip_nothing_that_is_drawn(monkeypatch):
+    """Under the paper preset the reflectors seen are rasterized with the scene only where the
+    reflectors' own virtual triangles cover, and only the triangles whose projected bounds meet
+    those pixels (bounces._over): the picture is the one rasterizing every triangle (the ants,
+    whose eyes see each other on a few pixels)."""
+    import refsoft
+    from refsoft.search import bounces
+
+    scene = refsoft.load_scene("ants", width=192, height=144)
+    opt = RenderOptions.from_preset("paper", bounces=2)
+    calls = []
+    over = bounces._over
+    monkeypatch.setattr(bounces, "_over", lambda *a: calls.append(over(*a)) or calls[-1])
+    kept = FrameDriver(scene, opt).render_frame(0)
+    assert sum(len(c) - c.sum() for c in calls) > 0  # triangles were left out
+    monkeypatch.setattr(bounces, "_over", lambda clip, camera, box: np.ones(len(clip), bool))
+    every = FrameDriver(scene, opt).render_frame(0)
+    assert (kept.arrays[BOUNCE_DEPTH] == 2).sum() > 0
+    for key, a in kept.arrays.items():
+        assert np.array_equal(a, every.arrays[key]), key
