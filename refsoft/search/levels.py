@@ -226,12 +226,19 @@ def _towards(rays, spheres):
     return out & valid
 
 
+def _valid(rays):
+    """The valid rays of ``rays`` alone, as rays (M,) (:func:`_towards` of each is its answer)."""
+    valid, origin, direction = rays
+    return np.ones(int(valid.sum()), bool), origin[valid], direction[valid]
+
+
 def _reached(meshes, group, rays):
     """``group`` (:func:`_candidates`) with the vertices of every object whose bounding sphere no
     ray of ``rays`` meets flagged CULLED (none of its triangles can be hit)."""
     ids, verts, virtual, flags = group
     sizes = [meshes[k - 1].n_vertices for k in ids]
-    hit = [bool(_towards(rays, [bounding_sphere(meshes[k - 1])]).any()) for k in ids]
+    valid = _valid(rays)
+    hit = [bool(_towards(valid, [bounding_sphere(meshes[k - 1])]).any()) for k in ids]
     if all(hit):
         return group
     return ids, verts, virtual, np.where(np.repeat(hit, sizes), flags, np.uint8(CULLED)).astype(np.uint8)
@@ -388,7 +395,8 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report, pa
     ids = [k for k, o in enumerate(scene.objects, start=1) if not o.reflector]
     if opt.images == "all":  # drawn by each pixel's ray: what no ray meets cannot be drawn
         rays = level_rays(bounce)
-        reach = (lambda k: bool(_towards(rays, [bounding_sphere(meshes[k - 1])]).any()))
+        valid = _valid(rays)
+        reach = (lambda k: bool(_towards(valid, [bounding_sphere(meshes[k - 1])]).any()))
     else:
         texels = texel_reach(bounce.position, bounce.normal, bounce.eye, bounce.mask)
         reach = (lambda k: reaches(texels, *bounding_sphere(meshes[k - 1])))
@@ -483,16 +491,23 @@ def deepen(scene, view, k, stencil, box, out, refl, parts, opt, search_first, ke
         from .acceptance import pixel_rays
 
         rays = pixel_rays(camera, view.meshes[k - 1], view.view.triangle, stencil, box)
-        reach = (lambda b: bool(_towards(rays, [bounding_sphere(view.meshes[b - 1])]).any()))
+        valid = _valid(rays)
+        reach = (lambda b: bool(_towards(valid, [bounding_sphere(view.meshes[b - 1])]).any()))
     else:
         texels = texel_reach(gb.position, gb.normal, eye, gb.mask, gb.origin)
         reach = (lambda b: reaches(texels, *bounding_sphere(view.meshes[b - 1])))
-    for b in scene.reflector_ids:
-        if b == k or not reach(b):
-            continue  # no reflected ray of this reflector comes near b
-        virtual, flags = search_first(view.meshes[b - 1].vertices)
-        first["searched"] += int(len(virtual))
-        found.append(([b], np.asarray(view.meshes[b - 1].vertices, np.float64), virtual, flags))
+    near = [b for b in scene.reflector_ids if b != k and reach(b)]  # the others no reflected ray comes near: nothing
+    if near and opt.images == "all":  # the rays that can meet one of them, as exact_level takes them
+        towards = (_towards(rays, [bounding_sphere(view.meshes[b - 1]) for b in near]), rays[1], rays[2])
+    for b in near:
+        verts = np.asarray(view.meshes[b - 1].vertices, np.float64)
+        want = np.ones(len(verts), bool)
+        if opt.images == "all":  # with a few rays, only the corners of the faces they can meet
+            want = _narrowed(view.meshes, [b], verts, towards, want)
+        virtual, flags = np.zeros((len(verts), 3)), np.full(len(verts), CULLED, np.uint8)
+        virtual[want], flags[want] = search_first(verts[want])
+        first["searched"] += int(want.sum())
+        found.append(([b], verts, virtual, flags))
     if not found:
         bounces = []
     elif opt.images == "all":  # the reflectors seen where each pixel's reflected ray meets them first
