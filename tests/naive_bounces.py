@@ -120,13 +120,22 @@ def faces_met(verts, faces, edge, origin, direction):
     return out
 
 
-def best_starts(samples, rel):
+def best_starts(samples, rel, own=None, has=None):
     """Per vertex (n, 3) the sample (K, 9: P, N, U) of highest float64 score, the first among
     equals: the halfway vector of the eye direction U and the normalized direction to the vertex,
-    normalized, dotted with N. All vertices and samples at once in NumPy. (n,) int64."""
-    g = samples.astype(np.float64)
-    d = rel.astype(np.float64)[:, None, :] - g[None, :, 0:3]
-    b = d / np.maximum(np.linalg.norm(d, axis=-1, keepdims=True), 1e-300)
-    hv = g[None, :, 6:9] + b
-    hv /= np.maximum(np.linalg.norm(hv, axis=-1, keepdims=True), 1e-300)
-    return np.argmax(np.sum(hv * g[None, :, 3:6], axis=-1), axis=1)
+    normalized, dotted with N. All vertices and samples at once in NumPy. With ``own`` (n, 9)
+    and ``has`` (n,) bool: K where a vertex's own sample scores higher than every one. (n,) int64."""
+    def scores(g, v):
+        d = v[:, None, :] - g[..., 0:3]
+        b = d / np.maximum(np.linalg.norm(d, axis=-1, keepdims=True), 1e-300)
+        hv = g[..., 6:9] + b
+        hv /= np.maximum(np.linalg.norm(hv, axis=-1, keepdims=True), 1e-300)
+        return np.sum(hv * g[..., 3:6], axis=-1)
+
+    v = rel.astype(np.float64)
+    s = scores(samples.astype(np.float64)[None], v)
+    best = np.argmax(s, axis=1)
+    if own is not None:
+        mine = scores(own.astype(np.float64)[:, None, :], v)[:, 0]
+        best[has & (mine > s.max(axis=1))] = len(samples)
+    return best

@@ -78,27 +78,36 @@ def faces_within(lo, hi, faces, near, edge, out):
 
 
 @kernel
-def best_starts(lo, hi, S, V, out):
+def _score(S, k, V, i):
+    """Float64 score of vertex ``V[i]`` at sample ``S[k]`` (P, N, U): :func:`best_starts`'s."""
+    dx, dy, dz = V[i, 0] - S[k, 0], V[i, 1] - S[k, 1], V[i, 2] - S[k, 2]
+    d = np.sqrt((dx * dx + dy * dy) + dz * dz)
+    if d < 1e-300:
+        d = 1e-300
+    hx, hy, hz = S[k, 6] + dx / d, S[k, 7] + dy / d, S[k, 8] + dz / d
+    m = np.sqrt((hx * hx + hy * hy) + hz * hz)
+    if m < 1e-300:
+        m = 1e-300
+    return ((hx / m) * S[k, 3] + (hy / m) * S[k, 4]) + (hz / m) * S[k, 5]
+
+
+@kernel
+def best_starts(lo, hi, S, V, X, has, out):
     """Rows ``lo .. hi - 1`` of ``out`` (n,) int64: per vertex ``V[i]`` (n, 3) float64 (relative to
     the G-buffer's origin) the sample of ``S`` (K, 9) float64 (P, N, U of K covered pixels) where
     its score is highest, the first among equals (a NaN score counts as highest, as np.argmax
-    takes it). Score in float64: ``b = (V - P) / max(|V - P|, 1e-300)``, ``h = (U + b) / max(|U +
-    b|, 1e-300)``, ``s = (h.x N.x + h.y N.y) + h.z N.z``."""
+    takes it); K where ``has[i]`` and its own sample ``X[i]`` (n, 9) scores higher still (its
+    previous frame's pixel). Score in float64: ``b = (V - P) / max(|V - P|, 1e-300)``, ``h = (U +
+    b) / max(|U + b|, 1e-300)``, ``s = (h.x N.x + h.y N.y) + h.z N.z``."""
     for i in range(lo, hi):
         best, top = -1, 0.0
         for k in range(S.shape[0]):
-            dx, dy, dz = V[i, 0] - S[k, 0], V[i, 1] - S[k, 1], V[i, 2] - S[k, 2]
-            d = np.sqrt((dx * dx + dy * dy) + dz * dz)
-            if d < 1e-300:
-                d = 1e-300
-            hx, hy, hz = S[k, 6] + dx / d, S[k, 7] + dy / d, S[k, 8] + dz / d
-            m = np.sqrt((hx * hx + hy * hy) + hz * hz)
-            if m < 1e-300:
-                m = 1e-300
-            s = ((hx / m) * S[k, 3] + (hy / m) * S[k, 4]) + (hz / m) * S[k, 5]
-            if s != s:  # NaN
-                best = k
+            s = _score(S, k, V, i)
+            if s != s:  # NaN: the highest
+                best, top = k, s
                 break
             if best < 0 or s > top:
                 best, top = k, s
+        if has[i] and top == top and _score(X, i, V, i) > top:
+            best = S.shape[0]
         out[i] = best

@@ -9,10 +9,11 @@ the camera's ray through its reflection pixel at the whole path's length, ``|O -
 finds the reflectors seen in a level by rasterizing their virtual triangles
 (:func:`seen_reflectors`, :func:`first_bounces`, :func:`later_bounces`).
 
-What a later level does not do: coherence (each vertex starts from the covered pixel, among
+Each vertex starts from its reflection pixel at the previous frame's bounce of the same path
+where that pixel is still in the stencil (coherence), else from the covered pixel, among
 :data:`~refsoft.constants.BOUNCE_START_SAMPLES` spread over the stencil, where its score is
-highest) and the inverse search (a hidden vertex's triangles are left out, as ``inverse =
-"discard"`` does, or, drawn by exact acceptance, tried everywhere).
+highest. What a later level does not do: the inverse search (a hidden vertex's triangles are
+left out, as ``inverse = "discard"`` does, or, drawn by exact acceptance, tried everywhere).
 """
 
 from __future__ import annotations
@@ -27,7 +28,7 @@ from .._parallel import parallel_range
 from ..raster import CULL_MODES, GBuffer, _setup, rasterize_trusted
 from ..raster._threads import SERIAL_MAX_VERTICES
 from ..raster.rays import primary_rays, ray_triangle
-from . import CULLED, HIDDEN, SearchResult, _bounces
+from . import CULLED, HIDDEN, RESTARTED, SearchResult, _bounces
 
 
 @dataclass(frozen=True, eq=False)
@@ -108,7 +109,8 @@ def gbuffer_of(bounce: Bounce, camera, precision="float32") -> GBuffer:
     return GBuffer(pos, nrm, m.copy(), depth, tri, camera.view_proj(), origin)
 
 
-def search_bounce(bounce: Bounce, gb: GBuffer, vertices, neighbourhood="cross", cap=None) -> SearchResult:
+def search_bounce(bounce: Bounce, gb: GBuffer, vertices, neighbourhood="cross", cap=None,
+                  previous=None) -> SearchResult:
     """The walk of spec section 4.2 for every vertex on a bounce's G-buffer, each pixel's eye
     its own (:class:`Bounce`).
 
@@ -122,12 +124,17 @@ def search_bounce(bounce: Bounce, gb: GBuffer, vertices, neighbourhood="cross", 
     neighbourhood : {"cross", "box"}
     cap : int, optional
         Iteration cap (default ``2 * (width + height)``).
+    previous : ndarray (N, 2) int, optional
+        Each vertex's reflection pixel in the view (row, column) at the previous frame's bounce of
+        the same path, or -1: coherence. A vertex starts there when the pixel is in this
+        bounce's stencil and its score there is higher than at the best sample (:func:`_starts`),
+        else from the best sample (flag RESTARTED when the pixel is off the stencil).
 
     Returns
     -------
     SearchResult
         Pixels in the G-buffer (the bounce's box); flags: HIDDEN where the vertex lies behind the
-        end pixel's tangent plane, CAPPED, BORDER.
+        end pixel's tangent plane, CAPPED, BORDER, RESTARTED.
     """
     from . import default_cap
 
@@ -146,26 +153,57 @@ def search_bounce(bounce: Bounce, gb: GBuffer, vertices, neighbourhood="cross", 
     eye_rel = np.ascontiguousarray((bounce.eye - gb.origin).astype(dt))
     parallel_range(_bounces.pack_eyes, h, gb.position, gb.normal, gb.mask, eye_rel, fp, G)
     rel = np.ascontiguousarray((verts - gb.origin).astype(dt))
-    starts = _starts(G, gb.mask, rel)
+    own, restarted = own_starts(bounce, previous, n)
+    starts = _starts(G, gb.mask, rel, own)
     flags[:] = 0
     parallel_range(_bounces.search_each, n, G, gb.mask, rel, starts, constants.NEIGHBOURHOODS[neighbourhood], cap, fp,
                    pixel, score, margin, iterations, flags)
+    flags[restarted] |= np.uint8(RESTARTED)
     return SearchResult(pixel, score, margin, iterations, flags, neighbourhood, "discard", cap)
 
 
-def _starts(G, mask, rel):
+def own_starts(bounce: Bounce, previous, n):
+    """Coherence at a later level: ``previous`` (n, 2) int view pixels (-1 none) or None as the
+    bounce's pixels where they are in its stencil, (n, 2) int64 (-1 elsewhere), and (n,) bool
+    the vertices whose previous pixel is off it (they restart)."""
+    own = np.full((n, 2), -1, np.int64)
+    if previous is None:
+        return own, np.zeros(n, bool)
+    prev = np.asarray(previous, np.int64).reshape(n, 2)
+    h, w = bounce.mask.shape
+    r, c = prev[:, 0] - bounce.box[0], prev[:, 1] - bounce.box[2]
+    given = prev[:, 0] >= 0
+    kept = given & (r >= 0) & (r < h) & (c >= 0) & (c < w)
+    kept[kept] = bounce.mask[r[kept], c[kept]]
+    own[kept] = np.stack([r[kept], c[kept]], axis=1)
+    return own, given & ~kept
+
+
+def _starts(G, mask, rel, previous=None):
     """Per vertex the covered pixel of highest score among up to BOUNCE_START_SAMPLES covered
     pixels taken evenly in row-major order (ties: the first; kernel
     :func:`refsoft.search._bounces.best_starts`, in float64): a stencil seen in a curved mirror
-    can be small and split, and no projection of the vertex points into it. (N, 2) int64."""
+    can be small and split, and no projection of the vertex points into it. With ``previous``
+    (N, 2) int (covered pixels, or -1 none) a vertex's previous pixel where its score is higher
+    still. (N, 2) int64."""
     rows, cols = np.nonzero(mask)
     step = max(1, -(-len(rows) // constants.BOUNCE_START_SAMPLES))
     rows, cols = rows[::step], cols[::step]
     g = np.ascontiguousarray(G[rows, cols], np.float64)  # (S, 9): P, N, U
-    best = np.empty(len(rel), np.int64)
-    parallel_range(_bounces.best_starts, len(rel), g, np.ascontiguousarray(rel, np.float64), best,
-                   serial=len(rel) * len(g) <= SERIAL_MAX_VERTICES)
-    return np.ascontiguousarray(np.stack([rows[best], cols[best]], axis=1), np.int64)
+    n = len(rel)
+    has = np.zeros(n, bool) if previous is None else np.asarray(previous)[:, 0] >= 0
+    own = np.zeros((n, 9))
+    if has.any():
+        own[has] = G[previous[has, 0], previous[has, 1]]
+    best = np.empty(n, np.int64)
+    parallel_range(_bounces.best_starts, n, g, np.ascontiguousarray(rel, np.float64), own, has, best,
+                   serial=n * len(g) <= SERIAL_MAX_VERTICES)
+    out = np.empty((n, 2), np.int64)
+    sampled = best < len(g)
+    out[sampled] = np.stack([rows[best[sampled]], cols[best[sampled]]], axis=1)
+    if not sampled.all():
+        out[~sampled] = previous[~sampled]
+    return out
 
 
 def unfolded(bounce: Bounce, result: SearchResult, vertices) -> np.ndarray:

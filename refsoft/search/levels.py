@@ -362,7 +362,46 @@ def exact_bounces(level, reflectors, rays, path, direction, camera_eye, box, sha
 
 
 # --- the levels --------------------------------------------------------------------------------
-def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report, path=(), keep=None):
+class LaterStarts:
+    """Coherence at a later level: each later bounce's reflection pixels (in the view) by path
+    and group of vertices, kept from one frame to the next. :meth:`begin` with a new frame makes
+    the last frame's the previous ones (rendering the same frame again reads the same)."""
+
+    def __init__(self):
+        self.frame, self.last, self.now = None, {}, {}
+
+    def begin(self, frame):
+        """Start ``frame``: what the last frame kept becomes the previous frame's."""
+        if frame != self.frame:
+            self.frame, self.last, self.now = frame, self.now, {}
+
+    def previous(self, path, group, n):
+        """(n, 2) int32 view pixels of ``group`` (0 the scene's vertices, else a reflector's id) at
+        the previous frame's bounce of ``path``, -1 where none; None without one."""
+        got = self.last.get((tuple(path), group))
+        return got if got is not None and len(got) == n else None
+
+    def keep(self, path, group, bounce, searched, result):
+        """Keep the view pixels of the ``searched`` (n,) bool vertices' ``result`` at ``bounce``."""
+        pixels = np.full((len(searched), 2), -1, np.int32)
+        found = result.pixel[:, 0] >= 0
+        at = np.flatnonzero(searched)[found]
+        pixels[at] = result.pixel[found] + np.array([bounce.box[0], bounce.box[2]], np.int32)
+        self.now[(tuple(path), group)] = pixels
+
+
+def _search(bounce, gb, verts, want, opt, starts, path, group):
+    """:func:`refsoft.search.bounces.search_bounce` of the ``want`` (n,) bool vertices of
+    ``verts`` (n, 3), from their previous pixels when ``starts`` (:class:`LaterStarts`) has them;
+    their results kept there."""
+    prev = None if starts is None else starts.previous(path, group, len(verts))
+    res = search_bounce(bounce, gb, verts[want], opt.neighbourhood, opt.cap, None if prev is None else prev[want])
+    if starts is not None:
+        starts.keep(path, group, bounce, want, res)
+    return res
+
+
+def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report, path=(), keep=None, starts=None):
     """Level ``bounce.level``'s picture in its stencil, and the later levels' inside it.
 
     Parameters
@@ -381,6 +420,8 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report, pa
     keep : dict, optional
         Receives each bounce drawn by its path (reflector ids, this one's last): what a trace of a
         later bounce's search replays.
+    starts : LaterStarts, optional
+        Coherence: the previous frame's pixels of each path, and this frame's kept.
 
     Returns
     -------
@@ -407,11 +448,11 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report, pa
         seen = _narrowed(meshes, ids, vertices, rays, seen)
     virtual = np.zeros((len(vertices), 3))
     flags = np.full(len(vertices), CULLED, np.uint8)
-    res = search_bounce(bounce, gb, vertices[seen], opt.neighbourhood, opt.cap)
+    res = _search(bounce, gb, vertices, seen, opt, starts, path, 0)
     virtual[seen], flags[seen] = unfolded(bounce, res, vertices[seen]), res.flags
     depth = np.where(bounce.mask, np.int8(bounce.level), np.int8(0)).astype(np.int8)
     entry = {"level": bounce.level, "reflector": bounce.reflector, "pixels": int(bounce.mask.sum()),
-             "searched": int(seen.sum())}
+             "searched": int(seen.sum()), "iterations": int(res.iterations.sum())}
     report.append(entry)
     others = [] if bounce.level >= opt.bounces else [k for k in scene.reflector_ids
                                                       if k != bounce.reflector and reach(k)]
@@ -421,11 +462,12 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report, pa
         want = np.ones(len(verts), bool)
         if opt.images == "all":
             want = _narrowed(meshes, [k], verts, rays, want)
-        r = search_bounce(bounce, gb, verts[want], opt.neighbourhood, opt.cap)
+        r = _search(bounce, gb, verts, want, opt, starts, path, k)
         virt, fl = np.zeros((len(verts), 3)), np.full(len(verts), CULLED, np.uint8)
         virt[want], fl[want] = unfolded(bounce, r, verts[want]), r.flags
         found.append(([k], verts, virt, fl))
         entry["searched"] += int(want.sum())
+        entry["iterations"] += int(r.iterations.sum())
     if opt.images == "all":  # each pixel's reflected ray decides among the virtual triangles over it
         colour, rid, covered, refl = exact_level(scene, meshes, [(ids, vertices, virtual, flags)] + found, camera,
                                                  bounce.box, rays)
@@ -439,7 +481,7 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report, pa
         nxt = later_bounces(bounce, seen_reflectors(parts, rparts, camera, stencil, bounce.box), meshes) if found else []
     for b in nxt:
         blend(colour, rid, covered, depth, bounce.box, b,
-              draw_bounce(scene, meshes, b, camera, vertices, opt, report, path, keep), scene)
+              draw_bounce(scene, meshes, b, camera, vertices, opt, report, path, keep, starts), scene)
     entry["ms"] = 1000 * (time.perf_counter() - t0)
     return colour, rid, covered, depth
 
@@ -464,14 +506,16 @@ def blend(colour, rid, covered, depth, box, bounce: Bounce, deeper, scene):
     depth[sl][m] = dep2[m]
 
 
-def deepen(scene, view, k, stencil, box, out, refl, parts, opt, search_first, keep=None):
+def deepen(scene, view, k, stencil, box, out, refl, parts, opt, search_first, keep=None, starts=None):
     """After level 1 of reflector ``k`` (its :class:`~refsoft.seam.ReflectorResult` ``out`` over
     ``box``, its reflection ``refl`` and virtual ``parts``): the reflectors seen in its image and
     every later level, composited into ``out`` in place, with the per-pixel depth.
 
     ``search_first(vertices)`` gives the first level's virtual vertices (N, 3) float64 and flags
     of other vertices (the reflectors'), as the method computes its own; ``keep`` (a dict)
-    receives every later bounce by its path (:func:`draw_bounce`).
+    receives every later bounce by its path (:func:`draw_bounce`); ``starts`` (a
+    :class:`LaterStarts`, kept by the method from frame to frame) gives the later levels'
+    searches their previous frame's pixels (coherence).
 
     Returns
     -------
@@ -480,6 +524,8 @@ def deepen(scene, view, k, stencil, box, out, refl, parts, opt, search_first, ke
         G-buffer), then one per later bounce drawn (:func:`draw_bounce`'s report).
     """
     first = {"level": 1, "reflector": int(k), "pixels": int(stencil.sum()), "searched": 0}
+    if starts is not None:
+        starts.begin(view.frame)
     report = [first]
     r0, r1, c0, c1 = box
     camera = view.camera
@@ -526,7 +572,7 @@ def deepen(scene, view, k, stencil, box, out, refl, parts, opt, search_first, ke
     colour, rid, covered = out.colour.copy(), out.reflected_id.copy(), out.covered.copy()
     for bounce in bounces:
         blend(colour, rid, covered, depth, box, bounce,
-              draw_bounce(scene, view.meshes, bounce, camera, view.vertices, opt, report, (k,), keep), scene)
+              draw_bounce(scene, view.meshes, bounce, camera, view.vertices, opt, report, (k,), keep, starts), scene)
     out.colour, out.reflected_id, out.covered = colour, rid, covered
     out.pixels = {**out.pixels, BOUNCE_DEPTH: depth}
     out.pixel_mask = stencil[r0:r1, c0:c1].copy()

@@ -256,7 +256,8 @@ def test_the_faces_a_few_rays_can_meet_are_the_naive_ones():
 
 def test_the_start_of_a_later_bounce_is_the_naive_best_sample():
     """_bounces.best_starts picks the sample the all-at-once NumPy reference picks, bit for bit
-    in its scores (ties included: two equal samples, the first wins), with any thread count."""
+    in its scores (ties included: two equal samples, the first wins), and a vertex's own sample
+    (its previous pixel) where that scores higher, with any thread count."""
     import naive_bounces
     from refsoft.search import _bounces as kernels
     from refsoft._parallel import parallel_range
@@ -274,11 +275,16 @@ def test_the_start_of_a_later_bounce_is_the_naive_best_sample():
     rel[0] = samples[5, 0:3]  # a vertex on a sample's point
     want = naive_bounces.best_starts(samples, rel)
     assert len(set(want.tolist())) > 10 and 11 not in want and 3 in want
+    own = samples[rng.integers(0, k, len(rel))] + rng.normal(scale=0.05, size=(len(rel), 9))  # near another
+    has = rng.random(len(rel)) < 0.5
+    mine = naive_bounces.best_starts(samples, rel, own, has)
+    assert 0 < np.sum(mine == k) < has.sum() and np.array_equal(mine[mine < k], want[mine < k])
     for threads in (True, False):
-        got = np.empty(len(rel), np.int64)
-        with one_thread(threads):
-            parallel_range(kernels.best_starts, len(rel), samples, rel.astype(np.float64), got)
-        assert np.array_equal(got, want)
+        for x, h, w in ((np.zeros((len(rel), 9)), np.zeros(len(rel), bool), want), (own, has, mine)):
+            got = np.empty(len(rel), np.int64)
+            with one_thread(threads):
+                parallel_range(kernels.best_starts, len(rel), samples, rel.astype(np.float64), x, h, got)
+            assert np.array_equal(got, w)
 
 
 def test_the_paper_presets_reflectors_seen_skip_nothing_that_is_drawn(monkeypatch):
@@ -301,3 +307,92 @@ def test_the_paper_presets_reflectors_seen_skip_nothing_that_is_drawn(monkeypatc
     assert (kept.arrays[BOUNCE_DEPTH] == 2).sum() > 0
     for key, a in kept.arrays.items():
         assert np.array_equal(a, every.arrays[key]), key
+
+
+def test_a_later_bounce_starts_from_the_previous_frames_pixel_where_it_is_in_the_stencil(ball):
+    """Coherence at a later level: a vertex given its own end pixel (in the view) starts there and
+    ends there at once (its score there beats the samples'); one given a pixel off the stencil
+    starts from the best sample, as with no previous pixel, flagged RESTARTED; -1 is no previous
+    pixel."""
+    from refsoft.search import RESTARTED
+
+    cam, gb, verts = ball
+    b = _bounce(cam, gb, (1.5, 1.0, 2.5))
+    g = gbuffer_of(b, cam)
+    fresh = search_bounce(b, g, verts, "box")
+    view = fresh.pixel + [b.box[0], b.box[2]]
+    prev = view.copy()
+    prev[1::3] = [0, 0]  # a corner of the view, off the ball
+    prev[2::3] = -1
+    got = search_bounce(b, g, verts, "box", previous=prev)
+    same = np.arange(len(verts)) % 3 == 0
+    assert np.array_equal(got.pixel[same], fresh.pixel[same]) and np.all(got.iterations[same] == 1)
+    assert np.all(got.iterations[same] <= fresh.iterations[same]) and np.any(fresh.iterations[same] > 1)
+    other = ~same
+    assert np.array_equal(got.pixel[other], fresh.pixel[other])
+    assert np.array_equal(got.iterations[other], fresh.iterations[other])
+    assert np.array_equal((got.flags & RESTARTED) != 0, np.arange(len(verts)) % 3 == 1)
+    assert np.array_equal(got.flags & ~np.uint8(RESTARTED), fresh.flags)
+
+
+def test_later_levels_start_from_the_previous_frame_in_order_and_deterministically():
+    """Frames rendered in order: frame 0 as without later-level coherence; the next frames'
+    later levels walk fewer steps from the previous frame's pixels of the same path; the same
+    bits rendered again and with one thread."""
+    import refsoft
+    from refsoft.search import levels
+
+    scene = refsoft.load_scene("mirrors", width=128, height=96)
+    opt = RenderOptions(bounces=3)
+
+    def run(later=True):
+        d = FrameDriver(scene, opt)
+        if not later:
+            d.method.later_starts = None  # as without coherence at a later level
+        out = []
+        for f in range(3):
+            fr = d.render_frame(f)
+            steps = sum(e.get("iterations", 0) for r in fr.report["bounces"].values() for e in r if e["level"] > 1)
+            out.append((fr.arrays, steps))
+        return out, d
+
+    on, d = run()
+    off, _ = run(False)
+    assert isinstance(d.method.later_starts, levels.LaterStarts) and d.method.later_starts.last
+    for key, a in on[0][0].items():
+        assert np.array_equal(a, off[0][0][key]), key
+    assert on[0][1] == off[0][1] and on[1][1] < off[1][1] and on[2][1] < off[2][1]
+    again, _ = run()
+    with one_thread():
+        single, _ = run()
+    for f in range(3):
+        for key, a in on[f][0].items():
+            assert np.array_equal(a, again[f][0][key]) and np.array_equal(a, single[f][0][key]), (f, key)
+
+
+def test_the_trace_of_a_later_bounce_at_a_later_frame_starts_where_the_render_did():
+    """At frame 1 the render's later level starts each vertex from its frame-0 pixel of the same
+    path (coherence): the trace replays that start (the two balls stand still, so a vertex whose
+    walk took steps at frame 0 starts at its end pixel and stops there)."""
+    from refsoft.scene.model import scene_vertices
+    from refsoft.search.trace import trace_vertex_bounce
+
+    scene = two_balls(320, 240)  # ball 2 in ball 1 over more pixels than the samples
+    driver = FrameDriver(scene, RenderOptions(bounces=2))
+    driver.render_frame(0)
+    driver.render_frame(1)
+    bounce = driver.method.kept_bounces[(1, 2)]
+    prev = driver.method.later_starts.previous((1, 2), 0, len(scene_vertices(scene, 1)[0]))
+    searched = np.flatnonzero(prev[:, 0] >= 0)  # the vertices the render searched on ball 2
+    assert len(searched) > 0
+    for i in searched[:40]:
+        first = trace_vertex_bounce(scene, int(i), (1, 2), 0)
+        if first.trace.iterations > 1:
+            break
+    assert first.trace.iterations > 1
+    assert prev[i].tolist() == [first.trace.pixel[0] + bounce.box[0], first.trace.pixel[1] + bounce.box[2]]
+    later = trace_vertex_bounce(scene, int(i), (1, 2), 1)
+    res = search_bounce(bounce, gbuffer_of(bounce, scene.camera), later.position[None], "box", previous=prev[i:i + 1])
+    assert later.trace.pixel == res.pixel[0].tolist() == first.trace.pixel
+    assert later.trace.iterations == res.iterations[0] == 1
+    assert later.trace.start == first.trace.pixel and not later.trace.restarted
