@@ -210,26 +210,44 @@ def _bounds(cand, camera, box):
     return screen, bbox, dilate, np.concatenate([rows, cols], axis=1)
 
 
-def _towards(rays, spheres):
-    """(h, w) bool: the rays that pass through one of ``spheres`` ((centre (3,), radius) each) ahead
-    of their origin or start inside it (a ray that meets a triangle inside a sphere does; the
-    radius is widened by 1e-9 of itself and of the distance for rounding)."""
-    valid, origin, direction = rays
-    out = np.zeros(valid.shape, bool)
+def _hits(rays, spheres):
+    """(K, M) bool: which of the valid rays (M,) (:func:`_valid`) pass through each of ``spheres``
+    ((centre (3,), radius) each) ahead of their origin or start inside it (a ray that meets a
+    triangle inside a sphere does; the radius is widened by 1e-9 of itself and of the distance for
+    rounding). Every sphere at once, each pair's arithmetic its own."""
+    _, origin, direction = rays
+    if not len(spheres):
+        return np.zeros((0, len(origin)), bool)
     d = direction / np.maximum(np.linalg.norm(direction, axis=-1, keepdims=True), 1e-300)
-    for centre, radius in spheres:
-        cp = centre - origin
-        dist = np.linalg.norm(cp, axis=-1)
-        t = np.maximum(np.sum(cp * d, axis=-1), 0.0)
-        miss = np.linalg.norm(cp - t[..., None] * d, axis=-1)
-        out |= miss <= radius * (1.0 + 1e-9) + 1e-9 * dist
-    return out & valid
+    centre = np.array([c for c, _ in spheres], np.float64)[:, None, :]
+    radius = np.array([r for _, r in spheres], np.float64)[:, None]
+    cp = centre - origin
+    dist = np.linalg.norm(cp, axis=-1)
+    t = np.maximum(np.sum(cp * d, axis=-1), 0.0)
+    miss = np.linalg.norm(cp - t[..., None] * d, axis=-1)
+    return miss <= radius * (1.0 + 1e-9) + 1e-9 * dist
+
+
+def _towards(rays, spheres):
+    """(h, w) bool: the valid rays of ``rays`` that pass through one of ``spheres``
+    (:func:`_hits`)."""
+    out = np.zeros(rays[0].shape, bool)
+    out[rays[0]] = _hits(_valid(rays), spheres).any(axis=0)
+    return out
 
 
 def _valid(rays):
-    """The valid rays of ``rays`` alone, as rays (M,) (:func:`_towards` of each is its answer)."""
+    """The valid rays of ``rays`` alone, as rays (M,)."""
     valid, origin, direction = rays
     return np.ones(int(valid.sum()), bool), origin[valid], direction[valid]
+
+
+def _reaching(meshes, ids, rays):
+    """{object id: whether one of the valid rays (:func:`_valid`) passes through its bounding
+    sphere} for ``ids``."""
+    ids = list(ids)
+    hit = _hits(rays, [bounding_sphere(meshes[k - 1]) for k in ids]).any(axis=1)
+    return dict(zip(ids, (bool(x) for x in hit)))
 
 
 def _reached(meshes, group, rays):
@@ -237,8 +255,8 @@ def _reached(meshes, group, rays):
     ray of ``rays`` meets flagged CULLED (none of its triangles can be hit)."""
     ids, verts, virtual, flags = group
     sizes = [meshes[k - 1].n_vertices for k in ids]
-    valid = _valid(rays)
-    hit = [bool(_towards(valid, [bounding_sphere(meshes[k - 1])]).any()) for k in ids]
+    reached = _reaching(meshes, ids, _valid(rays))
+    hit = [reached[k] for k in ids]
     if all(hit):
         return group
     return ids, verts, virtual, np.where(np.repeat(hit, sizes), flags, np.uint8(CULLED)).astype(np.uint8)
@@ -436,8 +454,8 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report, pa
     ids = [k for k, o in enumerate(scene.objects, start=1) if not o.reflector]
     if opt.images == "all":  # drawn by each pixel's ray: what no ray meets cannot be drawn
         rays = level_rays(bounce)
-        valid = _valid(rays)
-        reach = (lambda k: bool(_towards(valid, [bounding_sphere(meshes[k - 1])]).any()))
+        reached = _reaching(meshes, range(1, len(scene.objects) + 1), _valid(rays))
+        reach = reached.get
     else:
         texels = texel_reach(bounce.position, bounce.normal, bounce.eye, bounce.mask)
         reach = (lambda k: reaches(texels, *bounding_sphere(meshes[k - 1])))
@@ -537,8 +555,8 @@ def deepen(scene, view, k, stencil, box, out, refl, parts, opt, search_first, ke
         from .acceptance import pixel_rays
 
         rays = pixel_rays(camera, view.meshes[k - 1], view.view.triangle, stencil, box)
-        valid = _valid(rays)
-        reach = (lambda b: bool(_towards(valid, [bounding_sphere(view.meshes[b - 1])]).any()))
+        reached = _reaching(view.meshes, scene.reflector_ids, _valid(rays))
+        reach = reached.get
     else:
         texels = texel_reach(gb.position, gb.normal, eye, gb.mask, gb.origin)
         reach = (lambda b: reaches(texels, *bounding_sphere(view.meshes[b - 1])))

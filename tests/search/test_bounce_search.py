@@ -163,7 +163,7 @@ def test_several_bounces_give_the_same_bits_with_one_thread(renders):
 @pytest.mark.parametrize("name", ["two_balls", "ants"])
 def test_the_reach_test_skips_nothing_that_is_drawn(monkeypatch, renders, name):
     """Reflectors and objects no reflected ray can reach are not searched at a later bounce
-    (``may_see``, ``reaches``; drawn by exact acceptance, the rays of the pixels themselves: ``_towards``,
+    (``may_see``, ``reaches``; drawn by exact acceptance, the rays of the pixels themselves: ``_hits``,
     and with a few rays the triangles none of them can meet, ``_met``):
     the picture is the one searching everything gives (the ants' eyes: 8 reflectors among many
     objects, most out of each other's reach)."""
@@ -173,7 +173,7 @@ def test_the_reach_test_skips_nothing_that_is_drawn(monkeypatch, renders, name):
     scene = two_balls() if name == "two_balls" else refsoft.load_scene("ants", width=320, height=240)
     kept = renders[3] if name == "two_balls" else FrameDriver(scene, RenderOptions(bounces=3)).render_frame(0)
     monkeypatch.setattr(levels, "reaches", lambda *a: True)
-    monkeypatch.setattr(levels, "_towards", lambda rays, spheres: rays[0].copy())  # every ray meets everything
+    monkeypatch.setattr(levels, "_hits", lambda rays, spheres: np.ones((len(spheres), len(rays[1])), bool))  # all
     monkeypatch.setattr(refsoft.constants, "BOUNCE_FEW_RAYS", -1)  # no triangle left out for a few rays
     every = FrameDriver(scene, RenderOptions(bounces=3)).render_frame(0)
     for key, a in kept.arrays.items():
