@@ -102,18 +102,20 @@ def trace_paths(scene, meshes, camera, view, bounces, sees_itself=(), offset=0.0
 
 
 
-def faces_met(verts, faces, edge, origin, direction):
+def faces_met(verts, faces, edge, origin, direction, length=None):
     """(T,) bool: the faces each of whose corners lies within the face's longest edge (and 1e-9
-    of it) of one of the rays (origin (P, 3), direction (P, 3), the part ahead of the origin):
-    every face a ray meets is among them. One ray and one corner at a time."""
+    of it) of one of the rays (origin (P, 3), direction (P, 3), the part ahead of the origin, up
+    to ``length`` (P,) when given): every face a ray meets (within its length) is among them. One
+    ray and one corner at a time."""
     out = np.zeros(len(faces), bool)
+    length = np.full(len(origin), np.inf) if length is None else length
     for i, (face, e) in enumerate(zip(faces, edge)):
         ok = True
         for c in face:
             best = np.inf
-            for o, d in zip(origin, direction):
+            for o, d, L in zip(origin, direction, length):
                 u = _unit(d)
-                t = max(float(np.dot(verts[c] - o, u)), 0.0)
+                t = min(max(float(np.dot(verts[c] - o, u)), 0.0), L)
                 best = min(best, float(np.linalg.norm(verts[c] - o - t * u)))
             ok &= best <= e * (1.0 + 1e-9)
         out[i] = ok

@@ -49,11 +49,11 @@ def search_each(lo, hi, G, mask, V, starts, n_candidates, cap, fp, pixel, score,
 
 
 @kernel
-def ray_distances(lo, hi, V, O, D, near):
+def ray_distances(lo, hi, V, O, D, L, near):
     """Rows ``lo .. hi - 1`` of ``near`` (N,) float64: the least distance from point ``V[i]``
     (N, 3) to the rays of origins ``O`` (P, 3) and unit directions ``D`` (P, 3), each ray the part
-    ahead of its origin (``t = max((V - O).D, 0)``, the distance ``|V - O - t D|``), the rays in
-    order (np.inf with none)."""
+    ahead of its origin up to length ``L`` (P,) (np.inf: all of it; ``t = min(max((V - O).D, 0),
+    L)``, the distance ``|V - O - t D|``), the rays in order (np.inf with none)."""
     for i in range(lo, hi):
         best = np.inf
         for p in range(O.shape[0]):
@@ -61,6 +61,8 @@ def ray_distances(lo, hi, V, O, D, near):
             t = (cx * D[p, 0] + cy * D[p, 1]) + cz * D[p, 2]
             if t < 0.0:
                 t = 0.0
+            if t > L[p]:
+                t = L[p]
             ex, ey, ez = cx - t * D[p, 0], cy - t * D[p, 1], cz - t * D[p, 2]
             d = np.sqrt((ex * ex + ey * ey) + ez * ez)
             if d < best:

@@ -120,8 +120,9 @@ def _met(verts, faces, edge, rays):
     """(T,) bool: the faces a ray can meet. A ray meeting a triangle passes within its longest
     edge of each of its corners (the hit lies in the triangle), so a face is kept when each of
     its corners lies within that distance (and 1e-9 of it) of one of the rays (origin (P, 3),
-    unit direction (P, 3), the part ahead of the origin)."""
-    origin, direction = rays
+    direction (P, 3), the part ahead of the origin, and optionally its length (P,): a segment)."""
+    origin, direction = rays[:2]
+    length = np.ascontiguousarray(rays[2], np.float64) if len(rays) > 2 else np.full(len(origin), np.inf)
     d = np.ascontiguousarray(direction / np.maximum(np.linalg.norm(direction, axis=1, keepdims=True), 1e-300))
     origin = np.ascontiguousarray(origin, np.float64)
     faces = np.asarray(faces)
@@ -130,9 +131,19 @@ def _met(verts, faces, edge, rays):
         used[faces] = True
         index = np.cumsum(used) - 1
         verts, faces = verts[used], index[faces]
-    near = np.empty(len(verts))
-    parallel_range(_bounces.ray_distances, len(verts), np.ascontiguousarray(verts, np.float64), origin, d, near,
-                   serial=len(verts) * len(origin) <= SERIAL_MAX_VERTICES)
+    near = np.full(len(verts), np.inf)
+    some = np.ones(len(verts), bool)
+    if len(faces) and np.all(np.isfinite(length)):  # segments: a corner near one lies in their box, widened
+        grow = float(np.max(edge)) * (1.0 + 1e-6) + 1e-9
+        end = origin + length[:, None] * d
+        lo = np.minimum(origin, end).min(axis=0) - grow
+        hi = np.maximum(origin, end).max(axis=0) + grow
+        some = np.all((verts >= lo) & (verts <= hi), axis=1)
+    v = np.ascontiguousarray(verts[some] if not some.all() else verts, np.float64)
+    part = np.empty(len(v))
+    parallel_range(_bounces.ray_distances, len(v), v, origin, d, length, part,
+                   serial=len(v) * len(origin) <= SERIAL_MAX_VERTICES)
+    near[some] = part
     out = np.empty(len(faces), bool)
     parallel_range(_bounces.faces_within, len(faces), np.ascontiguousarray(faces), near,
                    np.ascontiguousarray(edge, np.float64), out, serial=len(faces) <= SERIAL_MAX_VERTICES)
@@ -161,14 +172,14 @@ def _narrowed(meshes, ids, verts, rays, want):
 
 
 def _few(rays):
-    """The valid rays of ``rays`` as (origin (P, 3), direction (P, 3)) when there are at most
-    BOUNCE_FEW_RAYS of them, else None."""
+    """The valid rays of ``rays`` (valid, origin, direction[, length]) as (origin (P, 3),
+    direction (P, 3)[, length (P,)]) when there are at most BOUNCE_FEW_RAYS of them, else None."""
     from .. import constants
 
-    valid, origin, direction = rays
+    valid = rays[0]
     if valid.sum() > constants.BOUNCE_FEW_RAYS:
         return None
-    return origin[valid], direction[valid]
+    return tuple(a[valid] for a in rays[1:])
 
 
 def _pixels(virtual, camera):
@@ -214,8 +225,9 @@ def _hits(rays, spheres):
     """(K, M) bool: which of the valid rays (M,) (:func:`_valid`) pass through each of ``spheres``
     ((centre (3,), radius) each) ahead of their origin or start inside it (a ray that meets a
     triangle inside a sphere does; the radius is widened by 1e-9 of itself and of the distance for
-    rounding). Every sphere at once, each pair's arithmetic its own."""
-    _, origin, direction = rays
+    rounding; with a 4th array, the rays' lengths (M,), segments). Every sphere at once, each
+    pair's arithmetic its own."""
+    origin, direction = rays[1:3]
     if not len(spheres):
         return np.zeros((0, len(origin)), bool)
     d = direction / np.maximum(np.linalg.norm(direction, axis=-1, keepdims=True), 1e-300)
@@ -224,6 +236,8 @@ def _hits(rays, spheres):
     cp = centre - origin
     dist = np.linalg.norm(cp, axis=-1)
     t = np.maximum(np.sum(cp * d, axis=-1), 0.0)
+    if len(rays) > 3:
+        t = np.minimum(t, rays[3])
     miss = np.linalg.norm(cp - t[..., None] * d, axis=-1)
     return miss <= radius * (1.0 + 1e-9) + 1e-9 * dist
 
@@ -237,9 +251,9 @@ def _towards(rays, spheres):
 
 
 def _valid(rays):
-    """The valid rays of ``rays`` alone, as rays (M,)."""
-    valid, origin, direction = rays
-    return np.ones(int(valid.sum()), bool), origin[valid], direction[valid]
+    """The valid rays of ``rays`` alone, as rays (M,) (with their lengths, if given)."""
+    valid = rays[0]
+    return (np.ones(int(valid.sum()), bool),) + tuple(a[valid] for a in rays[1:])
 
 
 def _reaching(meshes, ids, rays):
@@ -322,14 +336,20 @@ def exact_level(scene, meshes, groups, camera, box, rays, reflectors_only=False)
         towards = _towards(rays, [bounding_sphere(meshes[k - 1]) for ids, *_ in groups[1:] for k in ids])
         groups = groups[:1] + [_reached(meshes, g, (towards, origin, direction)) for g in groups[1:]]
         ref, _ = _candidates(meshes, groups[1:], near=(camera, box), rays=_few((towards, origin, direction)))
-        meet = nearest_hits(ref, camera, box, (valid & towards, origin, direction))[0] >= 0
+        first, t_first, _ = nearest_hits(ref, camera, box, (valid & towards, origin, direction))
+        meet = first >= 0
         if not meet.any():
             return colour, rid, drawn, {}
         rows, cols = np.flatnonzero(meet.any(axis=1)), np.flatnonzero(meet.any(axis=0))
         sub = (r0 + int(rows[0]), r0 + int(rows[-1]) + 1, c0 + int(cols[0]), c0 + int(cols[-1]) + 1)
-        valid = valid & meet  # the scene's objects only where these rays can reach them
-        scene_cand, _ = _candidates(meshes, [_reached(meshes, groups[0], (valid, origin, direction))],
-                                    near=(camera, sub), rays=_few((valid, origin, direction)))
+        valid = valid & meet
+        # only a scene triangle met no farther than the reflector's hit can be nearer: the rays up
+        # to that hit (and 1e-9 of it), and the scene's objects they can reach
+        upto = np.zeros(meet.shape)
+        upto[meet] = t_first[meet] * np.linalg.norm(direction[meet], axis=-1) * (1.0 + 1e-9)
+        segments = (valid, origin, direction, upto)
+        scene_cand, _ = _candidates(meshes, [_reached(meshes, groups[0], segments)], near=(camera, sub),
+                                    rays=_few(segments))
         cand = _joined(scene_cand, ref)
     else:
         groups = [_reached(meshes, g, rays) for g in groups]

@@ -230,7 +230,8 @@ def test_the_trace_of_a_later_bounce_refuses_a_path_it_cannot_replay(through, me
 
 def test_the_faces_a_few_rays_can_meet_are_the_naive_ones():
     """levels._met (kernel ``_bounces.ray_distances``) keeps the faces the one-ray-at-a-time
-    reference keeps, keeps every face a ray meets, and is the same with one thread."""
+    reference keeps, keeps every face a ray meets (a segment: within its length), and is the same
+    with one thread."""
     from naive_bounces import faces_met, ray_all_triangles
     from refsoft.search import levels
 
@@ -250,6 +251,15 @@ def test_the_faces_a_few_rays_can_meet_are_the_naive_ones():
     assert met[:9].all() and np.all(got[met])
     few = levels._met(verts, faces[::9], edge[::9], (origin, direction))  # their corners' distances only
     assert np.array_equal(few, got[::9])
+    length = 0.7 * np.linalg.norm(direction, axis=1)  # segments: 1.4 times the way to the triangle aimed at
+    short = levels._met(verts, faces, edge, (origin, direction, length))
+    assert np.array_equal(short, faces_met(verts, faces, edge, origin, direction, length))
+    assert np.all(got[short]) and short.sum() < got.sum()
+    before = np.zeros(len(faces), bool)
+    for o, d, L in zip(origin, direction, length):
+        t, _, _, hit = ray_all_triangles(o, d / np.linalg.norm(d), corners)
+        before |= hit & (t <= L)
+    assert before.sum() >= 5 and np.all(short[before])
     with one_thread():
         assert np.array_equal(got, levels._met(verts, faces, edge, (origin, direction)))
 
