@@ -64,10 +64,10 @@ def ray_distances(lo, hi, V, O, D, L, near):
             if t > L[p]:
                 t = L[p]
             ex, ey, ez = cx - t * D[p, 0], cy - t * D[p, 1], cz - t * D[p, 2]
-            d = np.sqrt((ex * ex + ey * ey) + ez * ez)
-            if d < best:
-                best = d
-        near[i] = best
+            d2 = (ex * ex + ey * ey) + ez * ez
+            if d2 < best:
+                best = d2
+        near[i] = np.sqrt(best)  # the root of the least square: the least root (sqrt is monotonic)
 
 
 @kernel

@@ -90,7 +90,8 @@ def _candidates(meshes, groups, near=None, rays=None):
             f = mesh.faces
             keep = ~(culled[f[:, 0]] | culled[f[:, 1]] | culled[f[:, 2]])
             if rays is not None and keep.any():
-                keep[keep] = _met(vs, f[keep], _edges(mesh)[keep], rays)
+                close = _rays_near(mesh, rays)
+                keep[keep] = _met(vs, f[keep], _edges(mesh)[keep], close) if len(close[0]) else False
             hidden = (fl & np.uint8(HIDDEN)) != 0
             if near is not None and keep.any():
                 fk = f[keep]
@@ -150,6 +151,16 @@ def _met(verts, faces, edge, rays):
     return out
 
 
+def _rays_near(mesh, rays):
+    """Of a few rays (:func:`_few`), those that pass within ``mesh``'s longest face edge of its
+    bounding sphere (:func:`_hits`), as a few rays: any other is farther than that edge from every
+    vertex of the mesh, so that :func:`_met` keeps the same faces without it."""
+    centre, radius = bounding_sphere(mesh)
+    grow = float(np.max(_edges(mesh))) * (1.0 + 1e-6) if mesh.n_faces else 0.0
+    near = _hits((np.ones(len(rays[0]), bool),) + tuple(rays), [(centre, radius + grow)])[0]
+    return tuple(a[near] for a in rays)
+
+
 def _narrowed(meshes, ids, verts, rays, want):
     """``want`` (n,) bool over the vertices of objects ``ids`` (consecutive in ``verts`` (n, 3),
     in that order), narrowed, when the level's rays are few (:func:`_few`), to the corners of
@@ -163,10 +174,13 @@ def _narrowed(meshes, ids, verts, rays, want):
     for k, mesh, vs, wa, ou in parts:
         if not len(few[0]) or not wa.any():
             continue
+        near = _rays_near(mesh, few)
+        if not len(near[0]):
+            continue  # no ray comes within an edge of the object's bounds
         f = mesh.faces
         keep = wa[f[:, 0]] & wa[f[:, 1]] & wa[f[:, 2]]
         if keep.any():
-            keep[keep] = _met(vs, f[keep], _edges(mesh)[keep], few)
+            keep[keep] = _met(vs, f[keep], _edges(mesh)[keep], near)
             ou[f[keep]] = True  # a view of ``out``
     return out
 
