@@ -39,18 +39,18 @@ BOUNCE_DEPTH = keys.BOUNCE_DEPTH
 
 
 # --- exact acceptance -----------------------------------------------------------------------
-def _edges(mesh):
-    """Each face's longest edge (F,) float64 (the last answers kept by mesh: the meshes of static
-    objects are the same frame after frame)."""
+def _edges(mesh, longest=False):
+    """Each face's longest edge (F,) float64, or with ``longest`` the longest of them (0.0 without
+    faces); the last answers kept by mesh (the meshes of static objects are the same frame after
+    frame)."""
     hit = _EDGES.get(id(mesh))
-    if hit is not None and hit[0] is mesh:
-        return hit[1]
-    corners = np.asarray(mesh.vertices, np.float64)[mesh.faces]
-    out = np.max(np.linalg.norm(corners - corners[:, [1, 2, 0]], axis=2), axis=1)
-    if len(_EDGES) >= 256:
-        _EDGES.pop(next(iter(_EDGES)))
-    _EDGES[id(mesh)] = (mesh, out)
-    return out
+    if hit is None or hit[0] is not mesh:
+        corners = np.asarray(mesh.vertices, np.float64)[mesh.faces]
+        out = np.max(np.linalg.norm(corners - corners[:, [1, 2, 0]], axis=2), axis=1)
+        if len(_EDGES) >= 256:
+            _EDGES.pop(next(iter(_EDGES)))
+        hit = _EDGES[id(mesh)] = (mesh, out, float(out.max()) if len(out) else 0.0)
+    return hit[2] if longest else hit[1]
 
 
 _EDGES = {}
@@ -82,15 +82,15 @@ def _candidates(meshes, groups, near=None, rays=None):
     virtual, real, normals, obj, tri, counts = [], [], [], [], [], []
     for ids, verts, virt, flags in groups:
         counts.append(0)
-        for k, mesh, vs, vt, fl in _objects(meshes, ids, np.asarray(verts, np.float64),
-                                             np.asarray(virt, np.float64), flags):
+        parts = _objects(meshes, ids, np.asarray(verts, np.float64), np.asarray(virt, np.float64), flags)
+        closes = _rays_near(meshes, ids, rays) if rays is not None else [None] * len(ids)
+        for (k, mesh, vs, vt, fl), close in zip(parts, closes):
             culled = (fl & np.uint8(CULLED)) != 0
             if culled.all():
                 continue  # not searched, or out of every ray's reach
             f = mesh.faces
             keep = ~(culled[f[:, 0]] | culled[f[:, 1]] | culled[f[:, 2]])
             if rays is not None and keep.any():
-                close = _rays_near(mesh, rays)
                 keep[keep] = _met(vs, f[keep], _edges(mesh)[keep], close) if len(close[0]) else False
             hidden = (fl & np.uint8(HIDDEN)) != 0
             if near is not None and keep.any():
@@ -151,14 +151,19 @@ def _met(verts, faces, edge, rays):
     return out
 
 
-def _rays_near(mesh, rays):
-    """Of a few rays (:func:`_few`), those that pass within ``mesh``'s longest face edge of its
-    bounding sphere (:func:`_hits`), as a few rays: any other is farther than that edge from every
-    vertex of the mesh, so that :func:`_met` keeps the same faces without it."""
-    centre, radius = bounding_sphere(mesh)
-    grow = float(np.max(_edges(mesh))) * (1.0 + 1e-6) if mesh.n_faces else 0.0
-    near = _hits((np.ones(len(rays[0]), bool),) + tuple(rays), [(centre, radius + grow)])[0]
-    return tuple(a[near] for a in rays)
+def _rays_near(meshes, ids, rays):
+    """Per object of ``ids``, those of a few rays (:func:`_few`) that pass within its longest face
+    edge of its bounding sphere (:func:`_hits`, every object at once), as a few rays: any other is
+    farther than that edge from every vertex of the object, so that :func:`_met` keeps the same
+    faces without it."""
+    spheres = []
+    for k in ids:
+        mesh = meshes[k - 1]
+        centre, radius = bounding_sphere(mesh)
+        grow = _edges(mesh, longest=True) * (1.0 + 1e-6)
+        spheres.append((centre, radius + grow))
+    near = _hits((np.ones(len(rays[0]), bool),) + tuple(rays), spheres)
+    return [tuple(a[m] for a in rays) for m in near]
 
 
 def _narrowed(meshes, ids, verts, rays, want):
@@ -171,10 +176,9 @@ def _narrowed(meshes, ids, verts, rays, want):
         return want
     out = np.zeros(len(verts), bool)
     parts = _objects(meshes, ids, np.asarray(verts, np.float64), want, out)
-    for k, mesh, vs, wa, ou in parts:
+    for (k, mesh, vs, wa, ou), near in zip(parts, _rays_near(meshes, ids, few)):
         if not len(few[0]) or not wa.any():
             continue
-        near = _rays_near(mesh, few)
         if not len(near[0]):
             continue  # no ray comes within an edge of the object's bounds
         f = mesh.faces
