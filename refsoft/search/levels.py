@@ -20,16 +20,12 @@ and a later level drawn by the virtual pass.
 from __future__ import annotations
 
 import time
-from dataclasses import replace
 
 import numpy as np
 
 from .. import keys
-from .._parallel import parallel_range
 from ..raster import shade
-from ..raster._threads import SERIAL_MAX_VERTICES
-from . import CULLED, HIDDEN, _bounces, acceptance
-from ._several import accept
+from . import CULLED, meet
 from .bounces import (Bounce, bounding_sphere, first_bounces, gbuffer_of, later_bounces, level_rays, make_bounce,
                       object_parts, reaches, search_bounce, seen_reflectors, texel_reach, unfolded)
 from .virtual import virtual_pass
@@ -38,297 +34,17 @@ from .virtual import virtual_pass
 BOUNCE_DEPTH = keys.BOUNCE_DEPTH
 
 
-# --- exact acceptance -----------------------------------------------------------------------
-def _edges(mesh, longest=False):
-    """Each face's longest edge (F,) float64, or with ``longest`` the longest of them (0.0 without
-    faces); the last answers kept by mesh (the meshes of static objects are the same frame after
-    frame)."""
-    hit = _EDGES.get(id(mesh))
-    if hit is None or hit[0] is not mesh:
-        corners = np.asarray(mesh.vertices, np.float64)[mesh.faces]
-        out = np.max(np.linalg.norm(corners - corners[:, [1, 2, 0]], axis=2), axis=1)
-        if len(_EDGES) >= 256:
-            _EDGES.pop(next(iter(_EDGES)))
-        hit = _EDGES[id(mesh)] = (mesh, out, float(out.max()) if len(out) else 0.0)
-    return hit[2] if longest else hit[1]
-
-
-_EDGES = {}
-
-
-def _objects(meshes, ids, *arrays):
-    """Per object of ``ids``: (id, mesh, its rows of each of ``arrays`` (the objects' vertices
-    consecutive in that order))."""
-    start = 0
-    for k in ids:
-        mesh = meshes[k - 1]
-        sl = slice(start, start + mesh.n_vertices)
-        start += mesh.n_vertices
-        yield (k, mesh) + tuple(a[sl] for a in arrays)
-
-
-def _candidates(meshes, groups, near=None, rays=None):
-    """Candidates of :func:`refsoft.search.acceptance.draw` from ``groups``: (object ids, their
-    vertices (n, 3) world, virtual vertices (n, 3), flags (n,)) each, the objects' vertices
-    consecutive in that order. A triangle with a CULLED corner is left out; one with a HIDDEN
-    corner (its virtual vertex is where its walk stopped, not its image) is tried over the whole
-    box (the draw's rule for a corner it cannot project). With ``near = (camera, box)`` only the
-    triangles whose dilated bounds may meet ``box`` (:func:`_near`) are kept; with ``rays`` (the
-    valid ones, at most BOUNCE_FEW_RAYS) only those one of the rays can meet (:func:`_met`).
-    Returns the candidates, in the order of the groups, their objects and faces, and, per group,
-    how many it gave."""
-    from .acceptance import Candidates
-
-    virtual, real, normals, obj, tri, counts = [], [], [], [], [], []
-    for ids, verts, virt, flags in groups:
-        counts.append(0)
-        parts = _objects(meshes, ids, np.asarray(verts, np.float64), np.asarray(virt, np.float64), flags)
-        closes = _rays_near(meshes, ids, rays) if rays is not None else [None] * len(ids)
-        for (k, mesh, vs, vt, fl), close in zip(parts, closes):
-            culled = (fl & np.uint8(CULLED)) != 0
-            if culled.all():
-                continue  # not searched, or out of every ray's reach
-            f = mesh.faces
-            keep = ~(culled[f[:, 0]] | culled[f[:, 1]] | culled[f[:, 2]])
-            if rays is not None and keep.any():
-                keep[keep] = _met(vs, f[keep], _edges(mesh)[keep], close) if len(close[0]) else False
-            hidden = (fl & np.uint8(HIDDEN)) != 0
-            if near is not None and keep.any():
-                fk = f[keep]
-                used = np.zeros(len(vt), bool)
-                used[fk] = True  # the kept faces' corners only (each point's pixel is its own)
-                px = np.full((len(vt), 2), np.nan)
-                px[used] = _pixels(np.where(hidden[used][:, None], np.nan, vt[used]), near[0])
-                keep[keep] = _near(px[fk], near[1])
-            if not keep.any():
-                continue
-            f = f[keep]
-            v = vt[f]
-            v[hidden[f]] = np.nan
-            virtual.append(v)
-            real.append(vs[f])
-            normals.append(np.asarray(mesh.normals, np.float64)[f])
-            obj.append(np.full(len(f), k, np.int32))
-            tri.append(np.flatnonzero(keep))
-            counts[-1] += len(f)
-    cat = (lambda x, shape: np.ascontiguousarray(np.concatenate(x)) if x else np.zeros(shape))
-    cand = Candidates(cat(virtual, (0, 3, 3)), cat(real, (0, 3, 3)), cat(normals, (0, 3, 3)),
-                      cat(obj, (0,)).astype(np.int32), cat(tri, (0,)).astype(np.int64), 0)
-    return cand, counts
-
-
-def _met(verts, faces, edge, rays):
-    """(T,) bool: the faces a ray can meet. A ray meeting a triangle passes within its longest
-    edge of each of its corners (the hit lies in the triangle), so a face is kept when each of
-    its corners lies within that distance (and 1e-9 of it) of one of the rays (origin (P, 3),
-    direction (P, 3), the part ahead of the origin, and optionally its length (P,): a segment)."""
-    origin, direction = rays[:2]
-    length = np.ascontiguousarray(rays[2], np.float64) if len(rays) > 2 else np.full(len(origin), np.inf)
-    d = np.ascontiguousarray(direction / np.maximum(np.linalg.norm(direction, axis=1, keepdims=True), 1e-300))
-    origin = np.ascontiguousarray(origin, np.float64)
-    faces = np.asarray(faces)
-    if 3 * len(faces) < len(verts):  # a few faces of many vertices: their corners' distances only
-        used = np.zeros(len(verts), bool)
-        used[faces] = True
-        index = np.cumsum(used) - 1
-        verts, faces = verts[used], index[faces]
-    near = np.full(len(verts), np.inf)
-    some = np.ones(len(verts), bool)
-    if len(faces) and np.all(np.isfinite(length)):  # segments: a corner near one lies in their box, widened
-        grow = float(np.max(edge)) * (1.0 + 1e-6) + 1e-9
-        end = origin + length[:, None] * d
-        lo = np.minimum(origin, end).min(axis=0) - grow
-        hi = np.maximum(origin, end).max(axis=0) + grow
-        some = np.all((verts >= lo) & (verts <= hi), axis=1)
-    v = np.ascontiguousarray(verts[some] if not some.all() else verts, np.float64)
-    part = np.empty(len(v))
-    parallel_range(_bounces.ray_distances, len(v), v, origin, d, length, part,
-                   serial=len(v) * len(origin) <= SERIAL_MAX_VERTICES)
-    near[some] = part
-    out = np.empty(len(faces), bool)
-    parallel_range(_bounces.faces_within, len(faces), np.ascontiguousarray(faces), near,
-                   np.ascontiguousarray(edge, np.float64), out, serial=len(faces) <= SERIAL_MAX_VERTICES)
-    return out
-
-
-def _rays_near(meshes, ids, rays):
-    """Per object of ``ids``, those of a few rays (:func:`_few`) that pass within its longest face
-    edge of its bounding sphere (:func:`_hits`, every object at once), as a few rays: any other is
-    farther than that edge from every vertex of the object, so that :func:`_met` keeps the same
-    faces without it."""
-    spheres = []
-    for k in ids:
-        mesh = meshes[k - 1]
-        centre, radius = bounding_sphere(mesh)
-        grow = _edges(mesh, longest=True) * (1.0 + 1e-6)
-        spheres.append((centre, radius + grow))
-    near = _hits((np.ones(len(rays[0]), bool),) + tuple(rays), spheres)
-    return [tuple(a[m] for a in rays) for m in near]
-
-
-def _narrowed(meshes, ids, verts, rays, want):
-    """``want`` (n,) bool over the vertices of objects ``ids`` (consecutive in ``verts`` (n, 3),
-    in that order), narrowed, when the level's rays are few (:func:`_few`), to the corners of
-    the faces with every corner wanted that one of the rays can meet (:func:`_met`, the test
-    :func:`_candidates` applies): no other vertex's image can be drawn."""
-    few = _few(rays)
-    if few is None:
-        return want
-    out = np.zeros(len(verts), bool)
-    parts = _objects(meshes, ids, np.asarray(verts, np.float64), want, out)
-    for (k, mesh, vs, wa, ou), near in zip(parts, _rays_near(meshes, ids, few)):
-        if not len(few[0]) or not wa.any():
-            continue
-        if not len(near[0]):
-            continue  # no ray comes within an edge of the object's bounds
-        f = mesh.faces
-        keep = wa[f[:, 0]] & wa[f[:, 1]] & wa[f[:, 2]]
-        if keep.any():
-            keep[keep] = _met(vs, f[keep], _edges(mesh)[keep], near)
-            ou[f[keep]] = True  # a view of ``out``
-    return out
-
-
-def _few(rays):
-    """The valid rays of ``rays`` (valid, origin, direction[, length]) as (origin (P, 3),
-    direction (P, 3)[, length (P,)]) when there are at most BOUNCE_FEW_RAYS of them, else None."""
-    from .. import constants
-
-    valid = rays[0]
-    if valid.sum() > constants.BOUNCE_FEW_RAYS:
-        return None
-    return tuple(a[valid] for a in rays[1:])
-
-
-def _pixels(virtual, camera):
-    """View (x, y) of points (N, 3) (pixel units, x along a row); NaN for a point at or behind
-    the eye plane or not finite."""
-    from ..raster import _setup
-
-    clip = _setup.transform_points(np.where(np.isfinite(virtual), virtual, 0.0), camera.view_proj())
-    w = clip[:, 3]
-    good = (w > 0) & np.all(np.isfinite(virtual), axis=1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        x = (clip[:, 0] / w + 1.0) * 0.5 * camera.width
-        y = (1.0 - clip[:, 1] / w) * 0.5 * camera.height
-    return np.where(good[:, None], np.stack([x, y], axis=1), np.nan)
-
-
-def _near(corners, box):
-    """Per triangle (T, 3, 2 view x, y) whether its bounds, dilated as the draw dilates them
-    (SEVERAL_DILATE_PIXELS plus SEVERAL_DILATE_FRACTION of its longest edge, no more than of its
-    box's width plus height), may meet ``box`` (r0, r1, c0, c1); True for a corner it cannot
-    project."""
-    from .. import constants
-
-    lo, hi = corners.min(axis=1), corners.max(axis=1)
-    grow = constants.SEVERAL_DILATE_PIXELS + constants.SEVERAL_DILATE_FRACTION * np.sum(hi - lo, axis=1) + 1.0
-    r0, r1, c0, c1 = box
-    with np.errstate(invalid="ignore"):
-        meets = ((lo[:, 0] - grow < c1) & (hi[:, 0] + grow > c0) & (lo[:, 1] - grow < r1) & (hi[:, 1] + grow > r0))
-    return meets | ~np.all(np.isfinite(corners), axis=(1, 2))
-
-
-def _bounds(cand, camera, box):
-    """The candidates' dilated bounds over ``box``: (C, 4) view rows and columns, clipped."""
-    r0, r1, c0, c1 = box
-    with np.errstate(invalid="ignore"):  # the hidden corners' NaN bounds, replaced by the box
-        screen, bbox, dilate = acceptance._screen(cand.virtual, camera, box)
-    rows = np.clip(bbox[:, 0:2] + r0, r0, r1)  # the draw's rows are the box's, its columns the view's
-    cols = np.clip(bbox[:, 2:4], c0, c1)
-    return screen, bbox, dilate, np.concatenate([rows, cols], axis=1)
-
-
-def _hits(rays, spheres):
-    """(K, M) bool: which of the valid rays (M,) (:func:`_valid`) pass through each of ``spheres``
-    ((centre (3,), radius) each) ahead of their origin or start inside it (a ray that meets a
-    triangle inside a sphere does; the radius is widened by 1e-9 of itself and of the distance for
-    rounding; with a 4th array, the rays' lengths (M,), segments). Every sphere at once, each
-    pair's arithmetic its own."""
-    origin, direction = rays[1:3]
-    if not len(spheres):
-        return np.zeros((0, len(origin)), bool)
-    d = direction / np.maximum(np.linalg.norm(direction, axis=-1, keepdims=True), 1e-300)
-    centre = np.array([c for c, _ in spheres], np.float64)[:, None, :]
-    radius = np.array([r for _, r in spheres], np.float64)[:, None]
-    cp = centre - origin
-    dist = np.linalg.norm(cp, axis=-1)
-    t = np.maximum(np.sum(cp * d, axis=-1), 0.0)
-    if len(rays) > 3:
-        t = np.minimum(t, rays[3])
-    miss = np.linalg.norm(cp - t[..., None] * d, axis=-1)
-    return miss <= radius * (1.0 + 1e-9) + 1e-9 * dist
-
-
-def _towards(rays, spheres):
-    """(h, w) bool: the valid rays of ``rays`` that pass through one of ``spheres``
-    (:func:`_hits`)."""
-    out = np.zeros(rays[0].shape, bool)
-    out[rays[0]] = _hits(_valid(rays), spheres).any(axis=0)
-    return out
-
-
-def _valid(rays):
-    """The valid rays of ``rays`` alone, as rays (M,) (with their lengths, if given)."""
-    valid = rays[0]
-    return (np.ones(int(valid.sum()), bool),) + tuple(a[valid] for a in rays[1:])
-
-
-def _reaching(meshes, ids, rays):
-    """{object id: whether one of the valid rays (:func:`_valid`) passes through its bounding
-    sphere} for ``ids``."""
-    ids = list(ids)
-    hit = _hits(rays, [bounding_sphere(meshes[k - 1]) for k in ids]).any(axis=1)
-    return dict(zip(ids, (bool(x) for x in hit)))
-
-
-def _reached(meshes, group, rays):
-    """``group`` (:func:`_candidates`) with the vertices of every object whose bounding sphere no
-    ray of ``rays`` meets flagged CULLED (none of its triangles can be hit)."""
-    ids, verts, virtual, flags = group
-    sizes = [meshes[k - 1].n_vertices for k in ids]
-    reached = _reaching(meshes, ids, _valid(rays))
-    hit = [reached[k] for k in ids]
-    if all(hit):
-        return group
-    return ids, verts, virtual, np.where(np.repeat(hit, sizes), flags, np.uint8(CULLED)).astype(np.uint8)
-
-
-def _joined(a, b):
-    """Two sets of candidates as one, ``a``'s first."""
-    return replace(a, **{name: np.concatenate([getattr(a, name), getattr(b, name)])
-                         for name in ("virtual", "real", "normals", "object_id", "triangle")})
-
-
-def nearest_hits(cand, camera, box, rays):
-    """Per pixel of ``box`` the candidate whose real triangle the pixel's ray meets nearest, among
-    those whose dilated virtual triangle covers it (:func:`refsoft.search.acceptance.draw`'s
-    acceptance): ``(candidate (h, w) int64, -1 none; t (h, w); barycentrics u, v (h, w, 2))``."""
-    r0, r1, c0, c1 = (int(x) for x in box)
-    h, w = r1 - r0, c1 - c0
-    valid, origin, direction = (np.ascontiguousarray(a) for a in rays)
-    best_t = np.full((h, w), np.inf)
-    best_c = np.full((h, w), -1, np.int64)
-    best_uv = np.zeros((h, w, 2))
-    if len(cand.real) and valid.any():
-        screen, bbox, dilate, _ = _bounds(cand, camera, (r0, r1, c0, c1))
-        real = np.ascontiguousarray(cand.real)
-        parallel_range(accept, h, r0, c0, valid, acceptance._spans(valid), origin, direction, screen, bbox,
-                       dilate, real, acceptance._runs(real), best_t, best_c, best_uv, np.zeros((h, w), bool),
-                       np.full((h, w), -1, np.int64))
-    return best_c, best_t, best_uv
-
-
 def exact_level(scene, meshes, groups, camera, box, rays, reflectors_only=False):
     """One level drawn by exact per-pixel acceptance: the nearest hit of each pixel's ray among
-    the candidates of ``groups`` (:func:`_candidates`; the non-reflectors first, then the
-    reflectors searched at this level), shaded as :func:`refsoft.search.acceptance.draw` shades it.
+    the candidates of ``groups`` (:func:`refsoft.search.meet.candidates`; the non-reflectors first,
+    then the reflectors searched at this level), shaded as :func:`refsoft.search.acceptance.draw`
+    shades it.
 
     Parameters
     ----------
     scene, meshes, camera
     groups : list
-        As :func:`_candidates`.
+        As :func:`refsoft.search.meet.candidates`.
     box : (r0, r1, c0, c1)
     rays : (valid (h, w), origin (h, w, 3), direction (h, w, 3))
         Each pixel's reflected ray over ``box`` (``valid``: the level's stencil).
@@ -351,30 +67,30 @@ def exact_level(scene, meshes, groups, camera, box, rays, reflectors_only=False)
     sub = box
     valid, origin, direction = rays
     if reflectors_only:  # the pixels whose rays meet a reflector, then what is nearest there
-        towards = _towards(rays, [bounding_sphere(meshes[k - 1]) for ids, *_ in groups[1:] for k in ids])
-        groups = groups[:1] + [_reached(meshes, g, (towards, origin, direction)) for g in groups[1:]]
-        ref, _ = _candidates(meshes, groups[1:], near=(camera, box), rays=_few((towards, origin, direction)))
-        first, t_first, _ = nearest_hits(ref, camera, box, (valid & towards, origin, direction))
-        meet = first >= 0
-        if not meet.any():
+        towards = meet.towards(rays, [bounding_sphere(meshes[k - 1]) for ids, *_ in groups[1:] for k in ids])
+        groups = groups[:1] + [meet.reached(meshes, g, (towards, origin, direction)) for g in groups[1:]]
+        ref, _ = meet.candidates(meshes, groups[1:], near=(camera, box), rays=meet.few((towards, origin, direction)))
+        first, t_first, _ = meet.nearest_hits(ref, camera, box, (valid & towards, origin, direction))
+        meets = first >= 0
+        if not meets.any():
             return colour, rid, drawn, {}
-        rows, cols = np.flatnonzero(meet.any(axis=1)), np.flatnonzero(meet.any(axis=0))
+        rows, cols = np.flatnonzero(meets.any(axis=1)), np.flatnonzero(meets.any(axis=0))
         sub = (r0 + int(rows[0]), r0 + int(rows[-1]) + 1, c0 + int(cols[0]), c0 + int(cols[-1]) + 1)
-        valid = valid & meet
+        valid = valid & meets
         # only a scene triangle met no farther than the reflector's hit can be nearer: the rays up
         # to that hit (and 1e-9 of it), and the scene's objects they can reach
-        upto = np.zeros(meet.shape)
-        upto[meet] = t_first[meet] * np.linalg.norm(direction[meet], axis=-1) * (1.0 + 1e-9)
+        upto = np.zeros(meets.shape)
+        upto[meets] = t_first[meets] * np.linalg.norm(direction[meets], axis=-1) * (1.0 + 1e-9)
         segments = (valid, origin, direction, upto)
-        scene_cand, _ = _candidates(meshes, [_reached(meshes, groups[0], segments)], near=(camera, sub),
-                                    rays=_few(segments))
-        cand = _joined(scene_cand, ref)
+        scene_cand, _ = meet.candidates(meshes, [meet.reached(meshes, groups[0], segments)], near=(camera, sub),
+                                        rays=meet.few(segments))
+        cand = meet.joined(scene_cand, ref)
     else:
-        groups = [_reached(meshes, g, rays) for g in groups]
-        cand, _ = _candidates(meshes, groups, near=(camera, box), rays=_few(rays))
+        groups = [meet.reached(meshes, g, rays) for g in groups]
+        cand, _ = meet.candidates(meshes, groups, near=(camera, box), rays=meet.few(rays))
     sl = (slice(sub[0] - r0, sub[1] - r0), slice(sub[2] - c0, sub[3] - c0))
     valid, origin, direction = valid[sl], origin[sl], direction[sl]
-    best_c, best_t, best_uv = nearest_hits(cand, camera, sub, (valid, origin, direction))
+    best_c, best_t, best_uv = meet.nearest_hits(cand, camera, sub, (valid, origin, direction))
     hit = best_c >= 0
     obj = np.zeros(best_c.shape, np.int32)
     obj[hit] = cand.object_id[best_c[hit]]
@@ -492,7 +208,7 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report, pa
     ids = [k for k, o in enumerate(scene.objects, start=1) if not o.reflector]
     if opt.images == "all":  # drawn by each pixel's ray: what no ray meets cannot be drawn
         rays = level_rays(bounce)
-        reached = _reaching(meshes, range(1, len(scene.objects) + 1), _valid(rays))
+        reached = meet.reaching(meshes, range(1, len(scene.objects) + 1), meet.valid_rays(rays))
         reach = reached.get
     else:
         texels = texel_reach(bounce.position, bounce.normal, bounce.eye, bounce.mask)
@@ -501,7 +217,7 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report, pa
     # are CULLED (their triangles are not drawn)
     seen = np.repeat([reach(k) for k in ids], [meshes[k - 1].n_vertices for k in ids]).astype(bool)
     if opt.images == "all":  # with a few rays, only the corners of the faces they can meet
-        seen = _narrowed(meshes, ids, vertices, rays, seen)
+        seen = meet.narrowed(meshes, ids, vertices, rays, seen)
     virtual = np.zeros((len(vertices), 3))
     flags = np.full(len(vertices), CULLED, np.uint8)
     res = _search(bounce, gb, vertices, seen, opt, starts, path, 0)
@@ -517,7 +233,7 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report, pa
         verts = np.asarray(meshes[k - 1].vertices, np.float64)
         want = np.ones(len(verts), bool)
         if opt.images == "all":
-            want = _narrowed(meshes, [k], verts, rays, want)
+            want = meet.narrowed(meshes, [k], verts, rays, want)
         r = _search(bounce, gb, verts, want, opt, starts, path, k)
         virt, fl = np.zeros((len(verts), 3)), np.full(len(verts), CULLED, np.uint8)
         virt[want], fl[want] = unfolded(bounce, r, verts[want]), r.flags
@@ -534,7 +250,8 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report, pa
         stencil = bounce.stencil()
         colour, rid, covered, _ = virtual_pass(scene, parts, camera, stencil, bounce.box, "discard")
         rparts = sum((object_parts(meshes, k, v, fl) for k, _, v, fl in found), [])
-        nxt = later_bounces(bounce, seen_reflectors(parts, rparts, camera, stencil, bounce.box), meshes) if found else []
+        shows = seen_reflectors(parts, rparts, camera, stencil, bounce.box) if found else {}
+        nxt = later_bounces(bounce, shows, meshes) if found else []
     for b in nxt:
         blend(colour, rid, covered, depth, bounce.box, b,
               draw_bounce(scene, meshes, b, camera, vertices, opt, report, path, keep, starts), scene)
@@ -593,19 +310,19 @@ def deepen(scene, view, k, stencil, box, out, refl, parts, opt, search_first, ke
         from .acceptance import pixel_rays
 
         rays = pixel_rays(camera, view.meshes[k - 1], view.view.triangle, stencil, box)
-        reached = _reaching(view.meshes, scene.reflector_ids, _valid(rays))
+        reached = meet.reaching(view.meshes, scene.reflector_ids, meet.valid_rays(rays))
         reach = reached.get
     else:
         texels = texel_reach(gb.position, gb.normal, eye, gb.mask, gb.origin)
         reach = (lambda b: reaches(texels, *bounding_sphere(view.meshes[b - 1])))
     near = [b for b in scene.reflector_ids if b != k and reach(b)]  # the others no reflected ray comes near: nothing
     if near and opt.images == "all":  # the rays that can meet one of them, as exact_level takes them
-        towards = (_towards(rays, [bounding_sphere(view.meshes[b - 1]) for b in near]), rays[1], rays[2])
+        towards = (meet.towards(rays, [bounding_sphere(view.meshes[b - 1]) for b in near]), rays[1], rays[2])
     for b in near:
         verts = np.asarray(view.meshes[b - 1].vertices, np.float64)
         want = np.ones(len(verts), bool)
         if opt.images == "all":  # with a few rays, only the corners of the faces they can meet
-            want = _narrowed(view.meshes, [b], verts, towards, want)
+            want = meet.narrowed(view.meshes, [b], verts, towards, want)
         virtual, flags = np.zeros((len(verts), 3)), np.full(len(verts), CULLED, np.uint8)
         virtual[want], flags[want] = search_first(verts[want])
         first["searched"] += int(want.sum())

@@ -163,17 +163,17 @@ def test_several_bounces_give_the_same_bits_with_one_thread(renders):
 @pytest.mark.parametrize("name", ["two_balls", "ants"])
 def test_the_reach_test_skips_nothing_that_is_drawn(monkeypatch, renders, name):
     """Reflectors and objects no reflected ray can reach are not searched at a later bounce
-    (``may_see``, ``reaches``; drawn by exact acceptance, the rays of the pixels themselves: ``_hits``,
-    and with a few rays the triangles none of them can meet, ``_met``):
+    (``may_see``, ``reaches``; drawn by exact acceptance, the rays of the pixels themselves: ``meet.hits``,
+    and with a few rays the triangles none of them can meet, ``meet.met``):
     the picture is the one searching everything gives (the ants' eyes: 8 reflectors among many
     objects, most out of each other's reach)."""
     import refsoft
-    from refsoft.search import levels
+    from refsoft.search import levels, meet
 
     scene = two_balls() if name == "two_balls" else refsoft.load_scene("ants", width=320, height=240)
     kept = renders[3] if name == "two_balls" else FrameDriver(scene, RenderOptions(bounces=3)).render_frame(0)
     monkeypatch.setattr(levels, "reaches", lambda *a: True)
-    monkeypatch.setattr(levels, "_hits", lambda rays, spheres: np.ones((len(spheres), len(rays[1])), bool))  # all
+    monkeypatch.setattr(meet, "hits", lambda rays, spheres: np.ones((len(spheres), len(rays[1])), bool))  # all
     monkeypatch.setattr(refsoft.constants, "BOUNCE_FEW_RAYS", -1)  # no triangle left out for a few rays
     every = FrameDriver(scene, RenderOptions(bounces=3)).render_frame(0)
     for key, a in kept.arrays.items():
@@ -229,11 +229,11 @@ def test_the_trace_of_a_later_bounce_refuses_a_path_it_cannot_replay(through, me
 
 
 def test_the_faces_a_few_rays_can_meet_are_the_naive_ones():
-    """levels._met (kernel ``_bounces.ray_distances``) keeps the faces the one-ray-at-a-time
+    """meet.met (kernel ``_bounces.ray_distances``) keeps the faces the one-ray-at-a-time
     reference keeps, keeps every face a ray meets (a segment: within its length), and is the same
     with one thread."""
     from naive_bounces import faces_met, ray_all_triangles
-    from refsoft.search import levels
+    from refsoft.search import meet
 
     rng = np.random.default_rng(5)
     verts = (rng.normal(size=(400, 1, 3)) + 0.1 * rng.normal(size=(400, 3, 3))).reshape(-1, 3)
@@ -242,17 +242,17 @@ def test_the_faces_a_few_rays_can_meet_are_the_naive_ones():
     edge = np.max(np.linalg.norm(corners - corners[:, [1, 2, 0]], axis=2), axis=1)
     origin = rng.normal(size=(9, 3)) * 3.0
     direction = 2.0 * (corners[:9].mean(axis=1) - origin)  # through a triangle each, not unit
-    got = levels._met(verts, faces, edge, (origin, direction))
+    got = meet.met(verts, faces, edge, (origin, direction))
     assert np.array_equal(got, faces_met(verts, faces, edge, origin, direction))
     assert 0 < got.sum() < len(faces)
     met = np.zeros(len(faces), bool)
     for o, d in zip(origin, direction):
         met |= ray_all_triangles(o, d / np.linalg.norm(d), corners)[3]
     assert met[:9].all() and np.all(got[met])
-    few = levels._met(verts, faces[::9], edge[::9], (origin, direction))  # their corners' distances only
+    few = meet.met(verts, faces[::9], edge[::9], (origin, direction))  # their corners' distances only
     assert np.array_equal(few, got[::9])
     length = 0.7 * np.linalg.norm(direction, axis=1)  # segments: 1.4 times the way to the triangle aimed at
-    short = levels._met(verts, faces, edge, (origin, direction, length))
+    short = meet.met(verts, faces, edge, (origin, direction, length))
     assert np.array_equal(short, faces_met(verts, faces, edge, origin, direction, length))
     assert np.all(got[short]) and short.sum() < got.sum()
     before = np.zeros(len(faces), bool)
@@ -261,7 +261,7 @@ def test_the_faces_a_few_rays_can_meet_are_the_naive_ones():
         before |= hit & (t <= L)
     assert before.sum() >= 5 and np.all(short[before])
     with one_thread():
-        assert np.array_equal(got, levels._met(verts, faces, edge, (origin, direction)))
+        assert np.array_equal(got, meet.met(verts, faces, edge, (origin, direction)))
 
 
 def test_the_start_of_a_later_bounce_is_the_naive_best_sample():
