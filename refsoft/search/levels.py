@@ -34,7 +34,7 @@ from .virtual import virtual_pass
 BOUNCE_DEPTH = keys.BOUNCE_DEPTH
 
 
-def exact_level(scene, meshes, groups, camera, box, rays, reflectors_only=False):
+def exact_level(scene, meshes, groups, camera, box, rays, reflectors_only=False, towards=None):
     """One level drawn by exact per-pixel acceptance: the nearest hit of each pixel's ray among
     the candidates of ``groups`` (:func:`refsoft.search.meet.candidates`; the non-reflectors first,
     then the reflectors searched at this level), shaded as :func:`refsoft.search.acceptance.draw`
@@ -51,6 +51,9 @@ def exact_level(scene, meshes, groups, camera, box, rays, reflectors_only=False)
     reflectors_only : bool
         Only the reflectors are wanted: the pixels whose rays meet a reflector's candidate are
         decided, with every candidate, and nothing is drawn.
+    towards : ndarray (h, w) bool, optional
+        With ``reflectors_only``: the rays that pass through one of the reflectors' bounding
+        spheres (:func:`refsoft.search.meet.towards`), when the caller has them.
 
     Returns
     -------
@@ -67,7 +70,8 @@ def exact_level(scene, meshes, groups, camera, box, rays, reflectors_only=False)
     sub = box
     valid, origin, direction = rays
     if reflectors_only:  # the pixels whose rays meet a reflector, then what is nearest there
-        towards = meet.towards(rays, [bounding_sphere(meshes[k - 1]) for ids, *_ in groups[1:] for k in ids])
+        if towards is None:
+            towards = meet.towards(rays, [bounding_sphere(meshes[k - 1]) for ids, *_ in groups[1:] for k in ids])
         groups = groups[:1] + [meet.reached(meshes, g, (towards, origin, direction)) for g in groups[1:]]
         ref, _ = meet.candidates(meshes, groups[1:], near=(camera, box), rays=meet.few((towards, origin, direction)))
         first, t_first, _ = meet.nearest_hits(ref, camera, box, (valid & towards, origin, direction))
@@ -310,14 +314,17 @@ def deepen(scene, view, k, stencil, box, out, refl, parts, opt, search_first, ke
         from .acceptance import pixel_rays
 
         rays = pixel_rays(camera, view.meshes[k - 1], view.view.triangle, stencil, box)
-        reached = meet.reaching(view.meshes, scene.reflector_ids, meet.valid_rays(rays))
-        reach = reached.get
+        others = [b for b in scene.reflector_ids if b != k]
+        hit = meet.hits(meet.valid_rays(rays), [bounding_sphere(view.meshes[b - 1]) for b in others])  # (K, M)
+        reach = dict(zip(others, (bool(x) for x in hit.any(axis=1)))).get
     else:
         texels = texel_reach(gb.position, gb.normal, eye, gb.mask, gb.origin)
         reach = (lambda b: reaches(texels, *bounding_sphere(view.meshes[b - 1])))
     near = [b for b in scene.reflector_ids if b != k and reach(b)]  # the others no reflected ray comes near: nothing
     if near and opt.images == "all":  # the rays that can meet one of them, as exact_level takes them
-        towards = (meet.towards(rays, [bounding_sphere(view.meshes[b - 1]) for b in near]), rays[1], rays[2])
+        through = np.zeros(rays[0].shape, bool)
+        through[rays[0]] = hit[[others.index(b) for b in near]].any(axis=0)
+        towards = (through, rays[1], rays[2])
     for b in near:
         verts = np.asarray(view.meshes[b - 1].vertices, np.float64)
         want = np.ones(len(verts), bool)
@@ -333,7 +340,7 @@ def deepen(scene, view, k, stencil, box, out, refl, parts, opt, search_first, ke
         ids = [j for j, o in enumerate(scene.objects, start=1) if not o.reflector]
         virtual = refl.virtual64 if refl.virtual64 is not None else refl.virtual.astype(np.float64)
         *_, seen = exact_level(scene, view.meshes, [(ids, view.vertices, virtual, refl.result.flags)] + found, camera,
-                               box, rays, reflectors_only=True)
+                               box, rays, reflectors_only=True, towards=towards[0])  # found: all of near
         to = np.where(rays[0][..., None], rays[1] - eye, 0.0)
         path = np.linalg.norm(to, axis=-1)
         direction = to / np.maximum(path, 1e-300)[..., None]
