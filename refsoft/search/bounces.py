@@ -411,7 +411,7 @@ def _nearest(parts, camera, box):
     flags, local = np.concatenate(flags), np.concatenate(local)
     out = (flags & np.uint8(CULLED | HIDDEN)) != 0
     keep = ~(out[faces[:, 0]] | out[faces[:, 1]] | out[faces[:, 2]])
-    keep[keep] = _over(clip[faces[keep]], camera, box)
+    keep[keep] = _over(clip, faces[keep], camera, box)
     faces, face_obj, local = faces[keep], face_obj[keep], local[keep]
     if not len(faces):
         return None
@@ -421,20 +421,21 @@ def _nearest(parts, camera, box):
     return frags.triangle, face_obj, local
 
 
-def _over(clip, camera, box):
-    """(T,) bool: the triangles (T, 3, 4) clip space that may cover a pixel of ``box``: those with
-    a corner at or behind the eye plane (``w <= 0``: clipped, kept), and those whose projected
-    bounds, widened by a pixel (the snapping moves a corner by less), meet the box. A part of
-    a triangle that clipping keeps projects inside its projected bounds."""
-    w = clip[..., 3]
-    ahead = np.all(w > 0, axis=1)
+def _over(clip, faces, camera, box):
+    """(T,) bool: the triangles ``faces`` (T, 3) of points ``clip`` (V, 4) that may cover a pixel of
+    ``box``: all but those whose corners all lie ahead of the eye plane (``w > 0``; a corner at
+    or behind it is clipped) and beyond one side of the box widened by a pixel (the snapping
+    moves a corner by less): each corner's side codes, the triangle's their common bits. A part
+    of a triangle that clipping keeps projects inside its projected bounds."""
+    w = clip[:, 3]
     with np.errstate(divide="ignore", invalid="ignore"):
-        x = (clip[..., 0] / w + 1.0) * 0.5 * camera.width
-        y = (1.0 - clip[..., 1] / w) * 0.5 * camera.height
+        x = (clip[:, 0] / w + 1.0) * 0.5 * camera.width
+        y = (1.0 - clip[:, 1] / w) * 0.5 * camera.height
     r0, r1, c0, c1 = box
-    meets = ((x.max(axis=1) >= c0 - 1) & (x.min(axis=1) <= c1 + 1) & (y.max(axis=1) >= r0 - 1)
-             & (y.min(axis=1) <= r1 + 1))
-    return ~ahead | meets
+    code = ((x < c0 - 1).astype(np.uint8) | ((x > c1 + 1).astype(np.uint8) << 1) | ((y < r0 - 1).astype(np.uint8) << 2)
+            | ((y > r1 + 1).astype(np.uint8) << 3))
+    code[~(w > 0)] = 0  # clipped: kept
+    return (code[faces[:, 0]] & code[faces[:, 1]] & code[faces[:, 2]]) == 0
 
 
 def _arrive(mesh, face, origin, direction):

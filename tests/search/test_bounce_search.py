@@ -312,7 +312,7 @@ def test_the_paper_presets_reflectors_seen_skip_nothing_that_is_drawn(monkeypatc
     monkeypatch.setattr(bounces, "_over", lambda *a: calls.append(over(*a)) or calls[-1])
     kept = FrameDriver(scene, opt).render_frame(0)
     assert sum(len(c) - c.sum() for c in calls) > 0  # triangles were left out
-    monkeypatch.setattr(bounces, "_over", lambda clip, camera, box: np.ones(len(clip), bool))
+    monkeypatch.setattr(bounces, "_over", lambda clip, faces, camera, box: np.ones(len(faces), bool))
     every = FrameDriver(scene, opt).render_frame(0)
     assert (kept.arrays[BOUNCE_DEPTH] == 2).sum() > 0
     for key, a in kept.arrays.items():
