@@ -100,3 +100,44 @@ def trace_paths(scene, meshes, camera, view, bounces, sees_itself=(), offset=0.0
             depth[r, c] = taken
     return rid, depth, hits
 
+
+
+def faces_met(verts, faces, edge, origin, direction, length=None):
+    """(T,) bool: the faces each of whose corners lies within the face's longest edge (and 1e-9
+    of it) of one of the rays (origin (P, 3), direction (P, 3), the part ahead of the origin, up
+    to ``length`` (P,) when given): every face a ray meets (within its length) is among them. One
+    ray and one corner at a time."""
+    out = np.zeros(len(faces), bool)
+    length = np.full(len(origin), np.inf) if length is None else length
+    for i, (face, e) in enumerate(zip(faces, edge)):
+        ok = True
+        for c in face:
+            best = np.inf
+            for o, d, L in zip(origin, direction, length):
+                u = _unit(d)
+                t = min(max(float(np.dot(verts[c] - o, u)), 0.0), L)
+                best = min(best, float(np.linalg.norm(verts[c] - o - t * u)))
+            ok &= best <= e * (1.0 + 1e-9)
+        out[i] = ok
+    return out
+
+
+def best_starts(samples, rel, own=None, has=None):
+    """Per vertex (n, 3) the sample (K, 9: P, N, U) of highest float64 score, the first among
+    equals: the halfway vector of the eye direction U and the normalized direction to the vertex,
+    normalized, dotted with N. All vertices and samples at once in NumPy. With ``own`` (n, 9)
+    and ``has`` (n,) bool: K where a vertex's own sample scores higher than every one. (n,) int64."""
+    def scores(g, v):
+        d = v[:, None, :] - g[..., 0:3]
+        b = d / np.maximum(np.linalg.norm(d, axis=-1, keepdims=True), 1e-300)
+        hv = g[..., 6:9] + b
+        hv /= np.maximum(np.linalg.norm(hv, axis=-1, keepdims=True), 1e-300)
+        return np.sum(hv * g[..., 3:6], axis=-1)
+
+    v = rel.astype(np.float64)
+    s = scores(samples.astype(np.float64)[None], v)
+    best = np.argmax(s, axis=1)
+    if own is not None:
+        mine = scores(own.astype(np.float64)[:, None, :], v)[:, 0]
+        best[has & (mine > s.max(axis=1))] = len(samples)
+    return best

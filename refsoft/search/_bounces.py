@@ -46,3 +46,70 @@ def search_each(lo, hi, G, mask, V, starts, n_candidates, cap, fp, pixel, score,
         iterations[i] = it
         flags[i] = fl
 
+
+
+@kernel
+def ray_distances(lo, hi, V, O, D, L, near):
+    """Rows ``lo .. hi - 1`` of ``near`` (N,) float64: the least distance from point ``V[i]``
+    (N, 3) to the rays of origins ``O`` (P, 3) and unit directions ``D`` (P, 3), each ray the part
+    ahead of its origin up to length ``L`` (P,) (np.inf: all of it; ``t = min(max((V - O).D, 0),
+    L)``, the distance ``|V - O - t D|``), the rays in order (np.inf with none)."""
+    for i in range(lo, hi):
+        best = np.inf
+        for p in range(O.shape[0]):
+            cx, cy, cz = V[i, 0] - O[p, 0], V[i, 1] - O[p, 1], V[i, 2] - O[p, 2]
+            t = (cx * D[p, 0] + cy * D[p, 1]) + cz * D[p, 2]
+            if t < 0.0:
+                t = 0.0
+            if t > L[p]:
+                t = L[p]
+            ex, ey, ez = cx - t * D[p, 0], cy - t * D[p, 1], cz - t * D[p, 2]
+            d2 = (ex * ex + ey * ey) + ez * ez
+            if d2 < best:
+                best = d2
+        near[i] = np.sqrt(best)  # the root of the least square: the least root (sqrt is monotonic)
+
+
+@kernel
+def faces_within(lo, hi, faces, near, edge, out):
+    """Rows ``lo .. hi - 1`` of ``out`` (T,) bool: whether each corner of face ``faces[i]`` (T, 3)
+    lies within ``edge[i] * (1 + 1e-9)`` of a ray (``near`` (V,): :func:`ray_distances`)."""
+    for i in range(lo, hi):
+        e = edge[i] * (1.0 + 1e-9)
+        out[i] = near[faces[i, 0]] <= e and near[faces[i, 1]] <= e and near[faces[i, 2]] <= e
+
+
+@kernel
+def _score(S, k, V, i):
+    """Float64 score of vertex ``V[i]`` at sample ``S[k]`` (P, N, U): :func:`best_starts`'s."""
+    dx, dy, dz = V[i, 0] - S[k, 0], V[i, 1] - S[k, 1], V[i, 2] - S[k, 2]
+    d = np.sqrt((dx * dx + dy * dy) + dz * dz)
+    if d < 1e-300:
+        d = 1e-300
+    hx, hy, hz = S[k, 6] + dx / d, S[k, 7] + dy / d, S[k, 8] + dz / d
+    m = np.sqrt((hx * hx + hy * hy) + hz * hz)
+    if m < 1e-300:
+        m = 1e-300
+    return ((hx / m) * S[k, 3] + (hy / m) * S[k, 4]) + (hz / m) * S[k, 5]
+
+
+@kernel
+def best_starts(lo, hi, S, V, X, has, out):
+    """Rows ``lo .. hi - 1`` of ``out`` (n,) int64: per vertex ``V[i]`` (n, 3) float64 (relative to
+    the G-buffer's origin) the sample of ``S`` (K, 9) float64 (P, N, U of K covered pixels) where
+    its score is highest, the first among equals (a NaN score counts as highest, as np.argmax
+    takes it); K where ``has[i]`` and its own sample ``X[i]`` (n, 9) scores higher still (its
+    previous frame's pixel). Score in float64: ``b = (V - P) / max(|V - P|, 1e-300)``, ``h = (U +
+    b) / max(|U + b|, 1e-300)``, ``s = (h.x N.x + h.y N.y) + h.z N.z``."""
+    for i in range(lo, hi):
+        best, top = -1, 0.0
+        for k in range(S.shape[0]):
+            s = _score(S, k, V, i)
+            if s != s:  # NaN: the highest
+                best, top = k, s
+                break
+            if best < 0 or s > top:
+                best, top = k, s
+        if has[i] and top == top and _score(X, i, V, i) > top:
+            best = S.shape[0]
+        out[i] = best

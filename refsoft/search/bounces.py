@@ -9,10 +9,11 @@ the camera's ray through its reflection pixel at the whole path's length, ``|O -
 finds the reflectors seen in a level by rasterizing their virtual triangles
 (:func:`seen_reflectors`, :func:`first_bounces`, :func:`later_bounces`).
 
-What a later level does not do: coherence (each vertex starts from the covered pixel, among
+Each vertex starts from its reflection pixel at the previous frame's bounce of the same path
+where that pixel is still in the stencil (coherence), else from the covered pixel, among
 :data:`~refsoft.constants.BOUNCE_START_SAMPLES` spread over the stencil, where its score is
-highest) and the inverse search (a hidden vertex's triangles are left out, as ``inverse =
-"discard"`` does, or, drawn by exact acceptance, tried everywhere).
+highest. What a later level does not do: the inverse search (a hidden vertex's triangles are
+left out, as ``inverse = "discard"`` does, or, drawn by exact acceptance, tried everywhere).
 """
 
 from __future__ import annotations
@@ -25,8 +26,9 @@ from .. import constants
 from .._numba import readonly
 from .._parallel import parallel_range
 from ..raster import CULL_MODES, GBuffer, _setup, rasterize_trusted
+from ..raster._threads import SERIAL_MAX_VERTICES
 from ..raster.rays import primary_rays, ray_triangle
-from . import CULLED, HIDDEN, SearchResult, _bounces
+from . import CULLED, HIDDEN, RESTARTED, SearchResult, _bounces
 
 
 @dataclass(frozen=True, eq=False)
@@ -107,7 +109,8 @@ def gbuffer_of(bounce: Bounce, camera, precision="float32") -> GBuffer:
     return GBuffer(pos, nrm, m.copy(), depth, tri, camera.view_proj(), origin)
 
 
-def search_bounce(bounce: Bounce, gb: GBuffer, vertices, neighbourhood="cross", cap=None) -> SearchResult:
+def search_bounce(bounce: Bounce, gb: GBuffer, vertices, neighbourhood="cross", cap=None,
+                  previous=None) -> SearchResult:
     """The walk of spec section 4.2 for every vertex on a bounce's G-buffer, each pixel's eye
     its own (:class:`Bounce`).
 
@@ -121,12 +124,17 @@ def search_bounce(bounce: Bounce, gb: GBuffer, vertices, neighbourhood="cross", 
     neighbourhood : {"cross", "box"}
     cap : int, optional
         Iteration cap (default ``2 * (width + height)``).
+    previous : ndarray (N, 2) int, optional
+        Each vertex's reflection pixel in the view (row, column) at the previous frame's bounce of
+        the same path, or -1: coherence. A vertex starts there when the pixel is in this
+        bounce's stencil and its score there is higher than at the best sample (:func:`_starts`),
+        else from the best sample (flag RESTARTED when the pixel is off the stencil).
 
     Returns
     -------
     SearchResult
         Pixels in the G-buffer (the bounce's box); flags: HIDDEN where the vertex lies behind the
-        end pixel's tangent plane, CAPPED, BORDER.
+        end pixel's tangent plane, CAPPED, BORDER, RESTARTED.
     """
     from . import default_cap
 
@@ -145,27 +153,57 @@ def search_bounce(bounce: Bounce, gb: GBuffer, vertices, neighbourhood="cross", 
     eye_rel = np.ascontiguousarray((bounce.eye - gb.origin).astype(dt))
     parallel_range(_bounces.pack_eyes, h, gb.position, gb.normal, gb.mask, eye_rel, fp, G)
     rel = np.ascontiguousarray((verts - gb.origin).astype(dt))
-    starts = _starts(G, gb.mask, rel)
+    own, restarted = own_starts(bounce, previous, n)
+    starts = _starts(G, gb.mask, rel, own)
     flags[:] = 0
     parallel_range(_bounces.search_each, n, G, gb.mask, rel, starts, constants.NEIGHBOURHOODS[neighbourhood], cap, fp,
                    pixel, score, margin, iterations, flags)
+    flags[restarted] |= np.uint8(RESTARTED)
     return SearchResult(pixel, score, margin, iterations, flags, neighbourhood, "discard", cap)
 
 
-def _starts(G, mask, rel):
+def own_starts(bounce: Bounce, previous, n):
+    """Coherence at a later level: ``previous`` (n, 2) int view pixels (-1 none) or None as the
+    bounce's pixels where they are in its stencil, (n, 2) int64 (-1 elsewhere), and (n,) bool
+    the vertices whose previous pixel is off it (they restart)."""
+    own = np.full((n, 2), -1, np.int64)
+    if previous is None:
+        return own, np.zeros(n, bool)
+    prev = np.asarray(previous, np.int64).reshape(n, 2)
+    h, w = bounce.mask.shape
+    r, c = prev[:, 0] - bounce.box[0], prev[:, 1] - bounce.box[2]
+    given = prev[:, 0] >= 0
+    kept = given & (r >= 0) & (r < h) & (c >= 0) & (c < w)
+    kept[kept] = bounce.mask[r[kept], c[kept]]
+    own[kept] = np.stack([r[kept], c[kept]], axis=1)
+    return own, given & ~kept
+
+
+def _starts(G, mask, rel, previous=None):
     """Per vertex the covered pixel of highest score among up to BOUNCE_START_SAMPLES covered
-    pixels taken evenly in row-major order (ties: the first): a stencil seen in a curved mirror
-    can be small and split, and no projection of the vertex points into it. (N, 2) int64."""
+    pixels taken evenly in row-major order (ties: the first; kernel
+    :func:`refsoft.search._bounces.best_starts`, in float64): a stencil seen in a curved mirror
+    can be small and split, and no projection of the vertex points into it. With ``previous``
+    (N, 2) int (covered pixels, or -1 none) a vertex's previous pixel where its score is higher
+    still. (N, 2) int64."""
     rows, cols = np.nonzero(mask)
     step = max(1, -(-len(rows) // constants.BOUNCE_START_SAMPLES))
     rows, cols = rows[::step], cols[::step]
-    g = G[rows, cols].astype(np.float64)  # (S, 9): P, N, U
-    d = rel.astype(np.float64)[:, None, :] - g[None, :, 0:3]
-    b = d / np.maximum(np.linalg.norm(d, axis=-1, keepdims=True), 1e-300)
-    hv = g[None, :, 6:9] + b
-    hv /= np.maximum(np.linalg.norm(hv, axis=-1, keepdims=True), 1e-300)
-    best = np.argmax(np.sum(hv * g[None, :, 3:6], axis=-1), axis=1)
-    return np.ascontiguousarray(np.stack([rows[best], cols[best]], axis=1), np.int64)
+    g = np.ascontiguousarray(G[rows, cols], np.float64)  # (S, 9): P, N, U
+    n = len(rel)
+    has = np.zeros(n, bool) if previous is None else np.asarray(previous)[:, 0] >= 0
+    own = np.zeros((n, 9))
+    if has.any():
+        own[has] = G[previous[has, 0], previous[has, 1]]
+    best = np.empty(n, np.int64)
+    parallel_range(_bounces.best_starts, n, g, np.ascontiguousarray(rel, np.float64), own, has, best,
+                   serial=n * len(g) <= SERIAL_MAX_VERTICES)
+    out = np.empty((n, 2), np.int64)
+    sampled = best < len(g)
+    out[sampled] = np.stack([rows[best[sampled]], cols[best[sampled]]], axis=1)
+    if not sampled.all():
+        out[~sampled] = previous[~sampled]
+    return out
 
 
 def unfolded(bounce: Bounce, result: SearchResult, vertices) -> np.ndarray:
@@ -199,7 +237,8 @@ def may_see(position, normal, eye, mask, centre, radius) -> bool:
     only when, at every covered texel, the ray reflected about its normal from its eye passes the
     sphere farther than ``radius`` plus BOUNCE_BOUND_FACTOR times the spread to its covered
     4-neighbours (the arc their rays' angle sweeps at the sphere's distance, and the distance
-    between their points), so that a ray from anywhere between texels misses it too.
+    between their points), so that a ray from anywhere between texels misses it too
+    (:func:`texel_reach` once per G-buffer, then :func:`reaches` per sphere).
 
     Parameters
     ----------
@@ -211,14 +250,28 @@ def may_see(position, normal, eye, mask, centre, radius) -> bool:
     centre : array_like (3,)
     radius : float
     """
+    return reaches(texel_reach(position, normal, eye, mask), centre, radius)
+
+
+def texel_reach(position, normal, eye, mask, origin=None):
+    """What :func:`may_see` tests of a G-buffer, for any number of spheres: per covered texel
+    (row-major order) its point (M, 3), its reflected ray's unit direction (M, 3), the largest
+    angle to its covered 4-neighbours' rays (M,) and distance to their points (M,), float64;
+    None when no texel is covered. Arguments as :func:`may_see`; with ``origin`` (3,) the
+    positions are relative to it (float32 or float64)."""
     rows, cols = np.nonzero(mask)
     if not len(rows):
-        return False
-    P = np.asarray(position, np.float64)
-    N = np.asarray(normal, np.float64)
+        return None
+    a0, a1, b0, b1 = int(rows[0]), int(rows[-1]) + 1, int(cols.min()), int(cols.max()) + 1
+    mask = mask[a0:a1, b0:b1]  # the covered texels' box: a neighbour outside it is not covered
+    rows, cols = rows - a0, cols - b0
+    P = np.asarray(position[a0:a1, b0:b1]).astype(np.float64)
+    if origin is not None:
+        P = np.where(mask[..., None], P + origin, 0.0)
+    N = np.asarray(normal[a0:a1, b0:b1], np.float64)
     E = np.asarray(eye, np.float64)
     p = P[rows, cols]
-    e = E if E.ndim == 1 else E[rows, cols]
+    e = E if E.ndim == 1 else E[a0:a1, b0:b1][rows, cols]
     i = p - e
     i /= np.maximum(np.linalg.norm(i, axis=1, keepdims=True), 1e-300)
     n = N[rows, cols]
@@ -238,10 +291,19 @@ def may_see(position, normal, eye, mask, centre, radius) -> bool:
         d = np.zeros(len(rows))
         d[ok] = np.linalg.norm(P[rr[ok], cc[ok]] - p[ok], axis=1)
         step = np.maximum(step, d)
+    return p, r, np.minimum(angle, np.pi), step
+
+
+def reaches(texels, centre, radius) -> bool:
+    """:func:`may_see`'s answer for a sphere from :func:`texel_reach`'s ``texels`` (False for
+    None)."""
+    if texels is None:
+        return False
+    p, r, angle, step = texels
     cp = np.asarray(centre, np.float64) - p
     t = np.maximum(np.sum(cp * r, axis=1), 0.0)
     miss = np.linalg.norm(cp - t[:, None] * r, axis=1)
-    spread = np.linalg.norm(cp, axis=1) * np.minimum(angle, np.pi) + step
+    spread = np.linalg.norm(cp, axis=1) * angle + step
     return bool(np.any(miss <= radius + constants.BOUNCE_BOUND_FACTOR * spread))
 
 
@@ -301,10 +363,41 @@ def seen_reflectors(parts, reflector_parts, camera, stencil, box):
     """
     if not reflector_parts:
         return {}
+    r0, r1, c0, c1 = (int(x) for x in box)
+    # the reflectors' triangles alone first: only a pixel one of them covers can show one
+    alone = _nearest(list(reflector_parts), camera, (r0, r1, c0, c1))
+    if alone is None:
+        return {}
+    sten = stencil[r0:r1, c0:c1] & (alone[0] >= 0)
+    rows, cols = np.flatnonzero(sten.any(axis=1)), np.flatnonzero(sten.any(axis=0))
+    if not len(rows):
+        return {}
+    sub = (r0 + int(rows[0]), r0 + int(rows[-1]) + 1, c0 + int(cols[0]), c0 + int(cols[-1]) + 1)
+    tri, face_obj, local = _nearest(list(parts) + list(reflector_parts), camera, sub)
+    obj = np.where(tri >= 0, face_obj[np.maximum(tri, 0)], 0)
+    sten = stencil[sub[0]:sub[1], sub[2]:sub[3]] & (tri >= 0)
+    reflectors = {int(p[3][0]) for p in reflector_parts if len(p[3])}
+    out = {}
+    sl = (slice(sub[0] - r0, sub[1] - r0), slice(sub[2] - c0, sub[3] - c0))
+    for b in (int(x) for x in np.unique(obj[sten])):
+        if b in reflectors:
+            m = np.zeros((r1 - r0, c1 - c0), bool)
+            face = np.full((r1 - r0, c1 - c0), -1, np.int64)
+            m[sl] = sten & (obj == b)
+            face[sl] = np.where(m[sl], local[np.maximum(tri, 0)], -1)
+            out[b] = (m, face)
+    return out
+
+
+def _nearest(parts, camera, box):
+    """The virtual triangles of ``parts`` (:func:`seen_reflectors`) in one z-buffer over ``box``,
+    those with a CULLED or HIDDEN corner left out: ``(triangle (h, w) int64 into the kept ones, -1
+    none; each kept one's object (T,) int32 and row in its part (T,) int64)``, or None when none
+    is kept."""
     vp = camera.view_proj()
     faces, face_obj, clips, flags, local = [], [], [], [], []
     offset = 0
-    for part in list(parts) + list(reflector_parts):
+    for part in parts:
         virtual, _, f, fobj, fl = part[:5]
         bad = ~np.all(np.isfinite(virtual), axis=1)
         clip = _setup.transform_points(np.where(bad[:, None], 0.0, virtual), vp)
@@ -316,23 +409,33 @@ def seen_reflectors(parts, reflector_parts, camera, stencil, box):
         offset += len(clip)
     faces, face_obj, clip = np.concatenate(faces), np.concatenate(face_obj), np.ascontiguousarray(np.concatenate(clips))
     flags, local = np.concatenate(flags), np.concatenate(local)
-    keep = ~np.any((flags[faces] & np.uint8(CULLED | HIDDEN)) != 0, axis=1)
+    out = (flags & np.uint8(CULLED | HIDDEN)) != 0
+    keep = ~(out[faces[:, 0]] | out[faces[:, 1]] | out[faces[:, 2]])
+    keep[keep] = _over(clip, faces[keep], camera, box)
     faces, face_obj, local = faces[keep], face_obj[keep], local[keep]
     if not len(faces):
-        return {}
+        return None
     faces32 = readonly(np.ascontiguousarray(faces, np.int32))
-    r0, r1, c0, c1 = (int(x) for x in box)
-    frags = rasterize_trusted(clip, faces32, camera.width, camera.height, (r0, r1, c0, c1), None, CULL_MODES[None])
-    tri = frags.triangle
-    obj = np.where(tri >= 0, face_obj[np.maximum(tri, 0)], 0)
-    sten = stencil[r0:r1, c0:c1] & (tri >= 0)
-    reflectors = {int(p[3][0]) for p in reflector_parts if len(p[3])}
-    out = {}
-    for b in (int(x) for x in np.unique(obj[sten])):
-        if b in reflectors:
-            m = sten & (obj == b)
-            out[b] = (m, np.where(m, local[np.maximum(tri, 0)], -1))
-    return out
+    frags = rasterize_trusted(clip, faces32, camera.width, camera.height, tuple(int(x) for x in box), None,
+                              CULL_MODES[None])
+    return frags.triangle, face_obj, local
+
+
+def _over(clip, faces, camera, box):
+    """(T,) bool: the triangles ``faces`` (T, 3) of points ``clip`` (V, 4) that may cover a pixel of
+    ``box``: all but those whose corners all lie ahead of the eye plane (``w > 0``; a corner at
+    or behind it is clipped) and beyond one side of the box widened by a pixel (the snapping
+    moves a corner by less): each corner's side codes, the triangle's their common bits. A part
+    of a triangle that clipping keeps projects inside its projected bounds."""
+    w = clip[:, 3]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x = (clip[:, 0] / w + 1.0) * 0.5 * camera.width
+        y = (1.0 - clip[:, 1] / w) * 0.5 * camera.height
+    r0, r1, c0, c1 = box
+    code = ((x < c0 - 1).astype(np.uint8) | ((x > c1 + 1).astype(np.uint8) << 1) | ((y < r0 - 1).astype(np.uint8) << 2)
+            | ((y > r1 + 1).astype(np.uint8) << 3))
+    code[~(w > 0)] = 0  # clipped: kept
+    return (code[faces[:, 0]] & code[faces[:, 1]] & code[faces[:, 2]]) == 0
 
 
 def _arrive(mesh, face, origin, direction):

@@ -20,228 +20,40 @@ and a later level drawn by the virtual pass.
 from __future__ import annotations
 
 import time
-from dataclasses import replace
 
 import numpy as np
 
 from .. import keys
-from .._parallel import parallel_range
 from ..raster import shade
-from . import CULLED, HIDDEN, acceptance
-from ._several import accept
+from . import CULLED, meet
 from .bounces import (Bounce, bounding_sphere, first_bounces, gbuffer_of, later_bounces, level_rays, make_bounce,
-                      may_see, object_parts, search_bounce, seen_reflectors, unfolded)
+                      object_parts, reaches, search_bounce, seen_reflectors, texel_reach, unfolded)
 from .virtual import virtual_pass
 
 #: The per-pixel array of the reflections taken (0 off reflectors).
 BOUNCE_DEPTH = keys.BOUNCE_DEPTH
 
 
-# --- exact acceptance -----------------------------------------------------------------------
-def _faces(meshes, ids):
-    """The faces of objects ``ids`` as rows of their vertices concatenated in that order (T, 3)
-    int64, each face's object (T,) int32 and local row (T,) int64, the normals concatenated
-    (V, 3) float64 and each face's longest edge (T,) float64; the last few answers kept (the
-    meshes of static objects are the same frame after frame)."""
-    key = tuple(id(meshes[k - 1]) for k in ids)
-    hit = _FACES.get(key)
-    if hit is not None and all(a is meshes[k - 1] for a, k in zip(hit[0], ids)):
-        return hit[1]
-    faces, owner, local, normals, edge, start = [], [], [], [], [], 0
-    for k in ids:
-        mesh = meshes[k - 1]
-        faces.append(mesh.faces.astype(np.int64) + start)
-        owner.append(np.full(mesh.n_faces, k, np.int32))
-        local.append(np.arange(mesh.n_faces, dtype=np.int64))
-        normals.append(np.asarray(mesh.normals, np.float64))
-        corners = np.asarray(mesh.vertices, np.float64)[mesh.faces]
-        edge.append(np.max(np.linalg.norm(corners - corners[:, [1, 2, 0]], axis=2), axis=1))
-        start += mesh.n_vertices
-    cat = (lambda x, shape, dt: np.concatenate(x) if x else np.zeros(shape, dt))
-    out = (cat(faces, (0, 3), np.int64), cat(owner, (0,), np.int32), cat(local, (0,), np.int64),
-           cat(normals, (0, 3), np.float64), cat(edge, (0,), np.float64))
-    if len(_FACES) >= 8:
-        _FACES.pop(next(iter(_FACES)))
-    _FACES[key] = (tuple(meshes[k - 1] for k in ids), out)
-    return out
-
-
-_FACES = {}
-
-
-def _candidates(meshes, groups, near=None, rays=None):
-    """Candidates of :func:`refsoft.search.acceptance.draw` from ``groups``: (object ids, their
-    vertices (n, 3) world, virtual vertices (n, 3), flags (n,)) each, the objects' vertices
-    consecutive in that order. A triangle with a CULLED corner is left out; one with a HIDDEN
-    corner (its virtual vertex is where its walk stopped, not its image) is tried over the whole
-    box (the draw's rule for a corner it cannot project). With ``near = (camera, box)`` only the
-    triangles whose dilated bounds may meet ``box`` (:func:`_near`) are kept; with ``rays`` (the
-    valid ones, at most BOUNCE_FEW_RAYS) only those one of the rays can meet (:func:`_met`).
-    Returns the candidates and, per group, how many it gave."""
-    from .acceptance import Candidates
-
-    virtual, real, normals, obj, tri, counts = [], [], [], [], [], []
-    for ids, verts, virt, flags in groups:
-        f, owner, local, nrm, edge = _faces(meshes, ids)
-        keep = ~np.any((flags[f] & np.uint8(CULLED)) != 0, axis=1)
-        if rays is not None and keep.any():
-            keep[keep] = _met(np.asarray(verts, np.float64), f[keep], edge[keep], rays)
-        if near is not None and keep.any():
-            virt_h = np.where(((flags & np.uint8(HIDDEN)) != 0)[:, None], np.nan, virt)
-            keep[keep] = _near(_pixels(virt_h, near[0])[f[keep]], near[1])
-        f = f[keep]
-        hidden = (flags & np.uint8(HIDDEN)) != 0
-        v = np.asarray(virt, np.float64)[f]
-        v[hidden[f]] = np.nan
-        virtual.append(v)
-        real.append(np.asarray(verts, np.float64)[f])
-        normals.append(nrm[f])
-        obj.append(owner[keep])
-        tri.append(local[keep])
-        counts.append(len(f))
-    cat = (lambda x, shape: np.ascontiguousarray(np.concatenate(x)) if x else np.zeros(shape))
-    cand = Candidates(cat(virtual, (0, 3, 3)), cat(real, (0, 3, 3)), cat(normals, (0, 3, 3)),
-                      cat(obj, (0,)).astype(np.int32), cat(tri, (0,)).astype(np.int64), 0)
-    return cand, counts
-
-
-def _met(verts, faces, edge, rays):
-    """(T,) bool: the faces a ray can meet. A ray meeting a triangle passes within its longest
-    edge of each of its corners (the hit lies in the triangle), so a face is kept when each of
-    its corners lies within that distance (and 1e-9 of it) of one of the rays (origin (P, 3),
-    unit direction (P, 3), the part ahead of the origin)."""
-    origin, direction = rays
-    d = direction / np.maximum(np.linalg.norm(direction, axis=1, keepdims=True), 1e-300)
-    used = np.zeros(len(verts), bool)
-    used[faces] = True  # the faces' vertices only
-    index = np.cumsum(used) - 1
-    v = verts[used]
-    near = np.full(len(v), np.inf)
-    for o, u in zip(origin, d):  # a few rays: one pass over the vertices each
-        cp = v - o
-        t = np.maximum(cp @ u, 0.0)
-        near = np.minimum(near, np.linalg.norm(cp - t[:, None] * u, axis=1))
-    return np.all(near[index[faces]] <= (edge * (1.0 + 1e-9))[:, None], axis=1)
-
-
-def _few(rays):
-    """The valid rays of ``rays`` as (origin (P, 3), direction (P, 3)) when there are at most
-    BOUNCE_FEW_RAYS of them, else None."""
-    from .. import constants
-
-    valid, origin, direction = rays
-    if valid.sum() > constants.BOUNCE_FEW_RAYS:
-        return None
-    return origin[valid], direction[valid]
-
-
-def _pixels(virtual, camera):
-    """View (x, y) of points (N, 3) (pixel units, x along a row); NaN for a point at or behind
-    the eye plane or not finite."""
-    from ..raster import _setup
-
-    clip = _setup.transform_points(np.where(np.isfinite(virtual), virtual, 0.0), camera.view_proj())
-    w = clip[:, 3]
-    good = (w > 0) & np.all(np.isfinite(virtual), axis=1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        x = (clip[:, 0] / w + 1.0) * 0.5 * camera.width
-        y = (1.0 - clip[:, 1] / w) * 0.5 * camera.height
-    return np.where(good[:, None], np.stack([x, y], axis=1), np.nan)
-
-
-def _near(corners, box):
-    """Per triangle (T, 3, 2 view x, y) whether its bounds, dilated as the draw dilates them
-    (SEVERAL_DILATE_PIXELS plus SEVERAL_DILATE_FRACTION of its longest edge, no more than of its
-    box's width plus height), may meet ``box`` (r0, r1, c0, c1); True for a corner it cannot
-    project."""
-    from .. import constants
-
-    lo, hi = corners.min(axis=1), corners.max(axis=1)
-    grow = constants.SEVERAL_DILATE_PIXELS + constants.SEVERAL_DILATE_FRACTION * np.sum(hi - lo, axis=1) + 1.0
-    r0, r1, c0, c1 = box
-    with np.errstate(invalid="ignore"):
-        meets = ((lo[:, 0] - grow < c1) & (hi[:, 0] + grow > c0) & (lo[:, 1] - grow < r1) & (hi[:, 1] + grow > r0))
-    return meets | ~np.all(np.isfinite(corners), axis=(1, 2))
-
-
-def _bounds(cand, camera, box):
-    """The candidates' dilated bounds over ``box``: (C, 4) view rows and columns, clipped."""
-    r0, r1, c0, c1 = box
-    with np.errstate(invalid="ignore"):  # the hidden corners' NaN bounds, replaced by the box
-        screen, bbox, dilate = acceptance._screen(cand.virtual, camera, box)
-    rows = np.clip(bbox[:, 0:2] + r0, r0, r1)  # the draw's rows are the box's, its columns the view's
-    cols = np.clip(bbox[:, 2:4], c0, c1)
-    return screen, bbox, dilate, np.concatenate([rows, cols], axis=1)
-
-
-def _towards(rays, spheres):
-    """(h, w) bool: the rays that pass through one of ``spheres`` ((centre (3,), radius) each) ahead
-    of their origin or start inside it (a ray that meets a triangle inside a sphere does; the
-    radius is widened by 1e-9 of itself and of the distance for rounding)."""
-    valid, origin, direction = rays
-    out = np.zeros(valid.shape, bool)
-    d = direction / np.maximum(np.linalg.norm(direction, axis=-1, keepdims=True), 1e-300)
-    for centre, radius in spheres:
-        cp = centre - origin
-        dist = np.linalg.norm(cp, axis=-1)
-        t = np.maximum(np.sum(cp * d, axis=-1), 0.0)
-        miss = np.linalg.norm(cp - t[..., None] * d, axis=-1)
-        out |= miss <= radius * (1.0 + 1e-9) + 1e-9 * dist
-    return out & valid
-
-
-def _reached(meshes, group, rays):
-    """``group`` (:func:`_candidates`) with the vertices of every object whose bounding sphere no
-    ray of ``rays`` meets flagged CULLED (none of its triangles can be hit)."""
-    ids, verts, virtual, flags = group
-    sizes = [meshes[k - 1].n_vertices for k in ids]
-    hit = [bool(_towards(rays, [bounding_sphere(meshes[k - 1])]).any()) for k in ids]
-    if all(hit):
-        return group
-    return ids, verts, virtual, np.where(np.repeat(hit, sizes), flags, np.uint8(CULLED)).astype(np.uint8)
-
-
-def _joined(a, b):
-    """Two sets of candidates as one, ``a``'s first."""
-    return replace(a, **{name: np.concatenate([getattr(a, name), getattr(b, name)])
-                         for name in ("virtual", "real", "normals", "object_id", "triangle")})
-
-
-def nearest_hits(cand, camera, box, rays):
-    """Per pixel of ``box`` the candidate whose real triangle the pixel's ray meets nearest, among
-    those whose dilated virtual triangle covers it (:func:`refsoft.search.acceptance.draw`'s
-    acceptance): ``(candidate (h, w) int64, -1 none; t (h, w); barycentrics u, v (h, w, 2))``."""
-    r0, r1, c0, c1 = (int(x) for x in box)
-    h, w = r1 - r0, c1 - c0
-    valid, origin, direction = (np.ascontiguousarray(a) for a in rays)
-    best_t = np.full((h, w), np.inf)
-    best_c = np.full((h, w), -1, np.int64)
-    best_uv = np.zeros((h, w, 2))
-    if len(cand.real) and valid.any():
-        screen, bbox, dilate, _ = _bounds(cand, camera, (r0, r1, c0, c1))
-        real = np.ascontiguousarray(cand.real)
-        parallel_range(accept, h, r0, c0, valid, acceptance._spans(valid), origin, direction, screen, bbox,
-                       dilate, real, acceptance._runs(real), best_t, best_c, best_uv, np.zeros((h, w), bool),
-                       np.full((h, w), -1, np.int64))
-    return best_c, best_t, best_uv
-
-
-def exact_level(scene, meshes, groups, camera, box, rays, reflectors_only=False):
+def exact_level(scene, meshes, groups, camera, box, rays, reflectors_only=False, towards=None):
     """One level drawn by exact per-pixel acceptance: the nearest hit of each pixel's ray among
-    the candidates of ``groups`` (:func:`_candidates`; the non-reflectors first, then the
-    reflectors searched at this level), shaded as :func:`refsoft.search.acceptance.draw` shades it.
+    the candidates of ``groups`` (:func:`refsoft.search.meet.candidates`; the non-reflectors first,
+    then the reflectors searched at this level), shaded as :func:`refsoft.search.acceptance.draw`
+    shades it.
 
     Parameters
     ----------
     scene, meshes, camera
     groups : list
-        As :func:`_candidates`.
+        As :func:`refsoft.search.meet.candidates`.
     box : (r0, r1, c0, c1)
     rays : (valid (h, w), origin (h, w, 3), direction (h, w, 3))
         Each pixel's reflected ray over ``box`` (``valid``: the level's stencil).
     reflectors_only : bool
         Only the reflectors are wanted: the pixels whose rays meet a reflector's candidate are
         decided, with every candidate, and nothing is drawn.
+    towards : ndarray (h, w) bool, optional
+        With ``reflectors_only``: the rays that pass through one of the reflectors' bounding
+        spheres (:func:`refsoft.search.meet.towards`), when the caller has them.
 
     Returns
     -------
@@ -257,23 +69,32 @@ def exact_level(scene, meshes, groups, camera, box, rays, reflectors_only=False)
     colour, rid, drawn = np.zeros((h, w, 3), np.float32), np.zeros((h, w), np.int32), np.zeros((h, w), bool)
     sub = box
     valid, origin, direction = rays
-    groups = [_reached(meshes, g, rays) for g in groups]
     if reflectors_only:  # the pixels whose rays meet a reflector, then what is nearest there
-        towards = _towards(rays, [bounding_sphere(meshes[k - 1]) for ids, *_ in groups[1:] for k in ids])
-        ref, _ = _candidates(meshes, groups[1:], near=(camera, box), rays=_few((towards, origin, direction)))
-        meet = nearest_hits(ref, camera, box, (valid & towards, origin, direction))[0] >= 0
-        if not meet.any():
+        if towards is None:
+            towards = meet.towards(rays, [bounding_sphere(meshes[k - 1]) for ids, *_ in groups[1:] for k in ids])
+        groups = groups[:1] + [meet.reached(meshes, g, (towards, origin, direction)) for g in groups[1:]]
+        ref, _ = meet.candidates(meshes, groups[1:], near=(camera, box), rays=meet.few((towards, origin, direction)))
+        first, t_first, _ = meet.nearest_hits(ref, camera, box, (valid & towards, origin, direction))
+        meets = first >= 0
+        if not meets.any():
             return colour, rid, drawn, {}
-        rows, cols = np.flatnonzero(meet.any(axis=1)), np.flatnonzero(meet.any(axis=0))
+        rows, cols = np.flatnonzero(meets.any(axis=1)), np.flatnonzero(meets.any(axis=0))
         sub = (r0 + int(rows[0]), r0 + int(rows[-1]) + 1, c0 + int(cols[0]), c0 + int(cols[-1]) + 1)
-        valid = valid & meet
-        scene_cand, _ = _candidates(meshes, groups[:1], near=(camera, sub), rays=_few((valid, origin, direction)))
-        cand = _joined(scene_cand, ref)
+        valid = valid & meets
+        # only a scene triangle met no farther than the reflector's hit can be nearer: the rays up
+        # to that hit (and 1e-9 of it), and the scene's objects they can reach
+        upto = np.zeros(meets.shape)
+        upto[meets] = t_first[meets] * np.linalg.norm(direction[meets], axis=-1) * (1.0 + 1e-9)
+        segments = (valid, origin, direction, upto)
+        scene_cand, _ = meet.candidates(meshes, [meet.reached(meshes, groups[0], segments)], near=(camera, sub),
+                                        rays=meet.few(segments))
+        cand = meet.joined(scene_cand, ref)
     else:
-        cand, _ = _candidates(meshes, groups, near=(camera, box), rays=_few(rays))
+        groups = [meet.reached(meshes, g, rays) for g in groups]
+        cand, _ = meet.candidates(meshes, groups, near=(camera, box), rays=meet.few(rays))
     sl = (slice(sub[0] - r0, sub[1] - r0), slice(sub[2] - c0, sub[3] - c0))
     valid, origin, direction = valid[sl], origin[sl], direction[sl]
-    best_c, best_t, best_uv = nearest_hits(cand, camera, sub, (valid, origin, direction))
+    best_c, best_t, best_uv = meet.nearest_hits(cand, camera, sub, (valid, origin, direction))
     hit = best_c >= 0
     obj = np.zeros(best_c.shape, np.int32)
     obj[hit] = cand.object_id[best_c[hit]]
@@ -317,7 +138,46 @@ def exact_bounces(level, reflectors, rays, path, direction, camera_eye, box, sha
 
 
 # --- the levels --------------------------------------------------------------------------------
-def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report, path=(), keep=None):
+class LaterStarts:
+    """Coherence at a later level: each later bounce's reflection pixels (in the view) by path
+    and group of vertices, kept from one frame to the next. :meth:`begin` with a new frame makes
+    the last frame's the previous ones (rendering the same frame again reads the same)."""
+
+    def __init__(self):
+        self.frame, self.last, self.now = None, {}, {}
+
+    def begin(self, frame):
+        """Start ``frame``: what the last frame kept becomes the previous frame's."""
+        if frame != self.frame:
+            self.frame, self.last, self.now = frame, self.now, {}
+
+    def previous(self, path, group, n):
+        """(n, 2) int32 view pixels of ``group`` (0 the scene's vertices, else a reflector's id) at
+        the previous frame's bounce of ``path``, -1 where none; None without one."""
+        got = self.last.get((tuple(path), group))
+        return got if got is not None and len(got) == n else None
+
+    def keep(self, path, group, bounce, searched, result):
+        """Keep the view pixels of the ``searched`` (n,) bool vertices' ``result`` at ``bounce``."""
+        pixels = np.full((len(searched), 2), -1, np.int32)
+        found = result.pixel[:, 0] >= 0
+        at = np.flatnonzero(searched)[found]
+        pixels[at] = result.pixel[found] + np.array([bounce.box[0], bounce.box[2]], np.int32)
+        self.now[(tuple(path), group)] = pixels
+
+
+def _search(bounce, gb, verts, want, opt, starts, path, group):
+    """:func:`refsoft.search.bounces.search_bounce` of the ``want`` (n,) bool vertices of
+    ``verts`` (n, 3), from their previous pixels when ``starts`` (:class:`LaterStarts`) has them;
+    their results kept there."""
+    prev = None if starts is None else starts.previous(path, group, len(verts))
+    res = search_bounce(bounce, gb, verts[want], opt.neighbourhood, opt.cap, None if prev is None else prev[want])
+    if starts is not None:
+        starts.keep(path, group, bounce, want, res)
+    return res
+
+
+def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report, path=(), keep=None, starts=None):
     """Level ``bounce.level``'s picture in its stencil, and the later levels' inside it.
 
     Parameters
@@ -336,6 +196,8 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report, pa
     keep : dict, optional
         Receives each bounce drawn by its path (reflector ids, this one's last): what a trace of a
         later bounce's search replays.
+    starts : LaterStarts, optional
+        Coherence: the previous frame's pixels of each path, and this frame's kept.
 
     Returns
     -------
@@ -350,29 +212,38 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report, pa
     ids = [k for k, o in enumerate(scene.objects, start=1) if not o.reflector]
     if opt.images == "all":  # drawn by each pixel's ray: what no ray meets cannot be drawn
         rays = level_rays(bounce)
-        reach = (lambda k: bool(_towards(rays, [bounding_sphere(meshes[k - 1])]).any()))
+        reached = meet.reaching(meshes, range(1, len(scene.objects) + 1), meet.valid_rays(rays))
+        reach = reached.get
     else:
-        reach = (lambda k: may_see(bounce.position, bounce.normal, bounce.eye, bounce.mask,
-                                   *bounding_sphere(meshes[k - 1])))
+        texels = texel_reach(bounce.position, bounce.normal, bounce.eye, bounce.mask)
+        reach = (lambda k: reaches(texels, *bounding_sphere(meshes[k - 1])))
     # only the objects a reflected ray of this level can reach are searched; the others' vertices
     # are CULLED (their triangles are not drawn)
     seen = np.repeat([reach(k) for k in ids], [meshes[k - 1].n_vertices for k in ids]).astype(bool)
+    if opt.images == "all":  # with a few rays, only the corners of the faces they can meet
+        seen = meet.narrowed(meshes, ids, vertices, rays, seen)
     virtual = np.zeros((len(vertices), 3))
     flags = np.full(len(vertices), CULLED, np.uint8)
-    res = search_bounce(bounce, gb, vertices[seen], opt.neighbourhood, opt.cap)
+    res = _search(bounce, gb, vertices, seen, opt, starts, path, 0)
     virtual[seen], flags[seen] = unfolded(bounce, res, vertices[seen]), res.flags
     depth = np.where(bounce.mask, np.int8(bounce.level), np.int8(0)).astype(np.int8)
     entry = {"level": bounce.level, "reflector": bounce.reflector, "pixels": int(bounce.mask.sum()),
-             "searched": int(seen.sum())}
+             "searched": int(seen.sum()), "iterations": int(res.iterations.sum())}
     report.append(entry)
     others = [] if bounce.level >= opt.bounces else [k for k in scene.reflector_ids
                                                       if k != bounce.reflector and reach(k)]
     found = []  # the other reflectors' vertices searched at this level: (ids, vertices, virtual, flags)
     for k in others:
         verts = np.asarray(meshes[k - 1].vertices, np.float64)
-        r = search_bounce(bounce, gb, verts, opt.neighbourhood, opt.cap)
-        found.append(([k], verts, unfolded(bounce, r, verts), r.flags))
-        entry["searched"] += len(verts)
+        want = np.ones(len(verts), bool)
+        if opt.images == "all":
+            want = meet.narrowed(meshes, [k], verts, rays, want)
+        r = _search(bounce, gb, verts, want, opt, starts, path, k)
+        virt, fl = np.zeros((len(verts), 3)), np.full(len(verts), CULLED, np.uint8)
+        virt[want], fl[want] = unfolded(bounce, r, verts[want]), r.flags
+        found.append(([k], verts, virt, fl))
+        entry["searched"] += int(want.sum())
+        entry["iterations"] += int(r.iterations.sum())
     if opt.images == "all":  # each pixel's reflected ray decides among the virtual triangles over it
         colour, rid, covered, refl = exact_level(scene, meshes, [(ids, vertices, virtual, flags)] + found, camera,
                                                  bounce.box, rays)
@@ -383,10 +254,11 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report, pa
         stencil = bounce.stencil()
         colour, rid, covered, _ = virtual_pass(scene, parts, camera, stencil, bounce.box, "discard")
         rparts = sum((object_parts(meshes, k, v, fl) for k, _, v, fl in found), [])
-        nxt = later_bounces(bounce, seen_reflectors(parts, rparts, camera, stencil, bounce.box), meshes) if found else []
+        shows = seen_reflectors(parts, rparts, camera, stencil, bounce.box) if found else {}
+        nxt = later_bounces(bounce, shows, meshes) if found else []
     for b in nxt:
         blend(colour, rid, covered, depth, bounce.box, b,
-              draw_bounce(scene, meshes, b, camera, vertices, opt, report, path, keep), scene)
+              draw_bounce(scene, meshes, b, camera, vertices, opt, report, path, keep, starts), scene)
     entry["ms"] = 1000 * (time.perf_counter() - t0)
     return colour, rid, covered, depth
 
@@ -411,14 +283,16 @@ def blend(colour, rid, covered, depth, box, bounce: Bounce, deeper, scene):
     depth[sl][m] = dep2[m]
 
 
-def deepen(scene, view, k, stencil, box, out, refl, parts, opt, search_first, keep=None):
+def deepen(scene, view, k, stencil, box, out, refl, parts, opt, search_first, keep=None, starts=None):
     """After level 1 of reflector ``k`` (its :class:`~refsoft.seam.ReflectorResult` ``out`` over
     ``box``, its reflection ``refl`` and virtual ``parts``): the reflectors seen in its image and
     every later level, composited into ``out`` in place, with the per-pixel depth.
 
     ``search_first(vertices)`` gives the first level's virtual vertices (N, 3) float64 and flags
     of other vertices (the reflectors'), as the method computes its own; ``keep`` (a dict)
-    receives every later bounce by its path (:func:`draw_bounce`).
+    receives every later bounce by its path (:func:`draw_bounce`); ``starts`` (a
+    :class:`LaterStarts`, kept by the method from frame to frame) gives the later levels'
+    searches their previous frame's pixels (coherence).
 
     Returns
     -------
@@ -427,6 +301,8 @@ def deepen(scene, view, k, stencil, box, out, refl, parts, opt, search_first, ke
         G-buffer), then one per later bounce drawn (:func:`draw_bounce`'s report).
     """
     first = {"level": 1, "reflector": int(k), "pixels": int(stencil.sum()), "searched": 0}
+    if starts is not None:
+        starts.begin(view.frame)
     report = [first]
     r0, r1, c0, c1 = box
     camera = view.camera
@@ -438,23 +314,33 @@ def deepen(scene, view, k, stencil, box, out, refl, parts, opt, search_first, ke
         from .acceptance import pixel_rays
 
         rays = pixel_rays(camera, view.meshes[k - 1], view.view.triangle, stencil, box)
-        reach = (lambda b: bool(_towards(rays, [bounding_sphere(view.meshes[b - 1])]).any()))
+        others = [b for b in scene.reflector_ids if b != k]
+        hit = meet.hits(meet.valid_rays(rays), [bounding_sphere(view.meshes[b - 1]) for b in others])  # (K, M)
+        reach = dict(zip(others, (bool(x) for x in hit.any(axis=1)))).get
     else:
-        position = np.where(gb.mask[..., None], gb.position.astype(np.float64) + gb.origin, 0.0)
-        reach = (lambda b: may_see(position, gb.normal, eye, gb.mask, *bounding_sphere(view.meshes[b - 1])))
-    for b in scene.reflector_ids:
-        if b == k or not reach(b):
-            continue  # no reflected ray of this reflector comes near b
-        virtual, flags = search_first(view.meshes[b - 1].vertices)
-        first["searched"] += int(len(virtual))
-        found.append(([b], np.asarray(view.meshes[b - 1].vertices, np.float64), virtual, flags))
+        texels = texel_reach(gb.position, gb.normal, eye, gb.mask, gb.origin)
+        reach = (lambda b: reaches(texels, *bounding_sphere(view.meshes[b - 1])))
+    near = [b for b in scene.reflector_ids if b != k and reach(b)]  # the others no reflected ray comes near: nothing
+    if near and opt.images == "all":  # the rays that can meet one of them, as exact_level takes them
+        through = np.zeros(rays[0].shape, bool)
+        through[rays[0]] = hit[[others.index(b) for b in near]].any(axis=0)
+        towards = (through, rays[1], rays[2])
+    for b in near:
+        verts = np.asarray(view.meshes[b - 1].vertices, np.float64)
+        want = np.ones(len(verts), bool)
+        if opt.images == "all":  # with a few rays, only the corners of the faces they can meet
+            want = meet.narrowed(view.meshes, [b], verts, towards, want)
+        virtual, flags = np.zeros((len(verts), 3)), np.full(len(verts), CULLED, np.uint8)
+        virtual[want], flags[want] = search_first(verts[want])
+        first["searched"] += int(want.sum())
+        found.append(([b], verts, virtual, flags))
     if not found:
         bounces = []
     elif opt.images == "all":  # the reflectors seen where each pixel's reflected ray meets them first
         ids = [j for j, o in enumerate(scene.objects, start=1) if not o.reflector]
         virtual = refl.virtual64 if refl.virtual64 is not None else refl.virtual.astype(np.float64)
         *_, seen = exact_level(scene, view.meshes, [(ids, view.vertices, virtual, refl.result.flags)] + found, camera,
-                               box, rays, reflectors_only=True)
+                               box, rays, reflectors_only=True, towards=towards[0])  # found: all of near
         to = np.where(rays[0][..., None], rays[1] - eye, 0.0)
         path = np.linalg.norm(to, axis=-1)
         direction = to / np.maximum(path, 1e-300)[..., None]
@@ -466,7 +352,7 @@ def deepen(scene, view, k, stencil, box, out, refl, parts, opt, search_first, ke
     colour, rid, covered = out.colour.copy(), out.reflected_id.copy(), out.covered.copy()
     for bounce in bounces:
         blend(colour, rid, covered, depth, box, bounce,
-              draw_bounce(scene, view.meshes, bounce, camera, view.vertices, opt, report, (k,), keep), scene)
+              draw_bounce(scene, view.meshes, bounce, camera, view.vertices, opt, report, (k,), keep, starts), scene)
     out.colour, out.reflected_id, out.covered = colour, rid, covered
     out.pixels = {**out.pixels, BOUNCE_DEPTH: depth}
     out.pixel_mask = stencil[r0:r1, c0:c1].copy()

@@ -128,6 +128,7 @@ class VertexSearch:
         #: The last frame's later bounces by path (reflector ids, the first reflector first):
         #: :class:`refsoft.search.bounces.Bounce` s, what a trace of a later bounce replays.
         self.kept_bounces, self._kept_frame = {}, None
+        self.later_starts = levels.LaterStarts()  # the later levels' pixels, frame to frame
         self.previous = {}
         self._last = {}
         self._reflected = None  # the concatenated non-reflector meshes (reflected_mesh)
@@ -176,7 +177,7 @@ class VertexSearch:
                     self.kept_bounces, self._kept_frame = {}, view.frame
                 report["bounces"] = levels.deepen(self.scene, view, k, stencil, box, out, refl, parts, opt,
                                                   lambda v: self._first_level(refl.gbuffer, view.camera.eye, v),
-                                                  self.kept_bounces)
+                                                  self.kept_bounces, self.later_starts if opt.coherence else None)
                 times["bounces"] = 1000 * (time.perf_counter() - t)
         out.arrays = {**gbuffer_outputs(refl.gbuffer, k), **vertex_outputs(refl, view.vertex_object, k)}
         return out

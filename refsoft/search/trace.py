@@ -168,15 +168,16 @@ def _steps(record, n_cand):
     return steps
 
 
-def trace_bounce(bounce, gb, vertex, neighbourhood="cross", cap=None) -> Trace:
+def trace_bounce(bounce, gb, vertex, neighbourhood="cross", cap=None, previous=None) -> Trace:
     """Replay one vertex's search at a later bounce (:func:`refsoft.search.bounces.search_bounce`,
     each pixel's eye its own) on the bounce's G-buffer ``gb``
-    (:func:`refsoft.search.bounces.gbuffer_of`): the same walk and start, recorded. Pixels are
+    (:func:`refsoft.search.bounces.gbuffer_of`): the same walk and start (from ``previous``, its
+    view pixel at the previous frame's bounce, where the search would), recorded. Pixels are
     the G-buffer's (the bounce's box); ``eye`` is the eye of the pixel the search ended at."""
     from .. import validate
     from . import NEIGHBOURHOODS, default_cap
     from . import _bounces
-    from .bounces import _starts
+    from .bounces import _starts, own_starts
 
     v = validate.point(vertex, "vertex")
     if not gb.mask.any():
@@ -189,7 +190,8 @@ def trace_bounce(bounce, gb, vertex, neighbourhood="cross", cap=None) -> Trace:
     eye_rel = np.ascontiguousarray((bounce.eye - gb.origin).astype(dt))
     parallel_range(_bounces.pack_eyes, h, gb.position, gb.normal, gb.mask, eye_rel, fp, G)
     v_rel = (v - gb.origin).astype(dt)
-    start = _starts(G, gb.mask, v_rel[None])[0]
+    own, restarted = own_starts(bounce, previous, 1)
+    start = _starts(G, gb.mask, v_rel[None], own)[0]
     record = np.zeros((2 * cap + 2, _kernels.RECORD_WIDTH), dtype=np.float64)
     n_cand = NEIGHBOURHOODS[neighbourhood]
     r, c, s, m, it, fl, n_rec = _kernels.search_one(G, gb.mask, v_rel, int(start[0]), int(start[1]), n_cand, cap,
@@ -199,8 +201,10 @@ def trace_bounce(bounce, gb, vertex, neighbourhood="cross", cap=None) -> Trace:
     capped_last = bool(steps) and steps[-1]["move_to"] is not None
     field = np.full((h, w), np.nan, dtype=dt)
     parallel_range(_kernels.score_field, h, G, gb.mask, v_rel, False, fp, field)
+    fl |= _kernels.RESTARTED if restarted[0] else 0
     return Trace(v, np.asarray(bounce.eye[r, c], np.float64), neighbourhood, "discard", cap,
-                 [int(start[0]), int(start[1])], False, steps, [int(r), int(c)], float(s), float(m), int(it), int(fl),
+                 [int(start[0]), int(start[1])], bool(restarted[0]), steps, [int(r), int(c)], float(s), float(m),
+                 int(it), int(fl),
                  "capped" if capped_last else "converged", field, None)
 
 
@@ -361,7 +365,7 @@ def trace_vertex_bounce(scene, vertex: int, through, frame: int = 0, coherence: 
     """Replay one vertex's search at a later bounce (spec section 5.1): on the G-buffer of the
     last reflector of ``through`` as seen along that path of reflectors, as a render of
     ``frame`` with ``bounces = len(through)`` runs it (frames ``0 .. frame`` rendered first with
-    coherence, as the render's first level starts from them).
+    coherence, as the render's levels start from them).
 
     Parameters
     ----------
@@ -409,7 +413,8 @@ def trace_vertex_bounce(scene, vertex: int, through, frame: int = 0, coherence: 
         raise RefsoftError(f"frame {frame} shows no bounce along {'->'.join(map(str, path))} (paths drawn: {seen})")
     camera = scene.camera_at(frame)
     gb = gbuffer_of(bounce, camera, opts.precision)
-    tr = trace_bounce(bounce, gb, verts[vertex], opts.neighbourhood, opts.cap)
+    prev = driver.method.later_starts.previous(path, 0, len(verts)) if coherence else None
+    tr = trace_bounce(bounce, gb, verts[vertex], opts.neighbourhood, opts.cap, None if prev is None else prev[vertex])
     obj = int(owner[vertex])
     local = vertex - int(np.argmax(owner == obj))
     rp = VertexReplay(scene.name, path[-1], frame, vertex, obj, local, "walk", tr, gb, tr.eye, verts[vertex], path)

@@ -163,17 +163,17 @@ def test_several_bounces_give_the_same_bits_with_one_thread(renders):
 @pytest.mark.parametrize("name", ["two_balls", "ants"])
 def test_the_reach_test_skips_nothing_that_is_drawn(monkeypatch, renders, name):
     """Reflectors and objects no reflected ray can reach are not searched at a later bounce
-    (``may_see``; drawn by exact acceptance, the rays of the pixels themselves: ``_towards``,
-    and with a few rays the triangles none of them can meet, ``_met``):
+    (``may_see``, ``reaches``; drawn by exact acceptance, the rays of the pixels themselves: ``meet.hits``,
+    and with a few rays the triangles none of them can meet, ``meet.met``):
     the picture is the one searching everything gives (the ants' eyes: 8 reflectors among many
     objects, most out of each other's reach)."""
     import refsoft
-    from refsoft.search import levels
+    from refsoft.search import levels, meet
 
     scene = two_balls() if name == "two_balls" else refsoft.load_scene("ants", width=320, height=240)
     kept = renders[3] if name == "two_balls" else FrameDriver(scene, RenderOptions(bounces=3)).render_frame(0)
-    monkeypatch.setattr(levels, "may_see", lambda *a: True)
-    monkeypatch.setattr(levels, "_towards", lambda rays, spheres: rays[0].copy())  # every ray meets everything
+    monkeypatch.setattr(levels, "reaches", lambda *a: True)
+    monkeypatch.setattr(meet, "hits", lambda rays, spheres: np.ones((len(spheres), len(rays[1])), bool))  # all
     monkeypatch.setattr(refsoft.constants, "BOUNCE_FEW_RAYS", -1)  # no triangle left out for a few rays
     every = FrameDriver(scene, RenderOptions(bounces=3)).render_frame(0)
     for key, a in kept.arrays.items():
@@ -226,3 +226,183 @@ def test_the_trace_of_a_later_bounce_refuses_a_path_it_cannot_replay(through, me
 
     with pytest.raises(RefsoftError, match=message):
         trace_vertex_bounce(two_balls(), 40, through, 0)
+
+
+def test_the_faces_a_few_rays_can_meet_are_the_naive_ones():
+    """meet.met (kernel ``_bounces.ray_distances``) keeps the faces the one-ray-at-a-time
+    reference keeps, keeps every face a ray meets (a segment: within its length), and is the same
+    with one thread."""
+    from naive_bounces import faces_met, ray_all_triangles
+    from refsoft.search import meet
+
+    rng = np.random.default_rng(5)
+    verts = (rng.normal(size=(400, 1, 3)) + 0.1 * rng.normal(size=(400, 3, 3))).reshape(-1, 3)
+    faces = np.arange(1200).reshape(400, 3)  # small triangles scattered over a cloud
+    corners = verts[faces]
+    edge = np.max(np.linalg.norm(corners - corners[:, [1, 2, 0]], axis=2), axis=1)
+    origin = rng.normal(size=(9, 3)) * 3.0
+    direction = 2.0 * (corners[:9].mean(axis=1) - origin)  # through a triangle each, not unit
+    got = meet.met(verts, faces, edge, (origin, direction))
+    assert np.array_equal(got, faces_met(verts, faces, edge, origin, direction))
+    assert 0 < got.sum() < len(faces)
+    met = np.zeros(len(faces), bool)
+    for o, d in zip(origin, direction):
+        met |= ray_all_triangles(o, d / np.linalg.norm(d), corners)[3]
+    assert met[:9].all() and np.all(got[met])
+    few = meet.met(verts, faces[::9], edge[::9], (origin, direction))  # their corners' distances only
+    assert np.array_equal(few, got[::9])
+    length = 0.7 * np.linalg.norm(direction, axis=1)  # segments: 1.4 times the way to the triangle aimed at
+    short = meet.met(verts, faces, edge, (origin, direction, length))
+    assert np.array_equal(short, faces_met(verts, faces, edge, origin, direction, length))
+    assert np.all(got[short]) and short.sum() < got.sum()
+    before = np.zeros(len(faces), bool)
+    for o, d, L in zip(origin, direction, length):
+        t, _, _, hit = ray_all_triangles(o, d / np.linalg.norm(d), corners)
+        before |= hit & (t <= L)
+    assert before.sum() >= 5 and np.all(short[before])
+    with one_thread():
+        assert np.array_equal(got, meet.met(verts, faces, edge, (origin, direction)))
+
+
+def test_the_start_of_a_later_bounce_is_the_naive_best_sample():
+    """_bounces.best_starts picks the sample the all-at-once NumPy reference picks, bit for bit
+    in its scores (ties included: two equal samples, the first wins), and a vertex's own sample
+    (its previous pixel) where that scores higher, with any thread count."""
+    import naive_bounces
+    from refsoft.search import _bounces as kernels
+    from refsoft._parallel import parallel_range
+
+    rng = np.random.default_rng(7)
+    k = 40
+    p = rng.normal(size=(k, 3))
+    n = rng.normal(size=(k, 3))
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    u = rng.normal(size=(k, 3))
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    samples = np.concatenate([p, n, u], axis=1).astype(np.float32).astype(np.float64)
+    samples[11] = samples[3]  # a tie: the first of the two
+    rel = rng.normal(size=(500, 3)).astype(np.float32)
+    rel[0] = samples[5, 0:3]  # a vertex on a sample's point
+    want = naive_bounces.best_starts(samples, rel)
+    assert len(set(want.tolist())) > 10 and 11 not in want and 3 in want
+    own = samples[rng.integers(0, k, len(rel))] + rng.normal(scale=0.05, size=(len(rel), 9))  # near another
+    has = rng.random(len(rel)) < 0.5
+    mine = naive_bounces.best_starts(samples, rel, own, has)
+    assert 0 < np.sum(mine == k) < has.sum() and np.array_equal(mine[mine < k], want[mine < k])
+    for threads in (True, False):
+        for x, h, w in ((np.zeros((len(rel), 9)), np.zeros(len(rel), bool), want), (own, has, mine)):
+            got = np.empty(len(rel), np.int64)
+            with one_thread(threads):
+                parallel_range(kernels.best_starts, len(rel), samples, rel.astype(np.float64), x, h, got)
+            assert np.array_equal(got, w)
+
+
+def test_the_paper_presets_reflectors_seen_skip_nothing_that_is_drawn(monkeypatch):
+    """Under the paper preset the reflectors seen are rasterized with the scene only where the
+    reflectors' own virtual triangles cover, and only the triangles whose projected bounds meet
+    those pixels (bounces._over): the picture is the one rasterizing every triangle (the ants,
+    whose eyes see each other on a few pixels)."""
+    import refsoft
+    from refsoft.search import bounces
+
+    scene = refsoft.load_scene("ants", width=192, height=144)
+    opt = RenderOptions.from_preset("paper", bounces=2)
+    calls = []
+    over = bounces._over
+    monkeypatch.setattr(bounces, "_over", lambda *a: calls.append(over(*a)) or calls[-1])
+    kept = FrameDriver(scene, opt).render_frame(0)
+    assert sum(len(c) - c.sum() for c in calls) > 0  # triangles were left out
+    monkeypatch.setattr(bounces, "_over", lambda clip, faces, camera, box: np.ones(len(faces), bool))
+    every = FrameDriver(scene, opt).render_frame(0)
+    assert (kept.arrays[BOUNCE_DEPTH] == 2).sum() > 0
+    for key, a in kept.arrays.items():
+        assert np.array_equal(a, every.arrays[key]), key
+
+
+def test_a_later_bounce_starts_from_the_previous_frames_pixel_where_it_is_in_the_stencil(ball):
+    """Coherence at a later level: a vertex given its own end pixel (in the view) starts there and
+    ends there at once (its score there beats the samples'); one given a pixel off the stencil
+    starts from the best sample, as with no previous pixel, flagged RESTARTED; -1 is no previous
+    pixel."""
+    from refsoft.search import RESTARTED
+
+    cam, gb, verts = ball
+    b = _bounce(cam, gb, (1.5, 1.0, 2.5))
+    g = gbuffer_of(b, cam)
+    fresh = search_bounce(b, g, verts, "box")
+    view = fresh.pixel + [b.box[0], b.box[2]]
+    prev = view.copy()
+    prev[1::3] = [0, 0]  # a corner of the view, off the ball
+    prev[2::3] = -1
+    got = search_bounce(b, g, verts, "box", previous=prev)
+    same = np.arange(len(verts)) % 3 == 0
+    assert np.array_equal(got.pixel[same], fresh.pixel[same]) and np.all(got.iterations[same] == 1)
+    assert np.all(got.iterations[same] <= fresh.iterations[same]) and np.any(fresh.iterations[same] > 1)
+    other = ~same
+    assert np.array_equal(got.pixel[other], fresh.pixel[other])
+    assert np.array_equal(got.iterations[other], fresh.iterations[other])
+    assert np.array_equal((got.flags & RESTARTED) != 0, np.arange(len(verts)) % 3 == 1)
+    assert np.array_equal(got.flags & ~np.uint8(RESTARTED), fresh.flags)
+
+
+def test_later_levels_start_from_the_previous_frame_in_order_and_deterministically():
+    """Frames rendered in order: frame 0 as without later-level coherence; the next frames'
+    later levels walk fewer steps from the previous frame's pixels of the same path; the same
+    bits rendered again and with one thread."""
+    import refsoft
+    from refsoft.search import levels
+
+    scene = refsoft.load_scene("mirrors", width=128, height=96)
+    opt = RenderOptions(bounces=3)
+
+    def run(later=True):
+        d = FrameDriver(scene, opt)
+        if not later:
+            d.method.later_starts = None  # as without coherence at a later level
+        out = []
+        for f in range(3):
+            fr = d.render_frame(f)
+            steps = sum(e.get("iterations", 0) for r in fr.report["bounces"].values() for e in r if e["level"] > 1)
+            out.append((fr.arrays, steps))
+        return out, d
+
+    on, d = run()
+    off, _ = run(False)
+    assert isinstance(d.method.later_starts, levels.LaterStarts) and d.method.later_starts.last
+    for key, a in on[0][0].items():
+        assert np.array_equal(a, off[0][0][key]), key
+    assert on[0][1] == off[0][1] and on[1][1] < off[1][1] and on[2][1] < off[2][1]
+    again, _ = run()
+    with one_thread():
+        single, _ = run()
+    for f in range(3):
+        for key, a in on[f][0].items():
+            assert np.array_equal(a, again[f][0][key]) and np.array_equal(a, single[f][0][key]), (f, key)
+
+
+def test_the_trace_of_a_later_bounce_at_a_later_frame_starts_where_the_render_did():
+    """At frame 1 the render's later level starts each vertex from its frame-0 pixel of the same
+    path (coherence): the trace replays that start (the two balls stand still, so a vertex whose
+    walk took steps at frame 0 starts at its end pixel and stops there)."""
+    from refsoft.scene.model import scene_vertices
+    from refsoft.search.trace import trace_vertex_bounce
+
+    scene = two_balls(320, 240)  # ball 2 in ball 1 over more pixels than the samples
+    driver = FrameDriver(scene, RenderOptions(bounces=2))
+    driver.render_frame(0)
+    driver.render_frame(1)
+    bounce = driver.method.kept_bounces[(1, 2)]
+    prev = driver.method.later_starts.previous((1, 2), 0, len(scene_vertices(scene, 1)[0]))
+    searched = np.flatnonzero(prev[:, 0] >= 0)  # the vertices the render searched on ball 2
+    assert len(searched) > 0
+    for i in searched[:40]:
+        first = trace_vertex_bounce(scene, int(i), (1, 2), 0)
+        if first.trace.iterations > 1:
+            break
+    assert first.trace.iterations > 1
+    assert prev[i].tolist() == [first.trace.pixel[0] + bounce.box[0], first.trace.pixel[1] + bounce.box[2]]
+    later = trace_vertex_bounce(scene, int(i), (1, 2), 1)
+    res = search_bounce(bounce, gbuffer_of(bounce, scene.camera), later.position[None], "box", previous=prev[i:i + 1])
+    assert later.trace.pixel == res.pixel[0].tolist() == first.trace.pixel
+    assert later.trace.iterations == res.iterations[0] == 1
+    assert later.trace.start == first.trace.pixel and not later.trace.restarted
