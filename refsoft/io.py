@@ -14,7 +14,6 @@ import io
 import json
 import os
 import tempfile
-import time
 import tokenize
 import zipfile
 import zlib
@@ -105,6 +104,10 @@ def write_npz_level(path, arrays, level: int):
                 _write_member(zf, name + ".npy", np.asanyarray(value), level)
 
 
+#: The date of every member of a frame's npz.
+ZIP_DATE = (1980, 1, 1, 0, 0, 0)
+
+
 def _npy_parts(array):
     """The ``.npy`` header NumPy writes for ``array`` (bytes) and its data as (n,) uint8, in the
     order NumPy writes it (Fortran order for a Fortran-contiguous array, as its header says)."""
@@ -125,7 +128,9 @@ def _npy_parts(array):
 
 def _write_member(zf, name, array, level):
     header, data = _npy_parts(array)
-    info = zipfile.ZipInfo(name, date_time=time.localtime(time.time())[:6])  # as zipfile dates a name
+    # a fixed date (the zip format's first): a rerun writes the same bytes (the file's own
+    # modification time says when it was written)
+    info = zipfile.ZipInfo(name, date_time=ZIP_DATE)
     store = level == 0 or _incompressible(data, level)
     info.compress_type = zipfile.ZIP_STORED if store else zipfile.ZIP_DEFLATED
     with zf.open(info, "w", force_zip64=True) as fh:
