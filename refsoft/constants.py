@@ -245,9 +245,13 @@ TRUTH_SELF_OFFSET = 1e-5
 # --- Every reflection point of a vertex (spec section 4.8) ------------------------------------
 #: ``images`` option: every reflection point (``all``) or the walk's one (``one``, the papers).
 IMAGE_MODES = ("all", "one")
-#: How the virtual triangles are drawn (RenderOptions.draw): rasterized with a z-buffer (the papers)
-#: or by exact per-pixel acceptance of the candidates they give (refsoft.search.exact).
-DRAW_MODES = ("raster", "exact")
+#: How the virtual triangles are drawn (RenderOptions.draw): rasterized with a z-buffer (the papers),
+#: by exact per-pixel acceptance of the candidates they give (refsoft.search.exact), or rasterized
+#: and then drawn exactly along the outlines.
+DRAW_MODES = ("raster", "exact", "edges")
+#: draw="edges": the pixels drawn exactly lie within this many 8-neighbour steps of a change of
+#: the rasterized reflected object or coverage, or of the mirror's outline.
+EDGE_BAND_PIXELS = 2
 #: A texel that is a local maximum of the score is an image when Newton's iteration solving
 #: "normal = bisector" from it, texel to texel, converges at most this many texels (Euclidean, in
 #: the texel grid) from it.

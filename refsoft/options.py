@@ -119,11 +119,13 @@ class RenderOptions:
         Every reflection point of every vertex (spec section 4.8, :func:`refsoft.search.images.find_images`:
         flag SEVERAL and the per-image arrays, on reflectors that can give two points:
         :func:`refsoft.search.convex.several_possible`), or the walk's one (the papers; ``paper``).
-    draw : {"raster", "exact"}
+    draw : {"raster", "exact", "edges"}
         How the virtual triangles are drawn in the stencil: rasterized with a z-buffer (the papers;
         ``paper``), or used as candidates of exact per-pixel acceptance, each stencil pixel's
         reflected ray met with the real triangles whose dilated virtual triangles cover it
-        (:mod:`refsoft.search.exact`, beyond the papers; ``accurate``).
+        (:mod:`refsoft.search.exact`, beyond the papers; ``accurate``), or rasterized and then
+        drawn exactly near the outlines of the rasterized reflection and of the mirror
+        (``edges``: :func:`refsoft.search.exact.edges_pass`).
     ldt_resolution, ldt_layers, ldt_faces, ldt_linear, ldt_tau, ldt_regions : optional
         ``method="ldt"`` only (default :data:`LDT_DEFAULTS`): texels per cube face edge (4 ..
         4096, a power of two keeps mirrored texels bit-exact); layers built ("all" or 1, the

@@ -38,7 +38,11 @@ SETTINGS = {
     "accurate, no clip": {"preset": "accurate", "silhouette": "texel"},
     "accurate, no refine": {"preset": "accurate", "refine": False},
     "accurate, no tessellation": {"preset": "accurate", "tessellate": None},
-    "accurate, tessellate 1e-3": {"preset": "accurate", "tessellate": 1e-3},
+    "accurate, tessellate 1e-4, 3 levels": {"preset": "accurate", "tessellate": 1e-4, "max_level": 3},
+    "accurate, raster": {"preset": "accurate", "draw": "raster"},
+    "accurate, raster, tessellate 1e-4, 3 levels": {"preset": "accurate", "draw": "raster", "tessellate": 1e-4,
+                                                    "max_level": 3},
+    "accurate, no restart": {"preset": "accurate", "border_restart": False},
     "accurate, hierarchy": {"preset": "accurate", "method": "hierarchy"},
 }
 COLUMNS = ["scene", "size", "setting", "frame", "agreement", "interior", "rim", "color_error", "specks",

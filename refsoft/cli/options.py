@@ -101,7 +101,8 @@ def render_options() -> argparse.ArgumentParser:
     p.add_argument("--draw", choices=constants.DRAW_MODES, default=None,
                    help="the virtual triangles rasterized with a z-buffer (the papers), or beyond them: each mirror "
                         "pixel's reflected ray met exactly with the real triangles whose virtual triangles cover it "
-                        "(paper: raster, accurate: exact)")
+                        "(exact), or rasterized and met exactly within 2 pixels of an outline (edges) (paper: raster, "
+                        "accurate: exact)")
     p.add_argument("--bounces", default=None, metavar="N",
                    help="beyond the papers: reflections followed per eye ray, 1 to 8 (default 1): mirrors that see "
                         "each other, searched and drawn level by level (the vertex search only)")

@@ -7,13 +7,14 @@ from .._numba import kernel
 
 
 @kernel
-def reaching(lo, hi, clip, faces, flags, lost, width, height, r0, r1, c0, c1, pixels, fraction, keep):
+def reaching(lo, hi, clip, faces, flags, lost, width, height, r0, r1, c0, c1, pixels, fraction, band, sat, keep):
     """Triangles ``lo .. hi - 1`` (run by :func:`refsoft._parallel.parallel_range`; each writes
     only its own entry): ``keep[t]`` is False where a vertex has a flag in ``lost`` or where the
     triangle's screen bounds, widened by the acceptance's dilation (``pixels + fraction *`` its
     longest screen edge) and one pixel more, stay off the box ``r0 .. r1, c0 .. c1`` (view rows
-    and columns); True otherwise, and always for a triangle with a vertex at or behind the eye
-    plane or a screen position that is not finite.
+    and columns), or, with ``band``, whose widened bounds hold no pixel of the band; True
+    otherwise, and always for a triangle with a vertex at or behind the eye plane or a screen
+    position that is not finite.
 
     Parameters
     ----------
@@ -28,6 +29,11 @@ def reaching(lo, hi, clip, faces, flags, lost, width, height, r0, r1, c0, c1, pi
         The box.
     pixels, fraction : float
         ``SEVERAL_DILATE_PIXELS``, ``SEVERAL_DILATE_FRACTION``.
+    band : bool
+        Whether ``sat`` holds the pixels drawn.
+    sat : (r1 - r0 + 1, c1 - c0 + 1) int64
+        The summed-area table of the pixels drawn over the box (``sat[i, j]``: those in box rows
+        ``< i`` and columns ``< j``).
     keep : (m,) bool
     """
     for t in range(lo, hi):
@@ -52,4 +58,10 @@ def reaching(lo, hi, clip, faces, flags, lost, width, height, r0, r1, c0, c1, pi
         reach = pixels + fraction * edge + 1.0
         off = (max(xa, xb, xc) + reach < c0 or min(xa, xb, xc) - reach > c1
                or max(ya, yb, yc) + reach < r0 or min(ya, yb, yc) - reach > r1)
+        if band and not off:  # pixel centres at .5: rows y0 .. y1 - 1 of the box may be covered
+            y0 = max(int(np.floor(min(ya, yb, yc) - reach - 0.5)), int(r0)) - int(r0)
+            y1 = min(int(np.ceil(max(ya, yb, yc) + reach - 0.5)) + 1, int(r1)) - int(r0)
+            x0 = max(int(np.floor(min(xa, xb, xc) - reach - 0.5)), int(c0)) - int(c0)
+            x1 = min(int(np.ceil(max(xa, xb, xc) + reach - 0.5)) + 1, int(c1)) - int(c0)
+            off = y0 >= y1 or x0 >= x1 or sat[y1, x1] - sat[y0, x1] - sat[y1, x0] + sat[y0, x0] == 0
         keep[t] = not off

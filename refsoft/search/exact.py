@@ -29,7 +29,57 @@ from ._exact import reaching
 from .acceptance import Candidates, draw
 
 
-def exact_pass(scene, part, real, camera, reflector_mesh, triangle, stencil, box, inverse):
+def edges_pass(scene, part, real, camera, reflector_mesh, triangle, stencil, box, inverse, cull=True):
+    """Draw one reflector's virtual triangles rasterized, then exactly (:func:`exact_pass`) on the
+    pixels where the raster can be wrong: within :data:`refsoft.constants.EDGE_BAND_PIXELS`
+    (8-neighbour steps) of a pixel whose reflected object or coverage differs from a
+    4-neighbour's in the stencil, or of the stencil's outline.
+
+    Parameters and returns as :func:`exact_pass` (``cull``: the virtual pass's object culling);
+    ``counts`` also holds ``band_pixels``.
+    """
+    from .virtual import virtual_pass
+
+    colour, rid, covered, _ = virtual_pass(scene, [part], camera, stencil, box, inverse, cull)
+    r0, r1, c0, c1 = (int(b) for b in box)
+    band = edge_band(rid, covered, np.ascontiguousarray(stencil[r0:r1, c0:c1], bool), constants.EDGE_BAND_PIXELS)
+    full = np.zeros(stencil.shape, bool)
+    full[r0:r1, c0:c1] = band
+    c2, rid2, cov2, counts = exact_pass(scene, part, real, camera, reflector_mesh, triangle, full, box, inverse,
+                                        band=band)
+    colour[band], rid[band], covered[band] = c2[band], rid2[band], cov2[band]
+    return colour, rid, covered, {**counts, "band_pixels": int(band.sum())}
+
+
+def edge_band(rid, covered, stencil, width):
+    """(h, w) bool: the ``stencil`` pixels within ``width`` 8-neighbour steps of a stencil pixel
+    whose ``rid`` or ``covered`` differs from a 4-neighbour's in the stencil, or of the stencil's
+    outline (a stencil pixel with a 4-neighbour outside it or outside the box)."""
+    h, w = stencil.shape
+    seed = np.zeros((h, w), bool)
+    for a, b in (((slice(None), slice(0, -1)), (slice(None), slice(1, None))),
+                 ((slice(0, -1), slice(None)), (slice(1, None), slice(None)))):
+        both = stencil[a] & stencil[b]
+        differ = both & ((rid[a] != rid[b]) | (covered[a] != covered[b]))
+        one = stencil[a] != stencil[b]  # the outline, on its stencil side
+        seed[a] |= differ | (one & stencil[a])
+        seed[b] |= differ | (one & stencil[b])
+    seed[0, :] |= stencil[0, :]
+    seed[-1, :] |= stencil[-1, :]
+    seed[:, 0] |= stencil[:, 0]
+    seed[:, -1] |= stencil[:, -1]
+    band = seed
+    for _ in range(int(width)):
+        p = np.pad(band, 1)
+        grown = band.copy()
+        for dr in (-1, 0, 1):
+            for dc in (-1, 0, 1):
+                grown |= p[1 + dr:1 + dr + h, 1 + dc:1 + dc + w]
+        band = grown
+    return band & stencil
+
+
+def exact_pass(scene, part, real, camera, reflector_mesh, triangle, stencil, box, inverse, band=None):
     """Draw one reflector's virtual triangles by exact per-pixel acceptance.
 
     Parameters
@@ -54,6 +104,9 @@ def exact_pass(scene, part, real, camera, reflector_mesh, triangle, stencil, box
     inverse : str
         The hidden-vertex mode: with ``discard`` a triangle with a HIDDEN vertex is no
         candidate; a CULLED vertex's triangles never are.
+    band : (h, w) bool, optional
+        The box's pixels of ``stencil`` when it holds only some (:func:`edges_pass`): triangles
+        whose dilated bounds hold none of them are left out.
 
     Returns
     -------
@@ -69,7 +122,7 @@ def exact_pass(scene, part, real, camera, reflector_mesh, triangle, stencil, box
     clip = _setup.transform_points(np.asarray(virtual, np.float64), camera.view_proj())
     # the virtual pass's own leave-out (a vertex without V'), and the triangles whose dilated
     # bounds stay off the box: the acceptance would test no pixel of theirs
-    keep = candidate_triangles(clip, faces, flags, lost, box, camera)
+    keep = candidate_triangles(clip, faces, flags, lost, box, camera, band)
     f = np.asarray(faces, np.int64)[keep]
     cand = Candidates(np.asarray(virtual, np.float64)[f], np.asarray(real, np.float64)[f],
                       np.asarray(normals, np.float64)[f], np.asarray(face_obj, np.int32)[keep], keep, 0)
@@ -78,7 +131,7 @@ def exact_pass(scene, part, real, camera, reflector_mesh, triangle, stencil, box
     return colour, rid, covered, {"candidates": int(len(keep)), **counts}
 
 
-def candidate_triangles(clip, faces, flags, lost, box, camera):
+def candidate_triangles(clip, faces, flags, lost, box, camera, band=None):
     """The triangles that can be candidates of the box's acceptance (kernel
     ``_exact.reaching``).
 
@@ -93,18 +146,25 @@ def candidate_triangles(clip, faces, flags, lost, box, camera):
         The flags that leave a vertex's triangles out.
     box : (r0, r1, c0, c1)
     camera : Camera
+    band : (r1 - r0, c1 - c0) bool, optional
+        The box pixels drawn (default: every one).
 
     Returns
     -------
     (k,) int64
         The rows of ``faces`` kept, ascending: those with no vertex flagged ``lost`` whose screen
-        bounds, widened by the acceptance's dilation and one pixel, reach the box (and those with
-        a vertex at or behind the eye plane).
+        bounds, widened by the acceptance's dilation and one pixel, reach the box, and a pixel of
+        ``band`` when given (and those with a vertex at or behind the eye plane).
     """
     r0, r1, c0, c1 = (float(b) for b in box)
     keep = np.empty(len(faces), bool)
+    sat = np.zeros((1, 1), np.int64)
+    if band is not None:
+        sat = np.zeros((band.shape[0] + 1, band.shape[1] + 1), np.int64)
+        sat[1:, 1:] = np.cumsum(np.cumsum(band, axis=0, dtype=np.int64), axis=1)
     parallel_range(reaching, len(faces), np.ascontiguousarray(clip, np.float64),
                    np.ascontiguousarray(faces, np.int64), np.ascontiguousarray(flags, np.uint8), np.uint8(lost),
                    float(camera.width), float(camera.height), r0, r1, c0, c1,
-                   float(constants.SEVERAL_DILATE_PIXELS), float(constants.SEVERAL_DILATE_FRACTION), keep)
+                   float(constants.SEVERAL_DILATE_PIXELS), float(constants.SEVERAL_DILATE_FRACTION), band is not None,
+                   sat, keep)
     return np.flatnonzero(keep)

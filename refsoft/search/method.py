@@ -20,7 +20,7 @@ from ..raster import PRECISIONS, GBuffer, _setup, gbuffer
 from ..seam import ReflectorResult, stencil_box
 from . import BORDER, CULLED, RESTARTED, SEVERAL, SearchResult, levels, search, skips, virtual_vertices
 from .convex import several_possible
-from .exact import exact_pass
+from .exact import edges_pass, exact_pass
 from .images import facing_gbuffer, find_images
 from .reflect import Reflection, coherent_starts, gbuffer_camera
 from .refine import refine as refine_points
@@ -166,6 +166,10 @@ class VertexSearch:
                 out.colour, out.reflected_id, out.covered, report["exact"] = exact_pass(
                     self.scene, parts[0], real, view.camera, view.meshes[k - 1], view.view.triangle, stencil, box,
                     opt.inverse)
+            elif drawn is None and opt.draw == "edges":  # rasterized, then met exactly along the outlines
+                out.colour, out.reflected_id, out.covered, report["exact"] = edges_pass(
+                    self.scene, parts[0], real, view.camera, view.meshes[k - 1], view.view.triangle, stencil, box,
+                    opt.inverse, opt.cull_virtual)
             elif drawn is None:
                 out.colour, out.reflected_id, out.covered, report["virtual_objects_culled"] = virtual_pass(
                     self.scene, parts, view.camera, stencil, box, opt.inverse, opt.cull_virtual)

@@ -152,3 +152,82 @@ def test_draw_is_checked():
         RenderOptions(draw="ray")
     assert RenderOptions(preset="paper").draw == "raster"
     assert RenderOptions().draw == "exact"
+
+
+# --- drawn exactly along the outlines (draw="edges") ------------------------------------------------
+def _band_naive(rid, covered, stencil, width):
+    """edge_band written pixel by pixel: seeds where a 4-neighbour in the stencil differs in
+    object or coverage, or lies outside the stencil or the box; then every stencil pixel within
+    ``width`` 8-neighbour steps (Chebyshev distance) of a seed."""
+    h, w = stencil.shape
+    seeds = []
+    for r in range(h):
+        for c in range(w):
+            if not stencil[r, c]:
+                continue
+            for dr, dc in ((0, 1), (1, 0), (0, -1), (-1, 0)):
+                rr, cc = r + dr, c + dc
+                if not (0 <= rr < h and 0 <= cc < w) or not stencil[rr, cc] \
+                        or rid[rr, cc] != rid[r, c] or covered[rr, cc] != covered[r, c]:
+                    seeds.append((r, c))
+                    break
+    band = np.zeros((h, w), bool)
+    for r, c in seeds:
+        band[max(r - width, 0):r + width + 1, max(c - width, 0):c + width + 1] = True
+    return band & stencil
+
+
+def test_the_band_is_the_pixels_near_a_change_or_the_outline(rng):
+    h, w = 30, 41
+    yy, xx = np.mgrid[:h, :w]
+    stencil = (yy - 15) ** 2 + (xx - 20) ** 2 < 13 ** 2
+    rid = np.where(xx + yy // 3 < 25, 2, 5).astype(np.int32)
+    rid[rng.random((h, w)) < 0.01] = 7
+    covered = rng.random((h, w)) > 0.02
+    for width in (0, 1, 2):
+        got = exact.edge_band(rid, covered, stencil, width)
+        np.testing.assert_array_equal(got, _band_naive(rid, covered, stencil, width))
+    assert 0 < got.sum() < stencil.sum()
+
+
+def test_a_band_leaves_out_only_triangles_that_cover_none_of_its_pixels(rng):
+    n, m = 300, 900
+    clip = rng.normal(size=(n, 4)) * 0.6
+    clip[:, 3] = rng.uniform(0.5, 2.0, n)
+    faces = rng.integers(0, n, (m, 3))
+    flags = np.zeros(n, np.uint8)
+    box = (10, 30, 20, 50)
+    band = np.zeros((20, 30), bool)
+    band[5:7, 3:9] = True
+    everyone = exact.candidate_triangles(clip, faces, flags, CULLED, box, _Camera)
+    got = exact.candidate_triangles(clip, faces, flags, CULLED, box, _Camera, band)
+    assert set(got) <= set(everyone) and 0 < len(got) < len(everyone)
+    # a triangle left out: its bounds widened as the acceptance's dilation hold no band pixel
+    w = clip[:, 3]
+    x = (clip[:, 0] / w + 1.0) * 0.5 * _Camera.width
+    y = (1.0 - clip[:, 1] / w) * 0.5 * _Camera.height
+    rows, cols = np.nonzero(band)
+    centres_y, centres_x = rows + box[0] + 0.5, cols + box[2] + 0.5
+    for t in sorted(set(everyone) - set(got)):
+        xs, ys = x[faces[t]], y[faces[t]]
+        edge = max(np.hypot(xs[i] - xs[(i + 1) % 3], ys[i] - ys[(i + 1) % 3]) for i in range(3))
+        reach = constants.SEVERAL_DILATE_PIXELS + constants.SEVERAL_DILATE_FRACTION * edge
+        inside = ((centres_x >= xs.min() - reach) & (centres_x <= xs.max() + reach)
+                  & (centres_y >= ys.min() - reach) & (centres_y <= ys.max() + reach))
+        assert not inside.any(), t
+
+
+def test_edges_draw_the_band_as_the_exact_drawing_and_the_rest_as_the_raster():
+    scene = refsoft.load_scene("sphere", width=128, height=96)
+    got = {d: FrameDriver(scene, RenderOptions(draw=d)).render_frame(0) for d in ("raster", "exact", "edges")}
+    r0 = got["edges"].report["exact"]["1"]
+    assert 0 < r0["band_pixels"]
+    ids = {d: f.arrays["reflected_id"] for d, f in got.items()}
+    image = {d: f.arrays["image"] for d, f in got.items()}
+    differ = (ids["raster"] != ids["exact"]) | np.any(image["raster"] != image["exact"], axis=2)
+    from_exact = np.all(image["edges"] == image["exact"], axis=2) & (ids["edges"] == ids["exact"])
+    from_raster = np.all(image["edges"] == image["raster"], axis=2) & (ids["edges"] == ids["raster"])
+    assert np.all(from_exact | from_raster)  # every pixel is one drawing's or the other's
+    # where the two drawings give another object, the edges give the exact one's
+    assert np.all(ids["edges"][ids["raster"] != ids["exact"]] == ids["exact"][ids["raster"] != ids["exact"]])
+    assert differ.any()
