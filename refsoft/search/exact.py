@@ -27,6 +27,7 @@ from .._parallel import parallel_range
 from . import CULLED, HIDDEN
 from ._exact import reaching
 from .acceptance import Candidates, draw
+from .virtual import virtual_pass
 
 
 def edges_pass(scene, part, real, camera, reflector_mesh, triangle, stencil, box, inverse, cull=True):
@@ -38,8 +39,6 @@ def edges_pass(scene, part, real, camera, reflector_mesh, triangle, stencil, box
     Parameters and returns as :func:`exact_pass` (``cull``: the virtual pass's object culling);
     ``counts`` also holds ``band_pixels``.
     """
-    from .virtual import virtual_pass
-
     colour, rid, covered, _ = virtual_pass(scene, [part], camera, stencil, box, inverse, cull)
     r0, r1, c0, c1 = (int(b) for b in box)
     band = edge_band(rid, covered, np.ascontiguousarray(stencil[r0:r1, c0:c1], bool), constants.EDGE_BAND_PIXELS)
