@@ -1,8 +1,8 @@
 """The accurate preset's price over the paper preset, per built-in convex scene: both presets
 render the same frames alternately in one process (frame 0 once each first, outside the timing,
 so the kernels are compiled and the searches coherent), and the script prints per scene and size
-the median frame time of each preset, their ratio and the accurate frame's stages, the
-tessellation and the silhouette cut timed apart.
+the median frame time of each preset, their ratio and the stages of each (the accurate frame's
+tessellation and silhouette cut timed apart).
 
 Run: ``python benchmarks/accurate_price.py [SCENE ...] [--sizes 1024x768 640x480] [--frames 3]`` (the
 scenes first: ``--sizes`` takes every word after it).
@@ -47,7 +47,7 @@ def measure(name, size, frames):
         d.render_frame(0)
     totals = {p: [] for p in drivers}
     cpu = {p: [] for p in drivers}
-    stages = []
+    stages, paper_stages = [], []
     picks = [1 + (i % max(1, scene.n_frames - 1)) for i in range(frames)]
     for f in picks:
         for p, d in drivers.items():
@@ -57,12 +57,12 @@ def measure(name, size, frames):
             fr = d.render_frame(f)
             cpu[p].append(1000 * (time.process_time() - c))
             totals[p].append(fr.time_ms["total"])
-            if p == "accurate":
-                stages.append({**fr.time_ms, **_SPLIT})
+            (stages if p == "accurate" else paper_stages).append({**fr.time_ms, **_SPLIT})
     med = {p: statistics.median(v) for p, v in totals.items()}
     st = {k: statistics.median(s.get(k, 0.0) for s in stages) for k in stages[0]}
     st["cpu_ratio"] = statistics.median(cpu["accurate"]) / statistics.median(cpu["paper"])
-    return med, st
+    pst = {k: statistics.median(s.get(k, 0.0) for s in paper_stages) for k in paper_stages[0]}
+    return med, st, pst
 
 
 def measure_cut(name, size, rounds=7):
@@ -111,13 +111,14 @@ def main(argv=None):
                 ms, n, edges = measure_cut(name, (w, h))
                 print(f"{name} {size} {edges} | {ms[True]:.1f} {n[True]} | {ms[False]:.1f} {n[False]}", flush=True)
         return
-    print("scene size paper_ms accurate_ms ratio cpu_ratio | accurate stages (ms)")
+    print("scene size paper_ms accurate_ms ratio cpu_ratio | accurate stages (ms) | paper stages (ms)")
     for size in args.sizes:
         w, h = (int(x) for x in size.split("x"))
         for name in args.scenes:
-            med, st = measure(name, (w, h), args.frames)
+            med, st, pst = measure(name, (w, h), args.frames)
             keys = ("gbuffer", "search", "tessellate_only", "clip", "virtual", "main")
             parts = " ".join(f"{k}={st.get(k, 0.0):.0f}" for k in keys)
+            parts += " | paper: " + " ".join(f"{k}={pst.get(k, 0.0):.0f}" for k in ("gbuffer", "search", "virtual", "main"))
             ratio = med["accurate"] / med["paper"]
             print(f"{name} {size} {med['paper']:.0f} {med['accurate']:.0f} {ratio:.2f} {st['cpu_ratio']:.2f} | {parts}",
                   flush=True)

@@ -446,7 +446,7 @@ def _may_hit(tri, ox, oy, oz, dx, dy, dz, length, margin):
 
 
 @kernel
-def screen_bounds(lo, hi, clip, width, height, r0, r1, c0, c1, pixels, fraction, screen, bbox, dilate, odd):
+def screen_bounds(lo, hi, clip, corner, width, height, r0, r1, c0, c1, pixels, fraction, screen, bbox, dilate, odd):
     """Candidates ``lo .. hi - 1`` (run by :func:`refsoft._parallel.parallel_range`; each writes
     only its own rows): the view-pixel positions of its virtual vertices from their clip
     coordinates, its dilated bounds and dilation, as ``refsoft.search.acceptance._screen_numpy``
@@ -456,7 +456,10 @@ def screen_bounds(lo, hi, clip, width, height, r0, r1, c0, c1, pixels, fraction,
 
     Parameters
     ----------
-    clip : (C, 3, 4) float64
+    clip : (n, 4) float64
+        Clip coordinates of the virtual vertices.
+    corner : (C, 3) int64
+        Each candidate's rows of ``clip``.
     width, height : float
         The view's size.
     r0, r1, c0, c1 : int
@@ -470,7 +473,7 @@ def screen_bounds(lo, hi, clip, width, height, r0, r1, c0, c1, pixels, fraction,
     """
     big = float(1 << 30)
     for c in range(lo, hi):
-        good = clip[c, 0, 3] > 0.0 and clip[c, 1, 3] > 0.0 and clip[c, 2, 3] > 0.0
+        good = clip[corner[c, 0], 3] > 0.0 and clip[corner[c, 1], 3] > 0.0 and clip[corner[c, 2], 3] > 0.0
         if not good:
             for k in range(3):
                 screen[c, k, 0] = 0.0
@@ -481,9 +484,10 @@ def screen_bounds(lo, hi, clip, width, height, r0, r1, c0, c1, pixels, fraction,
             continue
         bad = False
         for k in range(3):
-            wv = clip[c, k, 3]
-            x = (clip[c, k, 0] / wv + 1.0) * 0.5 * width
-            y = (1.0 - clip[c, k, 1] / wv) * 0.5 * height
+            i = corner[c, k]
+            wv = clip[i, 3]
+            x = (clip[i, 0] / wv + 1.0) * 0.5 * width
+            y = (1.0 - clip[i, 1] / wv) * 0.5 * height
             bad = bad or not (np.isfinite(x) and np.isfinite(y))
             screen[c, k, 0] = x
             screen[c, k, 1] = y

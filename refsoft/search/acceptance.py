@@ -19,7 +19,8 @@ from .. import constants
 from .._parallel import parallel_range
 from ..raster import _setup, shade
 from ..raster.rays import primary_rays
-from ._several import accept, accept_near, screen_bounds
+from ._several import accept, accept_near
+from ._several import screen_bounds as _screen_bounds
 
 
 @dataclass(frozen=True, eq=False)
@@ -117,10 +118,39 @@ def draw(cand: Candidates, camera, reflector_mesh, triangle, stencil, box, color
         ``pixels_accepted`` (a candidate's real triangle hit), ``pixels_empty`` (pixels with a
         reflected ray where no candidate's triangle is hit: nothing drawn).
     """
+    rays = pixel_rays(camera, reflector_mesh, triangle, stencil, box) if rays is None else rays
+    best_c, best_uv = nearest(cand, camera, stencil, box, rays=rays)
+    covered = best_c >= 0
+    c = best_c[covered]
+    return shade_winners(best_c, best_uv, cand.normals[c], cand.object_id[c], colors, rays[0])
+
+
+def nearest(cand: Candidates, camera, stencil, box, *, rays=None, screen=None, triangle=None, reflector_mesh=None):
+    """Per box pixel the candidate whose real triangle the pixel's reflected ray meets nearest,
+    among those whose dilated virtual triangle covers it (:func:`draw` without the shading).
+
+    Parameters
+    ----------
+    cand : Candidates
+        Only ``real`` and ``rays`` are read when ``screen`` is given, ``virtual`` too otherwise.
+    camera, stencil, box
+        As :func:`draw`.
+    rays : tuple, optional
+        :func:`pixel_rays` (made from ``triangle`` and ``reflector_mesh`` when not given).
+    screen : tuple, optional
+        :func:`screen_bounds` of the candidates (made here when not given).
+
+    Returns
+    -------
+    best_c : (h, w) int64
+        The winning candidate per box pixel, -1 none.
+    best_uv : (h, w, 2) float64
+        Its barycentrics (u, v) on the real triangle.
+    """
     r0, r1, c0, c1 = (int(x) for x in box)
     h, w = r1 - r0, c1 - c0
     valid, origin, direction = pixel_rays(camera, reflector_mesh, triangle, stencil, box) if rays is None else rays
-    screen, bbox, dilate = _screen(cand.virtual, camera, box)
+    screen, bbox, dilate = _screen(cand.virtual, camera, box) if screen is None else screen
     best_t = np.full((h, w), np.inf)
     best_c = np.full((h, w), -1, np.int64)
     best_uv = np.zeros((h, w, 2))
@@ -137,18 +167,43 @@ def draw(cand: Candidates, camera, reflector_mesh, triangle, stencil, box, color
             parallel_range(accept_near, h, r0, c0, valid, _spans(valid), origin, direction, rows, cols,
                            np.ascontiguousarray(origin[valid]), np.ascontiguousarray(direction[valid]), screen, bbox,
                            dilate, real, _runs(real), first, last, ray, best_t, best_c, best_uv, tested, seen)
+    return best_c, best_uv
+
+
+def shade_winners(best_c, best_uv, normals, object_id, colors, valid):
+    """Shade the pixels :func:`nearest` found a candidate for.
+
+    Parameters
+    ----------
+    best_c : (h, w) int64
+    best_uv : (h, w, 2) float64
+        :func:`nearest`'s outputs.
+    normals : (k, 3, 3) float64
+        The corner normals of the winning candidate of each covered pixel (``best_c >= 0``, in
+        row-major order).
+    object_id : (k,) int32
+        Its object.
+    colors : (K + 1, 3) float32
+        Object colours by id.
+    valid : (h, w) bool
+        Box pixels with a reflected ray.
+
+    Returns
+    -------
+    colour, reflected_id, covered, counts
+        As :func:`draw`.
+    """
+    h, w = best_c.shape
     covered = best_c >= 0
     rid = np.zeros((h, w), np.int32)
     colour = np.zeros((h, w, 3), np.float32)
     if covered.any():
-        c = best_c[covered]
         u, v = best_uv[covered, 0], best_uv[covered, 1]
-        nrm = cand.normals[c]
-        n = (1.0 - u - v)[:, None] * nrm[:, 0] + u[:, None] * nrm[:, 1] + v[:, None] * nrm[:, 2]
+        n = (1.0 - u - v)[:, None] * normals[:, 0] + u[:, None] * normals[:, 1] + v[:, None] * normals[:, 2]
         length = np.sqrt(np.sum(n * n, axis=1))[:, None]
         n = np.divide(n, length, out=np.zeros_like(n), where=length > 0)
-        rid[covered] = cand.object_id[c]
-        colour[covered] = shade(n, np.asarray(colors, np.float32)[cand.object_id[c]])
+        rid[covered] = object_id
+        colour[covered] = shade(n, np.asarray(colors, np.float32)[object_id])
     counts = {"pixels_accepted": int(covered.sum()), "pixels_empty": int((valid & ~covered).sum())}
     return colour, rid, covered, counts
 
@@ -174,20 +229,30 @@ def _spans(valid):
 def _screen(virtual, camera, box):
     """View-pixel positions (C, 3, 2) float64 of the candidates' virtual vertices (C, 3, 3), their
     dilated bounds (C, 4) int64 (box rows, view columns) and dilations (C,) float64 (-1: a vertex
-    at or behind the eye plane, the whole box): kernel ``_several.screen_bounds``, and
-    :func:`_screen_numpy` for the rows with a value that is not finite."""
-    r0, r1, c0, c1 = (int(x) for x in box)
+    at or behind the eye plane, the whole box): :func:`screen_bounds` of their clip coordinates."""
     c = len(virtual)
-    clip = _setup.transform_points(virtual.reshape(-1, 3), camera.view_proj()).reshape(c, 3, 4)
+    clip = _setup.transform_points(np.ascontiguousarray(virtual, np.float64).reshape(-1, 3), camera.view_proj())
+    return screen_bounds(clip, np.arange(3 * c, dtype=np.int64).reshape(c, 3), camera, box)
+
+
+def screen_bounds(clip, corner, camera, box):
+    """View-pixel positions (C, 3, 2) float64 of candidates whose corners are rows ``corner``
+    (C, 3) int64 of the clip coordinates ``clip`` (n, 4) float64, their dilated bounds (C, 4)
+    int64 (box rows, view columns) and dilations (C,) float64 (-1: a vertex at or behind the eye
+    plane, the whole box): kernel ``_several.screen_bounds``, and :func:`_screen_numpy` for the
+    rows with a value that is not finite."""
+    r0, r1, c0, c1 = (int(x) for x in box)
+    c = len(corner)
     clip = np.ascontiguousarray(clip, np.float64)
+    corner = np.ascontiguousarray(corner, np.int64)
     screen, bbox, dilate = np.empty((c, 3, 2)), np.empty((c, 4), np.int64), np.empty(c)
     odd = np.zeros(c, bool)
     if c:
-        parallel_range(screen_bounds, c, clip, float(camera.width), float(camera.height), r0, r1, c0, c1,
+        parallel_range(_screen_bounds, c, clip, corner, float(camera.width), float(camera.height), r0, r1, c0, c1,
                        float(constants.SEVERAL_DILATE_PIXELS), float(constants.SEVERAL_DILATE_FRACTION), screen, bbox,
                        dilate, odd)
     if odd.any():
-        screen[odd], bbox[odd], dilate[odd] = _screen_numpy(clip[odd], camera, box)
+        screen[odd], bbox[odd], dilate[odd] = _screen_numpy(clip[corner[odd]], camera, box)
     return screen, bbox, dilate
 
 

@@ -26,7 +26,7 @@ from ..raster import _setup
 from .._parallel import parallel_range
 from . import CULLED, HIDDEN
 from ._exact import reaching
-from .acceptance import Candidates, draw
+from .acceptance import Candidates, nearest, pixel_rays, screen_bounds, shade_winners
 from .virtual import virtual_pass
 
 
@@ -123,10 +123,15 @@ def exact_pass(scene, part, real, camera, reflector_mesh, triangle, stencil, box
     # bounds stay off the box: the acceptance would test no pixel of theirs
     keep = candidate_triangles(clip, faces, flags, lost, box, camera, band)
     f = np.asarray(faces, np.int64)[keep]
-    cand = Candidates(np.asarray(virtual, np.float64)[f], np.asarray(real, np.float64)[f],
-                      np.asarray(normals, np.float64)[f], np.asarray(face_obj, np.int32)[keep], keep, 0)
+    # the candidates' screen bounds from the clip coordinates already made, their real triangles;
+    # the normals and objects of the winners alone
+    cand = Candidates(None, np.asarray(real, np.float64)[f], None, None, keep, 0)
+    rays = pixel_rays(camera, reflector_mesh, triangle, stencil, box)
+    best_c, best_uv = nearest(cand, camera, stencil, box, rays=rays, screen=screen_bounds(clip, f, camera, box))
+    won = keep[best_c[best_c >= 0]]
     colors = np.vstack([np.zeros(3), [o.color for o in scene.objects]]).astype(np.float32)
-    colour, rid, covered, counts = draw(cand, camera, reflector_mesh, triangle, stencil, box, colors)
+    colour, rid, covered, counts = shade_winners(best_c, best_uv, np.asarray(normals, np.float64)[faces[won]],
+                                                 np.asarray(face_obj, np.int32)[won], colors, rays[0])
     return colour, rid, covered, {"candidates": int(len(keep)), **counts}
 
 
