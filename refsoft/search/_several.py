@@ -53,13 +53,26 @@ def accept(lo, hi, r0, c0, valid, span, origin, direction, screen, bbox, dilate,
     """
     for c in range(screen.shape[0]):
         _raster_one(c, lo, hi, r0, c0, valid, span, origin, direction, screen, bbox, dilate, real, run, best_t,
-                    best_c, best_uv, tested, seen)
+                    best_c, best_uv, tested, seen, True)
+
+
+@kernel
+def accept_untracked(lo, hi, r0, c0, valid, span, origin, direction, screen, bbox, dilate, real, best_t, best_c,
+                     best_uv):
+    """:func:`accept` without runs and without ``tested`` (each candidate its own run): the same
+    ``best_t``, ``best_c`` and ``best_uv`` where no two consecutive candidates share a real
+    triangle, without writing two arrays at every pixel a candidate covers."""
+    unused = np.empty((1, 1), np.int64)
+    for c in range(screen.shape[0]):
+        _raster_one(c, lo, hi, r0, c0, valid, span, origin, direction, screen, bbox, dilate, real, unused[0],
+                    best_t, best_c, best_uv, unused, unused, False)
 
 
 @kernel(inline=True)
 def _raster_one(c, lo, hi, r0, c0, valid, span, origin, direction, screen, bbox, dilate, real, run, best_t, best_c,
-                best_uv, tested, seen):
-    """:func:`accept` for candidate ``c`` on box rows ``lo .. hi - 1``."""
+                best_uv, tested, seen, track):
+    """:func:`accept` for candidate ``c`` on box rows ``lo .. hi - 1`` (``track``: with its runs and
+    ``tested``; else those arrays are not read)."""
     row0, row1 = max(lo, bbox[c, 0]), min(hi, bbox[c, 1])
     if row0 >= row1:
         return
@@ -89,7 +102,7 @@ def _raster_one(c, lo, hi, r0, c0, valid, span, origin, direction, screen, bbox,
             col0, col1 = _narrow(col0, col1, y, cx, cy, ax, ay, sign, -d * lca)
         for col in range(col0, col1):
             j = col - c0
-            if not valid[r, j] or seen[r, j] == run[c]:  # tested by this run: nothing to change
+            if not valid[r, j] or (track and seen[r, j] == run[c]):  # tested by this run: nothing to change
                 continue
             if not plain:
                 x = col + 0.5
@@ -99,8 +112,9 @@ def _raster_one(c, lo, hi, r0, c0, valid, span, origin, direction, screen, bbox,
                 fca = sign * ((ax - cx) * (y - cy) - (ay - cy) * (x - cx))
                 if fab < -d * lab or fbc < -d * lbc or fca < -d * lca:
                     continue
-            tested[r, j] = True
-            seen[r, j] = run[c]
+            if track:
+                tested[r, j] = True
+                seen[r, j] = run[c]
             dx, dy, dz = direction[r, j, 0], direction[r, j, 1], direction[r, j, 2]
             px, py, pz = dy * e2z - dz * e2y, dz * e2x - dx * e2z, dx * e2y - dy * e2x
             det = (e1x * px + e1y * py) + e1z * pz
@@ -149,7 +163,7 @@ def accept_near(lo, hi, r0, c0, valid, span, origin, direction, ray_row, ray_col
     for c in range(n):
         if first[c] < 0:
             _raster_one(c, lo, hi, r0, c0, valid, span, origin, direction, screen, bbox, dilate, real, run, best_t,
-                        best_c, best_uv, tested, seen)
+                        best_c, best_uv, tested, seen, True)
             continue
         row0, row1 = max(lo, bbox[c, 0]), min(hi, bbox[c, 1])
         if row0 >= row1:

@@ -19,7 +19,7 @@ from .. import constants
 from .._parallel import parallel_range
 from ..raster import _setup, shade
 from ..raster.rays import primary_rays
-from ._several import accept, accept_near
+from ._several import accept, accept_near, accept_untracked
 from ._several import screen_bounds as _screen_bounds
 
 
@@ -125,7 +125,8 @@ def draw(cand: Candidates, camera, reflector_mesh, triangle, stencil, box, color
     return shade_winners(best_c, best_uv, cand.normals[c], cand.object_id[c], colors, rays[0])
 
 
-def nearest(cand: Candidates, camera, stencil, box, *, rays=None, screen=None, triangle=None, reflector_mesh=None):
+def nearest(cand: Candidates, camera, stencil, box, *, rays=None, screen=None, triangle=None, reflector_mesh=None,
+            runs=True):
     """Per box pixel the candidate whose real triangle the pixel's reflected ray meets nearest,
     among those whose dilated virtual triangle covers it (:func:`draw` without the shading).
 
@@ -139,6 +140,11 @@ def nearest(cand: Candidates, camera, stencil, box, *, rays=None, screen=None, t
         :func:`pixel_rays` (made from ``triangle`` and ``reflector_mesh`` when not given).
     screen : tuple, optional
         :func:`screen_bounds` of the candidates (made here when not given).
+    runs : bool
+        Test a pixel's ray once per run of consecutive candidates with the same real triangle
+        (worth it where many share one, as every image's candidates do); False: each candidate
+        on its own, without the bookkeeping (kernel ``_several.accept_untracked``). The result
+        is the same.
 
     Returns
     -------
@@ -154,11 +160,14 @@ def nearest(cand: Candidates, camera, stencil, box, *, rays=None, screen=None, t
     best_t = np.full((h, w), np.inf)
     best_c = np.full((h, w), -1, np.int64)
     best_uv = np.zeros((h, w, 2))
-    tested = np.zeros((h, w), bool)
     if len(screen):
         real = np.ascontiguousarray(cand.real)
-        seen = np.full((h, w), -1, np.int64)
-        if cand.rays is None:
+        tested, seen = (np.zeros((h, w), bool), np.full((h, w), -1, np.int64)) if runs or cand.rays is not None else (
+            None, None)
+        if cand.rays is None and not runs:
+            parallel_range(accept_untracked, h, r0, c0, valid, _spans(valid), origin, direction, screen, bbox, dilate,
+                           real, best_t, best_c, best_uv)
+        elif cand.rays is None:
             parallel_range(accept, h, r0, c0, valid, _spans(valid), origin, direction, screen, bbox, dilate, real,
                            _runs(real), best_t, best_c, best_uv, tested, seen)
         else:  # each candidate's pixels whose rays may hit it, not every pixel it covers

@@ -127,7 +127,8 @@ def exact_pass(scene, part, real, camera, reflector_mesh, triangle, stencil, box
     # the normals and objects of the winners alone
     cand = Candidates(None, np.asarray(real, np.float64)[f], None, None, keep, 0)
     rays = pixel_rays(camera, reflector_mesh, triangle, stencil, box)
-    best_c, best_uv = nearest(cand, camera, stencil, box, rays=rays, screen=screen_bounds(clip, f, camera, box))
+    best_c, best_uv = nearest(cand, camera, stencil, box, rays=rays, screen=screen_bounds(clip, f, camera, box),
+                              runs=False)
     won = keep[best_c[best_c >= 0]]
     colors = np.vstack([np.zeros(3), [o.color for o in scene.objects]]).astype(np.float32)
     colour, rid, covered, counts = shade_winners(best_c, best_uv, np.asarray(normals, np.float64)[faces[won]],

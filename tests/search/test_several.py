@@ -270,13 +270,13 @@ def test_triples_and_matching_match_the_plain_python_pool():
 
 def test_acceptance_kernel_matches_the_plain_loop():
     """The acceptance kernel (candidates outer, valid spans, bisected edges, one ray test per run
-    of equal real triangles) gives the plain pixel-by-candidate loop's outputs bit for bit, on
-    one thread and on several: overlapping triangles at several heights, runs of equal ones with
+    of equal real triangles), and its variant without runs, give the plain pixel-by-candidate
+    loop's outputs bit for bit, on one thread and on several: overlapping triangles at several heights, runs of equal ones with
     different screen triangles, unusable projections and slivers."""
     import naive_several_pool
 
     from refsoft._parallel import parallel_range
-    from refsoft.search._several import accept
+    from refsoft.search._several import accept, accept_untracked
 
     rng = np.random.default_rng(3)
     h, w, r0, c0 = 14, 18, 5, 7
@@ -306,6 +306,17 @@ def test_acceptance_kernel_matches_the_plain_loop():
             with one_thread():
                 parallel_range(*args)
         for a, b in zip(got, want):
+            assert np.array_equal(a, b)
+        # without runs and without `tested` (the exact drawing's kernel): the same winners
+        plain = (np.full((h, w), np.inf), np.full((h, w), -1, np.int64), np.zeros((h, w, 2)))
+        args = (accept_untracked, h, r0, c0, valid, acceptance._spans(valid), origin, direction, screen, bbox, dilate,
+                real, *plain)
+        if threads:
+            parallel_range(*args)
+        else:
+            with one_thread():
+                parallel_range(*args)
+        for a, b in zip(plain, want[:3]):
             assert np.array_equal(a, b)
 
 
