@@ -53,29 +53,57 @@ def accept(lo, hi, r0, c0, valid, span, origin, direction, screen, bbox, dilate,
     """
     for c in range(screen.shape[0]):
         _raster_one(c, lo, hi, r0, c0, valid, span, origin, direction, screen, bbox, dilate, real, run, best_t,
-                    best_c, best_uv, tested, seen, True)
+                    best_c, best_uv, tested, seen)
 
 
 @kernel
 def accept_untracked(lo, hi, r0, c0, valid, span, origin, direction, screen, bbox, dilate, real, best_t, best_c,
                      best_uv):
     """:func:`accept` without runs and without ``tested`` (each candidate its own run): the same
-    ``best_t``, ``best_c`` and ``best_uv`` where no two consecutive candidates share a real
-    triangle, without writing two arrays at every pixel a candidate covers."""
-    unused = np.empty((1, 1), np.int64)
+    ``best_t``, ``best_c`` and ``best_uv`` (a later candidate with the same real triangle meets a
+    ray at the same ``t``, which does not replace the first), without two writes at every pixel
+    a candidate covers."""
     for c in range(screen.shape[0]):
-        _raster_one(c, lo, hi, r0, c0, valid, span, origin, direction, screen, bbox, dilate, real, unused[0],
-                    best_t, best_c, best_uv, unused, unused, False)
+        row0, row1 = max(lo, bbox[c, 0]), min(hi, bbox[c, 1])
+        if row0 >= row1:
+            continue
+        ax, ay, bx, by, cx, cy, sign, lab, lbc, lca, d, plain = _outline(c, screen, dilate)
+        p0x, p0y, p0z = real[c, 0, 0], real[c, 0, 1], real[c, 0, 2]
+        e1x, e1y, e1z = real[c, 1, 0] - p0x, real[c, 1, 1] - p0y, real[c, 1, 2] - p0z
+        e2x, e2y, e2z = real[c, 2, 0] - p0x, real[c, 2, 1] - p0y, real[c, 2, 2] - p0z
+        for r in range(row0, row1):
+            y = r + r0 + 0.5
+            col0, col1 = max(bbox[c, 2], c0 + span[r, 0]), min(bbox[c, 3], c0 + span[r, 1])
+            if col0 >= col1:
+                continue
+            if not plain:
+                col0, col1 = _narrow(col0, col1, y, ax, ay, bx, by, sign, -d * lab)
+                col0, col1 = _narrow(col0, col1, y, bx, by, cx, cy, sign, -d * lbc)
+                col0, col1 = _narrow(col0, col1, y, cx, cy, ax, ay, sign, -d * lca)
+            for col in range(col0, col1):
+                j = col - c0
+                if not valid[r, j]:
+                    continue
+                if not plain:
+                    x = col + 0.5
+                    fab = sign * ((bx - ax) * (y - ay) - (by - ay) * (x - ax))
+                    fbc = sign * ((cx - bx) * (y - by) - (cy - by) * (x - bx))
+                    fca = sign * ((ax - cx) * (y - cy) - (ay - cy) * (x - cx))
+                    if fab < -d * lab or fbc < -d * lbc or fca < -d * lca:
+                        continue
+                t, u, v = _meet(origin[r, j, 0], origin[r, j, 1], origin[r, j, 2], direction[r, j, 0],
+                                direction[r, j, 1], direction[r, j, 2], p0x, p0y, p0z, e1x, e1y, e1z, e2x, e2y, e2z)
+                if t > 0.0 and t < best_t[r, j]:
+                    best_t[r, j] = t
+                    best_c[r, j] = c
+                    best_uv[r, j, 0] = u
+                    best_uv[r, j, 1] = v
 
 
 @kernel(inline=True)
-def _raster_one(c, lo, hi, r0, c0, valid, span, origin, direction, screen, bbox, dilate, real, run, best_t, best_c,
-                best_uv, tested, seen, track):
-    """:func:`accept` for candidate ``c`` on box rows ``lo .. hi - 1`` (``track``: with its runs and
-    ``tested``; else those arrays are not read)."""
-    row0, row1 = max(lo, bbox[c, 0]), min(hi, bbox[c, 1])
-    if row0 >= row1:
-        return
+def _outline(c, screen, dilate):
+    """Candidate ``c``'s screen corners, the sign of its area, its edges' lengths, its dilation
+    and whether it is tested by its dilated box alone (a sliver or an unusable projection)."""
     ax, ay = screen[c, 0, 0], screen[c, 0, 1]
     bx, by = screen[c, 1, 0], screen[c, 1, 1]
     cx, cy = screen[c, 2, 0], screen[c, 2, 1]
@@ -85,8 +113,38 @@ def _raster_one(c, lo, hi, r0, c0, valid, span, origin, direction, screen, bbox,
     lbc = np.sqrt((cx - bx) * (cx - bx) + (cy - by) * (cy - by))
     lca = np.sqrt((ax - cx) * (ax - cx) + (ay - cy) * (ay - cy))
     d = dilate[c]
-    # a sliver or an unusable projection: the dilated box alone
     plain = d < 0.0 or abs(area) <= 1e-12 * (lab + lbc + lca) * (lab + lbc + lca)
+    return ax, ay, bx, by, cx, cy, sign, lab, lbc, lca, d, plain
+
+
+@kernel(inline=True)
+def _meet(ox, oy, oz, dx, dy, dz, p0x, p0y, p0z, e1x, e1y, e1z, e2x, e2y, e2z):
+    """Moller-Trumbore: ``(t, u, v)`` of the ray's hit inside the triangle ``p0 + u e1 + v e2``,
+    ``t = -1`` where it misses (or runs parallel)."""
+    px, py, pz = dy * e2z - dz * e2y, dz * e2x - dx * e2z, dx * e2y - dy * e2x
+    det = (e1x * px + e1y * py) + e1z * pz
+    if det == 0.0:
+        return -1.0, 0.0, 0.0
+    inv = 1.0 / det
+    sx, sy, sz = ox - p0x, oy - p0y, oz - p0z
+    u = ((sx * px + sy * py) + sz * pz) * inv
+    if u < 0.0 or u > 1.0:
+        return -1.0, 0.0, 0.0
+    qx, qy, qz = sy * e1z - sz * e1y, sz * e1x - sx * e1z, sx * e1y - sy * e1x
+    v = ((dx * qx + dy * qy) + dz * qz) * inv
+    if v < 0.0 or u + v > 1.0:
+        return -1.0, 0.0, 0.0
+    return ((e2x * qx + e2y * qy) + e2z * qz) * inv, u, v
+
+
+@kernel(inline=True)
+def _raster_one(c, lo, hi, r0, c0, valid, span, origin, direction, screen, bbox, dilate, real, run, best_t, best_c,
+                best_uv, tested, seen):
+    """:func:`accept` for candidate ``c`` on box rows ``lo .. hi - 1``."""
+    row0, row1 = max(lo, bbox[c, 0]), min(hi, bbox[c, 1])
+    if row0 >= row1:
+        return
+    ax, ay, bx, by, cx, cy, sign, lab, lbc, lca, d, plain = _outline(c, screen, dilate)
     p0x, p0y, p0z = real[c, 0, 0], real[c, 0, 1], real[c, 0, 2]
     e1x, e1y, e1z = real[c, 1, 0] - p0x, real[c, 1, 1] - p0y, real[c, 1, 2] - p0z
     e2x, e2y, e2z = real[c, 2, 0] - p0x, real[c, 2, 1] - p0y, real[c, 2, 2] - p0z
@@ -102,7 +160,7 @@ def _raster_one(c, lo, hi, r0, c0, valid, span, origin, direction, screen, bbox,
             col0, col1 = _narrow(col0, col1, y, cx, cy, ax, ay, sign, -d * lca)
         for col in range(col0, col1):
             j = col - c0
-            if not valid[r, j] or (track and seen[r, j] == run[c]):  # tested by this run: nothing to change
+            if not valid[r, j] or seen[r, j] == run[c]:  # tested by this run: nothing to change
                 continue
             if not plain:
                 x = col + 0.5
@@ -112,24 +170,10 @@ def _raster_one(c, lo, hi, r0, c0, valid, span, origin, direction, screen, bbox,
                 fca = sign * ((ax - cx) * (y - cy) - (ay - cy) * (x - cx))
                 if fab < -d * lab or fbc < -d * lbc or fca < -d * lca:
                     continue
-            if track:
-                tested[r, j] = True
-                seen[r, j] = run[c]
-            dx, dy, dz = direction[r, j, 0], direction[r, j, 1], direction[r, j, 2]
-            px, py, pz = dy * e2z - dz * e2y, dz * e2x - dx * e2z, dx * e2y - dy * e2x
-            det = (e1x * px + e1y * py) + e1z * pz
-            if det == 0.0:
-                continue
-            inv = 1.0 / det
-            sx, sy, sz = origin[r, j, 0] - p0x, origin[r, j, 1] - p0y, origin[r, j, 2] - p0z
-            u = ((sx * px + sy * py) + sz * pz) * inv
-            if u < 0.0 or u > 1.0:
-                continue
-            qx, qy, qz = sy * e1z - sz * e1y, sz * e1x - sx * e1z, sx * e1y - sy * e1x
-            v = ((dx * qx + dy * qy) + dz * qz) * inv
-            if v < 0.0 or u + v > 1.0:
-                continue
-            t = ((e2x * qx + e2y * qy) + e2z * qz) * inv
+            tested[r, j] = True
+            seen[r, j] = run[c]
+            t, u, v = _meet(origin[r, j, 0], origin[r, j, 1], origin[r, j, 2], direction[r, j, 0], direction[r, j, 1],
+                            direction[r, j, 2], p0x, p0y, p0z, e1x, e1y, e1z, e2x, e2y, e2z)
             if t > 0.0 and t < best_t[r, j]:
                 best_t[r, j] = t
                 best_c[r, j] = c
@@ -163,7 +207,7 @@ def accept_near(lo, hi, r0, c0, valid, span, origin, direction, ray_row, ray_col
     for c in range(n):
         if first[c] < 0:
             _raster_one(c, lo, hi, r0, c0, valid, span, origin, direction, screen, bbox, dilate, real, run, best_t,
-                        best_c, best_uv, tested, seen, True)
+                        best_c, best_uv, tested, seen)
             continue
         row0, row1 = max(lo, bbox[c, 0]), min(hi, bbox[c, 1])
         if row0 >= row1:
