@@ -28,48 +28,75 @@ def primary_rays(lo, hi, rows, cols, width, height, inv, eye, perspective, verti
     normal, ``ok[i]`` False where the ray is parallel to the plane (then hit is the ray's origin
     and ray its direction)."""
     for i in range(lo, hi):
-        x = (cols[i] + 0.5) / width * 2.0 - 1.0
-        y = (height - rows[i] - 0.5) / height * 2.0 - 1.0
-        nx_, ny_, nz_ = _unproject(inv, x, y, -1.0)
-        fx, fy, fz = _unproject(inv, x, y, 1.0)
-        dx, dy, dz = fx - nx_, fy - ny_, fz - nz_
-        length = np.sqrt((dx * dx + dy * dy) + dz * dz)
-        dx, dy, dz = dx / length, dy / length, dz / length
-        if perspective:
-            ox, oy, oz = eye[0], eye[1], eye[2]
-        else:
-            ox, oy, oz = nx_, ny_, nz_
-        ia, ib, ic = faces[tri[i], 0], faces[tri[i], 1], faces[tri[i], 2]
-        ax, ay, az = vertices[ia, 0], vertices[ia, 1], vertices[ia, 2]
-        e1x, e1y, e1z = vertices[ib, 0] - ax, vertices[ib, 1] - ay, vertices[ib, 2] - az
-        e2x, e2y, e2z = vertices[ic, 0] - ax, vertices[ic, 1] - ay, vertices[ic, 2] - az
-        px, py, pz = dy * e2z - dz * e2y, dz * e2x - dx * e2z, dx * e2y - dy * e2x
-        det = (e1x * px + e1y * py) + e1z * pz
-        if det == 0.0:
-            ok[i] = False
-            hit[i, 0], hit[i, 1], hit[i, 2] = ox, oy, oz
-            ray[i, 0], ray[i, 1], ray[i, 2] = dx, dy, dz
-            continue
-        inv_det = 1.0 / det
-        sx, sy, sz = ox - ax, oy - ay, oz - az
-        u = ((sx * px + sy * py) + sz * pz) * inv_det
-        qx, qy, qz = sy * e1z - sz * e1y, sz * e1x - sx * e1z, sx * e1y - sy * e1x
-        v = ((dx * qx + dy * qy) + dz * qz) * inv_det
-        t = ((e2x * qx + e2y * qy) + e2z * qz) * inv_det
-        ok[i] = np.isfinite(t)
-        if not ok[i]:
-            t = 0.0
-            u = 0.0
-            v = 0.0
-        w0 = 1.0 - u - v if ok[i] else 0.0
-        hit[i, 0], hit[i, 1], hit[i, 2] = ox + t * dx, oy + t * dy, oz + t * dz
-        mx = (w0 * normals[ia, 0] + u * normals[ib, 0]) + v * normals[ic, 0]
-        my = (w0 * normals[ia, 1] + u * normals[ib, 1]) + v * normals[ic, 1]
-        mz = (w0 * normals[ia, 2] + u * normals[ib, 2]) + v * normals[ic, 2]
-        m = np.sqrt((mx * mx + my * my) + mz * mz)
-        if m > 0.0:
-            mx, my, mz = mx / m, my / m, mz / m
-        else:
-            mx, my, mz = 0.0, 0.0, 0.0
-        k = 2.0 * ((dx * mx + dy * my) + dz * mz)
-        ray[i, 0], ray[i, 1], ray[i, 2] = dx - k * mx, dy - k * my, dz - k * mz
+        hx, hy, hz, rx, ry, rz, good = _pixel_ray(rows[i], cols[i], tri[i], width, height, inv, eye, perspective,
+                                                  vertices, normals, faces)
+        hit[i, 0], hit[i, 1], hit[i, 2] = hx, hy, hz
+        ray[i, 0], ray[i, 1], ray[i, 2] = rx, ry, rz
+        ok[i] = good
+
+
+@kernel
+def box_rays(lo, hi, r0, c0, stencil, triangle, width, height, inv, eye, perspective, vertices, normals, faces,
+             valid, origin, direction):
+    """:func:`primary_rays` of every ``stencil`` (h, w) pixel of box rows ``lo .. hi - 1`` (view
+    rows ``r0 + r``, columns ``c0 + c``; ``triangle`` (h, w) their visible triangles), written in
+    place: ``origin``, ``direction`` (h, w, 3) float64 and ``valid`` (h, w) bool (``ok``); the
+    other pixels are left as they are (zeros)."""
+    for r in range(lo, hi):
+        for c in range(stencil.shape[1]):
+            if not stencil[r, c]:
+                continue
+            hx, hy, hz, rx, ry, rz, good = _pixel_ray(r + r0, c + c0, triangle[r, c], width, height, inv, eye,
+                                                      perspective, vertices, normals, faces)
+            origin[r, c, 0], origin[r, c, 1], origin[r, c, 2] = hx, hy, hz
+            direction[r, c, 0], direction[r, c, 1], direction[r, c, 2] = rx, ry, rz
+            valid[r, c] = good
+
+
+@kernel(inline=True)
+def _pixel_ray(row, col, t_index, width, height, inv, eye, perspective, vertices, normals, faces):
+    """The eye ray through pixel (row, col), its hit on triangle ``t_index``'s plane and its
+    direction reflected about the normal interpolated there: ``(hit x, y, z, ray x, y, z, ok)``
+    (ok False where the ray is parallel to the plane: then hit is the ray's origin and ray its
+    direction)."""
+    x = (col + 0.5) / width * 2.0 - 1.0
+    y = (height - row - 0.5) / height * 2.0 - 1.0
+    nx_, ny_, nz_ = _unproject(inv, x, y, -1.0)
+    fx, fy, fz = _unproject(inv, x, y, 1.0)
+    dx, dy, dz = fx - nx_, fy - ny_, fz - nz_
+    length = np.sqrt((dx * dx + dy * dy) + dz * dz)
+    dx, dy, dz = dx / length, dy / length, dz / length
+    if perspective:
+        ox, oy, oz = eye[0], eye[1], eye[2]
+    else:
+        ox, oy, oz = nx_, ny_, nz_
+    ia, ib, ic = faces[t_index, 0], faces[t_index, 1], faces[t_index, 2]
+    ax, ay, az = vertices[ia, 0], vertices[ia, 1], vertices[ia, 2]
+    e1x, e1y, e1z = vertices[ib, 0] - ax, vertices[ib, 1] - ay, vertices[ib, 2] - az
+    e2x, e2y, e2z = vertices[ic, 0] - ax, vertices[ic, 1] - ay, vertices[ic, 2] - az
+    px, py, pz = dy * e2z - dz * e2y, dz * e2x - dx * e2z, dx * e2y - dy * e2x
+    det = (e1x * px + e1y * py) + e1z * pz
+    if det == 0.0:
+        return ox, oy, oz, dx, dy, dz, False
+    inv_det = 1.0 / det
+    sx, sy, sz = ox - ax, oy - ay, oz - az
+    u = ((sx * px + sy * py) + sz * pz) * inv_det
+    qx, qy, qz = sy * e1z - sz * e1y, sz * e1x - sx * e1z, sx * e1y - sy * e1x
+    v = ((dx * qx + dy * qy) + dz * qz) * inv_det
+    t = ((e2x * qx + e2y * qy) + e2z * qz) * inv_det
+    good = np.isfinite(t)
+    if not good:
+        t = 0.0
+        u = 0.0
+        v = 0.0
+    w0 = 1.0 - u - v if good else 0.0
+    mx = (w0 * normals[ia, 0] + u * normals[ib, 0]) + v * normals[ic, 0]
+    my = (w0 * normals[ia, 1] + u * normals[ib, 1]) + v * normals[ic, 1]
+    mz = (w0 * normals[ia, 2] + u * normals[ib, 2]) + v * normals[ic, 2]
+    m = np.sqrt((mx * mx + my * my) + mz * mz)
+    if m > 0.0:
+        mx, my, mz = mx / m, my / m, mz / m
+    else:
+        mx, my, mz = 0.0, 0.0, 0.0
+    k = 2.0 * ((dx * mx + dy * my) + dz * mz)
+    return ox + t * dx, oy + t * dy, oz + t * dz, dx - k * mx, dy - k * my, dz - k * mz, good

@@ -63,3 +63,40 @@ def primary_rays(camera, mesh, rows, cols, tri):
                    np.ascontiguousarray(mesh.vertices, np.float64), np.ascontiguousarray(mesh.normals, np.float64),
                    np.ascontiguousarray(mesh.faces, np.int64), np.asarray(tri, np.int64), hit, ray, ok)
     return hit, ray, ok
+
+
+def box_rays(camera, mesh, triangle, stencil, box):
+    """:func:`primary_rays` of every ``stencil`` pixel of ``box`` (r0, r1, c0, c1), written into
+    box-shaped arrays (kernel ``_rays.box_rays``, the same arithmetic).
+
+    Parameters
+    ----------
+    camera : Camera
+    mesh : Mesh
+        The reflector's world mesh.
+    triangle : (H, W) int
+        The visible triangle of ``mesh`` per view pixel.
+    stencil : (H, W) bool
+    box : (r0, r1, c0, c1)
+
+    Returns
+    -------
+    valid : (h, w) bool
+        Stencil pixels whose ray is not parallel to its triangle's plane.
+    origin, direction : (h, w, 3) float64
+        Each stencil pixel's hit and reflected direction (zeros off the stencil).
+    """
+    from .._parallel import parallel_range
+    from ._rays import box_rays as kernel
+
+    r0, r1, c0, c1 = (int(x) for x in box)
+    h, w = r1 - r0, c1 - c0
+    valid = np.zeros((h, w), bool)
+    origin, direction = np.zeros((h, w, 3)), np.zeros((h, w, 3))
+    parallel_range(kernel, h, r0, c0, np.ascontiguousarray(stencil[r0:r1, c0:c1], bool),
+                   np.ascontiguousarray(triangle[r0:r1, c0:c1], np.int64), float(camera.width), float(camera.height),
+                   np.ascontiguousarray(linalg.inv(camera.view_proj())), np.asarray(camera.eye, np.float64),
+                   camera.projection == "perspective", np.ascontiguousarray(mesh.vertices, np.float64),
+                   np.ascontiguousarray(mesh.normals, np.float64), np.ascontiguousarray(mesh.faces, np.int64), valid,
+                   origin, direction)
+    return valid, origin, direction

@@ -65,3 +65,54 @@ def reaching(lo, hi, clip, faces, flags, lost, width, height, r0, r1, c0, c1, pi
             x1 = min(int(np.ceil(max(xa, xb, xc) + reach - 0.5)) + 1, int(c1)) - int(c0)
             off = y0 >= y1 or x0 >= x1 or sat[y1, x1] - sat[y0, x1] - sat[y1, x0] + sat[y0, x0] == 0
         keep[t] = not off
+
+
+@kernel
+def shade_accepted(lo, hi, best_c, best_uv, corner, normals, cand_object, table, light, ambient, diffuse, colour, rid):
+    """Box rows ``lo .. hi - 1`` (run by :func:`refsoft._parallel.parallel_range`; each writes only
+    its own rows): at each pixel with a winning candidate ``c = best_c[r, j] >= 0`` the normal
+    interpolated at its barycentrics ``best_uv[r, j]`` from its corners' normals, renormalised
+    (zero stays zero), shaded as :func:`refsoft.raster.shade` does (float32), and its object.
+    The same operations in the same order as :func:`refsoft.search.acceptance.shade_winners`
+    (its reference), without its temporaries.
+
+    Parameters
+    ----------
+    best_c : (h, w) int64
+    best_uv : (h, w, 2) float64
+    corner : (C, 3) int64
+        Each candidate's rows of ``normals``.
+    normals : (n, 3) float64
+    cand_object : (C,) int32
+    table : (K + 1, 3) float32
+        Object colours by id.
+    light : (3,) float32
+    ambient, diffuse : float32
+    colour : (h, w, 3) float32
+        Zeros on entry; written where covered.
+    rid : (h, w) int32
+        Zeros on entry; written where covered.
+    """
+    for r in range(lo, hi):
+        for j in range(best_c.shape[1]):
+            c = best_c[r, j]
+            if c < 0:
+                continue
+            u, v = best_uv[r, j, 0], best_uv[r, j, 1]
+            w = (1.0 - u) - v
+            a, b, e = corner[c, 0], corner[c, 1], corner[c, 2]
+            nx = (w * normals[a, 0] + u * normals[b, 0]) + v * normals[e, 0]
+            ny = (w * normals[a, 1] + u * normals[b, 1]) + v * normals[e, 1]
+            nz = (w * normals[a, 2] + u * normals[b, 2]) + v * normals[e, 2]
+            length = np.sqrt((nx * nx + ny * ny) + nz * nz)
+            if length > 0.0:
+                nx, ny, nz = nx / length, ny / length, nz / length
+            else:
+                nx, ny, nz = 0.0, 0.0, 0.0
+            lam = abs((np.float32(nx) * light[0] + np.float32(ny) * light[1]) + np.float32(nz) * light[2])
+            k = ambient + diffuse * lam
+            obj = cand_object[c]
+            colour[r, j, 0] = table[obj, 0] * k
+            colour[r, j, 1] = table[obj, 1] * k
+            colour[r, j, 2] = table[obj, 2] * k
+            rid[r, j] = obj

@@ -18,7 +18,7 @@ import numpy as np
 from .. import constants
 from .._parallel import parallel_range
 from ..raster import _setup, shade
-from ..raster.rays import primary_rays
+from ..raster.rays import box_rays
 from ._several import accept, accept_near, accept_untracked
 from ._several import screen_bounds as _screen_bounds
 
@@ -61,7 +61,7 @@ class Candidates:
 # --- drawing ----------------------------------------------------------------------------------
 def pixel_rays(camera, reflector_mesh, triangle, stencil, box):
     """The reflected ray of every stencil pixel of the box (the truth's,
-    :func:`refsoft.raster.rays.primary_rays`).
+    :func:`refsoft.raster.rays.primary_rays`, through :func:`refsoft.raster.rays.box_rays`).
 
     Parameters
     ----------
@@ -73,20 +73,9 @@ def pixel_rays(camera, reflector_mesh, triangle, stencil, box):
     valid : (h, w) bool
         Box pixels with a reflected ray.
     origin, direction : (h, w, 3) float64
-        Each box pixel's reflected ray (zeros where not valid).
+        Each box pixel's reflected ray (zeros off the stencil).
     """
-    r0, r1, c0, c1 = (int(x) for x in box)
-    h, w = r1 - r0, c1 - c0
-    sten = np.ascontiguousarray(stencil[r0:r1, c0:c1], bool)
-    rows, cols = np.nonzero(sten)
-    hit, ray, ok = primary_rays(camera, reflector_mesh, rows + r0, cols + c0, triangle[rows + r0, cols + c0])
-    valid = np.zeros((h, w), bool)
-    origin = np.zeros((h, w, 3))
-    direction = np.zeros((h, w, 3))
-    valid[rows, cols] = ok
-    origin[rows, cols] = hit
-    direction[rows, cols] = ray
-    return valid, origin, direction
+    return box_rays(camera, reflector_mesh, triangle, stencil, box)
 
 
 def draw(cand: Candidates, camera, reflector_mesh, triangle, stencil, box, colors, rays=None):

@@ -25,8 +25,8 @@ from .. import constants
 from ..raster import _setup
 from .._parallel import parallel_range
 from . import CULLED, HIDDEN
-from ._exact import reaching
-from .acceptance import Candidates, nearest, pixel_rays, screen_bounds, shade_winners
+from ._exact import reaching, shade_accepted
+from .acceptance import Candidates, nearest, pixel_rays, screen_bounds
 from .virtual import virtual_pass
 
 
@@ -129,11 +129,47 @@ def exact_pass(scene, part, real, camera, reflector_mesh, triangle, stencil, box
     rays = pixel_rays(camera, reflector_mesh, triangle, stencil, box)
     best_c, best_uv = nearest(cand, camera, stencil, box, rays=rays, screen=screen_bounds(clip, f, camera, box),
                               runs=False)
-    won = keep[best_c[best_c >= 0]]
-    colors = np.vstack([np.zeros(3), [o.color for o in scene.objects]]).astype(np.float32)
-    colour, rid, covered, counts = shade_winners(best_c, best_uv, np.asarray(normals, np.float64)[faces[won]],
-                                                 np.asarray(face_obj, np.int32)[won], colors, rays[0])
+    colour, rid, covered, counts = shade(best_c, best_uv, f, normals, np.asarray(face_obj, np.int32)[keep], scene,
+                                         rays[0])
     return colour, rid, covered, {"candidates": int(len(keep)), **counts}
+
+
+def shade(best_c, best_uv, corner, normals, cand_object, scene, valid):
+    """The winners of the acceptance shaded (kernel ``_exact.shade_accepted``; as
+    :func:`refsoft.search.acceptance.shade_winners`, bit for bit).
+
+    Parameters
+    ----------
+    best_c : (h, w) int64
+    best_uv : (h, w, 2) float64
+        :func:`refsoft.search.acceptance.nearest`'s outputs.
+    corner : (C, 3) int64
+        Each candidate's rows of ``normals``.
+    normals : (n, 3) float64
+        The part's vertex normals.
+    cand_object : (C,) int32
+        Each candidate's object.
+    scene : Scene
+        For the objects' colours.
+    valid : (h, w) bool
+        Box pixels with a reflected ray.
+
+    Returns
+    -------
+    colour, reflected_id, covered, counts
+        As :func:`refsoft.search.acceptance.draw`.
+    """
+    h, w = best_c.shape
+    colour = np.zeros((h, w, 3), np.float32)
+    rid = np.zeros((h, w), np.int32)
+    table = np.vstack([np.zeros(3), [o.color for o in scene.objects]]).astype(np.float32)
+    parallel_range(shade_accepted, h, best_c, np.ascontiguousarray(best_uv), np.ascontiguousarray(corner, np.int64),
+                   np.ascontiguousarray(normals, np.float64), np.ascontiguousarray(cand_object, np.int32), table,
+                   constants.LIGHT_DIRECTION.astype(np.float32), np.float32(constants.AMBIENT),
+                   np.float32(constants.DIFFUSE), colour, rid)
+    covered = best_c >= 0
+    counts = {"pixels_accepted": int(covered.sum()), "pixels_empty": int((valid & ~covered).sum())}
+    return colour, rid, covered, counts
 
 
 def candidate_triangles(clip, faces, flags, lost, box, camera, band=None):

@@ -251,3 +251,29 @@ def test_a_plane_mirror_is_rasterized_mirrored_and_agrees_with_the_truth():
            for name, f in (("flat", flat), ("exact", drawn))}
     assert bad["flat"] <= bad["exact"]
     assert bad["flat"] < 1e-3
+
+
+def test_shading_kernel_matches_the_numpy_shading(rng):
+    """The exact drawing's shading kernel gives acceptance.shade_winners' colours and objects bit
+    for bit: random winners, barycentrics and normals (some zero: ambient only), several objects,
+    uncovered pixels and pixels without a ray."""
+    from types import SimpleNamespace
+
+    h, w, n, c = 23, 31, 50, 40
+    best_c = np.where(rng.random((h, w)) < 0.7, rng.integers(0, c, (h, w)), -1).astype(np.int64)
+    uv = rng.random((h, w, 2))
+    uv /= np.maximum(1.0, uv.sum(axis=2))[..., None]
+    normals = rng.normal(size=(n, 3))
+    normals[::7] = 0.0
+    corner = rng.integers(0, n, (c, 3))
+    obj = rng.integers(1, 5, c).astype(np.int32)
+    scene = SimpleNamespace(objects=[SimpleNamespace(color=tuple(rng.random(3))) for _ in range(4)])
+    valid = rng.random((h, w)) < 0.9
+    got = exact.shade(best_c, uv, corner, normals, obj, scene, valid)
+    colors = np.vstack([np.zeros(3), [o.color for o in scene.objects]]).astype(np.float32)
+    won = best_c[best_c >= 0]
+    want = acceptance.shade_winners(best_c, uv, normals[corner[won]], obj[won], colors, valid)
+    for a, b in zip(got[:3], want[:3]):
+        assert a.dtype == b.dtype and a.tobytes() == b.tobytes()
+    assert got[3] == want[3]
+    assert (got[1] > 0).sum() == (best_c >= 0).sum()

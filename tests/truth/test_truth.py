@@ -269,8 +269,9 @@ def test_closed_meshes_are_told_from_open_ones():
 def test_primary_ray_kernel_equals_the_numpy_rays_and_hits():
     """The truth's primary-ray kernel against camera.rays, ray_triangle and the interpolated,
     renormalised normal in NumPy, on the ball of the sphere scene (perspective) and an
-    orthographic view of it."""
-    from refsoft.raster.rays import primary_rays
+    orthographic view of it; the box-shaped kernel of the exact drawing against it, bit for
+    bit."""
+    from refsoft.raster.rays import box_rays, primary_rays
     from refsoft.truth.raytrace import _interpolated_normals
 
     scene = load_scene("sphere", width=96, height=72)
@@ -288,6 +289,14 @@ def test_primary_ray_kernel_equals_the_numpy_rays_and_hits():
         np.testing.assert_allclose(hit, o + t[:, None] * d, rtol=0, atol=1e-12)
         n = _interpolated_normals(ball.normals, ball.faces.astype(np.int64), tri, bary)
         np.testing.assert_allclose(ray, d - 2 * np.sum(d * n, axis=1, keepdims=True) * n, rtol=0, atol=1e-12)
+        # the same rays written into a box's arrays: the same bits, zeros off the stencil
+        stencil = view.object_id == 1
+        box = (rows.min() - 2, rows.max() + 3, cols.min() - 1, cols.max() + 2)
+        valid, origin, direction = box_rays(cam, ball, view.triangle, stencil, box)
+        at = (rows - box[0], cols - box[2])
+        assert np.array_equal(valid[at], ok) and valid.sum() == len(rows)
+        assert origin[at].tobytes() == hit.tobytes() and direction[at].tobytes() == ray.tobytes()
+        assert not origin[~valid].any() and not direction[~valid].any()
 
 
 def test_reflected_rays_split_over_threads_hit_what_one_embree_call_hits():
