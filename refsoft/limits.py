@@ -72,11 +72,12 @@ REFINED_GROWTH = 4
 #: ...each holding its faces, object id, parent, edge keys and the split's temporaries...
 REFINED_TRIANGLE_BYTES = 128
 #: The exact drawing (``draw="exact"``, :mod:`refsoft.search.exact`) per candidate triangle: its
-#: virtual, real and normal corners (3 x 72, float64), view positions (48), bounds (32), dilation,
-#: index, run (8 each), object id (4), and its vertices' clip coordinates (3 x 32) at most.
-EXACT_TRIANGLE_BYTES = 416
-#: ... and per pixel of the reflector's box: the reflected ray (48), the nearest hit, its
-#: candidate, barycentrics and work (8 + 8 + 16 + 8), flags (2).
+#: corners' indices (24), real corners (72, float64), view positions (48), bounds (32), dilation
+#: and index (8 each), object id (4), flags (2), and its vertices' clip coordinates (32) at most.
+EXACT_TRIANGLE_BYTES = 232
+#: ... and per pixel of the reflector's box: the reflected ray (48), its flag, the stencil and
+#: visible triangle cropped (1 + 1 + 8), the nearest hit, its candidate and barycentrics (8 + 8 +
+#: 16).
 EXACT_PIXEL_BYTES = 90
 #: Candidate triangles per reflected triangle counted for the exact drawing after the
 #: tessellation and the cut (the accurate preset's one level: measured 1.01x-1.08x on sphere,
@@ -181,7 +182,11 @@ def frame_bytes(scene, options, frames_kept: int = 1) -> dict:
     kept_gb = n_refl * g_px * GBUFFER_OUTPUT_BYTES_PER_PIXEL
     kept_v = n_refl * n_verts * VERTEX_OUTPUT_BYTES
     cache = n_refl * (g_px * GBUFFER_REUSE_BYTES[p] + n_verts * VERTEX_OUTPUT_BYTES) if options.reuse else 0
-    work = g_px * GBUFFER_WORK_BYTES[p] + n_verts * VERTEX_WORK_BYTES + n_tris * TRIANGLE_WORK_BYTES + view_px * 16
+    # the rasterizer's passes (the main view, each G-buffer) and a reflector's stages after its
+    # G-buffer (search, tessellation, cut, drawing) run one after another: the larger of the two
+    # transient sets, beside the vertices' arrays, which live through the frame
+    raster = g_px * GBUFFER_WORK_BYTES[p] + n_tris * TRIANGLE_WORK_BYTES + view_px * 16
+    work = 0
     if options.tessellate is not None or options.silhouette == "clip":
         n_reflected = sum(o.mesh.n_faces for o in scene.objects if not o.reflector)
         work += n_reflected * refined_growth(options) * REFINED_TRIANGLE_BYTES
@@ -203,6 +208,7 @@ def frame_bytes(scene, options, frames_kept: int = 1) -> dict:
         # one reflector enumerated at a time; its images kept with the frame
         work += pyramid_bytes + n_verts * IMAGES_VERTEX_WORK_BYTES
         kept_v += n_several * n_verts * IMAGES_VERTEX_OUTPUT_BYTES
+    work = n_verts * VERTEX_WORK_BYTES + max(raster, work)
     kept = (kept_view + kept_gb + kept_v) * max(int(frames_kept), 1)
     return {"view": kept_view, "gbuffers": kept_gb, "vertices": kept_v, "cache": cache, "work": work,
             "total": kept + cache + work}

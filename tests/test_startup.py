@@ -15,9 +15,9 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 #: Packages a command that renders nothing must not import.
 HEAVY = {"numba", "llvmlite", "trimesh", "scipy", "embreex", "imageio", "PIL", "tqdm", "matplotlib"}
 #: Kernels a one-frame render of the sphere loads from the cache (the accurate preset: the
-#: G-buffer, the search, its refinement, the tessellation and the cut's passes, the exact drawing,
-#: the main view).
-LOADED_KERNELS = 30
+#: G-buffer, the search, its refinement, the tessellation and the cut's passes, the exact drawing:
+#: its candidates, rays, acceptance and shading, the main view).
+LOADED_KERNELS = 31
 
 MODULES = """
 import json, sys

@@ -44,7 +44,7 @@ def test_a_render_after_the_warm_up_calls_its_kernels_with_the_same_types(option
     got = json.loads(out.stdout.strip().splitlines()[-1])
     exact = RenderOptions(**options).draw == "exact"
     # the virtual triangles rasterized (the paper preset) or drawn exactly (the accurate one)
-    assert "search_lanes" in got["warmed"] and ("accept" if exact else "shade_visible") in got["warmed"]
+    assert "search_lanes" in got["warmed"] and ("accept_untracked" if exact else "shade_visible") in got["warmed"]
     # only the G-buffer's interpolation, which the warm-up's ray-cast ball does not need, may be
     # new; and, drawn exactly, the main view's raster, which the command compiles first itself
     allowed = {"interpolate_pair"} | (MAIN_VIEW_RASTER if exact else set())
