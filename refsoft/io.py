@@ -134,6 +134,7 @@ def _write_member(zf, name, array, level):
     store = level == 0 or _incompressible(data, level)
     info.compress_type = zipfile.ZIP_STORED if store else zipfile.ZIP_DEFLATED
     with zf.open(info, "w", force_zip64=True) as fh:
+        deflate = None
         if not store:
             # zipfile's member writer crc32s each write, hands it to its compressor's
             # compress() and, at close, writes its flush(): that compressor is replaced by one
@@ -141,10 +142,81 @@ def _write_member(zf, name, array, level):
             # (floats: zlib's run-length strategy, as small for half the time of its default
             # on a G-buffer, whose float bytes seldom repeat beyond the runs of zeros)
             floats = array.dtype.kind in "fc"
-            fh._compressor = _PieceDeflate(level, zlib.Z_RLE if floats else zlib.Z_DEFAULT_STRATEGY)
+            deflate = fh._compressor = _PieceDeflate(level, zlib.Z_RLE if floats else zlib.Z_DEFAULT_STRATEGY)
         fh.write(header)
+        # a zero piece bypasses the member writer (when it has the state this module knows):
+        # its CRC-32 is combined from that of zeros, not computed over its bytes again
+        direct = deflate is not None and all(hasattr(fh, a) for a in _WRITER_STATE)
+        if direct:
+            deflate.check = False
         for lo in range(0, data.size, NPZ_PIECE_BYTES):
-            fh.write(data[lo:lo + NPZ_PIECE_BYTES])
+            piece = data[lo:lo + NPZ_PIECE_BYTES]
+            if direct and _zero_bytes(piece):
+                _write_zeros(fh, deflate, piece)
+            else:
+                fh.write(piece)
+
+
+#: What zipfile's member writer (``_ZipWriteFile``, Python 3.10-3.13) keeps of a member being
+#: written: its size, CRC-32 and compressed size, and the archive's file.
+_WRITER_STATE = ("_file_size", "_crc", "_compress_size", "_fileobj")
+
+
+def _write_zeros(fh, deflate, piece):
+    """What ``fh.write(piece)`` does for a piece of zero bytes, without reading it again."""
+    n = piece.size
+    fh._file_size += n
+    fh._crc = _crc_after_zeros(fh._crc, piece)
+    out = deflate.zeros(n)
+    fh._compress_size += len(out)
+    fh._fileobj.write(out)
+
+
+def _zero_bytes(piece) -> bool:
+    """Whether (n,) uint8 ``piece`` is zero bytes only (the bytes, not the values: -0.0 is not)."""
+    words = piece.view(np.uint64) if piece.size % 8 == 0 else piece
+    return piece.size > 0 and not words.max()
+
+
+_ZERO_CRCS = {}
+_COMBINE = []  # [zlib's crc32_combine64 or None], looked up at the first zero piece
+
+
+def _crc_after_zeros(crc: int, piece) -> int:
+    """``zlib.crc32(piece, crc)`` for a piece of zero bytes: zlib's ``crc32_combine64`` of ``crc``
+    and the CRC-32 of that many zeros (computed once per size), without reading the piece; where
+    the C library is not found, ``zlib.crc32`` itself."""
+    if not _COMBINE:
+        _COMBINE.append(_crc32_combine())
+    combine, n = _COMBINE[0], piece.size
+    if combine is None:
+        return zlib.crc32(piece, crc)
+    zeros = _ZERO_CRCS.get(n)
+    if zeros is None:
+        zeros = _ZERO_CRCS[n] = zlib.crc32(bytes(n))
+    return combine(crc, zeros, n)
+
+
+def _crc32_combine():
+    """zlib's ``crc32_combine64(crc1, crc2, len2)`` (the CRC-32 of two byte strings joined, from
+    their CRC-32s and the second's length) from the zlib library Python's zlib module is linked to,
+    through ctypes (the module does not expose it); None where it is not found or disagrees with
+    ``zlib.crc32`` (checked once)."""
+    import ctypes
+    import sys
+
+    names = {"linux": ("libz.so.1",), "darwin": ("libz.1.dylib", "libz.dylib")}.get(sys.platform, ())
+    for name in names:
+        try:
+            fn = ctypes.CDLL(name).crc32_combine64
+        except (OSError, AttributeError):
+            continue
+        fn.argtypes = (ctypes.c_ulong, ctypes.c_ulong, ctypes.c_int64)
+        fn.restype = ctypes.c_ulong
+        head, tail = b"refsoft", bytes(1000) + b"\x01"
+        if fn(zlib.crc32(head), zlib.crc32(tail), len(tail)) == zlib.crc32(head + tail):
+            return fn
+    return None
 
 
 def _incompressible(data, level) -> bool:
@@ -176,22 +248,29 @@ def _zero_piece(n: int, level: int) -> bytes:
 class _PieceDeflate:
     """A raw deflate stream (what zipfile's ZIP_DEFLATED compressor writes) fed in pieces: a piece
     of zero bytes only ends the stream's open block with a full flush (after which zlib refers
-    to nothing earlier) and is written as :func:`_zero_piece`; any other piece goes to zlib."""
+    to nothing earlier) and is written as :func:`_zero_piece` (:meth:`zeros`); any other piece
+    goes to zlib. ``check``: whether :meth:`compress` looks for zero pieces itself (off when the
+    caller hands those to :meth:`zeros`)."""
 
     def __init__(self, level: int, strategy: int = zlib.Z_DEFAULT_STRATEGY):
         self._level = level
         self._z = zlib.compressobj(level, zlib.DEFLATED, -15, 8, strategy)
         self._open = False  # input given to self._z since its last full flush
+        self.check = True
 
     def compress(self, data) -> bytes:
-        piece = np.frombuffer(data, np.uint8)
-        words = piece.view(np.uint64) if piece.size % 8 == 0 else piece
-        if piece.size and not np.count_nonzero(words):  # the bytes, not the values: -0.0 is not zero
-            out = self._z.flush(zlib.Z_FULL_FLUSH) if self._open else b""
-            self._open = False
-            return out + _zero_piece(piece.size, self._level)
+        if self.check:
+            piece = np.frombuffer(data, np.uint8)
+            if _zero_bytes(piece):
+                return self.zeros(piece.size)
         self._open = True
         return self._z.compress(data)
+
+    def zeros(self, n: int) -> bytes:
+        """The deflate output of ``n`` zero bytes, after the stream's open block."""
+        out = self._z.flush(zlib.Z_FULL_FLUSH) if self._open else b""
+        self._open = False
+        return out + _zero_piece(n, self._level)
 
     def flush(self) -> bytes:
         return self._z.flush()
