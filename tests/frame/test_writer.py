@@ -248,3 +248,36 @@ def test_zero_pieces_write_the_same_bytes_every_way(tmp_path, small_pieces, monk
     assert (tmp_path / "crc32.npz").read_bytes() == one and (tmp_path / "through.npz").read_bytes() == one
     with zipfile.ZipFile(tmp_path / "direct.npz") as zf:
         assert zf.testzip() is None  # every member's CRC-32 checked
+
+
+@pytest.mark.parametrize("shape", [(24, 32, 3), (5, 7), (1, 1, 3)])
+def test_png_of_unfiltered_rows_decodes_to_the_image(tmp_path, shape):
+    """The frame's PNG (unfiltered rows, zlib): Pillow reads it (every chunk's CRC verified) as
+    the same pixels, in colour or grey, from a view that is not contiguous as well; a rerun is
+    the same bytes."""
+    from PIL import Image
+
+    from refsoft.io import write_png_rows
+
+    rng = np.random.default_rng(11)
+    img = rng.integers(0, 256, shape[:1] + (2 * shape[1],) + shape[2:], dtype=np.uint8)[:, ::2]
+    img[: shape[0] // 2] = 17  # runs that deflate
+    write_png_rows(tmp_path / "a.png", img, 1)
+    with Image.open(tmp_path / "a.png") as p:
+        p.verify()
+    with Image.open(tmp_path / "a.png") as p:
+        assert p.mode == ("RGB" if len(shape) == 3 else "L")
+        assert np.array_equal(np.asarray(p), img)
+    write_png_rows(tmp_path / "b.png", img.copy(), 1)
+    assert (tmp_path / "a.png").read_bytes() == (tmp_path / "b.png").read_bytes()
+
+
+def test_png_of_unfiltered_rows_refuses_other_shapes(tmp_path):
+    from refsoft.errors import RefsoftError
+    from refsoft.io import write_png_rows
+
+    for bad in (np.zeros((4, 4, 4), np.uint8), np.zeros((0, 4, 3), np.uint8), np.zeros(5, np.uint8),
+                np.zeros((4, 4), np.float32)):
+        with pytest.raises(RefsoftError, match="PNG needs"):
+            write_png_rows(tmp_path / "x.png", bad, 1)
+    assert list(tmp_path.iterdir()) == []
