@@ -10,8 +10,10 @@ Reads (:func:`read_npz`, :func:`read_json`) turn a missing, unreadable or malfor
 
 from __future__ import annotations
 
+import bisect
 import io
 import json
+import mmap
 import os
 import tempfile
 import tokenize
@@ -83,7 +85,10 @@ def write_npz_level(path, arrays, level: int):
       zero bytes only (most of a G-buffer) is written as zlib's output for that many zeros after
       a full flush, computed once (:func:`_zero_piece`), instead of being compressed again;
     - a member whose samples deflate to more than :data:`~refsoft.constants.NPZ_STORE_RATIO` of
-      their size (high-entropy floats) is stored uncompressed.
+      their size (high-entropy floats) is stored uncompressed;
+    - a zero piece's CRC-32 is combined by zlib (``crc32_combine64``) from that of zeros, and a
+      piece whose pages were never touched (an anonymous mapping's, as
+      :func:`refsoft.limits.zeros` makes them; :class:`_PageMap`) is not read at all.
 
     zipfile writes the headers and the CRC-32 (``zlib.crc32`` over every byte); zlib does all the
     compression. On a frame of 8 reflectors at 1024x768 this takes about a sixth of the CPU time
@@ -97,11 +102,15 @@ def write_npz_level(path, arrays, level: int):
     level : int
         zlib's compression level (0 stores every member uncompressed).
     """
-    with atomic_path(path, ".npz") as tmp:
-        with zipfile.ZipFile(tmp, mode="w", compression=zipfile.ZIP_DEFLATED, compresslevel=level,
-                             allowZip64=True) as zf:
-            for name, value in arrays.items():
-                _write_member(zf, name + ".npy", np.asanyarray(value), level)
+    pages = _PageMap()
+    try:
+        with atomic_path(path, ".npz") as tmp:
+            with zipfile.ZipFile(tmp, mode="w", compression=zipfile.ZIP_DEFLATED, compresslevel=level,
+                                 allowZip64=True) as zf:
+                for name, value in arrays.items():
+                    _write_member(zf, name + ".npy", np.asanyarray(value), level, pages)
+    finally:
+        pages.close()
 
 
 #: The date of every member of a frame's npz.
@@ -126,11 +135,13 @@ def _npy_parts(array):
     return buf.getvalue(), data.view(np.uint8)
 
 
-def _write_member(zf, name, array, level):
+def _write_member(zf, name, array, level, pages=None):
     header, data = _npy_parts(array)
     # a fixed date (the zip format's first): a rerun writes the same bytes (the file's own
     # modification time says when it was written)
     info = zipfile.ZipInfo(name, date_time=ZIP_DATE)
+    # asked before the samples below read (and so touch) a few pages
+    unread = pages.untouched(data) if pages is not None and level else None
     store = level == 0 or _incompressible(data, level)
     info.compress_type = zipfile.ZIP_STORED if store else zipfile.ZIP_DEFLATED
     with zf.open(info, "w", force_zip64=True) as fh:
@@ -151,7 +162,7 @@ def _write_member(zf, name, array, level):
             deflate.check = False
         for lo in range(0, data.size, NPZ_PIECE_BYTES):
             piece = data[lo:lo + NPZ_PIECE_BYTES]
-            if direct and _zero_bytes(piece):
+            if direct and (_untouched_piece(unread, lo, piece.size) or _zero_bytes(piece)):
                 _write_zeros(fh, deflate, piece)
             else:
                 fh.write(piece)
@@ -176,6 +187,85 @@ def _zero_bytes(piece) -> bool:
     """Whether (n,) uint8 ``piece`` is zero bytes only (the bytes, not the values: -0.0 is not)."""
     words = piece.view(np.uint64) if piece.size % 8 == 0 else piece
     return piece.size > 0 and not words.max()
+
+
+def _untouched_piece(unread, lo: int, n: int) -> bool:
+    """Whether bytes ``lo:lo + n`` of an array lie in pages never touched (``unread``: what
+    :meth:`_PageMap.untouched` said of the array, or None)."""
+    if unread is None or n == 0:
+        return False
+    addr, flags = unread
+    first = addr // _PAGE
+    return bool(flags[(addr + lo) // _PAGE - first:(addr + lo + n - 1) // _PAGE - first + 1].all())
+
+
+_PAGE = mmap.PAGESIZE
+
+
+class _PageMap:
+    """Which pages of an array were never touched, where Linux says so (``/proc/self/pagemap``).
+
+    A page of an anonymous private mapping (what :func:`refsoft.limits.zeros` maps for the
+    G-buffers, of which a frame writes only the reflector's box) that is neither present nor
+    swapped out was never written: it reads as zeros, and reading it would cost a page fault
+    (the kernel maps its zero page: ~0.6 us a page, 36,000 pages in an ``ants`` frame at
+    1024x768). Only arrays whose memory is an ``mmap`` lying in one anonymous, private, writable
+    mapping of ``/proc/self/maps`` (no file, no name) are asked about; anything else, or a
+    system without these files, is None (the writer then reads the bytes)."""
+
+    def __init__(self):
+        self._ranges = None  # (starts, ends) of the anonymous private mappings, read once
+        self._fd = None
+
+    def _load(self) -> bool:
+        if self._ranges is None:
+            self._ranges = ([], [])
+            if not hasattr(os, "pread"):
+                return False
+            try:
+                with open("/proc/self/maps") as fh:
+                    lines = fh.read().splitlines()
+                self._fd = os.open("/proc/self/pagemap", os.O_RDONLY)
+            except OSError:
+                return False
+            for line in lines:
+                f = line.split()
+                if len(f) == 5 and f[1] == "rw-p" and f[4] == "0":  # no path, no name: anonymous
+                    lo, hi = f[0].split("-")
+                    self._ranges[0].append(int(lo, 16))
+                    self._ranges[1].append(int(hi, 16))
+        return self._fd is not None
+
+    def untouched(self, data):
+        """For (n,) uint8 ``data``: (its address, (P,) bool per page it overlaps: never touched),
+        or None when that cannot be told."""
+        root = data
+        while isinstance(root, np.ndarray) and root.base is not None:
+            root = root.base
+        if isinstance(root, memoryview):  # np.frombuffer's base
+            root = root.obj
+        if not isinstance(root, mmap.mmap) or data.size == 0 or not self._load():
+            return None
+        addr = data.__array_interface__["data"][0]
+        starts, ends = self._ranges
+        i = bisect.bisect_right(starts, addr) - 1
+        if i < 0 or addr + data.size > ends[i]:
+            return None
+        first = addr // _PAGE
+        n = (addr + data.size - 1) // _PAGE - first + 1
+        try:
+            raw = os.pread(self._fd, 8 * n, 8 * first)
+        except OSError:
+            return None
+        if len(raw) != 8 * n:
+            return None
+        # bit 63: present, bit 62: swapped out; neither: never written since mapped
+        return addr, (np.frombuffer(raw, np.uint64) >> np.uint64(62)) == 0
+
+    def close(self):
+        if self._fd is not None:
+            os.close(self._fd)
+            self._fd = None
 
 
 _ZERO_CRCS = {}

@@ -281,3 +281,73 @@ def test_png_of_unfiltered_rows_refuses_other_shapes(tmp_path):
         with pytest.raises(RefsoftError, match="PNG needs"):
             write_png_rows(tmp_path / "x.png", bad, 1)
     assert list(tmp_path.iterdir()) == []
+
+
+def test_pages_never_touched_are_told_apart():
+    """An anonymous private mapping's pages: those never written nor read are untouched; a page
+    written (even with zeros) or read is not. Arrays not in such a mapping are not asked about."""
+    import mmap
+
+    from refsoft.io import _PageMap
+
+    page = mmap.PAGESIZE
+    buf = mmap.mmap(-1, 16 * page, flags=mmap.MAP_PRIVATE | mmap.MAP_ANONYMOUS)
+    data = np.frombuffer(buf, np.uint8)
+    data[3 * page + 5] = 1
+    data[7 * page:8 * page] = 0  # written, with zeros
+    assert data[9 * page + 100] == 0  # read: the kernel maps its zero page
+    pm = _PageMap()
+    try:
+        addr, flags = pm.untouched(data)
+        assert addr == data.__array_interface__["data"][0] and addr % page == 0
+        assert flags.tolist() == [i not in (3, 7, 9) for i in range(16)]
+        addr, flags = pm.untouched(data[page + 10:5 * page])  # a view: the pages it overlaps
+        assert flags.tolist() == [True, True, False, True]
+        assert pm.untouched(np.zeros(4 * page, np.uint8)) is None  # the C heap's: not asked
+        assert pm.untouched(data.copy()) is None
+    finally:
+        pm.close()
+    del data
+    buf.close()
+
+
+def test_a_file_mapping_is_never_untouched(tmp_path):
+    """A file's pages not yet read hold the file, not zeros: never reported untouched."""
+    from refsoft.io import _PageMap
+
+    (tmp_path / "f.bin").write_bytes(b"\x01" * (1 << 16))
+    m = np.memmap(tmp_path / "f.bin", dtype=np.uint8, mode="c")  # private, writable, a file
+    pm = _PageMap()
+    try:
+        assert pm.untouched(m.view(np.ndarray)) is None
+    finally:
+        pm.close()
+    del m
+
+
+def test_untouched_pieces_are_not_read(tmp_path, small_pieces, monkeypatch):
+    """A G-buffer as the render leaves it (a lazy zero mapping, the box written): its untouched
+    pieces are written without a look at their bytes, and the file is the one the bytes give."""
+    import mmap
+
+    import refsoft.io
+    from refsoft import limits
+
+    page = mmap.PAGESIZE
+    monkeypatch.setattr(refsoft.io, "NPZ_PIECE_BYTES", page)
+    gbuf = limits.zeros((256, 1024), np.float32)  # 256 pages of 4 KiB, a row each
+    assert gbuf.nbytes >= limits.LAZY_ZEROS_BYTES
+    gbuf[20:23, 100:300] = np.random.default_rng(2).random((3, 200), dtype=np.float32)
+    arrays = {"gbuffer": gbuf, "image": np.arange(3000, dtype=np.uint8)}
+    looked = []
+    real = refsoft.io._zero_bytes
+    monkeypatch.setattr(refsoft.io, "_zero_bytes", lambda p: looked.append(p.size) or real(p))
+    refsoft.io.write_npz_level(tmp_path / "a.npz", arrays, 1)
+    if page == 4096:  # pieces of one page: only the 3 written are looked at (and the image's)
+        assert len(looked) == 3 + 1
+    with monkeypatch.context() as m:
+        m.setattr(refsoft.io._PageMap, "untouched", lambda self, data: None)
+        refsoft.io.write_npz_level(tmp_path / "b.npz", arrays, 1)
+    assert (tmp_path / "a.npz").read_bytes() == (tmp_path / "b.npz").read_bytes()
+    with np.load(tmp_path / "a.npz") as z:
+        assert z["gbuffer"].tobytes() == gbuf.tobytes()
