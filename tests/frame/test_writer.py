@@ -366,3 +366,30 @@ def test_small_windows_write_the_bytes_of_the_largest(tmp_path, small_pieces, mo
     monkeypatch.setattr(refsoft.io, "_window_bits", lambda n: -15)
     refsoft.io.write_npz_level(tmp_path / "largest.npz", arrays, 1)
     assert (tmp_path / "fit.npz").read_bytes() == (tmp_path / "largest.npz").read_bytes()
+
+
+def test_render_command_files_hold_the_frames_arrays(tmp_path):
+    """At a size whose G-buffers are lazy zero mappings (their untouched pages not read by the
+    writer): every array of the command's npz is the frame's, bit for bit, as np.savez_compressed
+    holds it; the PNG decodes to the image; a rerun writes the same bytes."""
+    from PIL import Image
+
+    import refsoft
+    from refsoft import limits
+    from refsoft.io import write_npz
+
+    frames, _ = refsoft.render("kitchen", frames=[2, 3], width=400, height=300, out=tmp_path / "a")
+    fr = frames[-1]
+    big = [k for k, a in fr.arrays.items() if k.startswith("gbuffer_position")]
+    assert big and all(fr.arrays[k].nbytes >= limits.LAZY_ZEROS_BYTES for k in big)
+    write_npz(tmp_path / "np.npz", **fr.arrays)
+    with np.load(tmp_path / "a" / "frame_0003.npz") as a, np.load(tmp_path / "np.npz") as b:
+        assert list(a.keys()) == list(b.keys()) == list(fr.arrays)
+        for k in a.keys():
+            x, y = a[k], b[k]
+            assert x.dtype == y.dtype and x.shape == y.shape and x.tobytes() == y.tobytes(), k
+    with Image.open(tmp_path / "a" / "frame_0003.png") as p:
+        assert np.array_equal(np.asarray(p), fr.arrays[keys.IMAGE])
+    refsoft.render("kitchen", frames=[2, 3], width=400, height=300, out=tmp_path / "b")
+    for name in ("frame_0002.npz", "frame_0003.npz", "frame_0002.png", "frame_0003.png"):
+        assert (tmp_path / "a" / name).read_bytes() == (tmp_path / "b" / name).read_bytes(), name
