@@ -15,6 +15,11 @@ machine: the loop's CPU is the render's, the command's adds the writer's and wha
 render (the GIL, caches).
 
 Run: ``python benchmarks/writer.py [SCENE ...] [--frames 10] [--rounds 3] [--size 1024x768]``.
+With ``--parts``: instead, one frame's files written whole (``write_frame``) from fresh copies of
+its arrays, the writer thread's CPU milliseconds (min and median of 7, the variants in turn),
+with each part of the writer turned off in turn: the zero pieces' CRC-32 combined by zlib, the
+untouched pages not read, zlib windows sized to each member, the PNG's unfiltered rows (Pillow's
+encoder instead).
 With ``--members``: instead, one frame (frame 1 after frame 0) written member by member:
 its bytes, the share of them in zero pieces, and the writer thread's CPU milliseconds for each
 member and for the PNG (the best of 3 writes of fresh copies, whose zero pages are first read
@@ -131,6 +136,48 @@ def members(names, size):
         shutil.rmtree(out, ignore_errors=True)
 
 
+def _variants():
+    from unittest import mock
+
+    from refsoft import io
+    from refsoft.frame import outputs
+
+    return {"as it is": [],
+            "CRC-32 of zero pieces by zlib.crc32": [mock.patch.object(io, "_COMBINE", [None])],
+            "untouched pages read": [mock.patch.object(io._PageMap, "untouched", lambda self, data: None)],
+            "32 KiB windows": [mock.patch.object(io, "_window_bits", lambda n: -15)],
+            "PNG by Pillow": [mock.patch.object(outputs, "write_png_rows", io.write_png)]}
+
+
+def parts(names, size, rounds=7):
+    from contextlib import ExitStack
+
+    from refsoft.frame import Frame, write_frame
+
+    out = tempfile.mkdtemp(prefix="refsoft-writer-")
+    try:
+        for name in names:
+            scene = refsoft.load_scene(name, width=size[0], height=size[1])
+            d = FrameDriver(scene)
+            d.render_frame(0)
+            arrays = d.render_frame(1).arrays
+            write_frame(out, Frame(1, {k: _fresh(a) for k, a in arrays.items()}, {}))  # one-time costs
+            times = {v: [] for v in _variants()}
+            for _ in range(rounds):
+                for v, patches in _variants().items():
+                    fr = Frame(1, {k: _fresh(a) for k, a in arrays.items()}, {})
+                    with ExitStack() as stack:
+                        for p in patches:
+                            stack.enter_context(p)
+                        c = time.thread_time()
+                        write_frame(out, fr)
+                        times[v].append(1000 * (time.thread_time() - c))
+            for v, t in times.items():
+                print(f"{name} | {v} | {min(t):.1f} | {statistics.median(t):.1f}", flush=True)
+    finally:
+        shutil.rmtree(out, ignore_errors=True)
+
+
 def parse_args(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("scenes", nargs="*", default=SCENES)
@@ -138,6 +185,7 @@ def parse_args(argv=None):
     p.add_argument("--rounds", type=int, default=3)
     p.add_argument("--size", default="1024x768")
     p.add_argument("--members", action="store_true")
+    p.add_argument("--parts", action="store_true")
     return p.parse_args(argv)
 
 
@@ -146,5 +194,7 @@ if __name__ == "__main__":
     size = tuple(int(v) for v in args.size.split("x"))
     if args.members:
         members(args.scenes, size)
+    elif args.parts:
+        parts(args.scenes, size)
     else:
         ratios(args.scenes, args.frames, args.rounds, size)
