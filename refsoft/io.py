@@ -153,8 +153,7 @@ def _write_member(zf, name, array, level, pages=None):
             # (floats: zlib's run-length strategy, as small for half the time of its default
             # on a G-buffer, whose float bytes seldom repeat beyond the runs of zeros)
             floats = array.dtype.kind in "fc"
-            deflate = fh._compressor = _PieceDeflate(level, zlib.Z_RLE if floats else zlib.Z_DEFAULT_STRATEGY,
-                                                     _window_bits(len(header) + data.size))
+            deflate = fh._compressor = _PieceDeflate(level, zlib.Z_RLE if floats else zlib.Z_DEFAULT_STRATEGY)
         fh.write(header)
         # a zero piece bypasses the member writer (when it has the state this module knows):
         # its CRC-32 is combined from that of zeros, not computed over its bytes again
@@ -316,21 +315,9 @@ def _incompressible(data, level) -> bool:
     n = NPZ_SAMPLE_BYTES
     if data.size < 4 * n:
         return False
-    z = zlib.compressobj(level, zlib.DEFLATED, _window_bits(4 * n))
+    z = zlib.compressobj(level, zlib.DEFLATED, -15)
     packed = sum(len(z.compress(data[s:s + n])) for s in np.linspace(0, data.size - n, 4).astype(np.int64))
     return packed + len(z.flush()) > NPZ_STORE_RATIO * 4 * n
-
-
-def _window_bits(n: int) -> int:
-    """zlib's raw deflate ``wbits`` for a stream of ``n`` bytes: the smallest window (2**9 to 2**15
-    bytes) that holds all of it with zlib's lookahead (262 bytes). zlib then finds the matches it
-    finds with the largest window, the same output, and its state is small enough for the C
-    heap, where the largest window's is mapped afresh for every compressor (20 page faults,
-    ~55 us: much of the cost of a small member)."""
-    w = 9
-    while w < 15 and (1 << w) < n + 262:
-        w += 1
-    return -w
 
 
 _ZERO_PIECES = {}
@@ -355,9 +342,9 @@ class _PieceDeflate:
     goes to zlib. ``check``: whether :meth:`compress` looks for zero pieces itself (off when the
     caller hands those to :meth:`zeros`)."""
 
-    def __init__(self, level: int, strategy: int = zlib.Z_DEFAULT_STRATEGY, wbits: int = -15):
+    def __init__(self, level: int, strategy: int = zlib.Z_DEFAULT_STRATEGY):
         self._level = level
-        self._z = zlib.compressobj(level, zlib.DEFLATED, wbits, 8, strategy)
+        self._z = zlib.compressobj(level, zlib.DEFLATED, -15, 8, strategy)
         self._open = False  # input given to self._z since its last full flush
         self.check = True
 

@@ -353,21 +353,6 @@ def test_untouched_pieces_are_not_read(tmp_path, small_pieces, monkeypatch):
         assert z["gbuffer"].tobytes() == gbuf.tobytes()
 
 
-def test_small_windows_write_the_bytes_of_the_largest(tmp_path, small_pieces, monkeypatch):
-    """Each member deflated (and sampled) with the smallest window that holds it gives the file
-    the largest window (zlib's 32 KiB) gives; a member larger than that window keeps it."""
-    import refsoft.io
-
-    assert refsoft.io._window_bits(0) == -9 and refsoft.io._window_bits(250) == -9
-    assert refsoft.io._window_bits(251) == -10 and refsoft.io._window_bits(8192) == -14
-    assert refsoft.io._window_bits((1 << 15) - 262) == -15 and refsoft.io._window_bits(10 ** 9) == -15
-    arrays = _odd_arrays()
-    refsoft.io.write_npz_level(tmp_path / "fit.npz", arrays, 1)
-    monkeypatch.setattr(refsoft.io, "_window_bits", lambda n: -15)
-    refsoft.io.write_npz_level(tmp_path / "largest.npz", arrays, 1)
-    assert (tmp_path / "fit.npz").read_bytes() == (tmp_path / "largest.npz").read_bytes()
-
-
 def test_render_command_files_hold_the_frames_arrays(tmp_path):
     """At a size whose G-buffers are lazy zero mappings (their untouched pages not read by the
     writer): every array of the command's npz is the frame's, bit for bit, as np.savez_compressed
