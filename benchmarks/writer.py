@@ -18,7 +18,7 @@ Run: ``python benchmarks/writer.py [SCENE ...] [--frames 10] [--rounds 3] [--siz
 With ``--parts``: instead, one frame's files written whole (``write_frame``) from fresh copies of
 its arrays, the writer thread's CPU milliseconds (min and median of 7, the variants in turn),
 with each part of the writer turned off in turn: the zero pieces' CRC-32 combined by zlib, the
-untouched pages not read, zlib windows sized to each member, the PNG's unfiltered rows (Pillow's
+untouched pages not read, the PNG's unfiltered rows (Pillow's
 encoder instead).
 With ``--members``: instead, one frame (frame 1 after frame 0) written member by member:
 its bytes, the share of them in zero pieces, and the writer thread's CPU milliseconds for each
@@ -145,7 +145,6 @@ def _variants():
     return {"as it is": [],
             "CRC-32 of zero pieces by zlib.crc32": [mock.patch.object(io, "_COMBINE", [None])],
             "untouched pages read": [mock.patch.object(io._PageMap, "untouched", lambda self, data: None)],
-            "32 KiB windows": [mock.patch.object(io, "_window_bits", lambda n: -15)],
             "PNG by Pillow": [mock.patch.object(outputs, "write_png_rows", io.write_png)]}
 
 
