@@ -90,9 +90,10 @@ def write_npz_level(path, arrays, level: int):
       piece whose pages were never touched (an anonymous mapping's, as
       :func:`refsoft.limits.zeros` makes them; :class:`_PageMap`) is not read at all.
 
-    zipfile writes the headers and the CRC-32 (``zlib.crc32`` over every byte); zlib does all the
-    compression. On a frame of 8 reflectors at 1024x768 this takes about a sixth of the CPU time
-    of deflating every byte at level 1 (docs/benchmarks.md).
+    zipfile writes the headers and the other pieces' CRC-32 (``zlib.crc32``); zlib does all the
+    compression. The file's bytes do not depend on how a zero piece was found or its CRC computed,
+    so a rerun writes the same bytes. An ``ants`` frame (8 reflectors) at 1024x768: about 60 ms of
+    CPU (docs/benchmarks.md).
 
     Parameters
     ----------
