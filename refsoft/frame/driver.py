@@ -237,8 +237,8 @@ def run_frames(renderer, indices, out=None, progress=False, desc="frames", keep=
     given) while the next one renders. With ``progress`` and several frames: a tqdm bar on a
     terminal, else (a log) a line every tenth of the run.
 
-    A frame's files are written by one background thread (zlib and Pillow's encoder release the
-    GIL, so the renderer runs meanwhile), one frame after another, each file atomically; the run
+    A frame's files are written by one background thread (zlib releases the GIL while it
+    compresses, so the renderer runs meanwhile), one frame after another, each file atomically; the run
     waits for a frame's files before it counts the frame as done, and on an error or an interrupt
     it still waits for the files being written. The bytes
     are those of a write in the main thread. The write's own times go into the frame's ``time_ms``

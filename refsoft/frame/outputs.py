@@ -8,14 +8,14 @@ import os
 import numpy as np
 
 from .. import keys
-from ..io import write_npz, write_npz_level, write_png
+from ..io import write_npz, write_npz_level, write_png, write_png_rows
 
 #: zlib level of ``frame_NNNN.npz`` and ``frame_NNNN.png`` in a run's folder: level 1 costs half of
 #: level 6's CPU time for files ~10% (npz) and ~45% (PNG) larger, so that the background write
 #: competes less with the next frame's render for the cores. The npz writer
 #: (:func:`refsoft.io.write_npz_level`) also skips compressing the G-buffers' runs of zeros and
-#: stores the high-entropy floats. (The golden set keeps ``np.savez_compressed``'s level 6:
-#: :func:`refsoft.io.write_npz`.)
+#: stores the high-entropy floats; the PNG's rows are not filtered (:func:`refsoft.io.write_png_rows`).
+#: (The golden set keeps ``np.savez_compressed``'s level 6: :func:`refsoft.io.write_npz`.)
 FRAME_LEVEL = 1
 
 
@@ -26,11 +26,11 @@ def frame_basename(index: int) -> str:
 
 def write_frame(out_dir, frame):
     """Write ``frame_NNNN.npz`` (every array, in the order the frame holds them; the arrays
-    ``np.savez_compressed`` would hold, bit for bit) and ``frame_NNNN.png`` atomically, both at
-    zlib level :data:`FRAME_LEVEL`."""
+    ``np.savez_compressed`` would hold, bit for bit) and ``frame_NNNN.png`` (its rows unfiltered)
+    atomically, both at zlib level :data:`FRAME_LEVEL`."""
     base = os.path.join(os.fspath(out_dir), frame_basename(frame.index))
     write_npz_level(base + ".npz", frame.arrays, FRAME_LEVEL)
-    write_png(base + ".png", frame.arrays[keys.IMAGE], FRAME_LEVEL)
+    write_png_rows(base + ".png", frame.arrays[keys.IMAGE], FRAME_LEVEL)
 
 
 def frame_stats(frames, options=None) -> dict:

@@ -208,3 +208,173 @@ def test_a_failed_npz_write_leaves_the_old_file(tmp_path, small_pieces):
     with pytest.raises(ValueError):
         write_npz_level(tmp_path / "f.npz", arrays, 1)
     assert [p.name for p in tmp_path.iterdir()] == ["f.npz"] and (tmp_path / "f.npz").read_bytes() == b"old"
+
+
+def test_crc_of_zero_pieces_is_zlibs(monkeypatch):
+    """The CRC-32 after a piece of zeros, combined by zlib's crc32_combine64 (without reading the
+    piece), is zlib.crc32 over its bytes, from any running CRC and for any size; without the
+    C library, zlib.crc32 itself."""
+    import zlib
+
+    import refsoft.io
+
+    assert refsoft.io._crc32_combine() is not None  # found on the platforms the tests run on
+    rng = np.random.default_rng(5)
+    for n in (1, 7, 512, 4096, 1 << 18, 3 * (1 << 18) + 5):
+        piece = np.zeros(n, np.uint8)
+        for crc in (0, 1, 0xFFFFFFFF, int(rng.integers(0, 1 << 32))):
+            assert refsoft.io._crc_after_zeros(crc, piece) == zlib.crc32(piece, crc), (n, crc)
+    monkeypatch.setattr(refsoft.io, "_COMBINE", [None])
+    assert refsoft.io._crc_after_zeros(12345, np.zeros(999, np.uint8)) == zlib.crc32(bytes(999), 12345)
+
+
+def test_zero_pieces_write_the_same_bytes_every_way(tmp_path, small_pieces, monkeypatch):
+    """Zero pieces written past zipfile's member writer (CRC combined, or computed by zlib.crc32
+    where the C library is missing) or through it (the compressor finding them) give one file."""
+    import zipfile
+
+    import refsoft.io
+
+    arrays = _odd_arrays()
+    refsoft.io.write_npz_level(tmp_path / "direct.npz", arrays, 1)
+    with monkeypatch.context() as m:
+        m.setattr(refsoft.io, "_COMBINE", [None])
+        refsoft.io.write_npz_level(tmp_path / "crc32.npz", arrays, 1)
+    with monkeypatch.context() as m:
+        m.setattr(refsoft.io, "_WRITER_STATE", ("_no_such_state",))
+        m.setattr(refsoft.io, "_write_zeros", None)  # never called
+        refsoft.io.write_npz_level(tmp_path / "through.npz", arrays, 1)
+    one = (tmp_path / "direct.npz").read_bytes()
+    assert (tmp_path / "crc32.npz").read_bytes() == one and (tmp_path / "through.npz").read_bytes() == one
+    with zipfile.ZipFile(tmp_path / "direct.npz") as zf:
+        assert zf.testzip() is None  # every member's CRC-32 checked
+
+
+@pytest.mark.parametrize("shape", [(24, 32, 3), (5, 7), (1, 1, 3)])
+def test_png_of_unfiltered_rows_decodes_to_the_image(tmp_path, shape):
+    """The frame's PNG (unfiltered rows, zlib): Pillow reads it (every chunk's CRC verified) as
+    the same pixels, in colour or grey, from a view that is not contiguous as well; a rerun is
+    the same bytes."""
+    from PIL import Image
+
+    from refsoft.io import write_png_rows
+
+    rng = np.random.default_rng(11)
+    img = rng.integers(0, 256, shape[:1] + (2 * shape[1],) + shape[2:], dtype=np.uint8)[:, ::2]
+    img[: shape[0] // 2] = 17  # runs that deflate
+    write_png_rows(tmp_path / "a.png", img, 1)
+    with Image.open(tmp_path / "a.png") as p:
+        p.verify()
+    with Image.open(tmp_path / "a.png") as p:
+        assert p.mode == ("RGB" if len(shape) == 3 else "L")
+        assert np.array_equal(np.asarray(p), img)
+    write_png_rows(tmp_path / "b.png", img.copy(), 1)
+    assert (tmp_path / "a.png").read_bytes() == (tmp_path / "b.png").read_bytes()
+
+
+def test_png_of_unfiltered_rows_refuses_other_shapes(tmp_path):
+    from refsoft.errors import RefsoftError
+    from refsoft.io import write_png_rows
+
+    for bad in (np.zeros((4, 4, 4), np.uint8), np.zeros((0, 4, 3), np.uint8), np.zeros(5, np.uint8),
+                np.zeros((4, 4), np.float32)):
+        with pytest.raises(RefsoftError, match="PNG needs"):
+            write_png_rows(tmp_path / "x.png", bad, 1)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_pages_never_touched_are_told_apart():
+    """An anonymous private mapping's pages: those never written nor read are untouched; a page
+    written (even with zeros) or read is not. Arrays not in such a mapping are not asked about."""
+    import mmap
+
+    from refsoft.io import _PageMap
+
+    page = mmap.PAGESIZE
+    buf = mmap.mmap(-1, 16 * page, flags=mmap.MAP_PRIVATE | mmap.MAP_ANONYMOUS)
+    data = np.frombuffer(buf, np.uint8)
+    data[3 * page + 5] = 1
+    data[7 * page:8 * page] = 0  # written, with zeros
+    assert data[9 * page + 100] == 0  # read: the kernel maps its zero page
+    pm = _PageMap()
+    try:
+        addr, flags = pm.untouched(data)
+        assert addr == data.__array_interface__["data"][0] and addr % page == 0
+        assert flags.tolist() == [i not in (3, 7, 9) for i in range(16)]
+        addr, flags = pm.untouched(data[page + 10:5 * page])  # a view: the pages it overlaps
+        assert flags.tolist() == [True, True, False, True]
+        assert pm.untouched(np.zeros(4 * page, np.uint8)) is None  # the C heap's: not asked
+        assert pm.untouched(data.copy()) is None
+    finally:
+        pm.close()
+    del data
+    buf.close()
+
+
+def test_a_file_mapping_is_never_untouched(tmp_path):
+    """A file's pages not yet read hold the file, not zeros: never reported untouched."""
+    from refsoft.io import _PageMap
+
+    (tmp_path / "f.bin").write_bytes(b"\x01" * (1 << 16))
+    m = np.memmap(tmp_path / "f.bin", dtype=np.uint8, mode="c")  # private, writable, a file
+    pm = _PageMap()
+    try:
+        assert pm.untouched(m.view(np.ndarray)) is None
+    finally:
+        pm.close()
+    del m
+
+
+def test_untouched_pieces_are_not_read(tmp_path, small_pieces, monkeypatch):
+    """A G-buffer as the render leaves it (a lazy zero mapping, the box written): its untouched
+    pieces are written without a look at their bytes, and the file is the one the bytes give."""
+    import mmap
+
+    import refsoft.io
+    from refsoft import limits
+
+    page = mmap.PAGESIZE
+    monkeypatch.setattr(refsoft.io, "NPZ_PIECE_BYTES", page)
+    gbuf = limits.zeros((256, 1024), np.float32)  # 256 pages of 4 KiB, a row each
+    assert gbuf.nbytes >= limits.LAZY_ZEROS_BYTES
+    gbuf[20:23, 100:300] = np.random.default_rng(2).random((3, 200), dtype=np.float32)
+    arrays = {"gbuffer": gbuf, "image": np.arange(3000, dtype=np.uint8)}
+    looked = []
+    real = refsoft.io._zero_bytes
+    monkeypatch.setattr(refsoft.io, "_zero_bytes", lambda p: looked.append(p.size) or real(p))
+    refsoft.io.write_npz_level(tmp_path / "a.npz", arrays, 1)
+    if page == 4096:  # pieces of one page: only the 3 written are looked at (and the image's)
+        assert len(looked) == 3 + 1
+    with monkeypatch.context() as m:
+        m.setattr(refsoft.io._PageMap, "untouched", lambda self, data: None)
+        refsoft.io.write_npz_level(tmp_path / "b.npz", arrays, 1)
+    assert (tmp_path / "a.npz").read_bytes() == (tmp_path / "b.npz").read_bytes()
+    with np.load(tmp_path / "a.npz") as z:
+        assert z["gbuffer"].tobytes() == gbuf.tobytes()
+
+
+def test_render_command_files_hold_the_frames_arrays(tmp_path):
+    """At a size whose G-buffers are lazy zero mappings (their untouched pages not read by the
+    writer): every array of the command's npz is the frame's, bit for bit, as np.savez_compressed
+    holds it; the PNG decodes to the image; a rerun writes the same bytes."""
+    from PIL import Image
+
+    import refsoft
+    from refsoft import limits
+    from refsoft.io import write_npz
+
+    frames, _ = refsoft.render("kitchen", frames=[2, 3], width=400, height=300, out=tmp_path / "a")
+    fr = frames[-1]
+    big = [k for k, a in fr.arrays.items() if k.startswith("gbuffer_position")]
+    assert big and all(fr.arrays[k].nbytes >= limits.LAZY_ZEROS_BYTES for k in big)
+    write_npz(tmp_path / "np.npz", **fr.arrays)
+    with np.load(tmp_path / "a" / "frame_0003.npz") as a, np.load(tmp_path / "np.npz") as b:
+        assert list(a.keys()) == list(b.keys()) == list(fr.arrays)
+        for k in a.keys():
+            x, y = a[k], b[k]
+            assert x.dtype == y.dtype and x.shape == y.shape and x.tobytes() == y.tobytes(), k
+    with Image.open(tmp_path / "a" / "frame_0003.png") as p:
+        assert np.array_equal(np.asarray(p), fr.arrays[keys.IMAGE])
+    refsoft.render("kitchen", frames=[2, 3], width=400, height=300, out=tmp_path / "b")
+    for name in ("frame_0002.npz", "frame_0003.npz", "frame_0002.png", "frame_0003.png"):
+        assert (tmp_path / "a" / name).read_bytes() == (tmp_path / "b" / name).read_bytes(), name

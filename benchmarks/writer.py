@@ -1,0 +1,199 @@
+"""What writing a run's files costs ``refsoft render``: the command against the same frames
+rendered in a loop of ``FrameDriver.render_frame`` without writing, and where the writer's CPU goes.
+
+For each scene, in one process, after a frame 0 rendered once to compile the kernels, each round
+runs in turn (so that both see the same state of the machine):
+
+- ``loop``: a new ``FrameDriver`` renders frames 0..N-1, nothing written;
+- ``command``: ``refsoft render SCENE --frames N --out DIR --overwrite`` (the command line's
+  ``main``, in this process), its frames written by the background writer.
+
+It prints per round the wall and process CPU milliseconds per frame of both, their ratios
+(command / loop), and the command's ``stats.json`` medians (``total``: the render's stages;
+``write_cpu``: the writer thread's CPU per frame). The CPU ratio is the better guide on a shared
+machine: the loop's CPU is the render's, the command's adds the writer's and what it costs the
+render (the GIL, caches).
+
+Run: ``python benchmarks/writer.py [SCENE ...] [--frames 10] [--rounds 3] [--size 1024x768]``.
+With ``--parts``: instead, one frame's files written whole (``write_frame``) from fresh copies of
+its arrays, the writer thread's CPU milliseconds (min and median of 7, the variants in turn),
+with each part of the writer turned off in turn: the zero pieces' CRC-32 combined by zlib, the
+untouched pages not read, the PNG's unfiltered rows (Pillow's
+encoder instead).
+With ``--members``: instead, one frame (frame 1 after frame 0) written member by member:
+its bytes, the share of them in zero pieces, and the writer thread's CPU milliseconds for each
+member and for the PNG (the best of 3 writes of fresh copies, whose zero pages are first read
+by the writer as the render's are).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shutil
+import statistics
+import tempfile
+import time
+
+import numpy as np
+
+import refsoft
+from refsoft.cli import main as cli_main
+from refsoft.frame import FrameDriver
+
+SCENES = ["kitchen", "ufo", "ants"]
+
+
+def _round(scene, name, n, size, out):
+    d = FrameDriver(scene)
+    t, c = time.perf_counter(), time.process_time()
+    for f in range(n):
+        d.render_frame(f)
+    loop = (time.perf_counter() - t) / n, (time.process_time() - c) / n
+    w, h = size
+    argv = ["render", name, "--frames", str(n), "--width", str(w), "--height", str(h), "--out", out, "--overwrite"]
+    t, c = time.perf_counter(), time.process_time()
+    code = cli_main(argv)
+    cmd = (time.perf_counter() - t) / n, (time.process_time() - c) / n
+    if code:
+        raise SystemExit(f"refsoft {' '.join(argv)} exited with {code}")
+    with open(os.path.join(out, "stats.json")) as fh:
+        frames = json.load(fh)["frames"]
+    med = {k: statistics.median(f["time_ms"][k] for f in frames) for k in ("total", "write", "write_cpu")}
+    return loop, cmd, med
+
+
+def ratios(names, n, rounds, size):
+    out = tempfile.mkdtemp(prefix="refsoft-writer-")
+    try:
+        print("scene round | loop wall, CPU ms/frame | command wall, CPU ms/frame | wall ratio | CPU ratio | "
+              "stats total, write, write_cpu ms")
+        for name in names:
+            scene = refsoft.load_scene(name, width=size[0], height=size[1])
+            FrameDriver(scene).render_frame(0)  # compiled (or loaded from the cache) outside the timing
+            rows = []
+            for r in range(rounds):
+                loop, cmd, med = _round(scene, name, n, size, os.path.join(out, name))
+                rows.append((cmd[0] / loop[0], cmd[1] / loop[1]))
+                print(f"{name} {r} | {1000 * loop[0]:.0f}, {1000 * loop[1]:.0f} | {1000 * cmd[0]:.0f}, "
+                      f"{1000 * cmd[1]:.0f} | {rows[-1][0]:.3f} | {rows[-1][1]:.3f} | "
+                      f"{med['total']:.0f}, {med['write']:.0f}, {med['write_cpu']:.1f}", flush=True)
+            print(f"{name}: wall ratio {min(r[0] for r in rows):.3f}-{max(r[0] for r in rows):.3f}, "
+                  f"CPU ratio {min(r[1] for r in rows):.3f}-{max(r[1] for r in rows):.3f}", flush=True)
+    finally:
+        shutil.rmtree(out, ignore_errors=True)
+
+
+def _fresh(a):
+    """A copy of ``a`` whose all-zero pages are untouched (as the render leaves its G-buffers)."""
+    from refsoft import limits
+
+    if not a.flags.c_contiguous or a.nbytes < limits.LAZY_ZEROS_BYTES:
+        return a.copy()
+    b = limits.zeros(a.shape, a.dtype)
+    src, dst = a.reshape(-1).view(np.uint8), b.reshape(-1).view(np.uint8)
+    for lo in range(0, src.size, 4096):
+        if src[lo:lo + 4096].any():
+            dst[lo:lo + 4096] = src[lo:lo + 4096]
+    return b
+
+
+def members(names, size):
+    from refsoft import io
+    from refsoft.constants import NPZ_PIECE_BYTES
+    from refsoft.frame.outputs import FRAME_LEVEL
+
+    out = tempfile.mkdtemp(prefix="refsoft-writer-")
+    try:
+        for name in names:
+            scene = refsoft.load_scene(name, width=size[0], height=size[1])
+            d = FrameDriver(scene)
+            d.render_frame(0)
+            arrays = d.render_frame(1).arrays
+            print(f"{name}: member | dtype | MB | zero pieces % | CPU ms (best of 3)")
+            total = 0.0
+            for k, a in arrays.items():
+                best = float("inf")
+                for _ in range(3):
+                    b = _fresh(a)
+                    c = time.thread_time()
+                    io.write_npz_level(os.path.join(out, "m.npz"), {k: b}, FRAME_LEVEL)
+                    best = min(best, 1000 * (time.thread_time() - c))
+                data = io._npy_parts(a)[1]
+                zero = sum(io._zero_bytes(data[lo:lo + NPZ_PIECE_BYTES]) * data[lo:lo + NPZ_PIECE_BYTES].size
+                           for lo in range(0, data.size, NPZ_PIECE_BYTES))
+                total += best
+                print(f"  {k} | {a.dtype} | {a.nbytes / 1e6:.2f} | {100 * zero / max(1, data.size):.0f} | {best:.1f}")
+            best = float("inf")
+            for _ in range(3):
+                c = time.thread_time()
+                io.write_png_rows(os.path.join(out, "m.png"), arrays["image"], FRAME_LEVEL)
+                best = min(best, 1000 * (time.thread_time() - c))
+            print(f"  png | uint8 | {arrays['image'].nbytes / 1e6:.2f} | | {best:.1f}")
+            print(f"  members, each in a file of its own: {total:.1f} ms; with the PNG {total + best:.1f} ms", flush=True)
+    finally:
+        shutil.rmtree(out, ignore_errors=True)
+
+
+def _variants():
+    from unittest import mock
+
+    from refsoft import io
+    from refsoft.frame import outputs
+
+    return {"as it is": [],
+            "CRC-32 of zero pieces by zlib.crc32": [mock.patch.object(io, "_COMBINE", [None])],
+            "untouched pages read": [mock.patch.object(io._PageMap, "untouched", lambda self, data: None)],
+            "PNG by Pillow": [mock.patch.object(outputs, "write_png_rows", io.write_png)]}
+
+
+def parts(names, size, rounds=7):
+    from contextlib import ExitStack
+
+    from refsoft.frame import Frame, write_frame
+
+    out = tempfile.mkdtemp(prefix="refsoft-writer-")
+    try:
+        for name in names:
+            scene = refsoft.load_scene(name, width=size[0], height=size[1])
+            d = FrameDriver(scene)
+            d.render_frame(0)
+            arrays = d.render_frame(1).arrays
+            write_frame(out, Frame(1, {k: _fresh(a) for k, a in arrays.items()}, {}))  # one-time costs
+            times = {v: [] for v in _variants()}
+            for _ in range(rounds):
+                for v, patches in _variants().items():
+                    fr = Frame(1, {k: _fresh(a) for k, a in arrays.items()}, {})
+                    with ExitStack() as stack:
+                        for p in patches:
+                            stack.enter_context(p)
+                        c = time.thread_time()
+                        write_frame(out, fr)
+                        times[v].append(1000 * (time.thread_time() - c))
+            for v, t in times.items():
+                print(f"{name} | {v} | {min(t):.1f} | {statistics.median(t):.1f}", flush=True)
+    finally:
+        shutil.rmtree(out, ignore_errors=True)
+
+
+def parse_args(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("scenes", nargs="*", default=SCENES)
+    p.add_argument("--frames", type=int, default=10)
+    p.add_argument("--rounds", type=int, default=3)
+    p.add_argument("--size", default="1024x768")
+    p.add_argument("--members", action="store_true")
+    p.add_argument("--parts", action="store_true")
+    return p.parse_args(argv)
+
+
+if __name__ == "__main__":
+    args = parse_args()
+    size = tuple(int(v) for v in args.size.split("x"))
+    if args.members:
+        members(args.scenes, size)
+    elif args.parts:
+        parts(args.scenes, size)
+    else:
+        ratios(args.scenes, args.frames, args.rounds, size)
