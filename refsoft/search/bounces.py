@@ -149,9 +149,7 @@ def search_bounce(bounce: Bounce, gb: GBuffer, vertices, neighbourhood="cross", 
     iterations, flags = np.zeros(n, np.int32), np.full(n, CULLED, np.uint8)
     if not n or not gb.mask.any():
         return SearchResult(pixel, score, margin, iterations, flags, neighbourhood, "discard", cap)
-    G = np.zeros((h, w, 9), dtype=dt)
-    eye_rel = np.ascontiguousarray((bounce.eye - gb.origin).astype(dt))
-    parallel_range(_bounces.pack_eyes, h, gb.position, gb.normal, gb.mask, eye_rel, fp, G)
+    G = packed(bounce, gb)
     rel = np.ascontiguousarray((verts - gb.origin).astype(dt))
     own, restarted = own_starts(bounce, previous, n)
     starts = _starts(G, gb.mask, rel, own)
@@ -160,6 +158,99 @@ def search_bounce(bounce: Bounce, gb: GBuffer, vertices, neighbourhood="cross", 
                    pixel, score, margin, iterations, flags)
     flags[restarted] |= np.uint8(RESTARTED)
     return SearchResult(pixel, score, margin, iterations, flags, neighbourhood, "discard", cap)
+
+
+def packed(bounce: Bounce, gb: GBuffer) -> np.ndarray:
+    """The bounce's G-buffer packed for the walk, (h, w, 9) in its precision: P, N and the unit
+    direction to each pixel's own eye (kernel :func:`refsoft.search._bounces.pack_eyes`)."""
+    dt = gb.position.dtype.type
+    h, w = gb.mask.shape
+    G = np.zeros((h, w, 9), dtype=dt)
+    eye_rel = np.ascontiguousarray((bounce.eye - gb.origin).astype(dt))
+    parallel_range(_bounces.pack_eyes, h, gb.position, gb.normal, gb.mask, eye_rel, dt(0), G)
+    return G
+
+
+class LevelEyes:
+    """A later bounce's walks from given pixels, its every image of a vertex and the view points
+    of its pixels: what :func:`refsoft.search.several.candidates` needs of a level whose reflector
+    is not convex (in place of the eye it takes at the first level).
+
+    Parameters
+    ----------
+    bounce : Bounce
+    gb : GBuffer
+        :func:`gbuffer_of` the bounce.
+    neighbourhood : {"cross", "box"}
+    cap : int, optional
+    """
+
+    def __init__(self, bounce: Bounce, gb: GBuffer, neighbourhood="cross", cap=None):
+        from . import default_cap
+
+        self.bounce, self.gb, self.neighbourhood = bounce, gb, neighbourhood
+        self.cap = default_cap(gb.mask.shape) if cap is None else int(cap)
+        self.G = packed(bounce, gb)
+        self.walks = 0  # iterations of every walk so far
+
+    def walk(self, vertices, starts) -> SearchResult:
+        """The walk of each vertex (N, 3) float64 world from its own start (N, 2) int (covered
+        pixels of the bounce's G-buffer), each pixel's eye its own."""
+        dt = self.gb.position.dtype.type
+        verts = np.asarray(vertices, np.float64).reshape(-1, 3)
+        n = len(verts)
+        pixel = np.full((n, 2), -1, np.int32)
+        score, margin = np.zeros(n, dt), np.zeros(n, dt)
+        iterations, flags = np.zeros(n, np.int32), np.zeros(n, np.uint8)
+        if n:
+            rel = np.ascontiguousarray((verts - self.gb.origin).astype(dt))
+            parallel_range(_bounces.search_each, n, self.G, self.gb.mask, rel,
+                           np.ascontiguousarray(starts, np.int64).reshape(n, 2),
+                           constants.NEIGHBOURHOODS[self.neighbourhood], self.cap, dt(0), pixel, score, margin,
+                           iterations, flags)
+            self.walks += int(iterations.sum())
+        return SearchResult(pixel, score, margin, iterations, flags, self.neighbourhood, "discard", self.cap)
+
+    def points(self, pixels):
+        """The view points of G-buffer ``pixels`` (M, 2): on the camera's ray through each at the
+        path's length to its bounce point (they project to the pixel, as an unfolded virtual vertex
+        does), (M, 3) float64, and whether the pixel is covered (M,) bool."""
+        b = self.bounce
+        r, c = np.asarray(pixels[:, 0]), np.asarray(pixels[:, 1])
+        return b.origin + b.path[r, c][:, None] * b.direction[r, c], b.mask[r, c].copy()
+
+    def images(self, vertices) -> "Images":
+        """Every image of each vertex (N, 3) at this level (spec section 4.8 at a later bounce):
+        the ends of its walks from up to BOUNCE_START_SAMPLES covered pixels taken evenly over the
+        stencil (row-major) with the vertex in front (not HIDDEN), ends within one texel
+        (Chebyshev) of a better one left out, the best first (kernel
+        :func:`refsoft.search._bounces.distinct_ends`), at most MAX_IMAGES; virtual vertices
+        unfolded (:func:`unfolded`)."""
+        from .images import Images
+
+        verts = np.asarray(vertices, np.float64).reshape(-1, 3)
+        n = len(verts)
+        rows, cols = np.nonzero(self.gb.mask)
+        step = max(1, -(-len(rows) // constants.BOUNCE_START_SAMPLES))
+        samples = np.stack([rows[::step], cols[::step]], axis=1).astype(np.int64)
+        s = len(samples)
+        res = self.walk(np.repeat(verts, s, axis=0), np.tile(samples, (n, 1)))
+        ok = ((res.flags & np.uint8(HIDDEN)) == 0).reshape(n, s)
+        count = np.zeros(n, np.int64)
+        out = np.zeros((n, constants.MAX_IMAGES, 2), np.int64)
+        if n and s:
+            parallel_range(_bounces.distinct_ends, n, np.ascontiguousarray(res.pixel.reshape(n, s, 2), np.int64),
+                           np.ascontiguousarray(res.score.reshape(n, s), np.float64), ok, count, out)
+        offset = np.zeros(n + 1, np.int64)
+        np.cumsum(count, out=offset[1:])
+        pix = out[np.arange(constants.MAX_IMAGES)[None, :] < count[:, None]].astype(np.int32)
+        owner = np.repeat(np.arange(n), count)
+        virtual = np.full((len(pix), 3), np.nan)
+        if len(pix):
+            r, c = pix[:, 0], pix[:, 1]
+            length = self.bounce.path[r, c] + np.linalg.norm(verts[owner] - self.bounce.position[r, c], axis=1)
+            virtual = self.bounce.origin + length[:, None] * self.bounce.direction[r, c]
+        return Images(offset, pix, virtual, np.full(len(pix), -1, np.int32))
 
 
 def own_starts(bounce: Bounce, previous, n):
