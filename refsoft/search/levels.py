@@ -314,20 +314,25 @@ def _images_level(scene, meshes, bounce, gb, camera, rays, reach, opt, entry):
     valid, origin, direction = rays
     ray_list = (origin[valid], direction[valid])
 
-    def group(ids):
+    offset = meet.self_offset(meshes[bounce.reflector - 1])
+    moved, _ = meet.moved(rays, offset)
+
+    def group(ids, ray_list):
         verts, normals, faces, fobj = _combined(meshes, ids)
         if not len(faces):
             return meet.candidates(meshes, [])[0]
         found = eyes.images(verts)
         entry["searched"] += len(verts)
+        # no cuts: a triangle with no linked triple of images gives every triple (the acceptance
+        # decides); the images of midpoints from the level's walks cost more and drew less
         cand, _ = candidates(gb, eyes, verts, normals, faces, fobj, found, eyes.images, opt.neighbourhood, opt.cap,
-                             max_level=opt.max_level, rays=ray_list)
+                             max_level=0, rays=ray_list)
         return cand
 
     ids = [k for k, o in enumerate(scene.objects, start=1) if not o.reflector and reach(k)]
     others = [] if bounce.level >= opt.bounces else [k for k in scene.reflector_ids if reach(k)]
-    scene_cand, ref = group(ids), group(others)
-    offset = meet.self_offset(meshes[bounce.reflector - 1])
+    # the reflectors' candidates for the rays from their moved origins, as they are met
+    scene_cand, ref = group(ids, ray_list), group(others, (moved[1][valid], direction[valid]))
     src, best_c, best_t, best_uv = meet.nearest_split(scene_cand, ref, camera, bounce.box, rays, offset)
     entry["iterations"] = eyes.walks
     entry["candidates"] = int(len(scene_cand.object_id) + len(ref.object_id))
@@ -493,7 +498,11 @@ def deepen_images(scene, view, k, stencil, box, out, drawn, opt, keep=None, star
     bounces = []
     if near:
         t0 = time.perf_counter()
-        ray_list = (origin[valid], direction[valid])
+        offset = meet.self_offset(meshes[k - 1]) if k in near else 0.0
+        # the rays as they meet the reflectors: from their moved origins (the triangle a ray leaves is
+        # then behind it, and no part of it is made)
+        moved, _ = meet.moved(rays, offset)
+        ray_list = (moved[1][valid], direction[valid])
         parts = []
         for b in near:
             mesh = meshes[b - 1]
@@ -501,13 +510,12 @@ def deepen_images(scene, view, k, stencil, box, out, drawn, opt, keep=None, star
             walk = search(gb, gb_eye, verts, opt.neighbourhood, opt.inverse, None, opt.cap)
             found = find_images(gb, gb_eye, verts, walk)
             cand, _ = candidates(gb, gb_eye, verts, mesh.normals, mesh.faces, np.full(mesh.n_faces, b, np.int32),
-                                 found, find, opt.neighbourhood, opt.cap, max_level=opt.max_level, rays=ray_list)
+                                 found, find, opt.neighbourhood, opt.cap, rays=ray_list)
             parts.append(cand)
             first["searched"] += len(verts)
         ref = parts[0]
         for c in parts[1:]:
             ref = meet.joined(ref, c)
-        offset = meet.self_offset(meshes[k - 1]) if k in near else 0.0
         src, best_c, best_t, best_uv = meet.nearest_split(drawn["candidates"], ref, camera, box, rays, offset)
         first["candidates"] = int(len(ref.object_id))
         first["ms"] = 1000 * (time.perf_counter() - t0)
