@@ -114,34 +114,3 @@ def best_starts(lo, hi, S, V, X, has, out):
             best = S.shape[0]
         out[i] = best
 
-
-@kernel
-def distinct_ends(lo, hi, end, score, ok, count, out):
-    """Vertices ``lo .. hi - 1``: of a vertex's walk ends ``end[i]`` (S, 2) int64 with scores
-    ``score[i]`` (S,) float64, those ``ok[i]`` (S,) bool, the best first (the first of equal
-    scores), then the next best farther than one texel (Chebyshev) from
-    every one taken, and so on, at most ``out.shape[1]``: ``count[i]`` and ``out[i, :count[i]]``
-    (rows and columns). Each vertex writes its own rows."""
-    s = end.shape[1]
-    limit = out.shape[1]
-    for i in range(lo, hi):
-        taken = np.zeros(s, dtype=np.bool_)
-        for j in range(s):
-            taken[j] = not ok[i, j]
-        n = 0
-        while n < limit:
-            best = -1
-            for j in range(s):
-                if taken[j]:
-                    continue
-                if best < 0 or score[i, j] > score[i, best]:
-                    best = j
-            if best < 0:
-                break
-            out[i, n, 0] = end[i, best, 0]
-            out[i, n, 1] = end[i, best, 1]
-            n += 1
-            for j in range(s):  # the ends beside it are the same image
-                if abs(end[i, j, 0] - end[i, best, 0]) <= 1 and abs(end[i, j, 1] - end[i, best, 1]) <= 1:
-                    taken[j] = True
-        count[i] = n

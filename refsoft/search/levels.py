@@ -218,11 +218,11 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report, pa
         texels = texel_reach(bounce.position, bounce.normal, bounce.eye, bounce.mask)
         reach = (lambda k: reaches(texels, *bounding_sphere(meshes[k - 1])))
     depth = np.where(bounce.mask, np.int8(bounce.level), np.int8(0)).astype(np.int8)
-    if opt.images == "all" and meet.sees_itself(scene, bounce.reflector):  # not convex: every image
+    if opt.images == "all" and meet.sees_itself(scene, bounce.reflector):  # not convex: by the rays
         entry = {"level": bounce.level, "reflector": bounce.reflector, "pixels": int(bounce.mask.sum()),
-                 "searched": 0, "iterations": 0}
+                 "searched": 0}
         report.append(entry)
-        colour, rid, covered, nxt = _images_level(scene, meshes, bounce, gb, camera, rays, reach, opt, entry)
+        colour, rid, covered, nxt = _rays_level(scene, meshes, bounce, camera, rays, reach, opt, entry)
         for b in nxt:
             blend(colour, rid, covered, depth, bounce.box, b,
                   draw_bounce(scene, meshes, b, camera, vertices, opt, report, path, keep, starts), scene)
@@ -289,13 +289,16 @@ def _combined(meshes, ids):
     return np.concatenate(verts), np.concatenate(normals), np.concatenate(faces), np.concatenate(obj)
 
 
-def _images_level(scene, meshes, bounce, gb, camera, rays, reach, opt, entry):
-    """A later level on a reflector that is not convex (:func:`draw_bounce`'s part): every image
-    of each vertex of the objects a ray of the level can reach
-    (:meth:`refsoft.search.bounces.LevelEyes.images`), their candidate virtual triangles
-    (:func:`refsoft.search.several.candidates` with the level's walks) and each pixel's ray met
-    with them: the scene's from the pixel's bounce point, the reflectors' (the next level's, this
-    one too) from a point moved along the ray (:func:`refsoft.search.meet.nearest_split`).
+def _rays_level(scene, meshes, bounce, camera, rays, reach, opt, entry):
+    """A later level on a reflector that sees itself (:func:`draw_bounce`'s part), drawn by its
+    pixels' rays alone: each triangle of the objects a ray of the level can reach that one of
+    the rays comes near (:func:`refsoft.search.several.near_rays`) is met by those rays, the
+    scene's from the pixel's bounce point, the reflectors' (the next level's, this one too) from a
+    point moved along the ray (:func:`refsoft.search.meet.nearest_split`). No vertex is searched
+    at such a level: with one eye per pixel there is no enumeration of every image (that of
+    :func:`refsoft.search.images.find_images` takes one eye), and a walk from a pixel of a stencil
+    seen in a curved mirror ends at the stencil's rim or at a maximum that is no reflection point
+    as often as at an image, so candidates placed by walks miss triangles (``docs/bounces.md``).
 
     Returns
     -------
@@ -304,37 +307,24 @@ def _images_level(scene, meshes, bounce, gb, camera, rays, reach, opt, entry):
     list of Bounce
         The next level's.
 
-    ``entry`` (the level's report) receives the vertices searched, the walks' iterations and the
-    candidates.
+    ``entry`` (the level's report) receives the candidates.
     """
-    from .bounces import LevelEyes
-    from .several import candidates
+    from .several import near_rays
 
-    eyes = LevelEyes(bounce, gb, opt.neighbourhood, opt.cap)
     valid, origin, direction = rays
-    ray_list = (origin[valid], direction[valid])
-
     offset = meet.self_offset(meshes[bounce.reflector - 1])
     moved, _ = meet.moved(rays, offset)
 
     def group(ids, ray_list):
         verts, normals, faces, fobj = _combined(meshes, ids)
-        if not len(faces):
-            return meet.candidates(meshes, [])[0]
-        found = eyes.images(verts)
-        entry["searched"] += len(verts)
-        # no cuts: a triangle with no linked triple of images gives every triple (the acceptance
-        # decides); the images of midpoints from the level's walks cost more and drew less
-        cand, _ = candidates(gb, eyes, verts, normals, faces, fobj, found, eyes.images, opt.neighbourhood, opt.cap,
-                             max_level=0, rays=ray_list)
-        return cand
+        return near_rays(verts, normals, faces, fobj, ray_list)
 
     ids = [k for k, o in enumerate(scene.objects, start=1) if not o.reflector and reach(k)]
     others = [] if bounce.level >= opt.bounces else [k for k in scene.reflector_ids if reach(k)]
     # the reflectors' candidates for the rays from their moved origins, as they are met
-    scene_cand, ref = group(ids, ray_list), group(others, (moved[1][valid], direction[valid]))
+    scene_cand = group(ids, (origin[valid], direction[valid]))
+    ref = group(others, (moved[1][valid], direction[valid]))
     src, best_c, best_t, best_uv = meet.nearest_split(scene_cand, ref, camera, bounce.box, rays, offset)
-    entry["iterations"] = eyes.walks
     entry["candidates"] = int(len(scene_cand.object_id) + len(ref.object_id))
     h, w = bounce.mask.shape
     colour, rid = np.zeros((h, w, 3), np.float32), np.zeros((h, w), np.int32)

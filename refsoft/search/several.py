@@ -223,6 +223,33 @@ def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, n
     return cand, with_sheets
 
 
+def near_rays(verts, normals, faces, face_obj, rays):
+    """One candidate per triangle a ray comes near (``_Reach``, the pruning of :func:`candidates`),
+    with those rays and no projection (its virtual corners NaN): the acceptance meets it with each
+    ray of its list, wherever the pixel, so the drawing is the ray cast's up to the pruning's
+    margin. A later bounce on a reflector that sees itself (spec section 5.1) is drawn so.
+
+    Parameters
+    ----------
+    verts, normals : (N, 3) float64
+    faces : (F, 3) int64
+    face_obj : (F,) int32
+    rays : tuple of two (R, 3) float64
+        Origins and directions of the rays the candidates are met with.
+
+    Returns
+    -------
+    Candidates
+    """
+    faces = np.asarray(faces, np.int64).reshape(-1, 3)
+    reach = _Reach(*rays)
+    first, last = reach.test_every(np.asarray(verts, np.float64)[faces]) if len(faces) else reach.every(0)
+    src = np.flatnonzero(last > first)
+    return Candidates(np.full((len(src), 3, 3), np.nan), np.asarray(verts, np.float64)[faces[src]],
+                      np.asarray(normals, np.float64)[faces[src]], np.asarray(face_obj, np.int32)[src], src, 0,
+                      (first[src], last[src], reach.ray()))
+
+
 def _take(span, keep):
     """The rays ``(first, last)`` of the triangles ``keep`` (a mask or indices)."""
     return span[0][keep], span[1][keep]

@@ -11,7 +11,6 @@ import numpy as np
 import pytest
 
 import refsoft
-from refsoft import constants
 from refsoft._parallel import one_thread
 from refsoft.frame.driver import FrameDriver
 from refsoft.options import RenderOptions
@@ -19,7 +18,6 @@ from refsoft.scene.camera import Camera
 from refsoft.scene.mesh import Mesh
 from refsoft.scene.model import Scene, SceneObject, Transform
 from refsoft.scene.primitives import box
-from refsoft.search import _bounces
 from refsoft.search.levels import BOUNCE_DEPTH
 from refsoft.truth.metrics import disagreement
 from refsoft.truth.raytrace import TruthRenderer
@@ -176,34 +174,3 @@ def test_the_concave_mirror_sees_itself_as_the_truth_does(concave):
 
 
 MEASURED_CONCAVE = 99.36
-
-
-def naive_distinct_ends(end, score, ok, limit):
-    """Plain reference of ``_bounces.distinct_ends`` for one vertex: repeatedly the best end left
-    (the first of equals), then every end within one texel (Chebyshev) of it dropped."""
-    left = [j for j in range(len(end)) if ok[j]]
-    out = []
-    while left and len(out) < limit:
-        best = left[0]
-        for j in left[1:]:
-            if score[j] > score[best]:
-                best = j
-        out.append(tuple(end[best]))
-        left = [j for j in left if max(abs(end[j][0] - end[best][0]), abs(end[j][1] - end[best][1])) > 1]
-    return out
-
-
-def test_the_distinct_walk_ends_are_the_naive_ones():
-    rng = np.random.default_rng(5)
-    n, s, limit = 40, 30, 4
-    end = rng.integers(0, 6, (n, s, 2)).astype(np.int64)
-    score = np.round(rng.uniform(0.9, 1.0, (n, s)), 2)  # ties on purpose
-    ok = rng.uniform(size=(n, s)) > 0.2
-    count = np.zeros(n, np.int64)
-    out = np.zeros((n, limit, 2), np.int64)
-    _bounces.distinct_ends(0, n, end, score, ok, count, out)
-    for i in range(n):
-        want = naive_distinct_ends(end[i], score[i], ok[i], limit)
-        assert count[i] == len(want)
-        assert [tuple(x) for x in out[i, :count[i]]] == want
-    assert limit <= constants.MAX_IMAGES
