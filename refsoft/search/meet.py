@@ -278,9 +278,23 @@ def reached(meshes, group, rays):
 
 
 def joined(a, b):
-    """Two sets of candidates as one, ``a``'s first."""
-    return replace(a, **{name: np.concatenate([getattr(a, name), getattr(b, name)])
-                         for name in ("virtual", "real", "normals", "object_id", "triangle")})
+    """Two sets of candidates as one, ``a``'s first; their ray lists (made for the same rays) one
+    after the other, a set without lists tested at every pixel it covers (``first`` -1)."""
+    rays = None
+    if a.rays is not None or b.rays is not None:
+        parts, size = [], 0
+        for c in (a, b):
+            n = len(c.object_id)
+            if c.rays is None:
+                first, last, ray = np.full(n, -1, np.int64), np.full(n, -1, np.int64), np.zeros(0, np.int64)
+            else:
+                first, last, ray = (np.asarray(x, np.int64) for x in c.rays)
+            shift = np.where(first >= 0, size, 0)  # -1 stays: no list
+            parts.append((first + shift, last + shift, ray))
+            size += len(ray)
+        rays = tuple(np.concatenate([p[i] for p in parts]) for i in range(3))
+    return replace(a, rays=rays, **{name: np.concatenate([getattr(a, name), getattr(b, name)])
+                                    for name in ("virtual", "real", "normals", "object_id", "triangle")})
 
 
 def nearest_near(cand, camera, box, rays):
