@@ -166,12 +166,19 @@ class LaterStarts:
         self.now[(tuple(path), group)] = pixels
 
 
+def _inverse(opt):
+    """A later level's hidden-vertex rule: the inverse search where the options ask for it, else
+    ``discard`` (``plane``, the paper preset's, is the first level's alone)."""
+    return "search" if opt.inverse == "search" else "discard"
+
+
 def _search(bounce, gb, verts, want, opt, starts, path, group):
     """:func:`refsoft.search.bounces.search_bounce` of the ``want`` (n,) bool vertices of
     ``verts`` (n, 3), from their previous pixels when ``starts`` (:class:`LaterStarts`) has them;
     their results kept there."""
     prev = None if starts is None else starts.previous(path, group, len(verts))
-    res = search_bounce(bounce, gb, verts[want], opt.neighbourhood, opt.cap, None if prev is None else prev[want])
+    res = search_bounce(bounce, gb, verts[want], opt.neighbourhood, opt.cap, None if prev is None else prev[want],
+                        _inverse(opt))
     if starts is not None:
         starts.keep(path, group, bounce, want, res)
     return res
@@ -262,7 +269,7 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report, pa
     else:
         parts = object_parts(meshes, ids, virtual, flags)
         stencil = bounce.stencil()
-        colour, rid, covered, _ = virtual_pass(scene, parts, camera, stencil, bounce.box, "discard")
+        colour, rid, covered, _ = virtual_pass(scene, parts, camera, stencil, bounce.box, _inverse(opt))
         rparts = sum((object_parts(meshes, k, v, fl) for k, _, v, fl in found), [])
         shows = seen_reflectors(parts, rparts, camera, stencil, bounce.box) if found else {}
         nxt = later_bounces(bounce, shows, meshes) if found else []
