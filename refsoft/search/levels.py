@@ -15,6 +15,10 @@ triangles whose virtual triangles, from the level's search, cover it (dilated), 
 drawn (:func:`refsoft.search.acceptance.draw`'s rule). Under the paper preset the reflectors'
 virtual triangles are rasterized with the scene's (:func:`refsoft.search.bounces.seen_reflectors`)
 and a later level drawn by the virtual pass.
+
+A reflector that can see itself (not convex, drawn by every image under the accurate preset) is
+its own level 2 where its pixels' rays meet it again (:func:`deepen_images`), and a later level
+on such a reflector is drawn by its pixels' rays (:func:`draw_bounce`, ``_rays_level``).
 """
 
 from __future__ import annotations
