@@ -26,10 +26,11 @@ def pack_eyes(lo, hi, P, N, mask, E, fp, G):
 
 
 @kernel
-def search_each(lo, hi, G, mask, V, starts, n_candidates, cap, fp, pixel, score, margin, iterations, flags):
-    """Vertices ``lo .. hi - 1``: the walk of spec section 4.2 (``_kernels.search_one``, no
-    inverse search) in the packed G-buffer ``G`` from ``starts[i]`` (covered), each vertex's
-    results written to its own rows."""
+def search_each(lo, hi, G, mask, V, starts, n_candidates, cap, inverse, fp, pixel, score, margin, iterations, flags):
+    """Vertices ``lo .. hi - 1``: the walk of spec section 4.2 (``_kernels.search_one``; with
+    ``inverse``, spec section 4.6's inverse search for a hidden vertex, from the pixel the walk
+    ended on, its score with each pixel's own eye, the ``U`` packed in ``G``) in the packed
+    G-buffer ``G`` from ``starts[i]`` (covered), each vertex's results written to its own rows."""
     scratch = np.empty((2, 9), dtype=G.dtype)
     seen = np.zeros((2, 9), dtype=np.bool_)
     record = np.empty((0, RECORD_WIDTH), dtype=np.float64)  # nothing recorded
@@ -37,8 +38,8 @@ def search_each(lo, hi, G, mask, V, starts, n_candidates, cap, fp, pixel, score,
     for i in range(lo, hi):
         for k in range(3):
             v[k] = V[i, k]
-        r, c, s, m, it, fl, _ = search_one(G, mask, v, starts[i, 0], starts[i, 1], n_candidates, cap, False, fp, record,
-                                           scratch, seen)
+        r, c, s, m, it, fl, _ = search_one(G, mask, v, starts[i, 0], starts[i, 1], n_candidates, cap, inverse, fp,
+                                           record, scratch, seen)
         pixel[i, 0] = r
         pixel[i, 1] = c
         score[i] = s
@@ -113,3 +114,4 @@ def best_starts(lo, hi, S, V, X, has, out):
         if has[i] and top == top and _score(X, i, V, i) > top:
             best = S.shape[0]
         out[i] = best
+

@@ -12,8 +12,10 @@ finds the reflectors seen in a level by rasterizing their virtual triangles
 Each vertex starts from its reflection pixel at the previous frame's bounce of the same path
 where that pixel is still in the stencil (coherence), else from the covered pixel, among
 :data:`~refsoft.constants.BOUNCE_START_SAMPLES` spread over the stencil, where its score is
-highest. What a later level does not do: the inverse search (a hidden vertex's triangles are
-left out, as ``inverse = "discard"`` does, or, drawn by exact acceptance, tried everywhere).
+highest. A hidden vertex is searched again with spec section 4.6's inverse score where the
+options ask for it (``inverse = "search"``); otherwise its triangles are left out, as ``inverse =
+"discard"`` does, or, drawn by exact acceptance, tried everywhere (``plane``, the paper preset's
+rule, is not applied at a later level).
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ import numpy as np
 
 from .. import constants
 from .._numba import readonly
+from ..errors import RefsoftError
 from .._parallel import parallel_range
 from ..raster import CULL_MODES, GBuffer, _setup, rasterize_trusted
 from ..raster._threads import SERIAL_MAX_VERTICES
@@ -110,7 +113,7 @@ def gbuffer_of(bounce: Bounce, camera, precision="float32") -> GBuffer:
 
 
 def search_bounce(bounce: Bounce, gb: GBuffer, vertices, neighbourhood="cross", cap=None,
-                  previous=None) -> SearchResult:
+                  previous=None, inverse="discard") -> SearchResult:
     """The walk of spec section 4.2 for every vertex on a bounce's G-buffer, each pixel's eye
     its own (:class:`Bounce`).
 
@@ -129,6 +132,12 @@ def search_bounce(bounce: Bounce, gb: GBuffer, vertices, neighbourhood="cross", 
         the same path, or -1: coherence. A vertex starts there when the pixel is in this
         bounce's stencil and its score there is higher than at the best sample (:func:`_starts`),
         else from the best sample (flag RESTARTED when the pixel is off the stencil).
+    inverse : {"discard", "search"}
+        A hidden vertex (behind the end pixel's tangent plane): its walk's end kept
+        (``discard``; its triangles are left out or tried everywhere by the drawing), or spec
+        section 4.6's inverse search from there (``search``), its score with each pixel's own
+        eye; ``iterations`` counts both walks. The unfolded rule (:func:`unfolded`) then places
+        the vertex's virtual vertex on the camera's ray through the pixel found.
 
     Returns
     -------
@@ -138,6 +147,8 @@ def search_bounce(bounce: Bounce, gb: GBuffer, vertices, neighbourhood="cross", 
     """
     from . import default_cap
 
+    if inverse not in ("discard", "search"):
+        raise RefsoftError(f"inverse at a later bounce must be 'discard' or 'search', got {inverse!r}")
     dt = gb.position.dtype.type
     fp = dt(0)
     verts = np.asarray(vertices, np.float64).reshape(-1, 3)
@@ -148,18 +159,27 @@ def search_bounce(bounce: Bounce, gb: GBuffer, vertices, neighbourhood="cross", 
     score, margin = np.zeros(n, dt), np.zeros(n, dt)
     iterations, flags = np.zeros(n, np.int32), np.full(n, CULLED, np.uint8)
     if not n or not gb.mask.any():
-        return SearchResult(pixel, score, margin, iterations, flags, neighbourhood, "discard", cap)
-    G = np.zeros((h, w, 9), dtype=dt)
-    eye_rel = np.ascontiguousarray((bounce.eye - gb.origin).astype(dt))
-    parallel_range(_bounces.pack_eyes, h, gb.position, gb.normal, gb.mask, eye_rel, fp, G)
+        return SearchResult(pixel, score, margin, iterations, flags, neighbourhood, inverse, cap)
+    G = packed(bounce, gb)
     rel = np.ascontiguousarray((verts - gb.origin).astype(dt))
     own, restarted = own_starts(bounce, previous, n)
     starts = _starts(G, gb.mask, rel, own)
     flags[:] = 0
-    parallel_range(_bounces.search_each, n, G, gb.mask, rel, starts, constants.NEIGHBOURHOODS[neighbourhood], cap, fp,
-                   pixel, score, margin, iterations, flags)
+    parallel_range(_bounces.search_each, n, G, gb.mask, rel, starts, constants.NEIGHBOURHOODS[neighbourhood], cap,
+                   inverse == "search", fp, pixel, score, margin, iterations, flags)
     flags[restarted] |= np.uint8(RESTARTED)
-    return SearchResult(pixel, score, margin, iterations, flags, neighbourhood, "discard", cap)
+    return SearchResult(pixel, score, margin, iterations, flags, neighbourhood, inverse, cap)
+
+
+def packed(bounce: Bounce, gb: GBuffer) -> np.ndarray:
+    """The bounce's G-buffer packed for the walk, (h, w, 9) in its precision: P, N and the unit
+    direction to each pixel's own eye (kernel :func:`refsoft.search._bounces.pack_eyes`)."""
+    dt = gb.position.dtype.type
+    h, w = gb.mask.shape
+    G = np.zeros((h, w, 9), dtype=dt)
+    eye_rel = np.ascontiguousarray((bounce.eye - gb.origin).astype(dt))
+    parallel_range(_bounces.pack_eyes, h, gb.position, gb.normal, gb.mask, eye_rel, dt(0), G)
+    return G
 
 
 def own_starts(bounce: Bounce, previous, n):

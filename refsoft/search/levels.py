@@ -15,6 +15,10 @@ triangles whose virtual triangles, from the level's search, cover it (dilated), 
 drawn (:func:`refsoft.search.acceptance.draw`'s rule). Under the paper preset the reflectors'
 virtual triangles are rasterized with the scene's (:func:`refsoft.search.bounces.seen_reflectors`)
 and a later level drawn by the virtual pass.
+
+A reflector that can see itself (not convex, drawn by every image under the accurate preset) is
+its own level 2 where its pixels' rays meet it again (:func:`deepen_images`), and a later level
+on such a reflector is drawn by its pixels' rays (:func:`draw_bounce`, ``_rays_level``).
 """
 
 from __future__ import annotations
@@ -25,7 +29,7 @@ import numpy as np
 
 from .. import keys
 from ..raster import shade
-from . import CULLED, meet
+from . import CULLED, meet, search
 from .bounces import (Bounce, bounding_sphere, first_bounces, gbuffer_of, later_bounces, level_rays, make_bounce,
                       object_parts, reaches, search_bounce, seen_reflectors, texel_reach, unfolded)
 from .virtual import virtual_pass
@@ -166,12 +170,19 @@ class LaterStarts:
         self.now[(tuple(path), group)] = pixels
 
 
+def _inverse(opt):
+    """A later level's hidden-vertex rule: the inverse search where the options ask for it, else
+    ``discard`` (``plane``, the paper preset's, is the first level's alone)."""
+    return "search" if opt.inverse == "search" else "discard"
+
+
 def _search(bounce, gb, verts, want, opt, starts, path, group):
     """:func:`refsoft.search.bounces.search_bounce` of the ``want`` (n,) bool vertices of
     ``verts`` (n, 3), from their previous pixels when ``starts`` (:class:`LaterStarts`) has them;
     their results kept there."""
     prev = None if starts is None else starts.previous(path, group, len(verts))
-    res = search_bounce(bounce, gb, verts[want], opt.neighbourhood, opt.cap, None if prev is None else prev[want])
+    res = search_bounce(bounce, gb, verts[want], opt.neighbourhood, opt.cap, None if prev is None else prev[want],
+                        _inverse(opt))
     if starts is not None:
         starts.keep(path, group, bounce, want, res)
     return res
@@ -217,6 +228,17 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report, pa
     else:
         texels = texel_reach(bounce.position, bounce.normal, bounce.eye, bounce.mask)
         reach = (lambda k: reaches(texels, *bounding_sphere(meshes[k - 1])))
+    depth = np.where(bounce.mask, np.int8(bounce.level), np.int8(0)).astype(np.int8)
+    if opt.images == "all" and meet.sees_itself(scene, bounce.reflector):  # not convex: by the rays
+        entry = {"level": bounce.level, "reflector": bounce.reflector, "pixels": int(bounce.mask.sum()),
+                 "searched": 0}
+        report.append(entry)
+        colour, rid, covered, nxt = _rays_level(scene, meshes, bounce, camera, rays, reach, opt, entry)
+        for b in nxt:
+            blend(colour, rid, covered, depth, bounce.box, b,
+                  draw_bounce(scene, meshes, b, camera, vertices, opt, report, path, keep, starts), scene)
+        entry["ms"] = 1000 * (time.perf_counter() - t0)
+        return colour, rid, covered, depth
     # only the objects a reflected ray of this level can reach are searched; the others' vertices
     # are CULLED (their triangles are not drawn)
     seen = np.repeat([reach(k) for k in ids], [meshes[k - 1].n_vertices for k in ids]).astype(bool)
@@ -226,7 +248,6 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report, pa
     flags = np.full(len(vertices), CULLED, np.uint8)
     res = _search(bounce, gb, vertices, seen, opt, starts, path, 0)
     virtual[seen], flags[seen] = unfolded(bounce, res, vertices[seen]), res.flags
-    depth = np.where(bounce.mask, np.int8(bounce.level), np.int8(0)).astype(np.int8)
     entry = {"level": bounce.level, "reflector": bounce.reflector, "pixels": int(bounce.mask.sum()),
              "searched": int(seen.sum()), "iterations": int(res.iterations.sum())}
     report.append(entry)
@@ -252,7 +273,7 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report, pa
     else:
         parts = object_parts(meshes, ids, virtual, flags)
         stencil = bounce.stencil()
-        colour, rid, covered, _ = virtual_pass(scene, parts, camera, stencil, bounce.box, "discard")
+        colour, rid, covered, _ = virtual_pass(scene, parts, camera, stencil, bounce.box, _inverse(opt))
         rparts = sum((object_parts(meshes, k, v, fl) for k, _, v, fl in found), [])
         shows = seen_reflectors(parts, rparts, camera, stencil, bounce.box) if found else {}
         nxt = later_bounces(bounce, shows, meshes) if found else []
@@ -261,6 +282,79 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report, pa
               draw_bounce(scene, meshes, b, camera, vertices, opt, report, path, keep, starts), scene)
     entry["ms"] = 1000 * (time.perf_counter() - t0)
     return colour, rid, covered, depth
+
+
+def _combined(meshes, ids):
+    """Objects ``ids`` as one mesh: vertices (n, 3) float64, normals (n, 3), faces (m, 3) int64
+    into those vertices, each face's object (m,) int32."""
+    verts, normals, faces, obj, start = [], [], [], [], 0
+    for k in ids:
+        mesh = meshes[k - 1]
+        verts.append(np.asarray(mesh.vertices, np.float64))
+        normals.append(np.asarray(mesh.normals, np.float64))
+        faces.append(np.asarray(mesh.faces, np.int64) + start)
+        obj.append(np.full(mesh.n_faces, k, np.int32))
+        start += mesh.n_vertices
+    if not ids:
+        return np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3), np.int64), np.zeros(0, np.int32)
+    return np.concatenate(verts), np.concatenate(normals), np.concatenate(faces), np.concatenate(obj)
+
+
+def _rays_level(scene, meshes, bounce, camera, rays, reach, opt, entry):
+    """A later level on a reflector that sees itself (:func:`draw_bounce`'s part), drawn by its
+    pixels' rays alone: each triangle of the objects a ray of the level can reach that one of
+    the rays comes near (:func:`refsoft.search.several.near_rays`) is met by those rays, the
+    scene's from the pixel's bounce point, the reflectors' (the next level's, this one too) from a
+    point moved along the ray (:func:`refsoft.search.meet.nearest_split`). No vertex is searched
+    at such a level: with one eye per pixel there is no enumeration of every image (that of
+    :func:`refsoft.search.images.find_images` takes one eye), and a walk from a pixel of a stencil
+    seen in a curved mirror ends at the stencil's rim or at a maximum that is no reflection point
+    as often as at an image, so candidates placed by walks miss triangles (``docs/bounces.md``).
+
+    Returns
+    -------
+    colour (h, w, 3) float32, reflected_id (h, w) int32, covered (h, w) bool
+        Over ``bounce.box``.
+    list of Bounce
+        The next level's.
+
+    ``entry`` (the level's report) receives the candidates.
+    """
+    from .several import near_rays
+
+    valid, origin, direction = rays
+    offset = meet.self_offset(meshes[bounce.reflector - 1])
+    moved, _ = meet.moved(rays, offset)
+
+    def group(ids, ray_list):
+        verts, normals, faces, fobj = _combined(meshes, ids)
+        return near_rays(verts, normals, faces, fobj, ray_list)
+
+    ids = [k for k, o in enumerate(scene.objects, start=1) if not o.reflector and reach(k)]
+    others = [] if bounce.level >= opt.bounces else [k for k in scene.reflector_ids if reach(k)]
+    # the reflectors' candidates for the rays from their moved origins, as they are met
+    scene_cand = group(ids, (origin[valid], direction[valid]))
+    ref = group(others, (moved[1][valid], direction[valid]))
+    src, best_c, best_t, best_uv = meet.nearest_split(scene_cand, ref, camera, bounce.box, rays, offset)
+    entry["candidates"] = int(len(scene_cand.object_id) + len(ref.object_id))
+    h, w = bounce.mask.shape
+    colour, rid = np.zeros((h, w, 3), np.float32), np.zeros((h, w), np.int32)
+    shown = src == 1
+    if shown.any():
+        c = best_c[shown]
+        u, v = best_uv[..., 0][shown], best_uv[..., 1][shown]
+        nrm = scene_cand.normals[c]
+        n = (1.0 - u - v)[:, None] * nrm[:, 0] + u[:, None] * nrm[:, 1] + v[:, None] * nrm[:, 2]
+        length = np.linalg.norm(n, axis=1, keepdims=True)
+        n = np.divide(n, length, out=np.zeros_like(n), where=length > 0)
+        colors = np.vstack([np.zeros(3), [o.color for o in scene.objects]]).astype(np.float32)
+        obj = scene_cand.object_id[c]
+        colour[shown] = shade(n, colors[obj])
+        rid[shown] = obj
+    seen = _seen(ref, src == 2, best_c, best_t, best_uv, rays)
+    nxt = exact_bounces(bounce.level + 1, seen, rays, bounce.path, bounce.direction, bounce.origin, bounce.box,
+                        bounce.shape)
+    return colour, rid, shown, nxt
 
 
 def blend(colour, rid, covered, depth, box, bounce: Bounce, deeper, scene):
@@ -349,11 +443,114 @@ def deepen(scene, view, k, stencil, box, out, refl, parts, opt, search_first, ke
         rparts = sum((object_parts(view.meshes, b, v, fl) for b, _, v, fl in found), [])
         bounces = first_bounces(camera, view.meshes, k, view.view.triangle,
                                 seen_reflectors(parts, rparts, camera, stencil, box), box)
+    _later(scene, view, k, stencil, box, out, bounces, depth, opt, report, keep, starts)
+    return report
+
+
+def _later(scene, view, k, stencil, box, out, bounces, depth, opt, report, keep, starts):
+    """Draw the level-2 ``bounces`` of reflector ``k`` and every level inside them, composited into
+    ``out`` (over ``box``) in place, with the per-pixel ``depth``."""
     colour, rid, covered = out.colour.copy(), out.reflected_id.copy(), out.covered.copy()
     for bounce in bounces:
         blend(colour, rid, covered, depth, box, bounce,
-              draw_bounce(scene, view.meshes, bounce, camera, view.vertices, opt, report, (k,), keep, starts), scene)
+              draw_bounce(scene, view.meshes, bounce, view.camera, view.vertices, opt, report, (k,), keep, starts),
+              scene)
     out.colour, out.reflected_id, out.covered = colour, rid, covered
     out.pixels = {**out.pixels, BOUNCE_DEPTH: depth}
+    r0, r1, c0, c1 = box
     out.pixel_mask = stencil[r0:r1, c0:c1].copy()
+
+
+def deepen_images(scene, view, k, stencil, box, out, drawn, opt, keep=None, starts=None):
+    """:func:`deepen` for a reflector ``k`` whose every image was drawn (a mirror that is not
+    convex, :func:`refsoft.search.several.several_pass`): the reflectors seen in its image, ``k``
+    itself among them when it can see itself (:func:`refsoft.search.meet.sees_itself`).
+
+    Each such reflector's vertices are searched on ``k``'s G-buffer as the scene's are: every
+    image (:func:`refsoft.search.images.find_images`) and their candidate virtual triangles
+    (:func:`refsoft.search.several.candidates`: sheets, cuts, the rays' pruning); each pixel's
+    reflected ray is met with them from an origin moved along it (the truth's rule for a mirror
+    that sees itself, :func:`refsoft.search.meet.self_offset`) and with the scene's candidates of
+    the drawing (``drawn``: ``candidates``, ``rays``, ``source``) from its own; where a
+    reflector's triangle is the nearer, the pixel is that reflector's level 2.
+
+    Returns
+    -------
+    list of dict
+        As :func:`deepen`'s.
+    """
+    from .images import find_images
+    from .several import candidates
+
+    first = {"level": 1, "reflector": int(k), "pixels": int(stencil.sum()), "searched": 0}
+    if starts is not None:
+        starts.begin(view.frame)
+    report = [first]
+    r0, r1, c0, c1 = box
+    camera, meshes = view.camera, view.meshes
+    eye = np.asarray(camera.eye, np.float64)
+    depth = np.where(stencil[r0:r1, c0:c1], np.int8(1), np.int8(0)).astype(np.int8)
+    rays = drawn["rays"]
+    valid, origin, direction = rays
+    gb, gb_eye, find = drawn["source"]
+    others = [b for b in scene.reflector_ids if b != k]
+    hit = meet.hits(meet.valid_rays(rays), [bounding_sphere(meshes[b - 1]) for b in others])
+    near = ([k] if meet.sees_itself(scene, k) else []) + [b for b, h in zip(others, hit) if h.any()]
+    bounces = []
+    if near:
+        t0 = time.perf_counter()
+        offset = meet.self_offset(meshes[k - 1]) if k in near else 0.0
+        # the rays as they meet the reflectors: from their moved origins (the triangle a ray leaves is
+        # then behind it, and no part of it is made)
+        moved, _ = meet.moved(rays, offset)
+        ray_list = (moved[1][valid], direction[valid])
+        parts = []
+        for b in near:
+            mesh = meshes[b - 1]
+            verts = np.asarray(mesh.vertices, np.float64)
+            walk = search(gb, gb_eye, verts, opt.neighbourhood, opt.inverse, None, opt.cap)
+            found = find_images(gb, gb_eye, verts, walk)
+            cand, _ = candidates(gb, gb_eye, verts, mesh.normals, mesh.faces, np.full(mesh.n_faces, b, np.int32),
+                                 found, find, opt.neighbourhood, opt.cap, rays=ray_list)
+            parts.append(cand)
+            first["searched"] += len(verts)
+        ref = parts[0]
+        for c in parts[1:]:
+            ref = meet.joined(ref, c)
+        src, best_c, best_t, best_uv = meet.nearest_split(drawn["candidates"], ref, camera, box, rays, offset)
+        first["candidates"] = int(len(ref.object_id))
+        first["ms"] = 1000 * (time.perf_counter() - t0)
+        seen = _seen(ref, src == 2, best_c, best_t, best_uv, rays)
+        to = np.where(valid[..., None], origin - eye, 0.0)
+        path = np.linalg.norm(to, axis=-1)
+        cam_dir = to / np.maximum(path, 1e-300)[..., None]
+        bounces = exact_bounces(2, seen, rays, path, cam_dir, eye, box, stencil.shape)
+    _later(scene, view, k, stencil, box, out, bounces, depth, opt, report, keep, starts)
     return report
+
+
+def _seen(cand, shows, best_c, best_t, best_uv, rays):
+    """:func:`exact_level`'s ``reflectors`` from the pixels ``shows`` (h, w) bool where a
+    candidate of ``cand`` (all reflectors') is the nearest hit: its index ``best_c``, parameter
+    ``best_t`` from the ray's origin and barycentrics ``best_uv``."""
+    _, origin, direction = rays
+    h, w = shows.shape
+    c = best_c[shows]
+    u, v = best_uv[..., 0][shows], best_uv[..., 1][shows]
+    nrm = cand.normals[c]
+    n = (1.0 - u - v)[:, None] * nrm[:, 0] + u[:, None] * nrm[:, 1] + v[:, None] * nrm[:, 2]
+    length = np.linalg.norm(n, axis=1, keepdims=True)
+    n = np.divide(n, length, out=np.zeros_like(n), where=length > 0)
+    obj = np.zeros((h, w), np.int32)
+    obj[shows] = cand.object_id[c]
+    normal = np.zeros((h, w, 3))
+    normal[shows] = n
+    out = {}
+    for k in (int(x) for x in np.unique(obj[shows])):
+        m = shows & (obj == k)
+        point, nr, dist = np.zeros((h, w, 3)), np.zeros((h, w, 3)), np.zeros((h, w))
+        point[m] = origin[m] + best_t[m][:, None] * direction[m]
+        nr[m] = normal[m]
+        dist[m] = best_t[m] * np.linalg.norm(direction[m], axis=1)
+        out[k] = (m, point, nr, dist)
+    return out

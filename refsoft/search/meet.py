@@ -18,7 +18,7 @@ import numpy as np
 from .._parallel import parallel_range
 from ..raster._threads import SERIAL_MAX_VERTICES
 from . import CULLED, HIDDEN, _bounces, acceptance
-from ._several import accept
+from ._several import accept, accept_near
 from .bounces import bounding_sphere
 
 
@@ -278,9 +278,48 @@ def reached(meshes, group, rays):
 
 
 def joined(a, b):
-    """Two sets of candidates as one, ``a``'s first."""
-    return replace(a, **{name: np.concatenate([getattr(a, name), getattr(b, name)])
-                         for name in ("virtual", "real", "normals", "object_id", "triangle")})
+    """Two sets of candidates as one, ``a``'s first; their ray lists (made for the same rays) one
+    after the other, a set without lists tested at every pixel it covers (``first`` -1)."""
+    rays = None
+    if a.rays is not None or b.rays is not None:
+        parts, size = [], 0
+        for c in (a, b):
+            n = len(c.object_id)
+            if c.rays is None:
+                first, last, ray = np.full(n, -1, np.int64), np.full(n, -1, np.int64), np.zeros(0, np.int64)
+            else:
+                first, last, ray = (np.asarray(x, np.int64) for x in c.rays)
+            shift = np.where(first >= 0, size, 0)  # -1 stays: no list
+            parts.append((first + shift, last + shift, ray))
+            size += len(ray)
+        rays = tuple(np.concatenate([p[i] for p in parts]) for i in range(3))
+    return replace(a, rays=rays, **{name: np.concatenate([getattr(a, name), getattr(b, name)])
+                                    for name in ("virtual", "real", "normals", "object_id", "triangle")})
+
+
+def nearest_near(cand, camera, box, rays):
+    """:func:`nearest_hits` of candidates with ray lists (:class:`refsoft.search.acceptance.Candidates`'
+    ``rays``, made for the valid rays of ``rays`` in row-major order): each candidate is met only
+    by the rays of its list (kernel ``accept_near``, as :func:`refsoft.search.acceptance.draw`
+    does; the others miss its triangle), so the answer is :func:`nearest_hits`'."""
+    if cand.rays is None:
+        return nearest_hits(cand, camera, box, rays)
+    r0, r1, c0, c1 = (int(x) for x in box)
+    h, w = r1 - r0, c1 - c0
+    valid, origin, direction = (np.ascontiguousarray(a) for a in rays)
+    best_t = np.full((h, w), np.inf)
+    best_c = np.full((h, w), -1, np.int64)
+    best_uv = np.zeros((h, w, 2))
+    if len(cand.real) and valid.any():
+        screen, bbox, dilate, _ = _bounds(cand, camera, (r0, r1, c0, c1))
+        real = np.ascontiguousarray(cand.real)
+        rows, cols = np.nonzero(valid)
+        first, last, ray = (np.ascontiguousarray(a, np.int64) for a in cand.rays)
+        parallel_range(accept_near, h, r0, c0, valid, acceptance._spans(valid), origin, direction, rows, cols,
+                       np.ascontiguousarray(origin[valid]), np.ascontiguousarray(direction[valid]), screen, bbox,
+                       dilate, real, acceptance._runs(real), first, last, ray, best_t, best_c, best_uv,
+                       np.zeros((h, w), bool), np.full((h, w), -1, np.int64))
+    return best_c, best_t, best_uv
 
 
 def nearest_hits(cand, camera, box, rays):
@@ -300,3 +339,49 @@ def nearest_hits(cand, camera, box, rays):
                        dilate, real, acceptance._runs(real), best_t, best_c, best_uv, np.zeros((h, w), bool),
                        np.full((h, w), -1, np.int64))
     return best_c, best_t, best_uv
+
+
+# --- a reflector that sees itself -------------------------------------------------------------
+def sees_itself(scene, k):
+    """Whether reflector ``k`` can reflect a ray onto itself: not a convex closed body nor a plane
+    (:func:`refsoft.search.convex.several_possible` of its drawn mesh, the truth's rule)."""
+    from .convex import several_possible
+
+    return several_possible(scene.objects[k - 1].mesh)
+
+
+def self_offset(mesh):
+    """How far along its ray a ray leaving a reflector that sees itself starts when it is met with
+    the reflectors: ``TRUTH_SELF_OFFSET`` times the mesh's bounding-box diagonal, as the truth
+    traces it (:mod:`refsoft.truth.paths`): the ray's own triangle is not met again at ``t ~ 0``."""
+    from .. import constants
+
+    v = np.asarray(mesh.vertices, np.float64)
+    return constants.TRUTH_SELF_OFFSET * float(np.linalg.norm(v.max(axis=0) - v.min(axis=0)))
+
+
+def moved(rays, offset):
+    """``rays`` (valid, origin, direction) with each valid origin moved ``offset`` along its unit
+    direction, and each ray's ``offset`` as a parameter of its own direction (h, w) (0 where not
+    valid): the parameter from the true origin is the moved one's plus it."""
+    valid, origin, direction = rays
+    length = np.linalg.norm(direction, axis=-1)
+    shift = np.where(valid, offset / np.maximum(length, 1e-300), 0.0)
+    return (valid, np.ascontiguousarray(origin + shift[..., None] * direction), direction), shift
+
+
+def nearest_split(scene_cand, ref_cand, camera, box, rays, offset):
+    """:func:`nearest_hits` of ``scene_cand`` from the rays' own origins and of ``ref_cand`` (the
+    reflectors') from origins moved ``offset`` along them (:func:`moved`), the nearer kept (the
+    scene's at a tie, as the truth keeps it): ``(source (h, w) int8: 0 none, 1 scene, 2
+    reflectors; candidate (h, w) int64 into its set; t (h, w) from the true origin; u, v (h, w,
+    2))``."""
+    shifted, shift = moved(rays, offset)
+    rc, rt, ruv = nearest_near(ref_cand, camera, box, shifted)
+    meets = rc >= 0
+    sc, st, suv = nearest_near(scene_cand, camera, box, rays)
+    rt = rt + shift
+    ref = meets & ~(st <= rt)
+    src = np.where(ref, np.int8(2), np.where(sc >= 0, np.int8(1), np.int8(0))).astype(np.int8)
+    return src, np.where(ref, rc, sc), np.where(ref, rt, st), np.where(ref[..., None], ruv, suv)
+

@@ -190,6 +190,13 @@ class VertexSearch:
                                                   lambda v: self._first_level(refl.gbuffer, view.camera.eye, v),
                                                   self.kept_bounces, self.later_starts if opt.coherence else None)
                 times["bounces"] = 1000 * (time.perf_counter() - t)
+            elif opt.bounces > 1:  # every image drawn: the reflectors seen in them, this one too if it can
+                t = time.perf_counter()
+                if self._kept_frame != view.frame:
+                    self.kept_bounces, self._kept_frame = {}, view.frame
+                report["bounces"] = levels.deepen_images(self.scene, view, k, stencil, box, out, self._drawn, opt,
+                                                         self.kept_bounces, self.later_starts if opt.coherence else None)
+                times["bounces"] = 1000 * (time.perf_counter() - t)
         out.arrays = {**gbuffer_outputs(refl.gbuffer, k), **vertex_outputs(refl, view.vertex_object, k)}
         return out
 
@@ -215,7 +222,9 @@ class VertexSearch:
         if source is None:
             return None
         self._reflected = reflected_mesh(self.scene, view.meshes, self._reflected)
-        return several.several_pass(self.scene, view, k, stencil, box, self._reflected[1], self.options, *source)
+        self._drawn = {}  # what a later bounce needs of the drawing (levels.deepen_images)
+        return several.several_pass(self.scene, view, k, stencil, box, self._reflected[1], self.options, *source,
+                                    keep=self._drawn)
 
     def frame_report(self, results) -> dict:
         """``stats.json``'s per-frame ``iterations`` (mean and max per reflector, CULLED vertices

@@ -83,7 +83,7 @@ def _walks(gb, eye, verts, start, count, pixel, edges, neighbourhood, cap):
     if len(rep) == 0:
         return np.zeros((0, 2), np.int64)
     target = b[rep]
-    res = search(gb, eye, verts[target], neighbourhood, "plane", pixel[i], cap)
+    res = _walk(gb, eye, verts[target], pixel[i], neighbourhood, cap)
     # each walk's end against every image of its target: the nearest (Chebyshev, the first of
     # equals) within SEVERAL_LINK_TEXELS
     j = np.empty(len(i), np.int64)
@@ -91,6 +91,14 @@ def _walks(gb, eye, verts, start, count, pixel, edges, neighbourhood, cap):
                    start, count, pixel, int(constants.SEVERAL_LINK_TEXELS), j)
     keep = j >= 0
     return np.stack([i[keep], j[keep]], axis=1).astype(np.int64).reshape(-1, 2)
+
+
+def _walk(gb, eye, verts, starts, neighbourhood, cap):
+    """The walks of ``verts`` from ``starts`` (M, 2): spec section 4.2's from the eye (3,), or a
+    later level's with each pixel's own (``eye`` a :class:`refsoft.search.bounces.LevelEyes`)."""
+    if hasattr(eye, "walk"):
+        return eye.walk(verts, starts)
+    return search(gb, eye, verts, neighbourhood, "plane", starts, cap)
 
 
 def sheets(images: Images, pairs) -> Images:
@@ -127,7 +135,10 @@ def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, n
     Parameters
     ----------
     gb : GBuffer
-    eye : (3,) float64
+    eye : (3,) float64, or LevelEyes
+        The eye; at a later bounce (spec section 5.1) its
+        :class:`refsoft.search.bounces.LevelEyes` (its walks with each pixel's own eye, and the
+        view points of its pixels).
     verts, normals : (N, 3) float64
         The reflected vertices and their unit normals.
     faces : (F, 3) int64
@@ -210,6 +221,33 @@ def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, n
         cand = replace(cand, rays=(np.concatenate([r[0] for r in out_r]), np.concatenate([r[1] for r in out_r]),
                                    reach.ray()))
     return cand, with_sheets
+
+
+def near_rays(verts, normals, faces, face_obj, rays):
+    """One candidate per triangle a ray comes near (``_Reach``, the pruning of :func:`candidates`),
+    with those rays and no projection (its virtual corners NaN): the acceptance meets it with each
+    ray of its list, wherever the pixel, so the drawing is the ray cast's up to the pruning's
+    margin. A later bounce on a reflector that sees itself (spec section 5.1) is drawn so.
+
+    Parameters
+    ----------
+    verts, normals : (N, 3) float64
+    faces : (F, 3) int64
+    face_obj : (F,) int32
+    rays : tuple of two (R, 3) float64
+        Origins and directions of the rays the candidates are met with.
+
+    Returns
+    -------
+    Candidates
+    """
+    faces = np.asarray(faces, np.int64).reshape(-1, 3)
+    reach = _Reach(*rays)
+    first, last = reach.test_every(np.asarray(verts, np.float64)[faces]) if len(faces) else reach.every(0)
+    src = np.flatnonzero(last > first)
+    return Candidates(np.full((len(src), 3, 3), np.nan), np.asarray(verts, np.float64)[faces[src]],
+                      np.asarray(normals, np.float64)[faces[src]], np.asarray(face_obj, np.int32)[src], src, 0,
+                      (first[src], last[src], reach.ray()))
 
 
 def _take(span, keep):
@@ -416,9 +454,12 @@ class _Pool:
         if len(starts):
             verts = np.concatenate(self.verts)
             pixel = np.concatenate(self.pixel)
-            res = search(gb, eye, verts[targets], neighbourhood, "plane", pixel[starts], cap)
-            world = np.asarray(gb.position, np.float64)[res.pixel[:, 0], res.pixel[:, 1]] + gb.origin
-            ok = np.asarray(gb.mask)[res.pixel[:, 0], res.pixel[:, 1]]
+            res = _walk(gb, eye, verts[targets], pixel[starts], neighbourhood, cap)
+            if hasattr(eye, "points"):  # a later level: the view points of the pixels
+                world, ok = eye.points(res.pixel)
+            else:
+                world = np.asarray(gb.position, np.float64)[res.pixel[:, 0], res.pixel[:, 1]] + gb.origin
+                ok = np.asarray(gb.mask)[res.pixel[:, 0], res.pixel[:, 1]]
             tg = targets[ok]
             if len(tg):
                 self.virtual.append(np.asarray(world[ok], np.float64))
@@ -528,7 +569,7 @@ def image_source(scene, view, k, refl, opt):
     return gb, eye, images, find
 
 
-def several_pass(scene, view, k, stencil, box, reflected, opt, gb, eye, images, find):
+def several_pass(scene, view, k, stencil, box, reflected, opt, gb, eye, images, find, keep=None):
     """The drawing of every image on reflector ``k`` (steps 1-3).
 
     Parameters
@@ -541,6 +582,9 @@ def several_pass(scene, view, k, stencil, box, reflected, opt, gb, eye, images, 
         Read: ``neighbourhood``, ``cap``.
     gb, eye, images, find
         From :func:`image_source`.
+    keep : dict, optional
+        Receives what a later bounce needs of this drawing (:func:`refsoft.search.levels.deepen_images`):
+        ``candidates`` (the scene's), ``rays`` (:func:`pixel_rays`), ``source`` ``(gb, eye, find)``.
 
     Returns
     -------
@@ -557,6 +601,8 @@ def several_pass(scene, view, k, stencil, box, reflected, opt, gb, eye, images, 
                                    rays=(origin[valid], direction[valid]))
     colors = np.vstack([np.zeros(3), [o.color for o in scene.objects]]).astype(np.float32)
     colour, rid, covered, counts = draw(cand, view.camera, mesh, triangle, stencil, box, colors, rays)
+    if keep is not None:
+        keep.update(candidates=cand, rays=rays, source=(gb, eye, find))
     report = {"images": int(len(images.pixel)), "candidates": int(len(cand.object_id)),
               "subdivided": int(cand.subdivided), **counts}
     return colour, rid, covered, {"several": report}, with_sheets

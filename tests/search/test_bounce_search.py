@@ -12,7 +12,7 @@ from refsoft.raster import gbuffer
 from refsoft.scene.camera import Camera
 from refsoft.scene.model import Scene, SceneObject, Transform
 from refsoft.scene.primitives import box, icosphere, plane_grid
-from refsoft.search import _bounces, _packed
+from refsoft.search import HIDDEN, _bounces, _packed, search
 from refsoft.search.bounces import gbuffer_of, make_bounce, search_bounce
 from refsoft.search.levels import BOUNCE_DEPTH
 from refsoft.truth.analytic import sphere_reflection_points
@@ -82,6 +82,50 @@ def test_the_search_finds_the_reflection_point_seen_from_each_pixels_eye(ball, e
         cam_exact = sphere_reflection_points([0, 0, 0], 1.0, cam.eye, verts[inner])
         cam_px = window_to_pixel(cam_exact, gb.view_proj, gb.mask.shape)
         assert np.median(np.linalg.norm(cam_px - px[inner], axis=1)) > 5
+
+
+def test_the_inverse_search_with_every_eye_the_cameras_is_the_ordinary_one(ball):
+    """``inverse = "search"`` at a later bounce (spec section 4.6 with each pixel's own eye): with
+    every eye the camera's, a hidden vertex whose walk ends where the ordinary walk does ends its
+    inverse search on the ordinary inverse search's pixel, with its score and flags, bit for bit;
+    a vertex that is not hidden is searched as without it."""
+    cam, gb, verts = ball
+    rng = np.random.default_rng(7)
+    d = rng.normal(size=(200, 3))
+    near = d / np.linalg.norm(d, axis=1, keepdims=True) * rng.uniform(1.05, 1.6, (200, 1))  # many hidden
+    verts = np.vstack([verts, near])
+    b = _bounce(cam, gb, cam.eye)
+    g = gbuffer_of(b, cam)
+    off = np.array([b.box[0], b.box[2]])
+    plain, inv = search_bounce(b, g, verts, "cross"), search_bounce(b, g, verts, "cross", inverse="search")
+    ref_plain, ref_inv = search(gb, cam.eye, verts, "cross", "plane"), search(gb, cam.eye, verts, "cross", "search")
+    same = np.all(plain.pixel + off == ref_plain.pixel, axis=1)
+    hidden = same & ((plain.flags & HIDDEN) != 0)
+    assert hidden.sum() >= 30 and inv.inverse == "search"
+    assert np.array_equal(inv.pixel[hidden] + off, ref_inv.pixel[hidden])
+    assert np.array_equal(inv.score[hidden], ref_inv.score[hidden])
+    assert np.array_equal(inv.flags[hidden], ref_inv.flags[hidden])
+    assert np.array_equal(inv.iterations[hidden] - plain.iterations[hidden],
+                          ref_inv.iterations[hidden] - ref_plain.iterations[hidden])
+    assert np.any(inv.pixel[hidden] != plain.pixel[hidden])  # the inverse search moved them
+    shown = (plain.flags & HIDDEN) == 0
+    for x, y in zip((inv.pixel, inv.score, inv.iterations, inv.flags), (plain.pixel, plain.score, plain.iterations,
+                                                                         plain.flags)):
+        assert np.array_equal(x[shown], y[shown])
+    with pytest.raises(RefsoftError, match="inverse"):
+        search_bounce(b, g, verts, "cross", inverse="plane")
+
+
+def test_a_later_level_runs_the_inverse_search_when_asked(renders):
+    """The two-ball scene with 2 bounces under the paper preset with ``inverse = "search"`` and
+    with ``discard``: the later levels' records count the inverse walks (more iterations), and
+    the second levels' stencils (found at the first level) are the same."""
+    sc = two_balls()
+    a = FrameDriver(sc, RenderOptions.from_preset("paper", bounces=2, inverse="discard")).render_frame(0)
+    b = FrameDriver(sc, RenderOptions.from_preset("paper", bounces=2, inverse="search")).render_frame(0)
+    it = (lambda f: sum(e.get("iterations", 0) for r in f.report["bounces"].values() for e in r if e["level"] > 1))
+    assert it(b) > it(a)
+    assert np.array_equal(a.arrays[BOUNCE_DEPTH] > 0, b.arrays[BOUNCE_DEPTH] > 0)
 
 
 def test_the_search_is_the_same_for_every_thread_count(ball):
