@@ -395,8 +395,8 @@ def trace_vertex_bounce(scene, vertex: int, through, frame: int = 0, coherence: 
     if len(path) < 2 or len(path) > 8:
         raise RefsoftError(f"through must name 2 to 8 reflectors (the first bounce's first), got {list(through)}")
     if any(a == b for a, b in zip(path, path[1:])):
-        raise RefsoftError(f"through names one reflector twice in a row ({list(path)}): a reflector seeing itself "
-                           "is not drawn at a later bounce")
+        raise RefsoftError(f"through names one reflector twice in a row ({list(path)}): a level on a reflector "
+                           "seeing itself is drawn by its pixels' rays, with no walk to replay")
     validate.integer(frame, "frame", 0, None if scene.animation is None else scene.n_frames - 1)
     opts = RenderOptions(coherence=coherence, bounces=len(path), **options)
     verts, owner = scene_vertices(scene, frame)
