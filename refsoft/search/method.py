@@ -24,7 +24,7 @@ from .exact import edges_pass, exact_pass
 from .images import facing_gbuffer, find_images
 from .reflect import Reflection, coherent_starts, gbuffer_camera
 from .refine import refine as refine_points
-from .virtual import reflected_mesh, refined_parts, virtual_parts, virtual_pass
+from .virtual import reflected_mesh, refined_parts, virtual_parts, virtual_pass, with_mirror_copies
 
 
 @dataclass
@@ -157,14 +157,18 @@ class VertexSearch:
                 parts = virtual_parts(self.scene, view.meshes, refl)
             else:
                 self._reflected = reflected_mesh(self.scene, view.meshes, self._reflected)
-                parts, counts, real = refined_parts(self.scene, view.meshes, refl, view.vertices, opt,
-                                                    view.camera.eye, self._reflected[1], with_real=True)
+                parts, counts, real, mirror = refined_parts(self.scene, view.meshes, refl, view.vertices, opt,
+                                                            view.camera.eye, self._reflected[1], with_real=True,
+                                                            with_mirror=True)
                 report.update(counts)
                 times["tessellate"] = 1000 * (time.perf_counter() - t)
                 t = time.perf_counter()
             if drawn is None and opt.draw == "exact":  # every stencil pixel's ray met exactly
+                # the triangles with a vertex whose image by the mirror rule is elsewhere once more,
+                # with that image (virtual.with_mirror_copies)
+                part, real = with_mirror_copies(parts[0], real, mirror, view.camera)
                 out.colour, out.reflected_id, out.covered, report["exact"] = exact_pass(
-                    self.scene, parts[0], real, view.camera, view.meshes[k - 1], view.view.triangle, stencil, box,
+                    self.scene, part, real, view.camera, view.meshes[k - 1], view.view.triangle, stencil, box,
                     opt.inverse)
             elif drawn is None and opt.draw == "edges":  # rasterized, then met exactly along the outlines
                 out.colour, out.reflected_id, out.covered, report["exact"] = edges_pass(

@@ -14,7 +14,7 @@ from .._numba import readonly
 from ..raster import CULL_MODES, _setup, rasterize_trusted, shade_fragments_trusted
 from ..raster._threads import SERIAL_MAX_TRIANGLES, serial_if_small
 from ..scene.mesh import concatenate
-from . import CULLED, HIDDEN, SearchResult, skips, virtual_vertices
+from . import BORDER, CULLED, HIDDEN, SearchResult, skips, virtual_vertices
 from .tessellate import tessellate
 
 
@@ -66,7 +66,7 @@ def reflected_mesh(scene, meshes, last=None):
     return sources, concatenate(sources, ids)
 
 
-def refined_parts(scene, meshes, refl, verts, opt, eye, reflected=None, with_real=False):
+def refined_parts(scene, meshes, refl, verts, opt, eye, reflected=None, with_real=False, with_mirror=False):
     """One part holding the reflected geometry after the options that add vertices: Szabo's
     adaptive tessellation (``opt.tessellate``, :func:`refsoft.search.tessellate.tessellate`),
     then the cut at the silhouette (``opt.silhouette == "clip"``,
@@ -81,6 +81,8 @@ def refined_parts(scene, meshes, refl, verts, opt, eye, reflected=None, with_rea
     real : (n, 3) float64
         With ``with_real``: the part's vertices in the scene (the real positions whose images
         its virtual vertices are).
+    mirror : ((b,) int64, (b, 3) float64)
+        With ``with_mirror`` (and ``with_real``): :func:`mirror_images` of the part's vertices.
     """
     from .silhouette import clip_at_silhouette
 
@@ -89,6 +91,7 @@ def refined_parts(scene, meshes, refl, verts, opt, eye, reflected=None, with_rea
     res, gb = refl.result, refl.gbuffer
     vertices, normals, faces, face_obj = verts, reflected.normals, reflected.faces, reflected.face_object
     pixel, flags, surface, virtual = res.pixel, res.flags, refl.surface, refl.virtual64
+    points = surface  # every vertex's sub-texel point (P, N), or None
     counts = {}
     if opt.tessellate is not None:
         t = tessellate(gb, eye, verts, normals, faces, face_obj, pixel, flags, opt.tessellate, opt.max_level,
@@ -98,6 +101,7 @@ def refined_parts(scene, meshes, refl, verts, opt, eye, reflected=None, with_rea
                                                         t.flags[len(verts):],
                                                         None if surface is None else t.surface, len(verts))])
         vertices, normals, faces, face_obj, pixel, flags = t.vertices, t.normals, t.faces, t.face_obj, t.pixel, t.flags
+        points = None if surface is None else t.surface
         counts["tessellation"] = {"vertices_searched": int(t.searched), "levels": int(t.levels),
                                   "triangles": int(len(t.faces))}
     if opt.silhouette == "clip":
@@ -111,12 +115,130 @@ def refined_parts(scene, meshes, refl, verts, opt, eye, reflected=None, with_rea
         virtual = np.concatenate([virtual, _new_virtual(refl, opt, eye, c.vertices, c.pixel, c.flags, new_surface, 0)])
         if with_real:  # the cut points' real positions (only the exact drawing reads them)
             vertices = np.concatenate([vertices, c.vertices])
+            pixel = np.concatenate([pixel, c.pixel])
+            points = None if points is None or new_surface is None else tuple(
+                np.concatenate([a[:len(pixel) - len(c.pixel)], b]) for a, b in zip(points[:2], new_surface[:2]))
         normals = np.concatenate([normals, c.normals])
         flags = np.concatenate([flags, c.flags])
         faces, face_obj = c.faces, c.face_obj
         counts["silhouette"] = {"edges_cut": int(c.cut), "vertices_searched": int(c.searched)}
     parts = [(virtual, normals, faces, face_obj, flags)]
-    return (parts, counts, np.asarray(vertices, np.float64)) if with_real else (parts, counts)
+    if not with_real:
+        return parts, counts
+    vertices = np.asarray(vertices, np.float64)
+    if with_mirror:
+        return parts, counts, vertices, mirror_images(refl, vertices, pixel, flags, points, eye)
+    return parts, counts, vertices
+
+
+def mirror_images(refl, vertices, pixel, flags, points, eye):
+    """The images by the ``mirror`` rule (across the tangent plane at the reflection point) of
+    the visible vertices (neither HIDDEN nor CULLED) whose search stopped on the outline (BORDER)
+    or that lie within :data:`refsoft.constants.EXACT_TWIN_GRAZING` (a sine) of the tangent plane
+    as seen from the reflection point.
+
+    Where the reflection point is exact, the ``unfold`` image is this one; where it is not (a
+    vertex reflected beyond the reflector's outline, whose search stopped on it, BORDER; a vertex
+    within a texel of the mirror, where the score hardly changes along a line of texels), the
+    ``unfold`` image moves along the eye's ray through the wrong point, this one stays near the
+    true image (on a plane mirror it is the true image).
+
+    Parameters
+    ----------
+    refl : Reflection
+        The reflector's G-buffer and search result.
+    vertices : (n, 3) float64
+        The part's real vertices.
+    pixel : (n, 2) int32
+    flags : (n,) uint8
+        Their search results.
+    points : (P (n, 3), N (n, 3)) or None
+        Their sub-texel reflection points (relative to the G-buffer's origin), or None: the
+        texels'.
+    eye : (3,)
+
+    Returns
+    -------
+    rows : (b,) int64
+        Those vertices, ascending.
+    images : (b, 3) float64
+        Their images, world space.
+    """
+    from ..constants import EXACT_TWIN_GRAZING
+
+    visible = flags & (HIDDEN | CULLED) == 0
+    if points is None:
+        at = (pixel[:, 0], pixel[:, 1])
+        p, nrm = refl.gbuffer.position[at], refl.gbuffer.normal[at]
+    else:
+        p, nrm = points[0], points[1]
+    d = np.asarray(vertices, np.float64) - refl.gbuffer.origin - p
+    # the vertices whose reflection point may be wrong: on the outline, or seen at a grazing angle
+    grazing = np.sum(d * nrm, axis=1) < EXACT_TWIN_GRAZING * np.sqrt(np.sum(d * d, axis=1))
+    rows = np.flatnonzero(visible & ((flags & BORDER != 0) | grazing))
+    if len(rows) == 0:
+        return rows, np.zeros((0, 3))
+    sub = None if points is None else tuple(np.asarray(a)[rows] for a in points[:2])
+    rel = virtual_vertices(refl.gbuffer, _result(refl.result, pixel[rows], flags[rows]), vertices[rows],
+                           relative=True, surface=sub, rule="mirror", eye=eye)
+    return rows, rel.astype(np.float64) + refl.gbuffer.origin
+
+
+def with_mirror_copies(part, real, mirror, camera):
+    """``part`` and ``real`` with a copy of every triangle that has a vertex whose
+    :func:`mirror_images` image lies more than :data:`refsoft.constants.EXACT_TWIN_PIXELS` view
+    pixels from its image in ``part``, right after it, with those vertices' mirror images: a
+    second candidate of the exact drawing over the same real triangle, which reaches the pixels
+    the first one's virtual image stops short of. Wherever both cover a pixel the copy changes
+    nothing (the same real triangle, tested once per pixel: :func:`refsoft.search.acceptance.draw`).
+
+    Parameters
+    ----------
+    part : tuple
+        ``(virtual (n, 3), normals (n, 3), faces (m, 3) int64, face_obj (m,) int32, flags (n,)
+        uint8)``.
+    real : (n, 3) float64
+    mirror : ((b,) int64, (b, 3) float64)
+        :func:`mirror_images` of the part's vertices.
+    camera : Camera
+        The view camera.
+
+    Returns
+    -------
+    part, real
+        The ``b'`` images that differ appended as vertices ``n .. n + b' - 1`` (the same real
+        position, normal and flags as the vertex they image) and the copies among the faces.
+    """
+    from ..constants import EXACT_TWIN_PIXELS
+
+    rows, images = mirror
+    virtual, normals, faces, face_obj, flags = part
+    if len(rows) == 0:
+        return part, real
+    vp = camera.view_proj()
+    a = _setup.transform_points(np.asarray(virtual, np.float64)[rows], vp)
+    b = _setup.transform_points(images, vp)
+    scale = 0.5 * np.array([camera.width, camera.height], np.float64)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        gap = np.abs(a[:, :2] / a[:, 3:] - b[:, :2] / b[:, 3:]) * scale
+    # a vertex at or behind the eye plane: a screen distance means nothing, no copy
+    far = (a[:, 3] > 0) & (b[:, 3] > 0) & np.any(gap > EXACT_TWIN_PIXELS, axis=1)
+    rows, images = rows[far], images[far]
+    if len(rows) == 0:
+        return part, real
+    n = len(virtual)
+    twin = np.arange(n, dtype=np.int64)
+    twin[rows] = n + np.arange(len(rows))
+    faces = np.asarray(faces, np.int64)
+    copied = np.any(twin[faces] >= n, axis=1)
+    order = np.repeat(np.arange(len(faces)), 1 + copied)
+    second = np.zeros(len(order), bool)
+    second[1:] = order[1:] == order[:-1]
+    new_faces = faces[order]
+    new_faces[second] = twin[new_faces[second]]
+    part = (np.concatenate([virtual, images]), np.concatenate([normals, normals[rows]]), new_faces,
+            np.asarray(face_obj)[order], np.concatenate([flags, flags[rows]]))
+    return part, np.concatenate([real, real[rows]])
 
 
 def _result(like, pixel, flags):
