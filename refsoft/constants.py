@@ -311,9 +311,9 @@ EXACT_TWIN_PIXELS = 1.0
 #: the others' reflection points are exact enough that the two images meet.
 EXACT_TWIN_GRAZING = 0.05
 #: ... and a triangle with a vertex HIDDEN by less than this sine where its walk stopped on the
-#: outline (a grazing reflection near the silhouette, which the texel's normal may put behind)
-#: is drawn a second time with its hidden vertices' images on the eye's rays through their
-#: walk's last texels (the visible part of it that the silhouette cut did not find).
+#: outline (a grazing reflection near the silhouette, which the texel's normal may put behind),
+#: and every triangle the silhouette cut replaced (whole), are drawn a second time with their
+#: hidden vertices' images on the eye's rays through their walks' last texels.
 EXACT_TWIN_HIDDEN = 0.1
 #: Two images are linked when the walk started at one ends within this many texels (Chebyshev)
 #: of the other, both ways.

@@ -225,9 +225,10 @@ def with_mirror_copies(part, real, mirror, camera):
       one's virtual image stops short of (where both cover a pixel they are one run of the
       acceptance, tested once: :func:`refsoft.search.acceptance.draw`);
     - a copy of every triangle with a corner hidden at the silhouette (``edge``), right after
-      it, and after all the others every triangle with such a corner that the cut at the
-      silhouette replaced by its visible part (drawn whole), with their HIDDEN corners' images
-      by ``at_texel``, HIDDEN cleared.
+      it, and after all the others every triangle that the cut at the silhouette replaced by its
+      visible part (drawn whole: the cut ends where the walks say HIDDEN, which near the
+      silhouette can be short of it), with their HIDDEN corners' images by ``at_texel``, HIDDEN
+      cleared.
 
     Parameters
     ----------
@@ -271,20 +272,20 @@ def with_mirror_copies(part, real, mirror, camera):
         copied = _touches(twin >= n, faces)
     extra = np.zeros((0, 3), np.int64)
     extra_obj = np.zeros(0, np.int32)
-    if edge.any():  # a face with a corner hidden at the silhouette: its hidden corners at their texels
+    if edge.any() or len(uncut):
+        # a face with a corner hidden at the silhouette, and a face the silhouette cut replaced by a
+        # part that may end short (drawn whole): their hidden corners at their texels
         near = _touches(edge, faces)
-        # and the faces the silhouette cut replaced by a part that may end short (drawn whole)
-        whole = _touches(edge, uncut)
         hidden = np.zeros(n, bool)
         hidden[faces[near].ravel()] = True
-        hidden[uncut[whole].ravel()] = True
+        hidden[uncut.ravel()] = True
         hidden &= (flags & (HIDDEN | CULLED)) == HIDDEN
         more = np.flatnonzero(hidden)
         if len(more):
             twin[more] = n + len(rows) + np.arange(len(more))
             rows, images = np.concatenate([rows, more]), np.concatenate([images, at_texel(more)])
             copied |= near
-            extra, extra_obj = twin[uncut[whole]], uncut_obj[whole]
+            extra, extra_obj = twin[uncut], np.asarray(uncut_obj, np.int32)
     if not copied.any() and len(extra) == 0:
         return part, real
     # each copy right after its face: the same real triangle, so one run of the acceptance

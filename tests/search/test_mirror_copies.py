@@ -26,10 +26,10 @@ class _Camera:
 def _copies_numpy(part, real, mirror, camera):
     """The rule written as loops. A visible vertex of ``rows`` whose image lies more than the
     threshold from its own in screen pixels (both in front of the eye) gets a twin (its image);
-    a HIDDEN vertex (not CULLED) of a face, or of a face the cut replaced, with an ``edge``
-    corner gets one too (``at_texel``). Every face with a twin corner is followed by its copy
-    with the twins; the replaced faces with an ``edge`` corner follow, with the twins; twins are
-    flagged as their vertex, HIDDEN cleared."""
+    a HIDDEN vertex (not CULLED) of a face with an ``edge`` corner, or of a face the cut
+    replaced, gets one too (``at_texel``). Every face with a twin corner is followed by its copy
+    with the twins; the replaced faces follow, with the twins; twins are flagged as their
+    vertex, HIDDEN cleared."""
     rows, images, edge, at_texel, (uncut, uncut_obj) = mirror
     virtual, normals, faces, face_obj, flags = part
     n = len(virtual)
@@ -46,7 +46,7 @@ def _copies_numpy(part, real, mirror, camera):
             new_rows.append(int(i))
             new_images.append(b)
     near = [any(edge[v] for v in f) for f in faces]
-    whole = [any(edge[v] for v in f) for f in uncut]
+    whole = [True] * len(uncut)
     hidden = sorted({int(v) for f, k in zip(list(faces) + list(uncut), near + whole) if k for v in f
                      if flags[v] & (HIDDEN | CULLED) == HIDDEN})
     for v in hidden:
