@@ -1,8 +1,11 @@
 """The exact drawing's second candidates (refsoft/search/virtual.py ``mirror_images`` and
-``with_mirror_copies``): the faces they add against a NumPy loop, and on a plane mirror's border
-the holes they fill (pixels that saw nothing although their reflected ray meets a triangle)."""
+``with_mirror_copies``): the faces they add against a loop, on a plane mirror's border the holes
+they fill (pixels that saw nothing although their reflected ray meets a triangle), by mirror
+balls' silhouettes the pixels they change (all to the truth's object), and their bits across
+thread counts."""
 
 import numpy as np
+import pytest
 
 import refsoft
 from refsoft import constants
@@ -166,21 +169,22 @@ def test_copies_fill_the_plane_mirrors_border_holes_and_change_nothing_else():
     assert int(metrics.holes(frame["reflected_id"], truth["reflected_id"]).sum()) == 0
 
 
-def test_copies_draw_the_same_on_one_thread_and_on_several():
+@pytest.mark.parametrize("name, frame", [("planar", 29), ("mirrors", 23)])
+def test_copies_draw_the_same_on_one_thread_and_on_several(name, frame):
     import numba
 
-    scene = refsoft.load_scene("planar", width=256, height=192)
+    scene = refsoft.load_scene(name, width=256, height=192)
     got = []
     for threads in (1, numba.config.NUMBA_NUM_THREADS):
         numba.set_num_threads(threads)
         try:
             spy = _Spy(scene, RenderOptions())
-            got.append(FrameDriver(scene, RenderOptions(), method=spy).render_frame(29).arrays)
+            got.append(FrameDriver(scene, RenderOptions(), method=spy).render_frame(frame).arrays)
             assert len(spy.args[1][2]) > len(spy.plain[0][2])  # copies were drawn
         finally:
             numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
-    for name in ("image", "reflected_id"):
-        assert got[0][name].tobytes() == got[1][name].tobytes(), name
+    for key in ("image", "reflected_id"):
+        assert got[0][key].tobytes() == got[1][key].tobytes(), key
 
 
 def test_hidden_copies_fill_the_silhouettes_of_mirror_balls():
