@@ -300,6 +300,21 @@ SEVERAL_MAX_LEVEL = 3
 #: straight where the real image curves; the per-pixel ray test accepts only exact hits.
 SEVERAL_DILATE_PIXELS = 1.0
 SEVERAL_DILATE_FRACTION = 0.25
+#: The exact drawing (``draw="exact"``) draws a triangle a second time, with its vertices' images
+#: by the ``mirror`` rule, when one of them lies more than this many view pixels from its image
+#: by the preset's rule (:func:`refsoft.search.virtual.with_mirror_copies`): where the search's
+#: reflection point is not exact (a vertex reflected beyond the outline, or within a texel of the
+#: mirror) the two part, and the mirror rule's stays near the true image.
+EXACT_TWIN_PIXELS = 1.0
+#: ... for the vertices on the outline (BORDER) or seen from their reflection point within this
+#: sine of its tangent plane (grazing: there the score hardly changes along a line of texels);
+#: the others' reflection points are exact enough that the two images meet.
+EXACT_TWIN_GRAZING = 0.05
+#: ... and a triangle with a vertex HIDDEN by less than this sine where its walk stopped on the
+#: outline (a grazing reflection near the silhouette, which the texel's normal may put behind),
+#: and every triangle the silhouette cut replaced (whole), are drawn a second time with their
+#: hidden vertices' images on the eye's rays through their walks' last texels.
+EXACT_TWIN_HIDDEN = 0.1
 #: Two images are linked when the walk started at one ends within this many texels (Chebyshev)
 #: of the other, both ways.
 SEVERAL_LINK_TEXELS = 1

@@ -84,31 +84,6 @@ def several_possible(mesh: Mesh) -> bool:
 _DECIDED = weakref.WeakKeyDictionary()
 
 
-def flat(mesh: Mesh) -> bool:
-    """Whether a reflector's (closed proxy) mesh is a plane mirror (:func:`_flat`): its mirror
-    image of a straight edge is straight, so its virtual triangles rasterized are its reflection
-    (the exact drawing, tessellation and silhouette cut have nothing to mend there).
-
-    Parameters
-    ----------
-    mesh : Mesh
-        Model or world space (an affine map keeps a plane and its one normal).
-
-    Returns
-    -------
-    bool
-    """
-    if not isinstance(mesh, Mesh):
-        raise RefsoftError(f"mesh must be a refsoft Mesh, got {type(mesh).__name__}")
-    if mesh not in _FLAT:
-        _FLAT[mesh] = _flat(mesh)
-    return _FLAT[mesh]
-
-
-#: Mesh -> whether it is flat, while the mesh lives.
-_FLAT = weakref.WeakKeyDictionary()
-
-
 def _flat(mesh: Mesh) -> bool:
     """A plane mirror: every vertex on one plane (within ``CONVEX_TOLERANCE`` of the extent) and
     every vertex normal the plane's normal (to 1e-12 in the cosine, one side). Then the normals

@@ -19,13 +19,12 @@ from .. import keys, limits
 from ..raster import PRECISIONS, GBuffer, _setup, gbuffer
 from ..seam import ReflectorResult, stencil_box
 from . import BORDER, CULLED, RESTARTED, SEVERAL, SearchResult, levels, search, skips, virtual_vertices
-from . import convex
 from .convex import several_possible
 from .exact import edges_pass, exact_pass
 from .images import facing_gbuffer, find_images
 from .reflect import Reflection, coherent_starts, gbuffer_camera
 from .refine import refine as refine_points
-from .virtual import reflected_mesh, refined_parts, virtual_parts, virtual_pass
+from .virtual import reflected_mesh, refined_parts, virtual_parts, virtual_pass, with_mirror_copies
 
 
 @dataclass
@@ -149,11 +148,6 @@ class VertexSearch:
             t = time.perf_counter()
             box = stencil_box(stencil) if opt.crop_virtual else (0, view.camera.height, 0, view.camera.width)
             drawn = self._draw_images(view, k, refl, stencil, box)
-            # a plane mirror's virtual triangles, mirrored across its plane (reflection), are its
-            # exact reflection: rasterized
-            flat = drawn is None and opt.draw != "raster" and self._flat(k)
-            if flat:
-                report["flat"] = True
             if drawn is not None:  # every image, drawn by exact acceptance (search/several.py)
                 out.colour, out.reflected_id, out.covered, extra, sheeted = drawn
                 report.update(extra)
@@ -163,17 +157,21 @@ class VertexSearch:
                 parts = virtual_parts(self.scene, view.meshes, refl)
             else:
                 self._reflected = reflected_mesh(self.scene, view.meshes, self._reflected)
-                parts, counts, real = refined_parts(self.scene, view.meshes, refl, view.vertices,
-                                                    replace(opt, virtual="mirror") if flat else opt,
-                                                    view.camera.eye, self._reflected[1], with_real=True)
+                twins = opt.draw == "exact"  # the exact drawing's second candidates
+                parts, counts, real, *mirror = refined_parts(self.scene, view.meshes, refl, view.vertices, opt,
+                                                             view.camera.eye, self._reflected[1], with_real=True,
+                                                             with_mirror=twins)
                 report.update(counts)
                 times["tessellate"] = 1000 * (time.perf_counter() - t)
                 t = time.perf_counter()
-            if drawn is None and opt.draw == "exact" and not flat:  # every stencil pixel's ray met exactly
+            if drawn is None and opt.draw == "exact":  # every stencil pixel's ray met exactly
+                # the triangles with a vertex whose image by the mirror rule is elsewhere once more,
+                # with that image (virtual.with_mirror_copies)
+                part, real = with_mirror_copies(parts[0], real, mirror[0], view.camera)
                 out.colour, out.reflected_id, out.covered, report["exact"] = exact_pass(
-                    self.scene, parts[0], real, view.camera, view.meshes[k - 1], view.view.triangle, stencil, box,
+                    self.scene, part, real, view.camera, view.meshes[k - 1], view.view.triangle, stencil, box,
                     opt.inverse)
-            elif drawn is None and opt.draw == "edges" and not flat:  # rasterized, then met exactly along the outlines
+            elif drawn is None and opt.draw == "edges":  # rasterized, then met exactly along the outlines
                 out.colour, out.reflected_id, out.covered, report["exact"] = edges_pass(
                     self.scene, parts[0], real, view.camera, view.meshes[k - 1], view.view.triangle, stencil, box,
                     opt.inverse, opt.cull_virtual)
@@ -208,11 +206,6 @@ class VertexSearch:
         rel, _ = virtual_relative(gb, res, verts, eye, opt.refine, opt.virtual)
         return rel.astype(np.float64) + gb.origin, res.flags
 
-    def _flat(self, k):
-        """Whether reflector ``k`` is a plane mirror (:func:`refsoft.search.convex.flat`)."""
-        obj = self.scene.objects[k - 1]
-        return convex.flat(obj.closed_proxy if obj.closed_proxy is not None else obj.mesh)
-
     def _draw_images(self, view, k, refl, stencil, box):
         """Every image of reflector ``k`` drawn (:func:`refsoft.search.several.several_pass`), or
         None: the virtual pass."""
@@ -238,8 +231,6 @@ class VertexSearch:
                    "virtual_objects_culled": {}, "widen_off": []}
         if self.options.images == "all":
             skipped["images_convex"] = []
-        if self.options.draw != "raster":
-            skipped["flat"] = []  # plane mirrors: rasterized, their vertices mirrored
         tessellation, silhouette, drawn, later, exact = {}, {}, {}, {}, {}
         for k, r in results.items():
             rep = r.report
@@ -250,8 +241,6 @@ class VertexSearch:
                     skipped[name].append(k)
             if rep.get("widen_off"):
                 skipped["widen_off"].append(k)
-            if rep.get("flat"):
-                skipped["flat"].append(k)
             for name in ("searches_reused", "virtual_objects_culled"):
                 if name in rep:
                     skipped[name][str(k)] = rep[name]
@@ -327,9 +316,7 @@ class VertexSearch:
             report["searches_reused"] = int(reuse.sum())
         else:
             res = self.search_vertices(gb, eye, verts, prev)
-        # a plane mirror: every vertex mirrored across the plane, exact even off the mirror's border
-        rule = "mirror" if opt.draw != "raster" and self._flat(k) else opt.virtual
-        rel, surface = virtual_relative(gb, res, verts, eye, opt.refine, rule)
+        rel, surface = virtual_relative(gb, res, verts, eye, opt.refine, opt.virtual)
         world64 = rel.astype(np.float64) + gb.origin
         images = None
         if opt.images == "all":

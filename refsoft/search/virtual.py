@@ -14,7 +14,7 @@ from .._numba import readonly
 from ..raster import CULL_MODES, _setup, rasterize_trusted, shade_fragments_trusted
 from ..raster._threads import SERIAL_MAX_TRIANGLES, serial_if_small
 from ..scene.mesh import concatenate
-from . import CULLED, HIDDEN, SearchResult, skips, virtual_vertices
+from . import BORDER, CULLED, HIDDEN, SearchResult, skips, virtual_vertices
 from .tessellate import tessellate
 
 
@@ -66,7 +66,7 @@ def reflected_mesh(scene, meshes, last=None):
     return sources, concatenate(sources, ids)
 
 
-def refined_parts(scene, meshes, refl, verts, opt, eye, reflected=None, with_real=False):
+def refined_parts(scene, meshes, refl, verts, opt, eye, reflected=None, with_real=False, with_mirror=False):
     """One part holding the reflected geometry after the options that add vertices: Szabo's
     adaptive tessellation (``opt.tessellate``, :func:`refsoft.search.tessellate.tessellate`),
     then the cut at the silhouette (``opt.silhouette == "clip"``,
@@ -81,6 +81,10 @@ def refined_parts(scene, meshes, refl, verts, opt, eye, reflected=None, with_rea
     real : (n, 3) float64
         With ``with_real``: the part's vertices in the scene (the real positions whose images
         its virtual vertices are).
+    mirror : tuple
+        With ``with_mirror`` (and ``with_real``): :func:`mirror_images` of the part's vertices
+        and the faces the cut at the silhouette replaced with their objects ((u, 3) int64, (u,)
+        int32), what :func:`with_mirror_copies` reads.
     """
     from .silhouette import clip_at_silhouette
 
@@ -89,6 +93,7 @@ def refined_parts(scene, meshes, refl, verts, opt, eye, reflected=None, with_rea
     res, gb = refl.result, refl.gbuffer
     vertices, normals, faces, face_obj = verts, reflected.normals, reflected.faces, reflected.face_object
     pixel, flags, surface, virtual = res.pixel, res.flags, refl.surface, refl.virtual64
+    points = surface  # every vertex's sub-texel point (P, N), or None
     counts = {}
     if opt.tessellate is not None:
         t = tessellate(gb, eye, verts, normals, faces, face_obj, pixel, flags, opt.tessellate, opt.max_level,
@@ -98,9 +103,16 @@ def refined_parts(scene, meshes, refl, verts, opt, eye, reflected=None, with_rea
                                                         t.flags[len(verts):],
                                                         None if surface is None else t.surface, len(verts))])
         vertices, normals, faces, face_obj, pixel, flags = t.vertices, t.normals, t.faces, t.face_obj, t.pixel, t.flags
+        points = None if surface is None else t.surface
         counts["tessellation"] = {"vertices_searched": int(t.searched), "levels": int(t.levels),
                                   "triangles": int(len(t.faces))}
+    uncut = (np.zeros((0, 3), np.int64), np.zeros(0, np.int32))  # the faces the cut replaced
     if opt.silhouette == "clip":
+        if with_mirror:
+            from .silhouette import mixed_faces
+
+            mixed = mixed_faces(faces, flags)
+            uncut = (np.asarray(faces, np.int64)[mixed], np.asarray(face_obj, np.int32)[mixed])
         c = clip_at_silhouette(gb, eye, vertices, normals, faces, face_obj, pixel, flags, opt.neighbourhood, opt.cap,
                                opt.method, predict=True)
         new_surface = None
@@ -111,12 +123,186 @@ def refined_parts(scene, meshes, refl, verts, opt, eye, reflected=None, with_rea
         virtual = np.concatenate([virtual, _new_virtual(refl, opt, eye, c.vertices, c.pixel, c.flags, new_surface, 0)])
         if with_real:  # the cut points' real positions (only the exact drawing reads them)
             vertices = np.concatenate([vertices, c.vertices])
+            pixel = np.concatenate([pixel, c.pixel])
+            points = None if points is None or new_surface is None else tuple(
+                np.concatenate([a[:len(pixel) - len(c.pixel)], b]) for a, b in zip(points[:2], new_surface[:2]))
         normals = np.concatenate([normals, c.normals])
         flags = np.concatenate([flags, c.flags])
         faces, face_obj = c.faces, c.face_obj
         counts["silhouette"] = {"edges_cut": int(c.cut), "vertices_searched": int(c.searched)}
     parts = [(virtual, normals, faces, face_obj, flags)]
-    return (parts, counts, np.asarray(vertices, np.float64)) if with_real else (parts, counts)
+    if not with_real:
+        return parts, counts
+    vertices = np.asarray(vertices, np.float64)
+    if with_mirror:
+        return parts, counts, vertices, mirror_images(refl, vertices, pixel, flags, points, eye) + (uncut,)
+    return parts, counts, vertices
+
+
+def mirror_images(refl, vertices, pixel, flags, points, eye):
+    """What :func:`with_mirror_copies` draws a second time: the images by the ``mirror`` rule
+    (across the tangent plane at the reflection point) of the visible vertices (neither HIDDEN nor
+    CULLED) whose search stopped on the outline (BORDER) or that lie within
+    :data:`refsoft.constants.EXACT_TWIN_GRAZING` (a sine) of the tangent plane as seen from the
+    reflection point, and the vertices HIDDEN by less than :data:`~refsoft.constants.
+    EXACT_TWIN_HIDDEN` whose walk stopped on the outline.
+
+    Where the reflection point is exact, the ``unfold`` image is the ``mirror`` one; where it is
+    not (a vertex reflected beyond the reflector's outline, whose search stopped on it; a vertex
+    within a texel of the mirror, where the score hardly changes along a line of texels), the
+    ``unfold`` image moves along the eye's ray through the wrong point, the ``mirror`` one stays
+    near the true image (on a plane mirror it is the true image). A vertex seen at a grazing angle
+    by a convex mirror's silhouette reflects within a texel of the outline, where the texel's
+    normal may put it a little behind (HIDDEN): its triangles were no candidates, and the cut at
+    the silhouette ends their neighbours short of the silhouette.
+
+    Parameters
+    ----------
+    refl : Reflection
+        The reflector's G-buffer and search result.
+    vertices : (n, 3) float64
+        The part's real vertices.
+    pixel : (n, 2) int32
+    flags : (n,) uint8
+        Their search results.
+    points : (P (n, 3), N (n, 3)) or None
+        Their sub-texel reflection points (relative to the G-buffer's origin), or None: the
+        texels'.
+    eye : (3,)
+
+    Returns
+    -------
+    rows : (b,) int64
+        The visible vertices, ascending.
+    images : (b, 3) float64
+        Their ``mirror`` images, world space.
+    edge : (n,) bool
+        The vertices hidden at the silhouette.
+    at_texel : callable
+        ``at_texel(r)`` (k, 3) float64: the ``unfold`` images of the HIDDEN vertices ``r`` (k,)
+        at their walk's last texel, as if seen there (on the eye's ray through it).
+    """
+    from ..constants import EXACT_TWIN_GRAZING, EXACT_TWIN_HIDDEN
+
+    visible = flags & (HIDDEN | CULLED) == 0
+    if points is None:
+        at = (pixel[:, 0], pixel[:, 1])
+        p, nrm = refl.gbuffer.position[at], refl.gbuffer.normal[at]
+    else:
+        p, nrm = points[0], points[1]
+    d = np.asarray(vertices, np.float64) - refl.gbuffer.origin - p
+    dn, size = np.sum(d * nrm, axis=1), np.sqrt(np.sum(d * d, axis=1))
+    # the vertices whose reflection point may be wrong: on the outline, or seen at a grazing angle
+    rows = np.flatnonzero(visible & ((flags & BORDER != 0) | (dn < EXACT_TWIN_GRAZING * size)))
+    # hidden by a grazing margin where the walk stopped on the outline: maybe seen at the silhouette
+    edge = (flags & CULLED == 0) & (flags & HIDDEN != 0) & (flags & BORDER != 0) & (-dn < EXACT_TWIN_HIDDEN * size)
+    origin = refl.gbuffer.origin
+
+    def at_texel(hidden_rows):
+        """(k, 3) float64: the ``unfold`` images of hidden vertices at their walk's last texel,
+        as if seen there (on the eye's ray through it)."""
+        fl = (flags[hidden_rows] & ~np.uint8(HIDDEN)).astype(np.uint8)
+        rel = virtual_vertices(refl.gbuffer, _result(refl.result, pixel[hidden_rows], fl), vertices[hidden_rows],
+                               relative=True, rule="unfold", eye=eye)
+        return rel.astype(np.float64) + origin
+
+    if len(rows) == 0:
+        return rows, np.zeros((0, 3)), edge, at_texel
+    sub = None if points is None else tuple(np.asarray(a)[rows] for a in points[:2])
+    rel = virtual_vertices(refl.gbuffer, _result(refl.result, pixel[rows], flags[rows]), vertices[rows],
+                           relative=True, surface=sub, rule="mirror", eye=eye)
+    return rows, rel.astype(np.float64) + origin, edge, at_texel
+
+
+def with_mirror_copies(part, real, mirror, camera):
+    """``part`` and ``real`` with more candidates for the exact drawing (:func:`mirror_images`),
+    each over a real triangle of the scene, so that a pixel's answer can only come nearer the
+    truth's where its own triangle was not tested:
+
+    - a copy of every triangle, right after it, with a visible vertex whose ``mirror`` image lies
+      more than :data:`refsoft.constants.EXACT_TWIN_PIXELS` view pixels from its image in
+      ``part`` (in front of the eye both), with those images: it reaches the pixels the first
+      one's virtual image stops short of (where both cover a pixel they are one run of the
+      acceptance, tested once: :func:`refsoft.search.acceptance.draw`);
+    - a copy of every triangle with a corner hidden at the silhouette (``edge``), right after
+      it, and after all the others every triangle that the cut at the silhouette replaced by its
+      visible part (drawn whole: the cut ends where the walks say HIDDEN, which near the
+      silhouette can be short of it), with their HIDDEN corners' images by ``at_texel``, HIDDEN
+      cleared.
+
+    Parameters
+    ----------
+    part : tuple
+        ``(virtual (n, 3), normals (n, 3), faces (m, 3) int64, face_obj (m,) int32, flags (n,)
+        uint8)``.
+    real : (n, 3) float64
+    mirror : tuple
+        :func:`mirror_images` of the part's vertices, then ``(faces (u, 3) int64, face_obj (u,)
+        int32)``: the faces the cut replaced (:func:`refined_parts`).
+    camera : Camera
+        The view camera.
+
+    Returns
+    -------
+    part, real
+        The images appended as vertices ``n ..`` (the same real position and normal as the
+        vertex they image, its flags without HIDDEN) and the copies among the faces; ``part``
+        itself when there is none.
+    """
+    from ..constants import EXACT_TWIN_PIXELS
+
+    rows, images, edge, at_texel, (uncut, uncut_obj) = mirror
+    virtual, normals, faces, face_obj, flags = part
+    n = len(virtual)
+    faces = np.asarray(faces, np.int64)
+    if len(rows):
+        vp = camera.view_proj()
+        a = _setup.transform_points(np.asarray(virtual, np.float64)[rows], vp)
+        b = _setup.transform_points(images, vp)
+        scale = 0.5 * np.array([camera.width, camera.height], np.float64)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            gap = np.abs(a[:, :2] / a[:, 3:] - b[:, :2] / b[:, 3:]) * scale
+        # a vertex at or behind the eye plane: a screen distance means nothing, no copy
+        far = (a[:, 3] > 0) & (b[:, 3] > 0) & np.any(gap > EXACT_TWIN_PIXELS, axis=1)
+        rows, images = rows[far], images[far]
+    copied = np.zeros(len(faces), bool)
+    twin = np.arange(n, dtype=np.int64)
+    if len(rows):
+        twin[rows] = n + np.arange(len(rows))
+        copied = _touches(twin >= n, faces)
+    extra = np.zeros((0, 3), np.int64)
+    extra_obj = np.zeros(0, np.int32)
+    if edge.any() or len(uncut):
+        # a face with a corner hidden at the silhouette, and a face the silhouette cut replaced by a
+        # part that may end short (drawn whole): their hidden corners at their texels
+        near = _touches(edge, faces)
+        hidden = np.zeros(n, bool)
+        hidden[faces[near].ravel()] = True
+        hidden[uncut.ravel()] = True
+        hidden &= (flags & (HIDDEN | CULLED)) == HIDDEN
+        more = np.flatnonzero(hidden)
+        if len(more):
+            twin[more] = n + len(rows) + np.arange(len(more))
+            rows, images = np.concatenate([rows, more]), np.concatenate([images, at_texel(more)])
+            copied |= near
+            extra, extra_obj = twin[uncut], np.asarray(uncut_obj, np.int32)
+    if not copied.any() and len(extra) == 0:
+        return part, real
+    # each copy right after its face: the same real triangle, so one run of the acceptance
+    which = np.flatnonzero(copied)
+    at = which + np.arange(1, len(which) + 1)
+    order = np.repeat(np.arange(len(faces)), 1 + copied)
+    new_faces = faces[order]
+    new_faces[at] = twin[faces[which]]
+    part = (np.concatenate([virtual, images]), np.concatenate([normals, normals[rows]]),
+            np.concatenate([new_faces, extra]), np.concatenate([np.asarray(face_obj)[order], extra_obj]),
+            np.concatenate([flags, flags[rows] & ~np.uint8(HIDDEN)]))
+    return part, np.concatenate([real, real[rows]])
+
+
+def _touches(mark, faces):
+    """(m,) bool: the faces (m, 3) with a corner marked in ``mark`` (n,) bool."""
+    return mark[faces[:, 0]] | mark[faces[:, 1]] | mark[faces[:, 2]]
 
 
 def _result(like, pixel, flags):

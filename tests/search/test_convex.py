@@ -63,20 +63,3 @@ def test_convex_builtins_show_one_image_at_most(name):
     for k, r in refl.items():
         assert find_images(r.gbuffer, eye, verts, r.result).count.max(initial=0) <= 1
 
-
-def test_flat_meshes():
-    """A plane mirror (every vertex on one plane, every normal its normal) is flat; a bent one,
-    one with a tilted normal and a ball are not."""
-    from refsoft.search.convex import flat
-
-    grid = plane_grid((2.0, 2.0), (3, 3))
-    assert flat(grid)
-    v = grid.vertices.copy()
-    v[5, 1] += 0.1
-    assert not flat(Mesh(v, grid.faces, grid.normals, name="bent"))
-    n = grid.normals.copy()
-    n[4] = (n[4] + [0.1, 0.0, 0.0]) / np.linalg.norm(n[4] + [0.1, 0.0, 0.0])
-    assert not flat(Mesh(grid.vertices, grid.faces, n, name="tilted normal"))
-    assert not flat(icosphere(2, 1.0))
-    with pytest.raises(RefsoftError, match="Mesh"):
-        flat(grid.vertices)
