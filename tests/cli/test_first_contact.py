@@ -99,7 +99,7 @@ def test_static_scenes_take_any_frame_in_every_command(tmp_path):
 
 
 def test_the_readme_claims_what_its_command_measures(tmp_path):
-    """The README says the accurate preset agrees with the truth on 98.8-99.9% of the mirrors'
+    """The README says the accurate preset agrees with the truth on 99.97-100% of the mirrors'
     pixels of the convex scenes and the paper preset on 0.2-70%, measured by `refsoft bench
     accuracy`: the same command at a small size on one scene lands in those ranges."""
     import re
