@@ -24,7 +24,7 @@ def _plane(P, N, origin, p_vis, p_hid, i, t, r, c):
     return d
 
 
-@kernel(inline=True)
+@kernel
 def _score(P, N, origin, eye, p_vis, p_hid, i, t, r, c):
     """The search's score (spec section 4.1) of the point at ``t`` of edge ``i`` at texel (r, c),
     in float64."""
@@ -48,7 +48,7 @@ def _score(P, N, origin, eye, p_vis, p_hid, i, t, r, c):
     return (np.float64(N[r, c, 0]) * hx + np.float64(N[r, c, 1]) * hy) + np.float64(N[r, c, 2]) * hz
 
 
-@kernel(inline=True)
+@kernel
 def _tie(P, N, origin, eye, p_vis, p_hid, i, a, b, r1, c1, r2, c2, steps):
     """Where in [a, b] texel (r2, c2) starts to outscore texel (r1, c1) for the points of edge
     ``i``: ``steps`` regula falsi (Illinois) steps on the difference of the scores; -1 unless
@@ -77,7 +77,7 @@ def _tie(P, N, origin, eye, p_vis, p_hid, i, a, b, r1, c1, r2, c2, steps):
     return a
 
 
-@kernel(inline=True)
+@kernel
 def _predict(P, N, mask, origin, eye, p_vis, p_hid, i, a, b, r1, c1, r2, c2, tie_steps):
     """Where in [a, b] the point of edge ``i`` is predicted to turn hidden when the bracket's ends
     reflect at the same or neighbouring texels (r1, c1) (seen) and (r2, c2) (hidden): where it
