@@ -232,13 +232,17 @@ def search_one(G, mask, v, start_r, start_c, n_candidates, cap, inverse_search, 
     """Standard search from (start_r, start_c) in the packed G-buffer ``G``, then the inverse
     search for a hidden vertex when ``inverse_search``. Returns
     ``(r, c, score, margin, iterations, flags, n_record)``."""
+    # both walks with the same argument types (no constant among them), so that the walk is
+    # compiled once, not once per set of constants
+    zero = n_candidates - n_candidates
+    no = zero != zero
     r, c, best, margin, it, stop, border, n_rec = walk(G, mask, v, start_r, start_c, n_candidates,
-                                                      cap, False, fp, record, 0, 0, scratch, seen)
+                                                      cap, no, fp, record, zero, zero, scratch, seen)
     flags, total, inverse = end_walk(0, 0, it, stop == STOP_CAPPED, border, 0, v[0], v[1], v[2], G, G, r, c, 3,
                                      inverse_search, fp)
     if inverse:
-        r, c, best, margin, it, stop, border, n_rec = walk(G, mask, v, r, c, n_candidates, cap, True, fp, record,
-                                                          n_rec, 1, scratch, seen)
+        r, c, best, margin, it, stop, border, n_rec = walk(G, mask, v, r, c, n_candidates, cap, not no, fp, record,
+                                                          n_rec, zero + 1, scratch, seen)
         flags, total, _ = end_walk(flags, total, it, stop == STOP_CAPPED, border, 1, v[0], v[1], v[2], G, G, r, c,
                                    3, inverse_search, fp)
     return r, c, best, margin, total, flags, n_rec
