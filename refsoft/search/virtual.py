@@ -222,8 +222,8 @@ def with_mirror_copies(part, real, mirror, camera):
     - a copy of every triangle, right after it, with a visible vertex whose ``mirror`` image lies
       more than :data:`refsoft.constants.EXACT_TWIN_PIXELS` view pixels from its image in
       ``part`` (in front of the eye both), with those images: it reaches the pixels the first
-      one's virtual image stops short of (where both cover a pixel they are one run of the
-      acceptance, tested once: :func:`refsoft.search.acceptance.draw`);
+      one's virtual image stops short of (where both cover a pixel, the copy meets the ray at
+      the same ``t`` and the first one's answer stands: :func:`refsoft.search.acceptance.draw`);
     - a copy of every triangle with a corner hidden at the silhouette (``edge``), right after
       it, and after all the others every triangle that the cut at the silhouette replaced by its
       visible part (drawn whole: the cut ends where the walks say HIDDEN, which near the
@@ -288,7 +288,8 @@ def with_mirror_copies(part, real, mirror, camera):
             extra, extra_obj = twin[uncut], np.asarray(uncut_obj, np.int32)
     if not copied.any() and len(extra) == 0:
         return part, real
-    # each copy right after its face: the same real triangle, so one run of the acceptance
+    # each copy right after its face: the same real triangle (one run, where the acceptance
+    # tracks runs; the same t, which does not replace the first, where it does not)
     which = np.flatnonzero(copied)
     at = which + np.arange(1, len(which) + 1)
     order = np.repeat(np.arange(len(faces)), 1 + copied)
