@@ -78,11 +78,7 @@ def exact_level(scene, meshes, groups, camera, box, rays, reflectors_only=False,
     hit = best_c >= 0
     obj = np.zeros(best_c.shape, np.int32)
     obj[hit] = cand.object_id[best_c[hit]]
-    u, v = best_uv[..., 0][hit], best_uv[..., 1][hit]
-    nrm = cand.normals[best_c[hit]]
-    n = (1.0 - u - v)[:, None] * nrm[:, 0] + u[:, None] * nrm[:, 1] + v[:, None] * nrm[:, 2]
-    length = np.linalg.norm(n, axis=1, keepdims=True)
-    n = np.divide(n, length, out=np.zeros_like(n), where=length > 0)
+    n = _hit_normals(cand.normals[best_c[hit]], best_uv[hit])
     normal = np.zeros(best_c.shape + (3,))
     normal[hit] = n
     is_reflector = np.isin(obj, scene.reflector_ids)
@@ -175,11 +171,7 @@ def rays_level(scene, meshes, bounce, camera, rays, reach, opt, entry):
     shown = src == 1
     if shown.any():
         c = best_c[shown]
-        u, v = best_uv[..., 0][shown], best_uv[..., 1][shown]
-        nrm = scene_cand.normals[c]
-        n = (1.0 - u - v)[:, None] * nrm[:, 0] + u[:, None] * nrm[:, 1] + v[:, None] * nrm[:, 2]
-        length = np.linalg.norm(n, axis=1, keepdims=True)
-        n = np.divide(n, length, out=np.zeros_like(n), where=length > 0)
+        n = _hit_normals(scene_cand.normals[c], best_uv[shown])
         colors = np.vstack([np.zeros(3), [o.color for o in scene.objects]]).astype(np.float32)
         obj = scene_cand.object_id[c]
         colour[shown] = shade(n, colors[obj])
@@ -197,11 +189,7 @@ def seen_by_rays(cand, shows, best_c, best_t, best_uv, rays):
     _, origin, direction = rays
     h, w = shows.shape
     c = best_c[shows]
-    u, v = best_uv[..., 0][shows], best_uv[..., 1][shows]
-    nrm = cand.normals[c]
-    n = (1.0 - u - v)[:, None] * nrm[:, 0] + u[:, None] * nrm[:, 1] + v[:, None] * nrm[:, 2]
-    length = np.linalg.norm(n, axis=1, keepdims=True)
-    n = np.divide(n, length, out=np.zeros_like(n), where=length > 0)
+    n = _hit_normals(cand.normals[c], best_uv[shows])
     obj = np.zeros((h, w), np.int32)
     obj[shows] = cand.object_id[c]
     normal = np.zeros((h, w, 3))
@@ -215,3 +203,12 @@ def seen_by_rays(cand, shows, best_c, best_t, best_uv, rays):
         dist[m] = best_t[m] * np.linalg.norm(direction[m], axis=1)
         out[k] = (m, point, nr, dist)
     return out
+
+
+def _hit_normals(normals, uv):
+    """The unit normals (k, 3) float64 interpolated at barycentrics ``uv`` (k, 2) (u, v) from the
+    corner normals ``normals`` (k, 3, 3) of the triangles hit (zero stays zero)."""
+    u, v = uv[:, 0], uv[:, 1]
+    n = (1.0 - u - v)[:, None] * normals[:, 0] + u[:, None] * normals[:, 1] + v[:, None] * normals[:, 2]
+    length = np.linalg.norm(n, axis=1, keepdims=True)
+    return np.divide(n, length, out=np.zeros_like(n), where=length > 0)
