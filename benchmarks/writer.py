@@ -99,6 +99,13 @@ def _fresh(a):
     return b
 
 
+def _second_frame(name, size):
+    """The arrays of a scene's frame 1, rendered after frame 0 (coherent, compiled)."""
+    d = FrameDriver(refsoft.load_scene(name, width=size[0], height=size[1]))
+    d.render_frame(0)
+    return d.render_frame(1).arrays
+
+
 def members(names, size):
     from refsoft import io
     from refsoft.constants import NPZ_PIECE_BYTES
@@ -107,10 +114,7 @@ def members(names, size):
     out = tempfile.mkdtemp(prefix="refsoft-writer-")
     try:
         for name in names:
-            scene = refsoft.load_scene(name, width=size[0], height=size[1])
-            d = FrameDriver(scene)
-            d.render_frame(0)
-            arrays = d.render_frame(1).arrays
+            arrays = _second_frame(name, size)
             print(f"{name}: member | dtype | MB | zero pieces % | CPU ms (best of 3)")
             total = 0.0
             for k, a in arrays.items():
@@ -156,10 +160,7 @@ def parts(names, size, rounds=7):
     out = tempfile.mkdtemp(prefix="refsoft-writer-")
     try:
         for name in names:
-            scene = refsoft.load_scene(name, width=size[0], height=size[1])
-            d = FrameDriver(scene)
-            d.render_frame(0)
-            arrays = d.render_frame(1).arrays
+            arrays = _second_frame(name, size)
             write_frame(out, Frame(1, {k: _fresh(a) for k, a in arrays.items()}, {}))  # one-time costs
             times = {v: [] for v in _variants()}
             for _ in range(rounds):

@@ -89,14 +89,19 @@ def _pixel_ray(row, col, t_index, width, height, inv, eye, perspective, vertices
         t = 0.0
         u = 0.0
         v = 0.0
-    w0 = 1.0 - u - v if good else 0.0
-    mx = (w0 * normals[ia, 0] + u * normals[ib, 0]) + v * normals[ic, 0]
-    my = (w0 * normals[ia, 1] + u * normals[ib, 1]) + v * normals[ic, 1]
-    mz = (w0 * normals[ia, 2] + u * normals[ib, 2]) + v * normals[ic, 2]
-    m = np.sqrt((mx * mx + my * my) + mz * mz)
-    if m > 0.0:
-        mx, my, mz = mx / m, my / m, mz / m
-    else:
-        mx, my, mz = 0.0, 0.0, 0.0
+    mx, my, mz = unit_normal(normals, ia, ib, ic, 1.0 - u - v if good else 0.0, u, v)
     k = 2.0 * ((dx * mx + dy * my) + dz * mz)
     return ox + t * dx, oy + t * dy, oz + t * dz, dx - k * mx, dy - k * my, dz - k * mz, good
+
+
+@kernel(inline=True)
+def unit_normal(normals, ia, ib, ic, w, u, v):
+    """``w n[ia] + u n[ib] + v n[ic]`` of the vertex normals (n, 3) float64, summed left to right,
+    renormalised (zero stays zero): ``(x, y, z)``."""
+    x = (w * normals[ia, 0] + u * normals[ib, 0]) + v * normals[ic, 0]
+    y = (w * normals[ia, 1] + u * normals[ib, 1]) + v * normals[ic, 1]
+    z = (w * normals[ia, 2] + u * normals[ib, 2]) + v * normals[ic, 2]
+    m = np.sqrt((x * x + y * y) + z * z)
+    if m > 0.0:
+        return x / m, y / m, z / m
+    return 0.0, 0.0, 0.0

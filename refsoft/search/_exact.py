@@ -4,6 +4,7 @@ box's exact acceptance. Its reference: ``tests/search/test_exact.py`` (the same 
 import numpy as np
 
 from .._numba import kernel
+from ..raster._rays import unit_normal
 
 
 @kernel
@@ -99,16 +100,7 @@ def shade_accepted(lo, hi, best_c, best_uv, corner, normals, cand_object, table,
             if c < 0:
                 continue
             u, v = best_uv[r, j, 0], best_uv[r, j, 1]
-            w = (1.0 - u) - v
-            a, b, e = corner[c, 0], corner[c, 1], corner[c, 2]
-            nx = (w * normals[a, 0] + u * normals[b, 0]) + v * normals[e, 0]
-            ny = (w * normals[a, 1] + u * normals[b, 1]) + v * normals[e, 1]
-            nz = (w * normals[a, 2] + u * normals[b, 2]) + v * normals[e, 2]
-            length = np.sqrt((nx * nx + ny * ny) + nz * nz)
-            if length > 0.0:
-                nx, ny, nz = nx / length, ny / length, nz / length
-            else:
-                nx, ny, nz = 0.0, 0.0, 0.0
+            nx, ny, nz = unit_normal(normals, corner[c, 0], corner[c, 1], corner[c, 2], (1.0 - u) - v, u, v)
             lam = abs((np.float32(nx) * light[0] + np.float32(ny) * light[1]) + np.float32(nz) * light[2])
             k = ambient + diffuse * lam
             obj = cand_object[c]

@@ -302,30 +302,19 @@ def nearest_near(cand, camera, box, rays):
     ``rays``, made for the valid rays of ``rays`` in row-major order): each candidate is met only
     by the rays of its list (kernel ``accept_near``, as :func:`refsoft.search.acceptance.draw`
     does; the others miss its triangle), so the answer is :func:`nearest_hits`'."""
-    if cand.rays is None:
-        return nearest_hits(cand, camera, box, rays)
-    r0, r1, c0, c1 = (int(x) for x in box)
-    h, w = r1 - r0, c1 - c0
-    valid, origin, direction = (np.ascontiguousarray(a) for a in rays)
-    best_t = np.full((h, w), np.inf)
-    best_c = np.full((h, w), -1, np.int64)
-    best_uv = np.zeros((h, w, 2))
-    if len(cand.real) and valid.any():
-        screen, bbox, dilate, _ = _bounds(cand, camera, (r0, r1, c0, c1))
-        real = np.ascontiguousarray(cand.real)
-        rows, cols = np.nonzero(valid)
-        first, last, ray = (np.ascontiguousarray(a, np.int64) for a in cand.rays)
-        parallel_range(accept_near, h, r0, c0, valid, acceptance._spans(valid), origin, direction, rows, cols,
-                       np.ascontiguousarray(origin[valid]), np.ascontiguousarray(direction[valid]), screen, bbox,
-                       dilate, real, acceptance._runs(real), first, last, ray, best_t, best_c, best_uv,
-                       np.zeros((h, w), bool), np.full((h, w), -1, np.int64))
-    return best_c, best_t, best_uv
+    return _nearest(cand, camera, box, rays, cand.rays is not None)
 
 
 def nearest_hits(cand, camera, box, rays):
     """Per pixel of ``box`` the candidate whose real triangle the pixel's ray meets nearest, among
     those whose dilated virtual triangle covers it (:func:`refsoft.search.acceptance.draw`'s
     acceptance): ``(candidate (h, w) int64, -1 none; t (h, w); barycentrics u, v (h, w, 2))``."""
+    return _nearest(cand, camera, box, rays, False)
+
+
+def _nearest(cand, camera, box, rays, near):
+    """:func:`nearest_hits` (``near`` False: every pixel a candidate covers) or
+    :func:`nearest_near` (True: each candidate's ray list)."""
     r0, r1, c0, c1 = (int(x) for x in box)
     h, w = r1 - r0, c1 - c0
     valid, origin, direction = (np.ascontiguousarray(a) for a in rays)
@@ -335,9 +324,17 @@ def nearest_hits(cand, camera, box, rays):
     if len(cand.real) and valid.any():
         screen, bbox, dilate, _ = _bounds(cand, camera, (r0, r1, c0, c1))
         real = np.ascontiguousarray(cand.real)
-        parallel_range(accept, h, r0, c0, valid, acceptance._spans(valid), origin, direction, screen, bbox,
-                       dilate, real, acceptance._runs(real), best_t, best_c, best_uv, np.zeros((h, w), bool),
-                       np.full((h, w), -1, np.int64))
+        tested, seen = np.zeros((h, w), bool), np.full((h, w), -1, np.int64)
+        if near:
+            rows, cols = np.nonzero(valid)
+            first, last, ray = (np.ascontiguousarray(a, np.int64) for a in cand.rays)
+            parallel_range(accept_near, h, r0, c0, valid, acceptance._spans(valid), origin, direction, rows, cols,
+                           np.ascontiguousarray(origin[valid]), np.ascontiguousarray(direction[valid]), screen,
+                           bbox, dilate, real, acceptance._runs(real), first, last, ray, best_t, best_c, best_uv,
+                           tested, seen)
+        else:
+            parallel_range(accept, h, r0, c0, valid, acceptance._spans(valid), origin, direction, screen, bbox,
+                           dilate, real, acceptance._runs(real), best_t, best_c, best_uv, tested, seen)
     return best_c, best_t, best_uv
 
 
