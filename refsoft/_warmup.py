@@ -126,11 +126,29 @@ def warm(options: dict) -> None:
         find_images(gb, camera.eye, verts, res)
     for _ in range(2):
         res = method.reflect(view, k, stencil)
+    if opts.draw in ("exact", "edges"):
+        _both_acceptances()
     if res.box is not None:
         colour = np.zeros(stencil.shape + (3,), np.float32)
         reflected = np.full(stencil.shape, -1, np.int32)
         composite(colour, reflected, colour.copy(), res.colour, res.reflected_id, res.covered, res.box, 1.0)
         to_uint8(colour)
+
+
+def _both_acceptances() -> None:
+    """Compile both ways of the exact drawing's acceptance (the candidates' own loop and the
+    traced one: the ball's frames take one of them, a scene's mirror may need the other), with
+    the types the render calls them with (C-ordered arrays made by :func:`refsoft.search.
+    acceptance.nearest`'s callers)."""
+    from .search import acceptance
+
+    valid = np.ones((1, 1), bool)
+    origin, direction = np.zeros((1, 1, 3)), np.ones((1, 1, 3))
+    screen, bbox, dilate = np.zeros((1, 3, 2)), np.zeros((1, 4), np.int64), np.ones(1)
+    cand = acceptance.Candidates(None, np.zeros((1, 3, 3)), None, None, np.zeros(1, np.int64), 0)
+    for traced in (False, True):
+        acceptance.nearest(cand, None, None, (0, 1, 0, 1), rays=(valid, origin, direction),
+                           screen=(screen, bbox, dilate), runs=False, traced=traced)
 
 
 def _after_refinement(opts, gb, res, verts, camera) -> None:

@@ -315,6 +315,17 @@ EXACT_TWIN_GRAZING = 0.05
 #: and every triangle the silhouette cut replaced (whole), are drawn a second time with their
 #: hidden vertices' images on the eye's rays through their walks' last texels.
 EXACT_TWIN_HIDDEN = 0.1
+#: The exact acceptance walks each pixel's ray through a hierarchy of the candidates' real
+#: triangles (``_traced.accept_traced``) when the candidates' dilated bounds cover more than this
+#: many of them per valid pixel on average: where the reflection compresses the scene (a small
+#: mirror, a mirror's outline) thousands of candidates cover a pixel and few of their triangles lie
+#: near its ray, where a walk costs about as much as a few hundred covered pixels. Both give the
+#: same bits; this only picks the cheaper.
+EXACT_TRACE_COVER = 250.0
+#: The hierarchy's boxes are widened by this fraction of the largest coordinate (plus one), and a
+#: box is entered while its entry is within this fraction of the best hit: far above the rounding
+#: of Moller-Trumbore and of the box test, so no hit it would accept is ever skipped.
+EXACT_TRACE_MARGIN = 1e-9
 #: Two images are linked when the walk started at one ends within this many texels (Chebyshev)
 #: of the other, both ways.
 SEVERAL_LINK_TEXELS = 1

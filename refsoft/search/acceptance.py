@@ -21,6 +21,7 @@ from ..raster import _setup, shade
 from ..raster.rays import box_rays
 from ._several import accept, accept_near, accept_untracked
 from ._several import screen_bounds as _screen_bounds
+from ._traced import LEAF, accept_traced, corner_bounds, leaf_boxes, morton_codes, parent_boxes, sort_codes
 
 
 @dataclass(frozen=True, eq=False)
@@ -115,7 +116,7 @@ def draw(cand: Candidates, camera, reflector_mesh, triangle, stencil, box, color
 
 
 def nearest(cand: Candidates, camera, stencil, box, *, rays=None, screen=None, triangle=None, reflector_mesh=None,
-            runs=True):
+            runs=True, traced=None):
     """Per box pixel the candidate whose real triangle the pixel's reflected ray meets nearest,
     among those whose dilated virtual triangle covers it (:func:`draw` without the shading).
 
@@ -134,6 +135,11 @@ def nearest(cand: Candidates, camera, stencil, box, *, rays=None, screen=None, t
         (worth it where many share one, as every image's candidates do); False: each candidate
         on its own, without the bookkeeping (kernel ``_several.accept_untracked``). The result
         is the same.
+    traced : bool, optional
+        With ``runs=False``: walk each pixel's ray through a hierarchy of the candidates' real
+        triangles (kernel ``_traced.accept_traced``) instead of testing every pixel each candidate
+        covers (True), or not (False); by default whichever :func:`_trace_pays` expects to be
+        cheaper. The result is the same bits.
 
     Returns
     -------
@@ -153,7 +159,9 @@ def nearest(cand: Candidates, camera, stencil, box, *, rays=None, screen=None, t
         real = np.ascontiguousarray(cand.real)
         tested, seen = (np.zeros((h, w), bool), np.full((h, w), -1, np.int64)) if runs or cand.rays is not None else (
             None, None)
-        if cand.rays is None and not runs:
+        if cand.rays is None and not runs and _trace_pays(valid, bbox, h, c0, c1, real, traced):
+            _accept_traced(r0, c0, valid, origin, direction, screen, bbox, dilate, real, best_t, best_c, best_uv)
+        elif cand.rays is None and not runs:
             parallel_range(accept_untracked, h, r0, c0, valid, _spans(valid), origin, direction, screen, bbox, dilate,
                            real, best_t, best_c, best_uv)
         elif cand.rays is None:
@@ -166,6 +174,49 @@ def nearest(cand: Candidates, camera, stencil, box, *, rays=None, screen=None, t
                            np.ascontiguousarray(origin[valid]), np.ascontiguousarray(direction[valid]), screen, bbox,
                            dilate, real, _runs(real), first, last, ray, best_t, best_c, best_uv, tested, seen)
     return best_c, best_uv
+
+
+def _trace_pays(valid, bbox, h, c0, c1, real, traced):
+    """Whether the traced acceptance is expected to cost less than the candidates' own loop: where
+    the candidates' dilated bounds cover more than :data:`refsoft.constants.EXACT_TRACE_COVER`
+    candidates per valid pixel on average (the loop's work grows with that, a walk's with the
+    hierarchy's depth)."""
+    if traced is not None:
+        return bool(traced)
+    rows = np.clip(bbox[:, 1], 0, h) - np.clip(bbox[:, 0], 0, h)
+    cols = np.clip(bbox[:, 3], c0, c1) - np.clip(bbox[:, 2], c0, c1)
+    covered = float(np.sum(np.maximum(rows, 0) * np.maximum(cols, 0), dtype=np.float64))
+    return covered > constants.EXACT_TRACE_COVER * float(np.count_nonzero(valid))
+
+
+def _accept_traced(r0, c0, valid, origin, direction, screen, bbox, dilate, real, best_t, best_c, best_uv):
+    """Kernel ``_traced.accept_traced`` with its hierarchy: the candidates sorted (stable) along a
+    Morton curve of their centroids (``_traced.morton_codes``), :data:`._traced.LEAF` a leaf. With a
+    value that is not finite among the triangles, the candidates' own loop (the same bits)."""
+    n = len(real)
+    low, high = np.empty(3), np.empty(3)
+    big = corner_bounds(real, low, high)
+    if not np.isfinite(big):  # the boxes would not bound such a triangle: the candidates' own loop
+        parallel_range(accept_untracked, valid.shape[0], r0, c0, valid, _spans(valid), origin, direction, screen,
+                       bbox, dilate, real, best_t, best_c, best_uv)
+        return
+    scale = np.where(high > low, 1023.0 / np.where(high > low, high - low, 1.0), 0.0)
+    code = np.empty(n, np.int64)
+    morton_codes(0, n, real, low, scale, code)
+    order = np.empty(n, np.int64)
+    sort_codes(code, order, np.empty(n, np.int64), np.empty(1025, np.int64))
+    size = [-(-n // LEAF)]
+    while size[-1] > 1:
+        size.append(-(-size[-1] // 2))
+    size = np.asarray(size, np.int64)
+    start = np.concatenate([[0], np.cumsum(size)[:-1]]).astype(np.int64)
+    boxes, rects = np.empty((int(size.sum()), 6)), np.empty((int(size.sum()), 4), np.int64)
+    margin = constants.EXACT_TRACE_MARGIN * (big + 1.0)
+    leaf_boxes(0, int(size[0]), order, real, bbox, margin, boxes, rects)
+    parent_boxes(start, size, boxes, rects)
+    parallel_range(accept_traced, valid.shape[0], r0, c0, valid, origin, direction, screen, bbox, dilate, real, order,
+                   start, size, boxes, rects, constants.EXACT_TRACE_MARGIN, best_t, best_c, best_uv,
+                   work=lambda: (np.empty(2 * len(size) + 2, np.int64), np.empty(2 * len(size) + 2)))
 
 
 def shade_winners(best_c, best_uv, normals, object_id, colors, valid):
