@@ -69,6 +69,16 @@ def reaching(lo, hi, clip, faces, flags, lost, width, height, r0, r1, c0, c1, pi
 
 
 @kernel
+def corners(lo, hi, points, corner, out):
+    """Triangles ``lo .. hi - 1``: ``out[t] = points[corner[t]]`` ((3, 3) each; NumPy's fancy
+    indexing of the same, without its per-element cost on hundreds of thousands of corners)."""
+    for t in range(lo, hi):
+        for i in range(3):
+            k = corner[t, i]
+            out[t, i, 0], out[t, i, 1], out[t, i, 2] = points[k, 0], points[k, 1], points[k, 2]
+
+
+@kernel
 def shade_accepted(lo, hi, best_c, best_uv, corner, normals, cand_object, table, light, ambient, diffuse, colour, rid):
     """Box rows ``lo .. hi - 1`` (run by :func:`refsoft._parallel.parallel_range`; each writes only
     its own rows): at each pixel with a winning candidate ``c = best_c[r, j] >= 0`` the normal

@@ -25,7 +25,7 @@ from .. import constants
 from ..raster import _setup
 from .._parallel import parallel_range
 from . import CULLED, HIDDEN
-from ._exact import reaching, shade_accepted
+from ._exact import corners, reaching, shade_accepted
 from .acceptance import Candidates, nearest, pixel_rays, screen_bounds
 from .virtual import virtual_pass
 
@@ -125,7 +125,9 @@ def exact_pass(scene, part, real, camera, reflector_mesh, triangle, stencil, box
     f = np.asarray(faces, np.int64)[keep]
     # the candidates' screen bounds from the clip coordinates already made, their real triangles;
     # the normals and objects of the winners alone
-    cand = Candidates(None, np.asarray(real, np.float64)[f], None, None, keep, 0)
+    real_corners = np.empty((len(f), 3, 3))
+    parallel_range(corners, len(f), np.ascontiguousarray(real, np.float64), f, real_corners)
+    cand = Candidates(None, real_corners, None, None, keep, 0)
     rays = pixel_rays(camera, reflector_mesh, triangle, stencil, box)
     best_c, best_uv = nearest(cand, camera, stencil, box, rays=rays, screen=screen_bounds(clip, f, camera, box),
                               runs=False)

@@ -262,3 +262,22 @@ def test_shading_kernel_matches_the_numpy_shading(rng):
         assert a.dtype == b.dtype and a.tobytes() == b.tobytes()
     assert got[3] == want[3]
     assert (got[1] > 0).sum() == (best_c >= 0).sum()
+
+
+def test_corners_kernel_is_numpy_fancy_indexing():
+    """``_exact.corners`` gathers each triangle's corners as ``points[corner]`` does, on one
+    thread and on several."""
+    from refsoft._parallel import one_thread, parallel_range
+    from refsoft.search._exact import corners
+
+    rng = np.random.default_rng(2)
+    points = rng.normal(size=(50, 3))
+    corner = rng.integers(0, 50, (200, 3)).astype(np.int64)
+    for several in (True, False):
+        out = np.full((200, 3, 3), np.nan)
+        if several:
+            parallel_range(corners, 200, points, corner, out)
+        else:
+            with one_thread():
+                parallel_range(corners, 200, points, corner, out)
+        assert np.array_equal(out, points[corner])
