@@ -8,13 +8,14 @@ same: the nearest hit, ties to the lowest candidate (``accept_untracked`` takes 
 index order and a later one replaces the best only when strictly nearer), with the same
 Moller-Trumbore arithmetic, so ``best_t``, ``best_c`` and ``best_uv`` are the same bits.
 
-The hierarchy is implicit: the candidates sorted along a Morton curve of their centroids, leaves
-of :data:`LEAF` consecutive ones, each level's node ``i`` the parent of the level below's nodes
-``2 i`` and ``2 i + 1``. Its boxes are widened by a margin far above the rounding of any test, so
-a ray that Moller-Trumbore finds inside a triangle never misses its boxes.
+The hierarchy is implicit: leaves of :data:`LEAF` consecutive candidates, each level's node ``i``
+the parent of the level below's nodes ``2 i`` and ``2 i + 1``. The candidates keep their order: a
+mesh's faces in order lie near each other, in the scene and in the image. Each node holds its 3D
+box, widened by a margin far above the rounding of any test (a ray that Moller-Trumbore finds
+inside a triangle never misses its boxes), and the screen bounds of its candidates.
 
-Reference: ``tests/search/test_traced.py`` checks every output against ``accept_untracked`` bit
-for bit.
+Reference: ``tests/search/test_traced.py`` checks every output against the plain loop bit
+for bit (``tests/naive_several_pool.py``).
 """
 
 import numpy as np
@@ -27,84 +28,31 @@ LEAF = 4
 
 
 @kernel
-def corner_bounds(real, low, high):
-    """The bounds ``low``, ``high`` (3,) of the triangles' corner sums ``real[c].sum(axis=0)``
-    (their centroids times 3, summed in corner order); returns the largest ``|coordinate|``, or
-    NaN when a value is not finite."""
+def largest(real):
+    """The largest ``|coordinate|`` of the triangles (C, 3, 3), NaN when a value is not finite."""
     big = 0.0
-    for a in range(3):
-        low[a], high[a] = np.inf, -np.inf
     for c in range(real.shape[0]):
-        for a in range(3):
-            x0, x1, x2 = real[c, 0, a], real[c, 1, a], real[c, 2, a]
-            s = (x0 + x1) + x2
-            if not np.isfinite(s):
-                return np.nan
-            low[a], high[a] = min(low[a], s), max(high[a], s)
-            big = max(big, abs(x0), abs(x1), abs(x2))
+        for i in range(3):
+            for a in range(3):
+                x = real[c, i, a]
+                if not np.isfinite(x):
+                    return np.nan
+                big = max(big, abs(x))
     return big
 
 
 @kernel
-def morton_codes(lo, hi, real, low, scale, code):
-    """Candidates ``lo .. hi - 1``: the Morton code (30 bits, x highest) of the centroid's corner
-    sum ``real[c].sum(axis=0)``, quantised to 10 bits an axis over ``low + [0, 1023] / scale``."""
-    for c in range(lo, hi):
-        key = 0
-        for a in range(3):
-            s = (real[c, 0, a] + real[c, 1, a]) + real[c, 2, a]
-            q = min(max((s - low[a]) * scale[a], 0.0), 1023.0)
-            key |= _spread(np.int64(q)) << (2 - a)
-        code[c] = key
-
-
-@kernel
-def sort_codes(code, order, scratch, count):
-    """``order`` (C,) int64: ``argsort(code, kind="stable")`` of 30-bit codes, by three stable
-    passes of 10 bits (least significant first); ``scratch`` (C,) int64 and ``count`` (1025,)
-    int64 are work."""
-    n = code.shape[0]
-    for c in range(n):
-        order[c] = c
-    for shift in (0, 10, 20):
-        for b in range(1025):
-            count[b] = 0
-        for c in range(n):
-            count[((code[order[c]] >> shift) & 0x3FF) + 1] += 1
-        for b in range(1024):
-            count[b + 1] += count[b]
-        for c in range(n):
-            k = order[c]
-            digit = (code[k] >> shift) & 0x3FF
-            scratch[count[digit]] = k
-            count[digit] += 1
-        for c in range(n):
-            order[c] = scratch[c]
-
-
-@kernel(inline=True)
-def _spread(q):
-    """The 10 low bits of ``q`` spread to every third bit."""
-    q = q & 0x3FF
-    q = (q | (q << 16)) & 0x30000FF
-    q = (q | (q << 8)) & 0x300F00F
-    q = (q | (q << 4)) & 0x30C30C3
-    return (q | (q << 2)) & 0x9249249
-
-
-@kernel
-def leaf_boxes(lo, hi, order, real, bbox, margin, boxes, rects):
-    """Leaves ``lo .. hi - 1``: the box (min x, y, z, max x, y, z) of the real triangles of
-    ``order[leaf * LEAF:(leaf + 1) * LEAF]``, widened by ``margin`` on every side, and the bounds
+def leaf_boxes(lo, hi, real, bbox, margin, boxes, rects):
+    """Leaves ``lo .. hi - 1``: the box (min x, y, z, max x, y, z) of the real triangles
+    ``leaf * LEAF .. (leaf + 1) * LEAF - 1``, widened by ``margin`` on every side, and the bounds
     (row0, row1, col0, col1) of their dilated screen bounds ``bbox``."""
-    n = order.shape[0]
+    n = real.shape[0]
     for leaf in range(lo, hi):
         mnx = mny = mnz = np.inf
         mxx = mxy = mxz = -np.inf
-        rects[leaf, 0], rects[leaf, 2] = bbox[order[leaf * LEAF], 0], bbox[order[leaf * LEAF], 2]
-        rects[leaf, 1], rects[leaf, 3] = bbox[order[leaf * LEAF], 1], bbox[order[leaf * LEAF], 3]
-        for k in range(leaf * LEAF, min(n, (leaf + 1) * LEAF)):
-            c = order[k]
+        rects[leaf, 0], rects[leaf, 1] = bbox[leaf * LEAF, 0], bbox[leaf * LEAF, 1]
+        rects[leaf, 2], rects[leaf, 3] = bbox[leaf * LEAF, 2], bbox[leaf * LEAF, 3]
+        for c in range(leaf * LEAF, min(n, (leaf + 1) * LEAF)):
             rects[leaf, 0], rects[leaf, 1] = min(rects[leaf, 0], bbox[c, 0]), max(rects[leaf, 1], bbox[c, 1])
             rects[leaf, 2], rects[leaf, 3] = min(rects[leaf, 2], bbox[c, 2]), max(rects[leaf, 3], bbox[c, 3])
             for i in range(3):
@@ -139,8 +87,8 @@ def parent_boxes(start, size, boxes, rects):
 
 
 @kernel
-def accept_traced(lo, hi, r0, c0, valid, origin, direction, screen, bbox, dilate, real, order, start, size, boxes,
-                  rects, slack, best_t, best_c, best_uv, stack, entry):
+def accept_traced(lo, hi, r0, c0, valid, origin, direction, screen, bbox, dilate, real, start, size, boxes, rects,
+                  slack, best_t, best_c, best_uv, stack, entry):
     """For box rows ``lo .. hi - 1`` (run by :func:`refsoft._parallel.parallel_range`; each pixel
     writes only its own outputs): ``accept_untracked``'s ``best_t``, ``best_c`` and ``best_uv``.
 
@@ -148,8 +96,6 @@ def accept_traced(lo, hi, r0, c0, valid, origin, direction, screen, bbox, dilate
     ----------
     r0, c0, valid, origin, direction, screen, bbox, dilate, real
         As ``_several.accept_untracked``.
-    order : (C,) int64
-        The candidates in the hierarchy's order.
     start, size : (L,) int64
         Each level's first row in ``boxes`` and its node count (level 0: the leaves; the last:
         the root).
@@ -165,7 +111,7 @@ def accept_traced(lo, hi, r0, c0, valid, origin, direction, screen, bbox, dilate
     stack, entry : (S,) int64, (S,) float64
         Work: the nodes still to visit and their entries (S >= 2 * L).
     """
-    n = order.shape[0]
+    n = real.shape[0]
     top = start.shape[0] - 1
     for r in range(lo, hi):
         y = r + r0 + 0.5
@@ -194,8 +140,7 @@ def accept_traced(lo, hi, r0, c0, valid, origin, direction, screen, bbox, dilate
                 if entry[depth] > bt + slack * (abs(bt) + 1.0):  # beyond the best hit
                     continue
                 if level == 0:
-                    for k in range(node * LEAF, min(n, (node + 1) * LEAF)):
-                        c = order[k]
+                    for c in range(node * LEAF, min(n, (node + 1) * LEAF)):
                         if r < bbox[c, 0] or r >= bbox[c, 1] or col < bbox[c, 2] or col >= bbox[c, 3]:
                             continue
                         p0x, p0y, p0z = real[c, 0, 0], real[c, 0, 1], real[c, 0, 2]

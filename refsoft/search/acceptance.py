@@ -21,7 +21,7 @@ from ..raster import _setup, shade
 from ..raster.rays import box_rays
 from ._several import accept, accept_near, accept_untracked
 from ._several import screen_bounds as _screen_bounds
-from ._traced import LEAF, accept_traced, corner_bounds, leaf_boxes, morton_codes, parent_boxes, sort_codes
+from ._traced import LEAF, accept_traced, largest, leaf_boxes, parent_boxes
 
 
 @dataclass(frozen=True, eq=False)
@@ -190,32 +190,24 @@ def _trace_pays(valid, bbox, h, c0, c1, real, traced):
 
 
 def _accept_traced(r0, c0, valid, origin, direction, screen, bbox, dilate, real, best_t, best_c, best_uv):
-    """Kernel ``_traced.accept_traced`` with its hierarchy: the candidates sorted (stable) along a
-    Morton curve of their centroids (``_traced.morton_codes``), :data:`._traced.LEAF` a leaf. With a
-    value that is not finite among the triangles, the candidates' own loop (the same bits)."""
-    n = len(real)
-    low, high = np.empty(3), np.empty(3)
-    big = corner_bounds(real, low, high)
+    """Kernel ``_traced.accept_traced`` with its hierarchy over the candidates in their order,
+    :data:`._traced.LEAF` a leaf. With a value that is not finite among the triangles, the
+    candidates' own loop (the same bits)."""
+    big = largest(real)
     if not np.isfinite(big):  # the boxes would not bound such a triangle: the candidates' own loop
         parallel_range(accept_untracked, valid.shape[0], r0, c0, valid, _spans(valid), origin, direction, screen,
                        bbox, dilate, real, best_t, best_c, best_uv)
         return
-    scale = np.where(high > low, 1023.0 / np.where(high > low, high - low, 1.0), 0.0)
-    code = np.empty(n, np.int64)
-    morton_codes(0, n, real, low, scale, code)
-    order = np.empty(n, np.int64)
-    sort_codes(code, order, np.empty(n, np.int64), np.empty(1025, np.int64))
-    size = [-(-n // LEAF)]
+    size = [-(-len(real) // LEAF)]
     while size[-1] > 1:
         size.append(-(-size[-1] // 2))
     size = np.asarray(size, np.int64)
     start = np.concatenate([[0], np.cumsum(size)[:-1]]).astype(np.int64)
     boxes, rects = np.empty((int(size.sum()), 6)), np.empty((int(size.sum()), 4), np.int64)
-    margin = constants.EXACT_TRACE_MARGIN * (big + 1.0)
-    leaf_boxes(0, int(size[0]), order, real, bbox, margin, boxes, rects)
+    leaf_boxes(0, int(size[0]), real, bbox, constants.EXACT_TRACE_MARGIN * (big + 1.0), boxes, rects)
     parent_boxes(start, size, boxes, rects)
-    parallel_range(accept_traced, valid.shape[0], r0, c0, valid, origin, direction, screen, bbox, dilate, real, order,
-                   start, size, boxes, rects, constants.EXACT_TRACE_MARGIN, best_t, best_c, best_uv,
+    parallel_range(accept_traced, valid.shape[0], r0, c0, valid, origin, direction, screen, bbox, dilate, real, start,
+                   size, boxes, rects, constants.EXACT_TRACE_MARGIN, best_t, best_c, best_uv,
                    work=lambda: (np.empty(2 * len(size) + 2, np.int64), np.empty(2 * len(size) + 2)))
 
 

@@ -100,27 +100,13 @@ def test_nearest_traced_equals_the_loop_and_picks_by_cover():
     assert not acceptance._trace_pays(valid, bbox[:1], h, c0, c0 + w, real, None)
 
 
-def test_morton_codes_and_their_sort():
-    """The codes interleave the quantised corner sums' bits (x highest), as a NumPy version does,
-    and the radix sort is NumPy's stable argsort."""
+def test_largest_coordinate():
+    """``_traced.largest``: the largest |coordinate| (the boxes' margin), NaN with a value that is
+    not finite."""
     rng = np.random.default_rng(7)
     real = rng.uniform(-3, 5, (500, 3, 3))
-    low, high = np.empty(3), np.empty(3)
-    big = _traced.corner_bounds(real, low, high)
-    s = (real[:, 0] + real[:, 1]) + real[:, 2]
-    assert big == np.abs(real).max() and np.array_equal(low, s.min(axis=0)) and np.array_equal(high, s.max(axis=0))
-    scale = 1023.0 / (high - low)
-    code = np.empty(len(real), np.int64)
-    _traced.morton_codes(0, len(real), real, low, scale, code)
-    q = np.clip((s - low) * scale, 0.0, 1023.0).astype(np.int64)
-    want = np.zeros(len(real), np.int64)
-    for bit in range(10):
-        for a in range(3):
-            want |= ((q[:, a] >> bit) & 1) << (3 * bit + 2 - a)
-    assert np.array_equal(code, want)
-    for keys in (code, rng.integers(0, 1 << 30, 3000), rng.integers(0, 5, 3000)):
-        order = np.empty(len(keys), np.int64)
-        _traced.sort_codes(keys, order, np.empty(len(keys), np.int64), np.empty(1025, np.int64))
-        assert np.array_equal(order, np.argsort(keys, kind="stable"))
+    assert _traced.largest(real) == np.abs(real).max()
     real[3, 2, 1] = np.inf
-    assert np.isnan(_traced.corner_bounds(real, low, high))
+    assert np.isnan(_traced.largest(real))
+    real[3, 2, 1] = np.nan
+    assert np.isnan(_traced.largest(real))
