@@ -78,15 +78,21 @@ def accept_untracked(lo, hi, r0, c0, valid, span, origin, direction, screen, bbo
             col0, col1 = max(bbox[c, 2], c0 + span[r, 0]), min(bbox[c, 3], c0 + span[r, 1])
             if col0 >= col1:
                 continue
+            # narrowed to exactly the columns that pass the three edge tests, unless an edge's
+            # values are too large to narrow: then each column is tested
+            tests = False
             if not plain:
-                col0, col1 = _narrow(col0, col1, y, ax, ay, bx, by, sign, -d * lab)
-                col0, col1 = _narrow(col0, col1, y, bx, by, cx, cy, sign, -d * lbc)
-                col0, col1 = _narrow(col0, col1, y, cx, cy, ax, ay, sign, -d * lca)
+                col0, col1, loose = _narrow_exactly(col0, col1, y, ax, ay, bx, by, sign, -d * lab)
+                tests |= loose
+                col0, col1, loose = _narrow_exactly(col0, col1, y, bx, by, cx, cy, sign, -d * lbc)
+                tests |= loose
+                col0, col1, loose = _narrow_exactly(col0, col1, y, cx, cy, ax, ay, sign, -d * lca)
+                tests |= loose
             for col in range(col0, col1):
                 j = col - c0
                 if not valid[r, j]:
                     continue
-                if not plain:
+                if tests:
                     x = col + 0.5
                     fab = sign * ((bx - ax) * (y - ay) - (by - ay) * (x - ax))
                     fbc = sign * ((cx - bx) * (y - by) - (cy - by) * (x - bx))
@@ -314,6 +320,23 @@ def _narrow(col0, col1, y, ax, ay, bx, by, sign, limit):
         return lo, col1
     return col0, col1
 
+
+
+@kernel(inline=True)
+def _narrow_exactly(col0, col1, y, ax, ay, bx, by, sign, limit):
+    """:func:`_narrow`, and whether the columns it keeps may still fail the edge's test (True only
+    where the edge's values are too large to narrow). An edge along the row (its value the same
+    at every column, the product with ``by - ay = 0`` being exactly 0) is tested once: all its
+    columns pass or none does."""
+    if not (abs(ax) < 1e100 and abs(ay) < 1e100 and abs(bx) < 1e100 and abs(by) < 1e100 and abs(limit) < 1e100):
+        return col0, col1, True
+    if by - ay == 0.0:
+        x = col0 + 0.5
+        if col0 < col1 and sign * ((bx - ax) * (y - ay) - (by - ay) * (x - ax)) < limit:
+            return col0, col0, False
+        return col0, col1, False
+    lo, hi = _narrow(col0, col1, y, ax, ay, bx, by, sign, limit)
+    return lo, hi, False
 
 
 @kernel(inline=True)
