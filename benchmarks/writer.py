@@ -124,8 +124,8 @@ def members(names, size):
                     c = time.thread_time()
                     io.write_npz_level(os.path.join(out, "m.npz"), {k: b}, FRAME_LEVEL)
                     best = min(best, 1000 * (time.thread_time() - c))
-                data = io._npy_parts(a)[1]
-                zero = sum(io._zero_bytes(data[lo:lo + NPZ_PIECE_BYTES]) * data[lo:lo + NPZ_PIECE_BYTES].size
+                data = io.npz._npy_parts(a)[1]
+                zero = sum(io.deflate.zero_bytes(data[lo:lo + NPZ_PIECE_BYTES]) * data[lo:lo + NPZ_PIECE_BYTES].size
                            for lo in range(0, data.size, NPZ_PIECE_BYTES))
                 total += best
                 print(f"  {k} | {a.dtype} | {a.nbytes / 1e6:.2f} | {100 * zero / max(1, data.size):.0f} | {best:.1f}")
@@ -147,8 +147,8 @@ def _variants():
     from refsoft.frame import outputs
 
     return {"as it is": [],
-            "CRC-32 of zero pieces by zlib.crc32": [mock.patch.object(io, "_COMBINE", [None])],
-            "untouched pages read": [mock.patch.object(io._PageMap, "untouched", lambda self, data: None)],
+            "CRC-32 of zero pieces by zlib.crc32": [mock.patch.object(io.crc, "_COMBINE", [None])],
+            "untouched pages read": [mock.patch.object(io.pages.PageMap, "untouched", lambda self, data: None)],
             "PNG by Pillow": [mock.patch.object(outputs, "write_png_rows", io.write_png)]}
 
 

@@ -135,8 +135,8 @@ def _odd_arrays():
 def small_pieces(monkeypatch):
     import refsoft.io
 
-    monkeypatch.setattr(refsoft.io, "NPZ_PIECE_BYTES", 512)
-    monkeypatch.setattr(refsoft.io, "NPZ_SAMPLE_BYTES", 64)
+    monkeypatch.setattr(refsoft.io.npz, "NPZ_PIECE_BYTES", 512)
+    monkeypatch.setattr(refsoft.io.npz, "NPZ_SAMPLE_BYTES", 64)
 
 
 @pytest.mark.parametrize("level", [1, 6, 0])
@@ -172,8 +172,8 @@ def test_zero_pieces_reuse_their_deflate_output(tmp_path, small_pieces, monkeypa
     import refsoft.io
 
     calls = []
-    real = refsoft.io._zero_piece
-    monkeypatch.setattr(refsoft.io, "_zero_piece", lambda n, level: calls.append(n) or real(n, level))
+    real = refsoft.io.deflate.zero_piece
+    monkeypatch.setattr(refsoft.io.deflate, "zero_piece", lambda n, level: calls.append(n) or real(n, level))
     data = np.zeros(512 * 9 + 100, np.uint8)  # the header in its own write, then 10 pieces
     data[512 * 3 + 7] = 1  # piece 3 is not zero; piece 9 is 100 zero bytes
     # pieces 5 and 7 the same bytes: zlib may refer from 7 to 5 only if it saw what lies between
@@ -218,14 +218,14 @@ def test_crc_of_zero_pieces_is_zlibs(monkeypatch):
 
     import refsoft.io
 
-    assert refsoft.io._crc32_combine() is not None  # found on the platforms the tests run on
+    assert refsoft.io.crc.crc32_combine() is not None  # found on the platforms the tests run on
     rng = np.random.default_rng(5)
     for n in (1, 7, 512, 4096, 1 << 18, 3 * (1 << 18) + 5):
         piece = np.zeros(n, np.uint8)
         for crc in (0, 1, 0xFFFFFFFF, int(rng.integers(0, 1 << 32))):
-            assert refsoft.io._crc_after_zeros(crc, piece) == zlib.crc32(piece, crc), (n, crc)
-    monkeypatch.setattr(refsoft.io, "_COMBINE", [None])
-    assert refsoft.io._crc_after_zeros(12345, np.zeros(999, np.uint8)) == zlib.crc32(bytes(999), 12345)
+            assert refsoft.io.crc.crc_after_zeros(crc, piece) == zlib.crc32(piece, crc), (n, crc)
+    monkeypatch.setattr(refsoft.io.crc, "_COMBINE", [None])
+    assert refsoft.io.crc.crc_after_zeros(12345, np.zeros(999, np.uint8)) == zlib.crc32(bytes(999), 12345)
 
 
 def test_zero_pieces_write_the_same_bytes_every_way(tmp_path, small_pieces, monkeypatch):
@@ -238,11 +238,11 @@ def test_zero_pieces_write_the_same_bytes_every_way(tmp_path, small_pieces, monk
     arrays = _odd_arrays()
     refsoft.io.write_npz_level(tmp_path / "direct.npz", arrays, 1)
     with monkeypatch.context() as m:
-        m.setattr(refsoft.io, "_COMBINE", [None])
+        m.setattr(refsoft.io.crc, "_COMBINE", [None])
         refsoft.io.write_npz_level(tmp_path / "crc32.npz", arrays, 1)
     with monkeypatch.context() as m:
-        m.setattr(refsoft.io, "_WRITER_STATE", ("_no_such_state",))
-        m.setattr(refsoft.io, "_write_zeros", None)  # never called
+        m.setattr(refsoft.io.npz, "_WRITER_STATE", ("_no_such_state",))
+        m.setattr(refsoft.io.npz, "_write_zeros", None)  # never called
         refsoft.io.write_npz_level(tmp_path / "through.npz", arrays, 1)
     one = (tmp_path / "direct.npz").read_bytes()
     assert (tmp_path / "crc32.npz").read_bytes() == one and (tmp_path / "through.npz").read_bytes() == one
@@ -288,7 +288,7 @@ def test_pages_never_touched_are_told_apart():
     written (even with zeros) or read is not. Arrays not in such a mapping are not asked about."""
     import mmap
 
-    from refsoft.io import _PageMap
+    from refsoft.io.pages import PageMap
 
     page = mmap.PAGESIZE
     buf = mmap.mmap(-1, 16 * page, flags=mmap.MAP_PRIVATE | mmap.MAP_ANONYMOUS)
@@ -296,7 +296,7 @@ def test_pages_never_touched_are_told_apart():
     data[3 * page + 5] = 1
     data[7 * page:8 * page] = 0  # written, with zeros
     assert data[9 * page + 100] == 0  # read: the kernel maps its zero page
-    pm = _PageMap()
+    pm = PageMap()
     try:
         addr, flags = pm.untouched(data)
         assert addr == data.__array_interface__["data"][0] and addr % page == 0
@@ -313,11 +313,11 @@ def test_pages_never_touched_are_told_apart():
 
 def test_a_file_mapping_is_never_untouched(tmp_path):
     """A file's pages not yet read hold the file, not zeros: never reported untouched."""
-    from refsoft.io import _PageMap
+    from refsoft.io.pages import PageMap
 
     (tmp_path / "f.bin").write_bytes(b"\x01" * (1 << 16))
     m = np.memmap(tmp_path / "f.bin", dtype=np.uint8, mode="c")  # private, writable, a file
-    pm = _PageMap()
+    pm = PageMap()
     try:
         assert pm.untouched(m.view(np.ndarray)) is None
     finally:
@@ -334,19 +334,20 @@ def test_untouched_pieces_are_not_read(tmp_path, small_pieces, monkeypatch):
     from refsoft import limits
 
     page = mmap.PAGESIZE
-    monkeypatch.setattr(refsoft.io, "NPZ_PIECE_BYTES", page)
+    monkeypatch.setattr(refsoft.io.npz, "NPZ_PIECE_BYTES", page)
     gbuf = limits.zeros((256, 1024), np.float32)  # 256 pages of 4 KiB, a row each
     assert gbuf.nbytes >= limits.LAZY_ZEROS_BYTES
     gbuf[20:23, 100:300] = np.random.default_rng(2).random((3, 200), dtype=np.float32)
     arrays = {"gbuffer": gbuf, "image": np.arange(3000, dtype=np.uint8)}
     looked = []
-    real = refsoft.io._zero_bytes
-    monkeypatch.setattr(refsoft.io, "_zero_bytes", lambda p: looked.append(p.size) or real(p))
+    real = refsoft.io.deflate.zero_bytes
+    for module in (refsoft.io.npz, refsoft.io.deflate):  # the writer's look and the compressor's
+        monkeypatch.setattr(module, "zero_bytes", lambda p: looked.append(p.size) or real(p))
     refsoft.io.write_npz_level(tmp_path / "a.npz", arrays, 1)
-    if page == 4096:  # pieces of one page: only the 3 written are looked at (and the image's)
+    if page == 4096:  # pieces of one page: only the 3 written are looked at (and the header, by the compressor)
         assert len(looked) == 3 + 1
     with monkeypatch.context() as m:
-        m.setattr(refsoft.io._PageMap, "untouched", lambda self, data: None)
+        m.setattr(refsoft.io.pages.PageMap, "untouched", lambda self, data: None)
         refsoft.io.write_npz_level(tmp_path / "b.npz", arrays, 1)
     assert (tmp_path / "a.npz").read_bytes() == (tmp_path / "b.npz").read_bytes()
     with np.load(tmp_path / "a.npz") as z:
