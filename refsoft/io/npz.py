@@ -133,7 +133,8 @@ def _write_member(zf, name, array, level, pages=None, float_level=None):
             return
         for lo, hi, pattern in runs:  # through the member writer, which reads every byte
             if pattern is None:
-                fh.write(data[lo:hi])
+                for a in range(lo, hi, NPZ_PIECE_BYTES):
+                    fh.write(data[a:min(hi, a + NPZ_PIECE_BYTES)])
                 continue
             for a in range(lo, hi, _chunk_bytes()):
                 deflate.pattern = pattern
@@ -154,16 +155,18 @@ def _write_runs(fh, deflate, data, runs):
     crc, out, held = fh._crc, [], 0
     for lo, hi, pattern in runs:
         if pattern is None:
-            piece = data[lo:hi]
-            crc = zlib.crc32(piece, crc)
-            out.append(deflate.compress(piece))
+            for a in range(lo, hi, NPZ_PIECE_BYTES):  # CRC-32 and deflate a piece while it is in cache
+                piece = data[a:min(hi, a + NPZ_PIECE_BYTES)]
+                crc = zlib.crc32(piece, crc)
+                out.append(deflate.compress(piece))
+                held += len(out[-1])
         else:
             for a in range(lo, hi, chunk):
                 n = min(hi, a + chunk) - a
                 piece, piece_crc = deflate.repeat(pattern, n)
                 crc = join(crc, piece_crc, n)
                 out.append(piece)
-        held += len(out[-1])
+                held += len(piece)
         if held >= chunk:  # the output held in memory stays small
             fh._compress_size += _write_out(fh, out)
             held = 0
