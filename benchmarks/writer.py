@@ -17,13 +17,14 @@ render (the GIL, caches).
 Run: ``python benchmarks/writer.py [SCENE ...] [--frames 10] [--rounds 3] [--size 1024x768]``.
 With ``--parts``: instead, one frame's files written whole (``write_frame``) from fresh copies of
 its arrays, the writer thread's CPU milliseconds (min and median of 7, the variants in turn),
-with each part of the writer turned off in turn: the zero pieces' CRC-32 combined by zlib, the
-untouched pages not read, the PNG's unfiltered rows (Pillow's
-encoder instead).
-With ``--members``: instead, one frame (frame 1 after frame 0) written member by member:
-its bytes, the share of them in zero pieces, and the writer thread's CPU milliseconds for each
-member and for the PNG (the best of 3 writes of fresh copies, whose zero pages are first read
-by the writer as the render's are).
+with each part of the writer turned off in turn: the repeating pieces written past zipfile's
+member writer (their CRC-32 combined by zlib, their untouched pages not read), the untouched pages
+not read, the float members' other bytes stored (``FRAME_FLOAT_LEVEL = 0``), the PNG's
+unfiltered rows (Pillow's encoder instead); and the npz's bytes.
+With ``--members``: instead, one frame (frame 1 after frame 0) written whole, the best of 3
+writes of fresh copies (whose untouched pages are the render's): per member its bytes, the share
+of them in repeating runs, its bytes in the file and the writer thread's CPU milliseconds; the
+PNG's; the sum and the whole write's.
 """
 
 from __future__ import annotations
@@ -107,35 +108,48 @@ def _second_frame(name, size):
 
 
 def members(names, size):
-    from refsoft import io
-    from refsoft.constants import NPZ_PIECE_BYTES
-    from refsoft.frame.outputs import FRAME_LEVEL
+    import zipfile
+    from unittest import mock
 
+    from refsoft import io
+    from refsoft.constants import NPZ_PERIOD_BYTES, NPZ_UNIT_BYTES
+    from refsoft.frame import Frame, outputs, write_frame
+
+    real_member, real_png = io.npz._write_member, outputs.write_png_rows
     out = tempfile.mkdtemp(prefix="refsoft-writer-")
     try:
         for name in names:
             arrays = _second_frame(name, size)
-            print(f"{name}: member | dtype | MB | zero pieces % | CPU ms (best of 3)")
-            total = 0.0
-            for k, a in arrays.items():
-                best = float("inf")
-                for _ in range(3):
-                    b = _fresh(a)
+            times = {}
+
+            def timed(fn, key):
+                def run(*args):
                     c = time.thread_time()
-                    io.write_npz_level(os.path.join(out, "m.npz"), {k: b}, FRAME_LEVEL)
-                    best = min(best, 1000 * (time.thread_time() - c))
+                    fn(*args)
+                    times[key(args)] = min(times.get(key(args), float("inf")), 1000 * (time.thread_time() - c))
+                return run
+
+            whole = float("inf")
+            with mock.patch.object(io.npz, "_write_member", timed(real_member, lambda a: a[1][:-4])), \
+                    mock.patch.object(outputs, "write_png_rows", timed(real_png, lambda a: "png")):
+                for _ in range(3):
+                    fr = Frame(1, {k: _fresh(a) for k, a in arrays.items()}, {})
+                    c = time.thread_time()
+                    write_frame(out, fr)
+                    whole = min(whole, 1000 * (time.thread_time() - c))
+            with zipfile.ZipFile(os.path.join(out, "frame_0001.npz")) as zf:
+                packed = {i.filename[:-4]: i.compress_size for i in zf.infolist()}
+            print(f"{name}: member | dtype | MB | repeating % | kB in the file | CPU ms (best of 3)")
+            for k, a in arrays.items():
                 data = io.npz._npy_parts(a)[1]
-                zero = sum(io.deflate.zero_bytes(data[lo:lo + NPZ_PIECE_BYTES]) * data[lo:lo + NPZ_PIECE_BYTES].size
-                           for lo in range(0, data.size, NPZ_PIECE_BYTES))
-                total += best
-                print(f"  {k} | {a.dtype} | {a.nbytes / 1e6:.2f} | {100 * zero / max(1, data.size):.0f} | {best:.1f}")
-            best = float("inf")
-            for _ in range(3):
-                c = time.thread_time()
-                io.write_png_rows(os.path.join(out, "m.png"), arrays["image"], FRAME_LEVEL)
-                best = min(best, 1000 * (time.thread_time() - c))
-            print(f"  png | uint8 | {arrays['image'].nbytes / 1e6:.2f} | | {best:.1f}")
-            print(f"  members, each in a file of its own: {total:.1f} ms; with the PNG {total + best:.1f} ms", flush=True)
+                runs = io.runs.repeating_runs(data, NPZ_UNIT_BYTES, NPZ_PERIOD_BYTES)
+                rep = sum(hi - lo for lo, hi, p in runs if p is not None)
+                print(f"  {k} | {a.dtype} | {a.nbytes / 1e6:.2f} | {100 * rep / max(1, data.size):.0f} | "
+                      f"{packed[k] / 1e3:.1f} | {times[k]:.2f}")
+            png = os.path.getsize(os.path.join(out, "frame_0001.png"))
+            print(f"  png | uint8 | {arrays['image'].nbytes / 1e6:.2f} | | {png / 1e3:.1f} | {times['png']:.2f}")
+            print(f"  sum {sum(times.values()):.1f} ms; the whole write (files, archive) {whole:.1f} ms; "
+                  f"npz {os.path.getsize(os.path.join(out, 'frame_0001.npz')) / 1e6:.2f} MB", flush=True)
     finally:
         shutil.rmtree(out, ignore_errors=True)
 
@@ -147,8 +161,9 @@ def _variants():
     from refsoft.frame import outputs
 
     return {"as it is": [],
-            "CRC-32 of zero pieces by zlib.crc32": [mock.patch.object(io.crc, "_COMBINE", [None])],
+            "every byte through zipfile's member writer": [mock.patch.object(io.crc, "_COMBINE", [None])],
             "untouched pages read": [mock.patch.object(io.pages.PageMap, "untouched", lambda self, data: None)],
+            "float bytes deflated": [mock.patch.object(outputs, "FRAME_FLOAT_LEVEL", None)],
             "PNG by Pillow": [mock.patch.object(outputs, "write_png_rows", io.write_png)]}
 
 
@@ -162,7 +177,7 @@ def parts(names, size, rounds=7):
         for name in names:
             arrays = _second_frame(name, size)
             write_frame(out, Frame(1, {k: _fresh(a) for k, a in arrays.items()}, {}))  # one-time costs
-            times = {v: [] for v in _variants()}
+            times, sizes = {v: [] for v in _variants()}, {}
             for _ in range(rounds):
                 for v, patches in _variants().items():
                     fr = Frame(1, {k: _fresh(a) for k, a in arrays.items()}, {})
@@ -172,8 +187,10 @@ def parts(names, size, rounds=7):
                         c = time.thread_time()
                         write_frame(out, fr)
                         times[v].append(1000 * (time.thread_time() - c))
+                    sizes[v] = os.path.getsize(os.path.join(out, "frame_0001.npz"))
             for v, t in times.items():
-                print(f"{name} | {v} | {min(t):.1f} | {statistics.median(t):.1f}", flush=True)
+                print(f"{name} | {v} | {min(t):.1f} | {statistics.median(t):.1f} | npz {sizes[v] / 1e6:.2f} MB",
+                      flush=True)
     finally:
         shutil.rmtree(out, ignore_errors=True)
 
