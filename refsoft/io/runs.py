@@ -52,7 +52,7 @@ def repeating_runs(data, unit: int, period: int, untouched=None, shortest: int =
         (``period`` bytes) from ``lo``, or ``pattern`` is None (other bytes).
     """
     n = data.size // unit
-    if n == 0:
+    if n < shortest or n == 0:  # no run long enough to repeat
         return [(0, data.size, None)] if data.size else []
     k, wu = period // 8, unit // 8
     read = np.arange(n) if untouched is None else np.flatnonzero(~untouched)  # the units read
