@@ -14,7 +14,10 @@ It prints per round the wall and process CPU milliseconds per frame of both, the
 machine: the loop's CPU is the render's, the command's adds the writer's and what it costs the
 render (the GIL, caches).
 
-Run: ``python benchmarks/writer.py [SCENE ...] [--frames 10] [--rounds 3] [--size 1024x768]``.
+Run: ``python benchmarks/writer.py [SCENE ...] [--frames 10] [--rounds 3] [--size 1024x768] [--bare]``;
+``--bare``: each round also runs the command with its files not written (``write_frame`` a no-op),
+its process CPU per frame: what the command costs beside its writer (the scene's loading, the
+folder, ``stats.json``, the progress).
 With ``--parts``: instead, one frame's files written whole (``write_frame``) from fresh copies of
 its arrays, the writer thread's CPU milliseconds (min and median of 7, the variants in turn),
 with each part of the writer turned off in turn: the repeating pieces written past zipfile's
@@ -46,7 +49,23 @@ from refsoft.frame import FrameDriver
 SCENES = ["kitchen", "ufo", "ants"]
 
 
-def _round(scene, name, n, size, out):
+def _command(argv, n, write=True):
+    """Wall and process CPU seconds per frame of ``refsoft ARGV`` in this process (``write=False``:
+    its frames' files not written, ``write_frame`` a no-op)."""
+    from unittest import mock
+
+    from refsoft.frame import driver
+
+    with mock.patch.object(driver, "write_frame", driver.write_frame if write else lambda out, fr: None):
+        t, c = time.perf_counter(), time.process_time()
+        code = cli_main(argv)
+        took = (time.perf_counter() - t) / n, (time.process_time() - c) / n
+    if code:
+        raise SystemExit(f"refsoft {' '.join(argv)} exited with {code}")
+    return took
+
+
+def _round(scene, name, n, size, out, bare=False):
     d = FrameDriver(scene)
     t, c = time.perf_counter(), time.process_time()
     for f in range(n):
@@ -54,32 +73,30 @@ def _round(scene, name, n, size, out):
     loop = (time.perf_counter() - t) / n, (time.process_time() - c) / n
     w, h = size
     argv = ["render", name, "--frames", str(n), "--width", str(w), "--height", str(h), "--out", out, "--overwrite"]
-    t, c = time.perf_counter(), time.process_time()
-    code = cli_main(argv)
-    cmd = (time.perf_counter() - t) / n, (time.process_time() - c) / n
-    if code:
-        raise SystemExit(f"refsoft {' '.join(argv)} exited with {code}")
+    cmd = _command(argv, n)
     with open(os.path.join(out, "stats.json")) as fh:
         frames = json.load(fh)["frames"]
     med = {k: statistics.median(f["time_ms"][k] for f in frames) for k in ("total", "write", "write_cpu")}
+    med["bare_cpu"] = 1000 * _command(argv, n, write=False)[1] if bare else float("nan")
     return loop, cmd, med
 
 
-def ratios(names, n, rounds, size):
+def ratios(names, n, rounds, size, bare=False):
     out = tempfile.mkdtemp(prefix="refsoft-writer-")
     try:
         print("scene round | loop wall, CPU ms/frame | command wall, CPU ms/frame | wall ratio | CPU ratio | "
-              "stats total, write, write_cpu ms")
+              "stats total, write, write_cpu ms" + (" | command without writing, CPU ms/frame" if bare else ""))
         for name in names:
             scene = refsoft.load_scene(name, width=size[0], height=size[1])
             FrameDriver(scene).render_frame(0)  # compiled (or loaded from the cache) outside the timing
             rows = []
             for r in range(rounds):
-                loop, cmd, med = _round(scene, name, n, size, os.path.join(out, name))
+                loop, cmd, med = _round(scene, name, n, size, os.path.join(out, name), bare)
                 rows.append((cmd[0] / loop[0], cmd[1] / loop[1]))
                 print(f"{name} {r} | {1000 * loop[0]:.0f}, {1000 * loop[1]:.0f} | {1000 * cmd[0]:.0f}, "
                       f"{1000 * cmd[1]:.0f} | {rows[-1][0]:.3f} | {rows[-1][1]:.3f} | "
-                      f"{med['total']:.0f}, {med['write']:.0f}, {med['write_cpu']:.1f}", flush=True)
+                      f"{med['total']:.0f}, {med['write']:.0f}, {med['write_cpu']:.1f}"
+                      + (f" | {med['bare_cpu']:.0f}" if bare else ""), flush=True)
             print(f"{name}: wall ratio {min(r[0] for r in rows):.3f}-{max(r[0] for r in rows):.3f}, "
                   f"CPU ratio {min(r[1] for r in rows):.3f}-{max(r[1] for r in rows):.3f}", flush=True)
     finally:
@@ -203,6 +220,7 @@ def parse_args(argv=None):
     p.add_argument("--size", default="1024x768")
     p.add_argument("--members", action="store_true")
     p.add_argument("--parts", action="store_true")
+    p.add_argument("--bare", action="store_true", help="each round also runs the command without writing files")
     return p.parse_args(argv)
 
 
@@ -214,4 +232,4 @@ if __name__ == "__main__":
     elif args.parts:
         parts(args.scenes, size)
     else:
-        ratios(args.scenes, args.frames, args.rounds, size)
+        ratios(args.scenes, args.frames, args.rounds, size, args.bare)
