@@ -24,6 +24,8 @@ with each part of the writer turned off in turn: the repeating pieces written pa
 member writer (their CRC-32 combined by zlib, their untouched pages not read), the untouched pages
 not read, the float members' other bytes stored (``FRAME_FLOAT_LEVEL = 0``), the PNG's
 unfiltered rows (Pillow's encoder instead); and the npz's bytes.
+With ``--png``: instead, the frame's PNG deflated three ways (the command's, stored, "Up"
+filter with ``Z_RLE``): CPU milliseconds and bytes.
 With ``--members``: instead, one frame (frame 1 after frame 0) written whole, the best of 3
 writes of fresh copies (whose untouched pages are the render's): per member its bytes, the share
 of them in repeating runs, its bytes in the file and the writer thread's CPU milliseconds; the
@@ -212,6 +214,46 @@ def parts(names, size, rounds=7):
         shutil.rmtree(out, ignore_errors=True)
 
 
+def png(names, size, rounds=7):
+    """The frame's PNG (frame 1's image) written at zlib level 1 unfiltered (as the command writes
+    it), at level 0 (stored), and with every row's "Up" filter and zlib's run-length strategy
+    (``Z_RLE``): the image's deflate CPU milliseconds (min of 7; the filter's own NumPy time
+    included) and the PNG's bytes."""
+    import zlib
+
+    print("scene | PNG | CPU ms (min of 7) | bytes")
+    for name in names:
+        img = _second_frame(name, size)["image"]
+        h = img.shape[0]
+        flat = img.reshape(h, -1)
+
+        def unfiltered():
+            rows = np.zeros((h, 1 + flat.shape[1]), np.uint8)
+            rows[:, 1:] = flat
+            return rows
+
+        def up():
+            rows = np.empty((h, 1 + flat.shape[1]), np.uint8)
+            rows[:, 0] = 2
+            rows[0, 1:] = flat[0]
+            np.subtract(flat[1:], flat[:-1], out=rows[1:, 1:])
+            return rows
+
+        def rle(rows):
+            z = zlib.compressobj(1, zlib.DEFLATED, 15, 8, zlib.Z_RLE)
+            return z.compress(rows) + z.flush()
+
+        for what, rows, deflate in (("level 1, unfiltered", unfiltered, lambda r: zlib.compress(r, 1)),
+                                    ("level 0 (stored)", unfiltered, lambda r: zlib.compress(r, 0)),
+                                    ("level 1, Up filter, Z_RLE", up, rle)):
+            best = float("inf")
+            for _ in range(rounds):
+                c = time.thread_time()
+                data = deflate(rows())
+                best = min(best, 1000 * (time.thread_time() - c))
+            print(f"{name} | {what} | {best:.2f} | {len(data)}", flush=True)
+
+
 def parse_args(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("scenes", nargs="*", default=SCENES)
@@ -220,6 +262,7 @@ def parse_args(argv=None):
     p.add_argument("--size", default="1024x768")
     p.add_argument("--members", action="store_true")
     p.add_argument("--parts", action="store_true")
+    p.add_argument("--png", action="store_true")
     p.add_argument("--bare", action="store_true", help="each round also runs the command without writing files")
     return p.parse_args(argv)
 
@@ -229,6 +272,8 @@ if __name__ == "__main__":
     size = tuple(int(v) for v in args.size.split("x"))
     if args.members:
         members(args.scenes, size)
+    elif args.png:
+        png(args.scenes, size)
     elif args.parts:
         parts(args.scenes, size)
     else:
