@@ -290,22 +290,24 @@ def test_crc_combine_is_zlibs():
             assert combine(crc, zlib.crc32(piece), n) == zlib.crc32(piece, crc), (n, crc)
 
 
-def test_repeating_pieces_write_the_same_bytes_every_way(tmp_path, small_pieces, monkeypatch):
+@pytest.mark.parametrize("float_level", [None, 0])
+def test_repeating_pieces_write_the_same_bytes_every_way(tmp_path, small_pieces, monkeypatch, float_level):
     """Repeating pieces written past zipfile's member writer (CRC combined) or through it (where
-    the C library is missing or the writer's state unknown: every byte read) give one file."""
+    the C library is missing or the writer's state unknown: every byte read) give one file, the
+    float members' other bytes deflated or stored."""
     import zipfile
 
     import refsoft.io
 
     arrays = _odd_arrays()
-    refsoft.io.write_npz_level(tmp_path / "direct.npz", arrays, 1)
+    refsoft.io.write_npz_level(tmp_path / "direct.npz", arrays, 1, float_level)
     with monkeypatch.context() as m:
         m.setattr(refsoft.io.crc, "_COMBINE", [None])
-        refsoft.io.write_npz_level(tmp_path / "crc32.npz", arrays, 1)
+        refsoft.io.write_npz_level(tmp_path / "crc32.npz", arrays, 1, float_level)
     with monkeypatch.context() as m:
         m.setattr(refsoft.io.npz, "_WRITER_STATE", ("_no_such_state",))
         m.setattr(refsoft.io.npz, "_write_runs", None)  # never called
-        refsoft.io.write_npz_level(tmp_path / "through.npz", arrays, 1)
+        refsoft.io.write_npz_level(tmp_path / "through.npz", arrays, 1, float_level)
     one = (tmp_path / "direct.npz").read_bytes()
     assert (tmp_path / "crc32.npz").read_bytes() == one and (tmp_path / "through.npz").read_bytes() == one
     with zipfile.ZipFile(tmp_path / "direct.npz") as zf:
