@@ -1,6 +1,7 @@
-"""A frame's ``.npz``: the archive ``np.savez_compressed`` writes, at a chosen zlib level, with its
-G-buffers' zero pieces deflated once (:mod:`refsoft.io.deflate`), their CRC-32 combined
-(:mod:`refsoft.io.crc`) and their untouched pages not read (:mod:`refsoft.io.pages`)."""
+"""A frame's ``.npz``: the archive ``np.savez_compressed`` writes, at a chosen zlib level, with
+its repeating runs (zeros, an id, a colour: :mod:`refsoft.io.runs`) deflated once
+(:mod:`refsoft.io.deflate`), their CRC-32 combined (:mod:`refsoft.io.crc`) and their untouched
+pages not read (:mod:`refsoft.io.pages`)."""
 
 from __future__ import annotations
 
