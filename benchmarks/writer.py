@@ -14,16 +14,22 @@ It prints per round the wall and process CPU milliseconds per frame of both, the
 machine: the loop's CPU is the render's, the command's adds the writer's and what it costs the
 render (the GIL, caches).
 
-Run: ``python benchmarks/writer.py [SCENE ...] [--frames 10] [--rounds 3] [--size 1024x768]``.
+Run: ``python benchmarks/writer.py [SCENE ...] [--frames 10] [--rounds 3] [--size 1024x768] [--bare]``;
+``--bare``: each round also runs the command with its files not written (``write_frame`` a no-op),
+its process CPU per frame: what the command costs beside its writer (the scene's loading, the
+folder, ``stats.json``, the progress).
 With ``--parts``: instead, one frame's files written whole (``write_frame``) from fresh copies of
 its arrays, the writer thread's CPU milliseconds (min and median of 7, the variants in turn),
-with each part of the writer turned off in turn: the zero pieces' CRC-32 combined by zlib, the
-untouched pages not read, the PNG's unfiltered rows (Pillow's
-encoder instead).
-With ``--members``: instead, one frame (frame 1 after frame 0) written member by member:
-its bytes, the share of them in zero pieces, and the writer thread's CPU milliseconds for each
-member and for the PNG (the best of 3 writes of fresh copies, whose zero pages are first read
-by the writer as the render's are).
+with each part of the writer turned off in turn: the repeating pieces written past zipfile's
+member writer (their CRC-32 combined by zlib, their untouched pages not read), the untouched pages
+not read, the float members' other bytes stored (``FRAME_FLOAT_LEVEL = 0``), the PNG's
+unfiltered rows (Pillow's encoder instead); and the npz's bytes.
+With ``--png``: instead, the frame's PNG deflated three ways (the command's, stored, "Up"
+filter with ``Z_RLE``): CPU milliseconds and bytes.
+With ``--members``: instead, one frame (frame 1 after frame 0) written whole, the best of 3
+writes of fresh copies (whose untouched pages are the render's): per member its bytes, the share
+of them in repeating runs, its bytes in the file and the writer thread's CPU milliseconds; the
+PNG's; the sum and the whole write's.
 """
 
 from __future__ import annotations
@@ -45,7 +51,23 @@ from refsoft.frame import FrameDriver
 SCENES = ["kitchen", "ufo", "ants"]
 
 
-def _round(scene, name, n, size, out):
+def _command(argv, n, write=True):
+    """Wall and process CPU seconds per frame of ``refsoft ARGV`` in this process (``write=False``:
+    its frames' files not written, ``write_frame`` a no-op)."""
+    from unittest import mock
+
+    from refsoft.frame import driver
+
+    with mock.patch.object(driver, "write_frame", driver.write_frame if write else lambda out, fr: None):
+        t, c = time.perf_counter(), time.process_time()
+        code = cli_main(argv)
+        took = (time.perf_counter() - t) / n, (time.process_time() - c) / n
+    if code:
+        raise SystemExit(f"refsoft {' '.join(argv)} exited with {code}")
+    return took
+
+
+def _round(scene, name, n, size, out, bare=False):
     d = FrameDriver(scene)
     t, c = time.perf_counter(), time.process_time()
     for f in range(n):
@@ -53,32 +75,30 @@ def _round(scene, name, n, size, out):
     loop = (time.perf_counter() - t) / n, (time.process_time() - c) / n
     w, h = size
     argv = ["render", name, "--frames", str(n), "--width", str(w), "--height", str(h), "--out", out, "--overwrite"]
-    t, c = time.perf_counter(), time.process_time()
-    code = cli_main(argv)
-    cmd = (time.perf_counter() - t) / n, (time.process_time() - c) / n
-    if code:
-        raise SystemExit(f"refsoft {' '.join(argv)} exited with {code}")
+    cmd = _command(argv, n)
     with open(os.path.join(out, "stats.json")) as fh:
         frames = json.load(fh)["frames"]
     med = {k: statistics.median(f["time_ms"][k] for f in frames) for k in ("total", "write", "write_cpu")}
+    med["bare_cpu"] = 1000 * _command(argv, n, write=False)[1] if bare else float("nan")
     return loop, cmd, med
 
 
-def ratios(names, n, rounds, size):
+def ratios(names, n, rounds, size, bare=False):
     out = tempfile.mkdtemp(prefix="refsoft-writer-")
     try:
         print("scene round | loop wall, CPU ms/frame | command wall, CPU ms/frame | wall ratio | CPU ratio | "
-              "stats total, write, write_cpu ms")
+              "stats total, write, write_cpu ms" + (" | command without writing, CPU ms/frame" if bare else ""))
         for name in names:
             scene = refsoft.load_scene(name, width=size[0], height=size[1])
             FrameDriver(scene).render_frame(0)  # compiled (or loaded from the cache) outside the timing
             rows = []
             for r in range(rounds):
-                loop, cmd, med = _round(scene, name, n, size, os.path.join(out, name))
+                loop, cmd, med = _round(scene, name, n, size, os.path.join(out, name), bare)
                 rows.append((cmd[0] / loop[0], cmd[1] / loop[1]))
                 print(f"{name} {r} | {1000 * loop[0]:.0f}, {1000 * loop[1]:.0f} | {1000 * cmd[0]:.0f}, "
                       f"{1000 * cmd[1]:.0f} | {rows[-1][0]:.3f} | {rows[-1][1]:.3f} | "
-                      f"{med['total']:.0f}, {med['write']:.0f}, {med['write_cpu']:.1f}", flush=True)
+                      f"{med['total']:.0f}, {med['write']:.0f}, {med['write_cpu']:.1f}"
+                      + (f" | {med['bare_cpu']:.0f}" if bare else ""), flush=True)
             print(f"{name}: wall ratio {min(r[0] for r in rows):.3f}-{max(r[0] for r in rows):.3f}, "
                   f"CPU ratio {min(r[1] for r in rows):.3f}-{max(r[1] for r in rows):.3f}", flush=True)
     finally:
@@ -107,35 +127,48 @@ def _second_frame(name, size):
 
 
 def members(names, size):
-    from refsoft import io
-    from refsoft.constants import NPZ_PIECE_BYTES
-    from refsoft.frame.outputs import FRAME_LEVEL
+    import zipfile
+    from unittest import mock
 
+    from refsoft import io
+    from refsoft.constants import NPZ_PERIOD_BYTES, NPZ_UNIT_BYTES
+    from refsoft.frame import Frame, outputs, write_frame
+
+    real_member, real_png = io.npz._write_member, outputs.write_png_rows
     out = tempfile.mkdtemp(prefix="refsoft-writer-")
     try:
         for name in names:
             arrays = _second_frame(name, size)
-            print(f"{name}: member | dtype | MB | zero pieces % | CPU ms (best of 3)")
-            total = 0.0
-            for k, a in arrays.items():
-                best = float("inf")
-                for _ in range(3):
-                    b = _fresh(a)
+            times = {}
+
+            def timed(fn, key):
+                def run(*args):
                     c = time.thread_time()
-                    io.write_npz_level(os.path.join(out, "m.npz"), {k: b}, FRAME_LEVEL)
-                    best = min(best, 1000 * (time.thread_time() - c))
+                    fn(*args)
+                    times[key(args)] = min(times.get(key(args), float("inf")), 1000 * (time.thread_time() - c))
+                return run
+
+            whole = float("inf")
+            with mock.patch.object(io.npz, "_write_member", timed(real_member, lambda a: a[1][:-4])), \
+                    mock.patch.object(outputs, "write_png_rows", timed(real_png, lambda a: "png")):
+                for _ in range(3):
+                    fr = Frame(1, {k: _fresh(a) for k, a in arrays.items()}, {})
+                    c = time.thread_time()
+                    write_frame(out, fr)
+                    whole = min(whole, 1000 * (time.thread_time() - c))
+            with zipfile.ZipFile(os.path.join(out, "frame_0001.npz")) as zf:
+                packed = {i.filename[:-4]: i.compress_size for i in zf.infolist()}
+            print(f"{name}: member | dtype | MB | repeating % | kB in the file | CPU ms (best of 3)")
+            for k, a in arrays.items():
                 data = io.npz._npy_parts(a)[1]
-                zero = sum(io.deflate.zero_bytes(data[lo:lo + NPZ_PIECE_BYTES]) * data[lo:lo + NPZ_PIECE_BYTES].size
-                           for lo in range(0, data.size, NPZ_PIECE_BYTES))
-                total += best
-                print(f"  {k} | {a.dtype} | {a.nbytes / 1e6:.2f} | {100 * zero / max(1, data.size):.0f} | {best:.1f}")
-            best = float("inf")
-            for _ in range(3):
-                c = time.thread_time()
-                io.write_png_rows(os.path.join(out, "m.png"), arrays["image"], FRAME_LEVEL)
-                best = min(best, 1000 * (time.thread_time() - c))
-            print(f"  png | uint8 | {arrays['image'].nbytes / 1e6:.2f} | | {best:.1f}")
-            print(f"  members, each in a file of its own: {total:.1f} ms; with the PNG {total + best:.1f} ms", flush=True)
+                runs = io.runs.repeating_runs(data, NPZ_UNIT_BYTES, NPZ_PERIOD_BYTES)
+                rep = sum(hi - lo for lo, hi, p in runs if p is not None)
+                print(f"  {k} | {a.dtype} | {a.nbytes / 1e6:.2f} | {100 * rep / max(1, data.size):.0f} | "
+                      f"{packed[k] / 1e3:.1f} | {times[k]:.2f}")
+            png = os.path.getsize(os.path.join(out, "frame_0001.png"))
+            print(f"  png | uint8 | {arrays['image'].nbytes / 1e6:.2f} | | {png / 1e3:.1f} | {times['png']:.2f}")
+            print(f"  sum {sum(times.values()):.1f} ms; the whole write (files, archive) {whole:.1f} ms; "
+                  f"npz {os.path.getsize(os.path.join(out, 'frame_0001.npz')) / 1e6:.2f} MB", flush=True)
     finally:
         shutil.rmtree(out, ignore_errors=True)
 
@@ -147,8 +180,9 @@ def _variants():
     from refsoft.frame import outputs
 
     return {"as it is": [],
-            "CRC-32 of zero pieces by zlib.crc32": [mock.patch.object(io.crc, "_COMBINE", [None])],
+            "every byte through zipfile's member writer": [mock.patch.object(io.crc, "_COMBINE", [None])],
             "untouched pages read": [mock.patch.object(io.pages.PageMap, "untouched", lambda self, data: None)],
+            "float bytes deflated": [mock.patch.object(outputs, "FRAME_FLOAT_LEVEL", None)],
             "PNG by Pillow": [mock.patch.object(outputs, "write_png_rows", io.write_png)]}
 
 
@@ -162,7 +196,7 @@ def parts(names, size, rounds=7):
         for name in names:
             arrays = _second_frame(name, size)
             write_frame(out, Frame(1, {k: _fresh(a) for k, a in arrays.items()}, {}))  # one-time costs
-            times = {v: [] for v in _variants()}
+            times, sizes = {v: [] for v in _variants()}, {}
             for _ in range(rounds):
                 for v, patches in _variants().items():
                     fr = Frame(1, {k: _fresh(a) for k, a in arrays.items()}, {})
@@ -172,10 +206,52 @@ def parts(names, size, rounds=7):
                         c = time.thread_time()
                         write_frame(out, fr)
                         times[v].append(1000 * (time.thread_time() - c))
+                    sizes[v] = os.path.getsize(os.path.join(out, "frame_0001.npz"))
             for v, t in times.items():
-                print(f"{name} | {v} | {min(t):.1f} | {statistics.median(t):.1f}", flush=True)
+                print(f"{name} | {v} | {min(t):.1f} | {statistics.median(t):.1f} | npz {sizes[v] / 1e6:.2f} MB",
+                      flush=True)
     finally:
         shutil.rmtree(out, ignore_errors=True)
+
+
+def png(names, size, rounds=7):
+    """The frame's PNG (frame 1's image) written at zlib level 1 unfiltered (as the command writes
+    it), at level 0 (stored), and with every row's "Up" filter and zlib's run-length strategy
+    (``Z_RLE``): the image's deflate CPU milliseconds (min of 7; the filter's own NumPy time
+    included) and the PNG's bytes."""
+    import zlib
+
+    print("scene | PNG | CPU ms (min of 7) | bytes")
+    for name in names:
+        img = _second_frame(name, size)["image"]
+        h = img.shape[0]
+        flat = img.reshape(h, -1)
+
+        def unfiltered():
+            rows = np.zeros((h, 1 + flat.shape[1]), np.uint8)
+            rows[:, 1:] = flat
+            return rows
+
+        def up():
+            rows = np.empty((h, 1 + flat.shape[1]), np.uint8)
+            rows[:, 0] = 2
+            rows[0, 1:] = flat[0]
+            np.subtract(flat[1:], flat[:-1], out=rows[1:, 1:])
+            return rows
+
+        def rle(rows):
+            z = zlib.compressobj(1, zlib.DEFLATED, 15, 8, zlib.Z_RLE)
+            return z.compress(rows) + z.flush()
+
+        for what, rows, deflate in (("level 1, unfiltered", unfiltered, lambda r: zlib.compress(r, 1)),
+                                    ("level 0 (stored)", unfiltered, lambda r: zlib.compress(r, 0)),
+                                    ("level 1, Up filter, Z_RLE", up, rle)):
+            best = float("inf")
+            for _ in range(rounds):
+                c = time.thread_time()
+                data = deflate(rows())
+                best = min(best, 1000 * (time.thread_time() - c))
+            print(f"{name} | {what} | {best:.2f} | {len(data)}", flush=True)
 
 
 def parse_args(argv=None):
@@ -186,6 +262,8 @@ def parse_args(argv=None):
     p.add_argument("--size", default="1024x768")
     p.add_argument("--members", action="store_true")
     p.add_argument("--parts", action="store_true")
+    p.add_argument("--png", action="store_true")
+    p.add_argument("--bare", action="store_true", help="each round also runs the command without writing files")
     return p.parse_args(argv)
 
 
@@ -194,7 +272,9 @@ if __name__ == "__main__":
     size = tuple(int(v) for v in args.size.split("x"))
     if args.members:
         members(args.scenes, size)
+    elif args.png:
+        png(args.scenes, size)
     elif args.parts:
         parts(args.scenes, size)
     else:
-        ratios(args.scenes, args.frames, args.rounds, size)
+        ratios(args.scenes, args.frames, args.rounds, size, args.bare)

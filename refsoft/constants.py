@@ -33,9 +33,21 @@ MAX_VERTICES = 1 << 26
 MAX_TRIANGLES = 1 << 26
 
 # --- Frame files (spec section 7; refsoft.io.write_npz_level) ---------------------------
-#: Bytes of an array a frame's ``.npz`` writer hands zlib at a time: a piece that is all zero
-#: bytes (most of a G-buffer: the pixels outside the reflector) is not compressed again but
-#: written as the deflate output of that many zeros, computed once.
+#: Bytes of an array a frame's ``.npz`` writer looks at as one unit: a run of units that repeat
+#: the same :data:`NPZ_PERIOD_BYTES` (zeros: most of a G-buffer, the pixels outside the
+#: reflector; one id or colour: the background of an id map or image) is not compressed again but
+#: written as zlib's output for such bytes, computed once (a page: the G-buffers' rows that
+#: cross the reflector are mostly zero pages).
+NPZ_UNIT_BYTES = 1 << 12
+#: The period of a repeating run: 24 bytes, a whole number of pixels of every dtype a frame holds
+#: (uint8, int32, float32, float64; one value or three).
+NPZ_PERIOD_BYTES = 24
+#: Units of the shortest run written from the cache: a shorter one is deflated with the bytes
+#: around it (a full flush ends zlib's block, and a block's Huffman tables cost more CPU and
+#: bytes than zlib's run-length matches over a few pages).
+NPZ_SHORTEST_RUN = 4
+#: Largest run written as one cached deflate output (rounded down to a multiple of
+#: ``NPZ_UNIT_BYTES`` and ``NPZ_PERIOD_BYTES``); a longer run is written as several.
 NPZ_PIECE_BYTES = 1 << 18
 #: Bytes of an array sampled (in 4 places) to decide whether deflating it pays; arrays smaller
 #: than 4 samples are always deflated.

@@ -13,10 +13,15 @@ from ..io import write_npz, write_npz_level, write_png, write_png_rows
 #: zlib level of ``frame_NNNN.npz`` and ``frame_NNNN.png`` in a run's folder: level 1 costs half of
 #: level 6's CPU time for files ~10% (npz) and ~45% (PNG) larger, so that the background write
 #: competes less with the next frame's render for the cores. The npz writer
-#: (:func:`refsoft.io.write_npz_level`) also skips compressing the G-buffers' runs of zeros and
-#: stores the high-entropy floats; the PNG's rows are not filtered (:func:`refsoft.io.write_png_rows`).
+#: (:func:`refsoft.io.write_npz_level`) also skips compressing the runs that repeat (the
+#: G-buffers' zeros, the id maps' and image's background) and stores the high-entropy floats; the
+#: PNG's rows are not filtered (:func:`refsoft.io.write_png_rows`).
 #: (The golden set keeps ``np.savez_compressed``'s level 6: :func:`refsoft.io.write_npz`.)
 FRAME_LEVEL = 1
+#: zlib level of the float members' bytes outside their runs of zeros (a G-buffer's reflector
+#: pixels): stored. Deflating them (zlib's run-length strategy) halves them at ~100 KB per CPU
+#: millisecond, a tenth of what it buys on the id maps and the image (docs/benchmarks.md).
+FRAME_FLOAT_LEVEL = 0
 
 
 def frame_basename(index: int) -> str:
@@ -29,7 +34,7 @@ def write_frame(out_dir, frame):
     ``np.savez_compressed`` would hold, bit for bit) and ``frame_NNNN.png`` (its rows unfiltered)
     atomically, both at zlib level :data:`FRAME_LEVEL`."""
     base = os.path.join(os.fspath(out_dir), frame_basename(frame.index))
-    write_npz_level(base + ".npz", frame.arrays, FRAME_LEVEL)
+    write_npz_level(base + ".npz", frame.arrays, FRAME_LEVEL, FRAME_FLOAT_LEVEL)
     write_png_rows(base + ".png", frame.arrays[keys.IMAGE], FRAME_LEVEL)
 
 

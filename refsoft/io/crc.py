@@ -1,27 +1,18 @@
-"""The CRC-32 of zero bytes after a running CRC-32, without reading them: zlib's
-``crc32_combine64`` (through ctypes: Python's zlib module does not expose it)."""
+"""The CRC-32 of two byte strings joined, from their CRC-32s: zlib's ``crc32_combine64`` (through
+ctypes: Python's zlib module does not expose it)."""
 
 from __future__ import annotations
 
 import zlib
 
-_ZERO_CRCS = {}
-_COMBINE = []  # [zlib's crc32_combine64 or None], looked up at the first zero piece
+_COMBINE = []  # [zlib's crc32_combine64 or None], looked up at the first call
 
 
-def crc_after_zeros(crc: int, piece) -> int:
-    """``zlib.crc32(piece, crc)`` for a piece of zero bytes: zlib's ``crc32_combine64`` of ``crc``
-    and the CRC-32 of that many zeros (computed once per size), without reading the piece; where
-    the C library is not found, ``zlib.crc32`` itself."""
+def combine():
+    """zlib's ``crc32_combine64(crc1, crc2, len2)``, or None where the C library is not found."""
     if not _COMBINE:
         _COMBINE.append(crc32_combine())
-    combine, n = _COMBINE[0], piece.size
-    if combine is None:
-        return zlib.crc32(piece, crc)
-    zeros = _ZERO_CRCS.get(n)
-    if zeros is None:
-        zeros = _ZERO_CRCS[n] = zlib.crc32(bytes(n))
-    return combine(crc, zeros, n)
+    return _COMBINE[0]
 
 
 def crc32_combine():

@@ -1,5 +1,6 @@
-"""A raw deflate stream (a zip member's) fed in pieces, whose pieces of zero bytes are written as
-zlib's output for that many zeros, computed once, instead of being compressed again."""
+"""A raw deflate stream (a zip member's) fed in pieces, whose pieces that repeat a short pattern
+(zeros, one id, one colour) are written as zlib's output for such bytes, computed once, instead of
+being compressed again."""
 
 from __future__ import annotations
 
@@ -7,54 +8,64 @@ import zlib
 
 import numpy as np
 
-
-def zero_bytes(piece) -> bool:
-    """Whether (n,) uint8 ``piece`` is zero bytes only (the bytes, not the values: -0.0 is not)."""
-    words = piece.view(np.uint64) if piece.size % 8 == 0 else piece
-    return piece.size > 0 and not words.max()
-
-
-_ZERO_PIECES = {}
+#: (pattern, n, level, strategy) -> (deflate output, CRC-32) of a repeating piece.
+_PIECES = {}
+#: Entries kept at most: a run's patterns are few (zeros, the background's ids and colours), but a
+#: long run of varied scenes should not grow the cache without bound.
+_MAX_PIECES = 4096
 
 
-def zero_piece(n: int, level: int) -> bytes:
-    """zlib's raw deflate output for ``n`` zero bytes followed by a full flush, from a fresh
-    compressor: it refers to nothing before it and ends on a byte boundary, so it can follow any
-    full flush of another stream (computed once per size and level)."""
-    key = (n, level)
-    piece = _ZERO_PIECES.get(key)
+def repeat_bytes(pattern: bytes, n: int) -> np.ndarray:
+    """(n,) uint8: ``pattern`` repeated from its first byte, cut to ``n`` bytes."""
+    p = np.frombuffer(pattern, np.uint8)
+    return np.tile(p, -(-n // p.size))[:n]
+
+
+def repeat_piece(pattern: bytes, n: int, level: int, strategy: int = zlib.Z_DEFAULT_STRATEGY):
+    """zlib's raw deflate output for ``n`` bytes repeating ``pattern``, followed by a full flush,
+    from a fresh compressor (it refers to nothing before it and ends on a byte boundary, so it can
+    follow any full flush of another stream), and the CRC-32 of those bytes; computed once per
+    pattern, size, level and strategy."""
+    key = (pattern, n, level, strategy)
+    piece = _PIECES.get(key)
     if piece is None:
-        z = zlib.compressobj(level, zlib.DEFLATED, -15)
-        piece = _ZERO_PIECES[key] = z.compress(bytes(n)) + z.flush(zlib.Z_FULL_FLUSH)
+        data = repeat_bytes(pattern, n)
+        z = zlib.compressobj(level, zlib.DEFLATED, -15, 8, strategy)
+        if len(_PIECES) >= _MAX_PIECES:
+            _PIECES.clear()
+        piece = _PIECES[key] = (z.compress(data) + z.flush(zlib.Z_FULL_FLUSH), zlib.crc32(data))
     return piece
 
 
 class PieceDeflate:
     """A raw deflate stream (what zipfile's ZIP_DEFLATED compressor writes) fed in pieces: a piece
-    of zero bytes only ends the stream's open block with a full flush (after which zlib refers
-    to nothing earlier) and is written as :func:`zero_piece` (:meth:`zeros`); any other piece
-    goes to zlib. ``check``: whether :meth:`compress` looks for zero pieces itself (off when the
-    caller hands those to :meth:`zeros`)."""
+    that repeats a pattern ends the stream's open block with a full flush (after which zlib refers
+    to nothing earlier) and is written as :func:`repeat_piece` (:meth:`repeat`); any other piece
+    goes to zlib at ``other_level`` (default ``level``; 0: stored blocks). ``pattern``: set by a
+    caller that hands the next piece through zipfile's member writer (which calls
+    :meth:`compress`), to say that it repeats this pattern."""
 
-    def __init__(self, level: int, strategy: int = zlib.Z_DEFAULT_STRATEGY):
+    def __init__(self, level: int, strategy: int = zlib.Z_DEFAULT_STRATEGY, other_level=None):
         self._level = level
-        self._z = zlib.compressobj(level, zlib.DEFLATED, -15, 8, strategy)
+        self._strategy = strategy
+        self._z = zlib.compressobj(level if other_level is None else other_level, zlib.DEFLATED, -15, 8, strategy)
         self._open = False  # input given to self._z since its last full flush
-        self.check = True
+        self.pattern = None
 
     def compress(self, data) -> bytes:
-        if self.check:
-            piece = np.frombuffer(data, np.uint8)
-            if zero_bytes(piece):
-                return self.zeros(piece.size)
+        if self.pattern is not None:
+            pattern, self.pattern = self.pattern, None
+            return self.repeat(pattern, memoryview(data).nbytes)[0]
         self._open = True
         return self._z.compress(data)
 
-    def zeros(self, n: int) -> bytes:
-        """The deflate output of ``n`` zero bytes, after the stream's open block."""
+    def repeat(self, pattern: bytes, n: int):
+        """The deflate output of ``n`` bytes repeating ``pattern``, after the stream's open block,
+        and the CRC-32 of those bytes."""
         out = self._z.flush(zlib.Z_FULL_FLUSH) if self._open else b""
         self._open = False
-        return out + zero_piece(n, self._level)
+        piece, crc = repeat_piece(pattern, n, self._level, self._strategy)
+        return out + piece, crc
 
     def flush(self) -> bytes:
         return self._z.flush()

@@ -1,42 +1,52 @@
-"""A frame's ``.npz``: the archive ``np.savez_compressed`` writes, at a chosen zlib level, with its
-G-buffers' zero pieces deflated once (:mod:`refsoft.io.deflate`), their CRC-32 combined
-(:mod:`refsoft.io.crc`) and their untouched pages not read (:mod:`refsoft.io.pages`)."""
+"""A frame's ``.npz``: the archive ``np.savez_compressed`` writes, at a chosen zlib level, with
+its repeating runs (zeros, an id, a colour: :mod:`refsoft.io.runs`) deflated once
+(:mod:`refsoft.io.deflate`), their CRC-32 combined (:mod:`refsoft.io.crc`) and their untouched
+pages not read (:mod:`refsoft.io.pages`)."""
 
 from __future__ import annotations
 
 import io
+import math
 import zipfile
 import zlib
 
 import numpy as np
 
-from ..constants import NPZ_PIECE_BYTES, NPZ_SAMPLE_BYTES, NPZ_STORE_RATIO
+from ..constants import (NPZ_PERIOD_BYTES, NPZ_PIECE_BYTES, NPZ_SAMPLE_BYTES, NPZ_SHORTEST_RUN, NPZ_STORE_RATIO,
+                         NPZ_UNIT_BYTES)
 from .atomic import atomic_path
-from .crc import crc_after_zeros
-from .deflate import PieceDeflate, zero_bytes
-from .pages import PageMap, untouched_piece
+from .crc import combine
+from .deflate import PieceDeflate
+from .pages import PageMap
+from .runs import repeating_runs, untouched_units
 
 
-def write_npz_level(path, arrays, level: int):
+def write_npz_level(path, arrays, level: int, float_level=None):
     """Write ``arrays`` as an ``.npz`` to ``path`` atomically, deflated at zlib ``level`` (0-9).
 
     The archive is the one ``np.savez_compressed`` writes (one ``NAME.npy`` member per array, in
     order, zip64 members, the ``.npy`` header NumPy writes) but for how each member's bytes are
     compressed, so ``np.load`` reads the same arrays bit for bit:
 
-    - a member is deflated in pieces of :data:`~refsoft.constants.NPZ_PIECE_BYTES`; a piece of
-      zero bytes only (most of a G-buffer) is written as zlib's output for that many zeros after
-      a full flush, computed once (:func:`~refsoft.io.deflate.zero_piece`), instead of being compressed again;
+    - a member is cut into runs (:func:`~refsoft.io.runs.repeating_runs`): runs of
+      :data:`~refsoft.constants.NPZ_UNIT_BYTES` units that repeat
+      :data:`~refsoft.constants.NPZ_PERIOD_BYTES` (zeros: most of a G-buffer; one id or colour:
+      the background of the id maps and the image) and other bytes. A repeating run is written
+      as zlib's output for such bytes after a full flush, computed once per pattern and size
+      (:func:`~refsoft.io.deflate.repeat_piece`), instead of being compressed again; its CRC-32
+      is combined by zlib (``crc32_combine64``) from the piece's, and a unit whose pages were
+      never touched (an anonymous mapping's, as :func:`refsoft.limits.zeros` makes them;
+      :class:`~refsoft.io.pages.PageMap`) is not read at all;
     - a member whose samples deflate to more than :data:`~refsoft.constants.NPZ_STORE_RATIO` of
-      their size (high-entropy floats) is stored uncompressed;
-    - a zero piece's CRC-32 is combined by zlib (``crc32_combine64``) from that of zeros, and a
-      piece whose pages were never touched (an anonymous mapping's, as
-      :func:`refsoft.limits.zeros` makes them; :class:`~refsoft.io.pages.PageMap`) is not read at all.
+      their size (high-entropy floats) is stored uncompressed; with ``float_level=0`` the other
+      bytes of a float member (a G-buffer's reflector pixels) are stored inside its deflate
+      stream, its repeating runs still deflated.
 
-    zipfile writes the headers and the other pieces' CRC-32 (``zlib.crc32``); zlib does all the
-    compression. The file's bytes do not depend on how a zero piece was found or its CRC computed,
-    so a rerun writes the same bytes. An ``ants`` frame (8 reflectors) at 1024x768: about 60 ms of
-    CPU (docs/benchmarks.md).
+    zipfile writes the headers and, where its member writer's state is not the one this module
+    knows, each byte's CRC-32 (``zlib.crc32``); zlib does all the compression. The file's bytes
+    depend on the arrays' bytes only (not on which pages were read, on what the cache of pieces
+    holds or on how a CRC was computed), so a rerun writes the same bytes. A ``kitchen`` frame
+    at 1024x768: about 25 ms of CPU (docs/benchmarks.md).
 
     Parameters
     ----------
@@ -45,6 +55,9 @@ def write_npz_level(path, arrays, level: int):
         Written in the dict's order; object arrays are refused (``ValueError``, no pickles).
     level : int
         zlib's compression level (0 stores every member uncompressed).
+    float_level : int, optional
+        zlib's level for the bytes of float members outside their repeating runs (default
+        ``level``; 0: stored, the runs still deflated at ``level``).
     """
     pages = PageMap()
     try:
@@ -52,7 +65,7 @@ def write_npz_level(path, arrays, level: int):
             with zipfile.ZipFile(tmp, mode="w", compression=zipfile.ZIP_DEFLATED, compresslevel=level,
                                  allowZip64=True) as zf:
                 for name, value in arrays.items():
-                    _write_member(zf, name + ".npy", np.asanyarray(value), level, pages)
+                    _write_member(zf, name + ".npy", np.asanyarray(value), level, pages, float_level)
     finally:
         pages.close()
 
@@ -79,7 +92,14 @@ def _npy_parts(array):
     return buf.getvalue(), data.view(np.uint8)
 
 
-def _write_member(zf, name, array, level, pages=None):
+def _chunk_bytes() -> int:
+    """Bytes of the longest repeating piece: a multiple of NPZ_UNIT_BYTES and NPZ_PERIOD_BYTES (so
+    that a run's later pieces start its pattern over) of at most NPZ_PIECE_BYTES."""
+    step = math.lcm(NPZ_UNIT_BYTES, NPZ_PERIOD_BYTES)
+    return max(1, NPZ_PIECE_BYTES // step) * step
+
+
+def _write_member(zf, name, array, level, pages=None, float_level=None):
     header, data = _npy_parts(array)
     # a fixed date (the zip format's first): a rerun writes the same bytes (the file's own
     # modification time says when it was written)
@@ -89,27 +109,37 @@ def _write_member(zf, name, array, level, pages=None):
     store = level == 0 or _incompressible(data, level)
     info.compress_type = zipfile.ZIP_STORED if store else zipfile.ZIP_DEFLATED
     with zf.open(info, "w", force_zip64=True) as fh:
-        deflate = None
-        if not store:
-            # zipfile's member writer crc32s each write, hands it to its compressor's
-            # compress() and, at close, writes its flush(): that compressor is replaced by one
-            # that reuses the deflate output of zero pieces
-            # (floats: zlib's run-length strategy, as small for half the time of its default
-            # on a G-buffer, whose float bytes seldom repeat beyond the runs of zeros)
-            floats = array.dtype.kind in "fc"
-            deflate = fh._compressor = PieceDeflate(level, zlib.Z_RLE if floats else zlib.Z_DEFAULT_STRATEGY)
+        if store:
+            fh.write(header)
+            fh.write(data)
+            return
+        # zipfile's member writer crc32s each write, hands it to its compressor's compress()
+        # and, at close, writes its flush(): that compressor is replaced by one that reuses the
+        # deflate output of repeating pieces
+        # (floats: zlib's run-length strategy, as small for half the time of its default
+        # on a G-buffer, whose float bytes seldom repeat beyond the runs of zeros; or stored)
+        floats = array.dtype.kind in "fc"
+        other = float_level if floats and float_level is not None else level
+        deflate = fh._compressor = PieceDeflate(level, zlib.Z_RLE if floats else zlib.Z_DEFAULT_STRATEGY, other)
         fh.write(header)
-        # a zero piece bypasses the member writer (when it has the state this module knows):
-        # its CRC-32 is combined from that of zeros, not computed over its bytes again
-        direct = deflate is not None and all(hasattr(fh, a) for a in _WRITER_STATE)
+        # a repeating piece bypasses the member writer (when it has the state this module
+        # knows): its CRC-32 is combined from the piece's, not computed over its bytes again
+        direct = combine() is not None and all(hasattr(fh, a) for a in _WRITER_STATE)
+        n_units = data.size // NPZ_UNIT_BYTES
+        skip = untouched_units(unread, n_units, NPZ_UNIT_BYTES) if direct else None
+        shortest = 1 if other == 0 else NPZ_SHORTEST_RUN
+        runs = repeating_runs(data, NPZ_UNIT_BYTES, NPZ_PERIOD_BYTES, skip, shortest)
         if direct:
-            deflate.check = False
-        for lo in range(0, data.size, NPZ_PIECE_BYTES):
-            piece = data[lo:lo + NPZ_PIECE_BYTES]
-            if direct and (untouched_piece(unread, lo, piece.size) or zero_bytes(piece)):
-                _write_zeros(fh, deflate, piece)
-            else:
-                fh.write(piece)
+            _write_runs(fh, deflate, data, runs)
+            return
+        for lo, hi, pattern in runs:  # through the member writer, which reads every byte
+            if pattern is None:
+                for a in range(lo, hi, NPZ_PIECE_BYTES):
+                    fh.write(data[a:min(hi, a + NPZ_PIECE_BYTES)])
+                continue
+            for a in range(lo, hi, _chunk_bytes()):
+                deflate.pattern = pattern
+                fh.write(data[a:min(hi, a + _chunk_bytes())])
 
 
 #: What zipfile's member writer (``_ZipWriteFile``, Python 3.10-3.13) keeps of a member being
@@ -117,14 +147,40 @@ def _write_member(zf, name, array, level, pages=None):
 _WRITER_STATE = ("_file_size", "_crc", "_compress_size", "_fileobj")
 
 
-def _write_zeros(fh, deflate, piece):
-    """What ``fh.write(piece)`` does for a piece of zero bytes, without reading it again."""
-    n = piece.size
-    fh._file_size += n
-    fh._crc = crc_after_zeros(fh._crc, piece)
-    out = deflate.zeros(n)
-    fh._compress_size += len(out)
-    fh._fileobj.write(out)
+def _write_runs(fh, deflate, data, runs):
+    """What ``fh.write`` of each run does (the member writer's size, CRC-32, compressed size and
+    output), in one pass: a repeating piece's CRC-32 is combined from the piece's (zlib's
+    ``crc32_combine64``), not computed over its bytes, which are not read."""
+    join = combine()
+    chunk = _chunk_bytes()
+    crc, out, held = fh._crc, [], 0
+    for lo, hi, pattern in runs:
+        if pattern is None:
+            for a in range(lo, hi, NPZ_PIECE_BYTES):  # CRC-32 and deflate a piece while it is in cache
+                piece = data[a:min(hi, a + NPZ_PIECE_BYTES)]
+                crc = zlib.crc32(piece, crc)
+                out.append(deflate.compress(piece))
+                held += len(out[-1])
+        else:
+            for a in range(lo, hi, chunk):
+                n = min(hi, a + chunk) - a
+                piece, piece_crc = deflate.repeat(pattern, n)
+                crc = join(crc, piece_crc, n)
+                out.append(piece)
+                held += len(piece)
+        if held >= chunk:  # the output held in memory stays small
+            fh._compress_size += _write_out(fh, out)
+            held = 0
+    fh._compress_size += _write_out(fh, out)
+    fh._file_size += data.size
+    fh._crc = crc
+
+
+def _write_out(fh, out) -> int:
+    blob = b"".join(out)
+    out.clear()
+    fh._fileobj.write(blob)
+    return len(blob)
 
 
 def _incompressible(data, level) -> bool:
@@ -134,5 +190,5 @@ def _incompressible(data, level) -> bool:
     if data.size < 4 * n:
         return False
     z = zlib.compressobj(level, zlib.DEFLATED, -15)
-    packed = sum(len(z.compress(data[s:s + n])) for s in np.linspace(0, data.size - n, 4).astype(np.int64))
+    packed = sum(len(z.compress(data[i * (data.size - n) // 3:][:n])) for i in range(4))
     return packed + len(z.flush()) > NPZ_STORE_RATIO * 4 * n

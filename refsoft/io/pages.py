@@ -12,16 +12,6 @@ import numpy as np
 PAGE = mmap.PAGESIZE
 
 
-def untouched_piece(unread, lo: int, n: int) -> bool:
-    """Whether bytes ``lo:lo + n`` of an array lie in pages never touched (``unread``: what
-    :meth:`PageMap.untouched` said of the array, or None)."""
-    if unread is None or n == 0:
-        return False
-    addr, flags = unread
-    first = addr // PAGE
-    return bool(flags[(addr + lo) // PAGE - first:(addr + lo + n - 1) // PAGE - first + 1].all())
-
-
 class PageMap:
     """Which pages of an array were never touched, where Linux says so (``/proc/self/pagemap``).
 

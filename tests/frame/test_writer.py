@@ -133,20 +133,24 @@ def _odd_arrays():
 
 @pytest.fixture
 def small_pieces(monkeypatch):
+    """Units of 128 bytes, repeating pieces of at most 512 (384: a multiple of the unit and the
+    24-byte period), runs of 2 units or more, samples of 64 bytes."""
     import refsoft.io
 
     monkeypatch.setattr(refsoft.io.npz, "NPZ_PIECE_BYTES", 512)
+    monkeypatch.setattr(refsoft.io.npz, "NPZ_UNIT_BYTES", 128)
+    monkeypatch.setattr(refsoft.io.npz, "NPZ_SHORTEST_RUN", 2)
     monkeypatch.setattr(refsoft.io.npz, "NPZ_SAMPLE_BYTES", 64)
 
 
-@pytest.mark.parametrize("level", [1, 6, 0])
-def test_npz_writer_holds_the_arrays_numpy_writes(tmp_path, small_pieces, level):
+@pytest.mark.parametrize("level, float_level", [(1, None), (6, None), (0, None), (1, 0), (6, 1)])
+def test_npz_writer_holds_the_arrays_numpy_writes(tmp_path, small_pieces, level, float_level):
     import zipfile
 
     from refsoft.io import write_npz, write_npz_level
 
     arrays = _odd_arrays()
-    write_npz_level(tmp_path / "a.npz", arrays, level)
+    write_npz_level(tmp_path / "a.npz", arrays, level, float_level)
     write_npz(tmp_path / "np.npz", **arrays)
     with zipfile.ZipFile(tmp_path / "a.npz") as zf:
         assert zf.testzip() is None
@@ -164,27 +168,87 @@ def test_npz_writer_holds_the_arrays_numpy_writes(tmp_path, small_pieces, level)
             assert x.tobytes("A") == y.tobytes("A") == arrays[k].tobytes("A"), k
 
 
-def test_zero_pieces_reuse_their_deflate_output(tmp_path, small_pieces, monkeypatch):
-    """Every piece of zero bytes (and only those: -0.0 is not one) is written as the one deflate
-    output of its size, and the member still reads back (its CRC checked by zipfile)."""
+def test_repeating_runs_reuse_their_deflate_output(tmp_path, small_pieces, monkeypatch):
+    """Every run of 2 units or more that repeats 24 bytes (zeros, one int32 value, -0.0) is written
+    as the deflate output of its pieces (384 bytes at most), and only those; the member still reads
+    back (its CRC checked by zipfile)."""
     import zipfile
+    import zlib
 
     import refsoft.io
 
     calls = []
-    real = refsoft.io.deflate.zero_piece
-    monkeypatch.setattr(refsoft.io.deflate, "zero_piece", lambda n, level: calls.append(n) or real(n, level))
-    data = np.zeros(512 * 9 + 100, np.uint8)  # the header in its own write, then 10 pieces
-    data[512 * 3 + 7] = 1  # piece 3 is not zero; piece 9 is 100 zero bytes
-    # pieces 5 and 7 the same bytes: zlib may refer from 7 to 5 only if it saw what lies between
-    data[512 * 5:512 * 6] = data[512 * 7:512 * 8] = np.random.default_rng(3).integers(1, 256, 512)
-    neg = np.full(256, -0.0, np.float32)  # 2 pieces of 0x80000000 words
-    refsoft.io.write_npz_level(tmp_path / "z.npz", {"data": data, "neg": neg}, 1)
-    assert calls == [512] * 6 + [100]
+    real = refsoft.io.deflate.repeat_piece
+    monkeypatch.setattr(refsoft.io.deflate, "repeat_piece",
+                        lambda p, n, *a: calls.append((p[:4], n)) or real(p, n, *a))
+    data = np.zeros(128 * 9 + 100, np.uint8)  # units 0-8 and 100 bytes
+    data[128 * 3 + 7] = 1  # units 0-2 zero (a run), 3 not, 4-8 zero (a run), the tail other bytes
+    data[128 * 9 + 50] = 2
+    ids = np.full(32 * 8, 7, np.int32)  # 8 units of 7s, then one of other bytes
+    ids = np.concatenate([ids, np.arange(32, dtype=np.int32)])
+    neg = np.full(64, -0.0, np.float32)  # 2 units of 0x80000000 words
+    refsoft.io.write_npz_level(tmp_path / "z.npz", {"data": data, "ids": ids, "neg": neg}, 1)
+    seven, minus = bytes([7, 0, 0, 0]), bytes([0, 0, 0, 0x80])
+    zero = bytes(4)
+    assert calls == [(zero, 384), (zero, 384), (zero, 256), (seven, 384), (seven, 384), (seven, 256), (minus, 256)]
     with zipfile.ZipFile(tmp_path / "z.npz") as zf:
         assert zf.testzip() is None
         assert zf.read("data.npy")[-data.size:] == data.tobytes()
+        assert zf.read("ids.npy")[-ids.nbytes:] == ids.tobytes()
         assert zf.read("neg.npy")[-neg.nbytes:] == neg.tobytes()
+    for (pattern, n, level, strategy), (out, crc) in refsoft.io.deflate._PIECES.items():
+        piece = refsoft.io.deflate.repeat_bytes(pattern, n)
+        assert zlib.decompressobj(-15).decompress(out) == piece.tobytes() and crc == zlib.crc32(piece)
+
+
+def test_repeating_runs_match_the_naive_cut():
+    """repeating_runs cuts as the byte-by-byte reference does, for units read or known untouched,
+    on arrays of runs of zeros, of one value, of a pattern whose phase crosses units, and noise."""
+    from naive_runs import naive_repeating_runs
+
+    from refsoft.io.runs import repeating_runs
+
+    rng = np.random.default_rng(17)
+    unit, period = 48, 24
+    for trial in range(40):
+        parts = []
+        for _ in range(rng.integers(1, 12)):
+            kind, m = rng.integers(0, 4), int(rng.integers(1, 5)) * unit + int(rng.integers(0, 2)) * 8
+            if kind == 0:
+                parts.append(np.zeros(m, np.uint8))
+            elif kind == 1:
+                parts.append(np.tile(rng.integers(0, 3, 8, dtype=np.uint8), m // 8 + 1)[:m])
+            elif kind == 2:
+                parts.append(np.tile(rng.integers(0, 256, 24, dtype=np.uint8), m // 24 + 1)[:m])
+            else:
+                parts.append(rng.integers(0, 256, m, dtype=np.uint8))
+        data = np.concatenate(parts)[:int(rng.integers(0, 30 * unit))]
+        n = data.size // unit
+        zero = np.array([not data[u * unit:(u + 1) * unit].any() for u in range(n)], bool)
+        untouched = zero & (rng.random(n) < 0.7)
+        for shortest in (1, 2, 3):
+            want = naive_repeating_runs(data, unit, period, shortest)
+            assert repeating_runs(data, unit, period, None, shortest) == want, (trial, shortest)
+            assert repeating_runs(data, unit, period, untouched, shortest) == want, (trial, shortest)
+
+
+def test_cached_pieces_follow_the_bytes(tmp_path, small_pieces, monkeypatch):
+    """The cache of repeating pieces is keyed by their bytes: a frame whose background changes
+    value (or whose cache was emptied) writes its own arrays, the same file as a fresh process."""
+    import refsoft.io
+
+    ids = np.full((40, 32), 3, np.int32)
+    ids[10:12, 5:9] = 8
+    refsoft.io.write_npz_level(tmp_path / "a.npz", {"ids": ids}, 1)
+    ids[:20] = 5  # the background's value changes: other pieces, other bytes
+    refsoft.io.write_npz_level(tmp_path / "b.npz", {"ids": ids}, 1)
+    with np.load(tmp_path / "b.npz") as z:
+        assert z["ids"].tobytes() == ids.tobytes()
+    monkeypatch.setattr(refsoft.io.deflate, "_PIECES", {})
+    monkeypatch.setattr(refsoft.io.deflate, "_MAX_PIECES", 2)  # emptied as it fills
+    refsoft.io.write_npz_level(tmp_path / "c.npz", {"ids": ids}, 1)
+    assert (tmp_path / "c.npz").read_bytes() == (tmp_path / "b.npz").read_bytes()
+    assert len(refsoft.io.deflate._PIECES) <= 2
 
 
 def test_npz_writes_are_the_same_bytes_every_time(tmp_path, small_pieces):
@@ -210,40 +274,40 @@ def test_a_failed_npz_write_leaves_the_old_file(tmp_path, small_pieces):
     assert [p.name for p in tmp_path.iterdir()] == ["f.npz"] and (tmp_path / "f.npz").read_bytes() == b"old"
 
 
-def test_crc_of_zero_pieces_is_zlibs(monkeypatch):
-    """The CRC-32 after a piece of zeros, combined by zlib's crc32_combine64 (without reading the
-    piece), is zlib.crc32 over its bytes, from any running CRC and for any size; without the
-    C library, zlib.crc32 itself."""
+def test_crc_combine_is_zlibs():
+    """zlib's crc32_combine64 (through ctypes) gives zlib.crc32 of the joined bytes, from any
+    running CRC and for pieces of any size."""
     import zlib
 
     import refsoft.io
 
-    assert refsoft.io.crc.crc32_combine() is not None  # found on the platforms the tests run on
+    combine = refsoft.io.crc.combine()
+    assert combine is not None  # found on the platforms the tests run on
     rng = np.random.default_rng(5)
     for n in (1, 7, 512, 4096, 1 << 18, 3 * (1 << 18) + 5):
-        piece = np.zeros(n, np.uint8)
+        piece = np.tile(rng.integers(0, 256, 24, dtype=np.uint8), n // 24 + 1)[:n]
         for crc in (0, 1, 0xFFFFFFFF, int(rng.integers(0, 1 << 32))):
-            assert refsoft.io.crc.crc_after_zeros(crc, piece) == zlib.crc32(piece, crc), (n, crc)
-    monkeypatch.setattr(refsoft.io.crc, "_COMBINE", [None])
-    assert refsoft.io.crc.crc_after_zeros(12345, np.zeros(999, np.uint8)) == zlib.crc32(bytes(999), 12345)
+            assert combine(crc, zlib.crc32(piece), n) == zlib.crc32(piece, crc), (n, crc)
 
 
-def test_zero_pieces_write_the_same_bytes_every_way(tmp_path, small_pieces, monkeypatch):
-    """Zero pieces written past zipfile's member writer (CRC combined, or computed by zlib.crc32
-    where the C library is missing) or through it (the compressor finding them) give one file."""
+@pytest.mark.parametrize("float_level", [None, 0])
+def test_repeating_pieces_write_the_same_bytes_every_way(tmp_path, small_pieces, monkeypatch, float_level):
+    """Repeating pieces written past zipfile's member writer (CRC combined) or through it (where
+    the C library is missing or the writer's state unknown: every byte read) give one file, the
+    float members' other bytes deflated or stored."""
     import zipfile
 
     import refsoft.io
 
     arrays = _odd_arrays()
-    refsoft.io.write_npz_level(tmp_path / "direct.npz", arrays, 1)
+    refsoft.io.write_npz_level(tmp_path / "direct.npz", arrays, 1, float_level)
     with monkeypatch.context() as m:
         m.setattr(refsoft.io.crc, "_COMBINE", [None])
-        refsoft.io.write_npz_level(tmp_path / "crc32.npz", arrays, 1)
+        refsoft.io.write_npz_level(tmp_path / "crc32.npz", arrays, 1, float_level)
     with monkeypatch.context() as m:
         m.setattr(refsoft.io.npz, "_WRITER_STATE", ("_no_such_state",))
-        m.setattr(refsoft.io.npz, "_write_zeros", None)  # never called
-        refsoft.io.write_npz_level(tmp_path / "through.npz", arrays, 1)
+        m.setattr(refsoft.io.npz, "_write_runs", None)  # never called
+        refsoft.io.write_npz_level(tmp_path / "through.npz", arrays, 1, float_level)
     one = (tmp_path / "direct.npz").read_bytes()
     assert (tmp_path / "crc32.npz").read_bytes() == one and (tmp_path / "through.npz").read_bytes() == one
     with zipfile.ZipFile(tmp_path / "direct.npz") as zf:
@@ -325,27 +389,31 @@ def test_a_file_mapping_is_never_untouched(tmp_path):
     del m
 
 
-def test_untouched_pieces_are_not_read(tmp_path, small_pieces, monkeypatch):
-    """A G-buffer as the render leaves it (a lazy zero mapping, the box written): its untouched
-    pieces are written without a look at their bytes, and the file is the one the bytes give."""
+def test_untouched_pages_are_not_read(tmp_path, monkeypatch):
+    """A G-buffer as the render leaves it (a lazy zero mapping, its box written): the writer reads
+    none of its untouched pages but the few its 4 samples fall in (they stay untouched), and the
+    file is the one the bytes give."""
     import mmap
 
     import refsoft.io
     from refsoft import limits
 
     page = mmap.PAGESIZE
-    monkeypatch.setattr(refsoft.io.npz, "NPZ_PIECE_BYTES", page)
-    gbuf = limits.zeros((256, 1024), np.float32)  # 256 pages of 4 KiB, a row each
+    gbuf = limits.zeros((256, page // 4), np.float32)  # a row per page
     assert gbuf.nbytes >= limits.LAZY_ZEROS_BYTES
     gbuf[20:23, 100:300] = np.random.default_rng(2).random((3, 200), dtype=np.float32)
+    gbuf[200, :] = 0  # touched, zeros
     arrays = {"gbuffer": gbuf, "image": np.arange(3000, dtype=np.uint8)}
-    looked = []
-    real = refsoft.io.deflate.zero_bytes
-    for module in (refsoft.io.npz, refsoft.io.deflate):  # the writer's look and the compressor's
-        monkeypatch.setattr(module, "zero_bytes", lambda p: looked.append(p.size) or real(p))
-    refsoft.io.write_npz_level(tmp_path / "a.npz", arrays, 1)
-    if page == 4096:  # pieces of one page: only the 3 written are looked at (and the header, by the compressor)
-        assert len(looked) == 3 + 1
+    data = gbuf.reshape(-1).view(np.uint8)
+    pm = refsoft.io.pages.PageMap()
+    try:
+        before = pm.untouched(data)[1]
+        assert before.sum() == 256 - 4
+        refsoft.io.write_npz_level(tmp_path / "a.npz", arrays, 1)
+        after = pm.untouched(data)[1]
+    finally:
+        pm.close()
+    assert np.all(before | ~after) and before.sum() - after.sum() <= 4 * 2  # ≤ 2 pages a sample
     with monkeypatch.context() as m:
         m.setattr(refsoft.io.pages.PageMap, "untouched", lambda self, data: None)
         refsoft.io.write_npz_level(tmp_path / "b.npz", arrays, 1)
