@@ -150,8 +150,8 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report, pa
     entry = {"level": bounce.level, "reflector": bounce.reflector, "pixels": int(bounce.mask.sum()),
              "searched": int(seen.sum()), "iterations": int(res.iterations.sum())}
     report.append(entry)
-    others = [] if bounce.level >= opt.bounces else [k for k in scene.reflector_ids
-                                                      if k != bounce.reflector and reach(k)]
+    others = [] if bounce.level >= opt.bounces else [k for k in scene.reflector_ids if reach(k) and (
+        k != bounce.reflector or meet.sees_itself(scene, k))]  # the paper preset: a mirror that sees itself too
     found = []  # the other reflectors' vertices searched at this level: (ids, vertices, virtual, flags)
     for k in others:
         verts = np.asarray(meshes[k - 1].vertices, np.float64)
@@ -241,6 +241,8 @@ def deepen(scene, view, k, stencil, box, out, refl, parts, opt, search_first, ke
         texels = texel_reach(gb.position, gb.normal, eye, gb.mask, gb.origin)
         reach = (lambda b: reaches(texels, *bounding_sphere(view.meshes[b - 1])))
     near = [b for b in scene.reflector_ids if b != k and reach(b)]  # the others no reflected ray comes near: nothing
+    if opt.images != "all" and meet.sees_itself(scene, k):  # the paper's method: its own vertices searched too
+        near = [k] + near
     if near and opt.images == "all":  # the rays that can meet one of them, as exact_level takes them
         through = np.zeros(rays[0].shape, bool)
         through[rays[0]] = hit[[others.index(b) for b in near]].any(axis=0)
