@@ -70,8 +70,10 @@ class LaterStarts:
 
 
 def _inverse(opt):
-    """A later level's hidden-vertex rule: the inverse search where the options ask for it, else
-    ``discard`` (``plane``, the paper preset's, is the first level's alone)."""
+    """A later level's walk for a hidden vertex: the inverse search where the options ask for it,
+    else its walk's end kept (``discard`` and ``plane``: the virtual pass then leaves its triangles
+    out, or, by ``plane``, draws them with the vertex unfolded from that end: equation 1 turns
+    ``V - R`` about the normal and keeps its length, the one thing the unfolded rule takes)."""
     return "search" if opt.inverse == "search" else "discard"
 
 
@@ -172,7 +174,7 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report, pa
     else:
         parts = object_parts(meshes, ids, virtual, flags)
         stencil = bounce.stencil()
-        colour, rid, covered, _ = virtual_pass(scene, parts, camera, stencil, bounce.box, _inverse(opt))
+        colour, rid, covered, _ = virtual_pass(scene, parts, camera, stencil, bounce.box, opt.inverse)
         rparts = sum((object_parts(meshes, k, v, fl) for k, _, v, fl in found), [])
         shows = seen_reflectors(parts, rparts, camera, stencil, bounce.box) if found else {}
         nxt = later_bounces(bounce, shows, meshes) if found else []
