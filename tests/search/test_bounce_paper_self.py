@@ -80,3 +80,32 @@ def test_the_same_bits_with_one_thread(concave):
     assert (f.arrays[BOUNCE_DEPTH] == 2).sum() > 1000
     for key, a in render[2].arrays.items():
         assert np.array_equal(a, f.arrays[key]), key
+
+
+def test_the_trace_replays_the_walk_on_the_bowl_seen_in_itself(concave):
+    """``refsoft trace --through 1,1 --preset paper``: the walk the render takes at the bowl's own
+    level 2, from the render's start."""
+    from refsoft.search.bounces import gbuffer_of, search_bounce
+    from refsoft.search.trace import trace_vertex_bounce
+
+    sc = concave[0]
+    rp = trace_vertex_bounce(sc, 100, (1, 1), 0, coherence=False, preset="paper")
+    driver = FrameDriver(sc, RenderOptions.from_preset("paper", bounces=2, coherence=False))
+    driver.render_frame(0)
+    bounce = driver.method.kept_bounces[(1, 1)]
+    assert rp.through == (1, 1) and rp.gbuffer_box == bounce.box
+    res = search_bounce(bounce, gbuffer_of(bounce, sc.camera), rp.position[None])
+    assert rp.trace.pixel == res.pixel[0].tolist() and rp.trace.iterations == res.iterations[0]
+
+
+@pytest.mark.parametrize("scene, through, preset, message", [
+    ("concave", (1, 1), "accurate", "add --preset paper"),
+    ("mirrors", (2, 2), "paper", "cannot see itself"),
+])
+def test_the_trace_of_a_level_with_no_walk_says_what_to_run(scene, through, preset, message):
+    from refsoft.errors import RefsoftError
+    from refsoft.search.trace import trace_vertex_bounce
+
+    sc = refsoft.load_scene(scene, width=64, height=48)
+    with pytest.raises(RefsoftError, match=message):
+        trace_vertex_bounce(sc, 0, through, 0, preset=preset)
