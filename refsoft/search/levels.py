@@ -30,10 +30,10 @@ import numpy as np
 
 from .. import keys
 from ..raster import shade
-from . import CULLED, meet, search
+from . import CULLED, meet
 from .bounces import (Bounce, bounding_sphere, first_bounces, gbuffer_of, later_bounces, level_rays,
                       object_parts, reaches, search_bounce, seen_reflectors, texel_reach, unfolded)
-from .exact_levels import exact_bounces, exact_level, rays_level, seen_by_rays
+from .exact_levels import combined, exact_bounces, exact_level, rays_level, seen_by_rays
 from .virtual import virtual_pass
 
 #: The per-pixel array of the reflections taken (0 off reflectors).
@@ -296,21 +296,23 @@ def deepen_images(scene, view, k, stencil, box, out, drawn, opt, keep=None, star
     convex, :func:`refsoft.search.several.several_pass`): the reflectors seen in its image, ``k``
     itself among them when it can see itself (:func:`refsoft.search.meet.sees_itself`).
 
-    Each such reflector's vertices are searched on ``k``'s G-buffer as the scene's are: every
-    image (:func:`refsoft.search.images.find_images`) and their candidate virtual triangles
-    (:func:`refsoft.search.several.candidates`: sheets, cuts, the rays' pruning); each pixel's
-    reflected ray is met with them from an origin moved along it (the truth's rule for a mirror
-    that sees itself, :func:`refsoft.search.meet.self_offset`) and with the scene's candidates of
-    the drawing (``drawn``: ``candidates``, ``rays``, ``source``) from its own; where a
-    reflector's triangle is the nearer, the pixel is that reflector's level 2.
+    Each such reflector is met by the pixels' rays alone, as a later level on a reflector that
+    sees itself is (:func:`refsoft.search.exact_levels.rays_level`): each of its triangles that one
+    of the rays comes near (:func:`refsoft.search.several.near_rays`) is a candidate tested with
+    those rays, from an origin moved along each (the truth's rule for a mirror that sees itself,
+    :func:`refsoft.search.meet.self_offset`), and the scene's candidates of the drawing
+    (``drawn``: ``candidates``, ``rays``) from its own; where a reflector's triangle is the
+    nearer, the pixel is that reflector's level 2. No vertex of theirs is searched: their images
+    in a mirror that is not convex (every image of each vertex on the mirror, sheets, cuts) would
+    place candidates that the rays then test, and the rays' own pruning leaves out no triangle a
+    ray meets (up to its margin), at a fraction of the enumeration's cost.
 
     Returns
     -------
     list of dict
         As :func:`deepen`'s.
     """
-    from .images import find_images
-    from .several import candidates
+    from .several import near_rays
 
     first = {"level": 1, "reflector": int(k), "pixels": int(stencil.sum()), "searched": 0}
     if starts is not None:
@@ -322,7 +324,6 @@ def deepen_images(scene, view, k, stencil, box, out, drawn, opt, keep=None, star
     depth = np.where(stencil[r0:r1, c0:c1], np.int8(1), np.int8(0)).astype(np.int8)
     rays = drawn["rays"]
     valid, origin, direction = rays
-    gb, gb_eye, find = drawn["source"]
     others = [b for b in scene.reflector_ids if b != k]
     hit = meet.hits(meet.valid_rays(rays), [bounding_sphere(meshes[b - 1]) for b in others])
     near = ([k] if meet.sees_itself(scene, k) else []) + [b for b, h in zip(others, hit) if h.any()]
@@ -331,22 +332,9 @@ def deepen_images(scene, view, k, stencil, box, out, drawn, opt, keep=None, star
         t0 = time.perf_counter()
         offset = meet.self_offset(meshes[k - 1]) if k in near else 0.0
         # the rays as they meet the reflectors: from their moved origins (the triangle a ray leaves is
-        # then behind it, and no part of it is made)
+        # then behind it)
         moved, _ = meet.moved(rays, offset)
-        ray_list = (moved[1][valid], direction[valid])
-        parts = []
-        for b in near:
-            mesh = meshes[b - 1]
-            verts = np.asarray(mesh.vertices, np.float64)
-            walk = search(gb, gb_eye, verts, opt.neighbourhood, opt.inverse, None, opt.cap)
-            found = find_images(gb, gb_eye, verts, walk)
-            cand, _ = candidates(gb, gb_eye, verts, mesh.normals, mesh.faces, np.full(mesh.n_faces, b, np.int32),
-                                 found, find, opt.neighbourhood, opt.cap, rays=ray_list)
-            parts.append(cand)
-            first["searched"] += len(verts)
-        ref = parts[0]
-        for c in parts[1:]:
-            ref = meet.joined(ref, c)
+        ref = near_rays(*combined(meshes, near), (moved[1][valid], direction[valid]))
         src, best_c, best_t, best_uv = meet.nearest_split(drawn["candidates"], ref, camera, box, rays, offset)
         first["candidates"] = int(len(ref.object_id))
         first["ms"] = 1000 * (time.perf_counter() - t0)
