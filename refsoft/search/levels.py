@@ -298,7 +298,7 @@ def deepen_images(scene, view, k, stencil, box, out, drawn, opt, keep=None, star
 
     Each such reflector is met by the pixels' rays alone, as a later level on a reflector that
     sees itself is (:func:`refsoft.search.exact_levels.rays_level`): each of its triangles that one
-    of the rays comes near (:func:`refsoft.search.several.near_rays`) is a candidate tested with
+    of the rays comes near (:func:`refsoft.search.meet.near_rays`) is a candidate tested with
     those rays, from an origin moved along each (the truth's rule for a mirror that sees itself,
     :func:`refsoft.search.meet.self_offset`), and the scene's candidates of the drawing
     (``drawn``: ``candidates``, ``rays``) from its own; where a reflector's triangle is the
@@ -312,8 +312,6 @@ def deepen_images(scene, view, k, stencil, box, out, drawn, opt, keep=None, star
     list of dict
         As :func:`deepen`'s.
     """
-    from .several import near_rays
-
     first = {"level": 1, "reflector": int(k), "pixels": int(stencil.sum()), "searched": 0}
     if starts is not None:
         starts.begin(view.frame)
@@ -334,7 +332,7 @@ def deepen_images(scene, view, k, stencil, box, out, drawn, opt, keep=None, star
         # the rays as they meet the reflectors: from their moved origins (the triangle a ray leaves is
         # then behind it)
         moved, _ = meet.moved(rays, offset)
-        ref = near_rays(*combined(meshes, near), (moved[1][valid], direction[valid]))
+        ref = meet.near_rays(*combined(meshes, near), moved)
         src, best_c, best_t, best_uv = meet.nearest_split(drawn["candidates"], ref, camera, box, rays, offset)
         first["candidates"] = int(len(ref.object_id))
         first["ms"] = 1000 * (time.perf_counter() - t0)
