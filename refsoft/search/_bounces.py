@@ -5,6 +5,7 @@ import numpy as np
 
 from .._numba import kernel
 from ._kernels import RECORD_WIDTH, _normalize, search_one
+from ._several import _may_hit, _triangle
 
 
 @kernel
@@ -118,11 +119,13 @@ def best_starts(lo, hi, S, V, X, has, out):
 
 
 @kernel
-def rays_by_tiles(lo, hi, tri, coarse, fine, index, size, count, start, out, fill, coarse_band, fine_band):
+def rays_by_tiles(lo, hi, tri, coarse, fine, index, size, real, rays, margin, parallel, count, start, out, fill,
+                  coarse_band, fine_band):
     """Triangles ``lo .. hi - 1`` (run by :func:`refsoft._parallel.parallel_range`; each writes only
-    its own outputs): the rays of the fine tiles (``size`` x ``size`` pixels of ``index``, four a
-    side in a coarse tile) that may come near it (:func:`_tile_meets`, a fine tile tried only in a
-    coarse tile that may), ascending (row by row of each band of fine tiles).
+    its own outputs): the rays that may hit it by :func:`refsoft.search._several.rays_near`'s test
+    (the same arithmetic), ascending, each tested only where its fine tile (``size`` x ``size``
+    pixels of ``index``, four a side in a coarse tile) may come near the triangle
+    (:func:`_tile_meets`, a fine tile tried only in a coarse tile that may).
 
     Parameters
     ----------
@@ -137,6 +140,12 @@ def rays_by_tiles(lo, hi, tri, coarse, fine, index, size, count, start, out, fil
         (:func:`refsoft.search.meet._tiles`).
     index : (h, w) int64
         Each pixel's ray index (row-major over the valid pixels), -1 none.
+    real : (F, 3, 3) float64
+        The triangles.
+    rays : (7, R) float64
+        Origins (x, y, z), directions (x, y, z) and direction lengths, one row each.
+    margin, parallel : float
+        ``constants.SEVERAL_PRUNE_MARGIN``, ``constants.SEVERAL_PRUNE_PARALLEL``.
     count, start : (F,) int64
         ``fill`` False: ``count`` written (each triangle's number of rays); True: read, and
         ``start`` where its rays go in ``out``.
@@ -150,6 +159,9 @@ def rays_by_tiles(lo, hi, tri, coarse, fine, index, size, count, start, out, fil
     for f in range(lo, hi):
         n = 0
         pos = start[f] if fill else 0
+        if fill and count[f] == 0:
+            continue
+        near = _triangle(real, f, margin, parallel)
         for cr in range(n_cr):
             kc = 0
             for cc in range(n_cc):
@@ -170,7 +182,8 @@ def rays_by_tiles(lo, hi, tri, coarse, fine, index, size, count, start, out, fil
                         c0 = fine_band[j] * size
                         for c in range(c0, min(w, c0 + size)):
                             q = index[r, c]
-                            if q >= 0:
+                            if q >= 0 and _may_hit(near, rays[0, q], rays[1, q], rays[2, q], rays[3, q],
+                                                   rays[4, q], rays[5, q], rays[6, q], margin):
                                 if fill:
                                     out[pos + n] = q
                                 n += 1

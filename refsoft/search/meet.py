@@ -407,7 +407,7 @@ def near_rays(verts, normals, faces, face_obj, rays):
     through that sphere, nor lie within twice ``SEVERAL_PRUNE_PARALLEL``'s angle of the
     triangle's plane, holds no ray the pruning keeps (kernel
     :func:`refsoft.search._bounces.rays_by_tiles`); the rays of the others are tested one by one
-    (kernel :func:`refsoft.search._several.rays_near`), in ascending order, as
+    with :func:`refsoft.search._several.rays_near`'s test, in ascending order, as
     :func:`refsoft.search.several.near_rays` tests every ray.
 
     Parameters
@@ -423,42 +423,32 @@ def near_rays(verts, normals, faces, face_obj, rays):
     Candidates
     """
     from .. import constants
-    from ._several import rays_near
 
     valid, origin, direction = rays
     margin, parallel = float(constants.SEVERAL_PRUNE_MARGIN), float(constants.SEVERAL_PRUNE_PARALLEL)
     verts = np.asarray(verts, np.float64)
     faces = np.asarray(faces, np.int64).reshape(-1, 3)
     real = np.ascontiguousarray(verts[faces])
-    o = np.ascontiguousarray(origin[valid], np.float64)
-    d = np.ascontiguousarray(direction[valid], np.float64)
+    o, d = origin[valid].astype(np.float64), direction[valid].astype(np.float64)
     length = np.sqrt((d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1]) + d[:, 2] * d[:, 2])  # _several's arithmetic
+    columns = np.ascontiguousarray(np.concatenate([o.T, d.T, length[None]]))
     index = np.full(valid.shape, -1, np.int64)
     index[valid] = np.arange(len(o))
     fine, coarse = _tiles(valid, origin, direction, RAY_TILE), _tiles(valid, origin, direction, 4 * RAY_TILE)
-    args = (_triangles(real, margin, parallel), coarse, fine, index, RAY_TILE)
+    args = (_triangles(real, margin, parallel), coarse, fine, index, RAY_TILE, real, columns, margin, parallel)
     n_faces = len(real)
     count = np.zeros(n_faces, np.int64)
     work = (lambda: (np.empty(coarse.shape[1], np.int64), np.empty(fine.shape[1], np.int64)))
     if n_faces:
         parallel_range(_bounces.rays_by_tiles, n_faces, *args, count, count, np.zeros(0, np.int64), False, work=work)
     start = np.cumsum(count) - count
-    pre = np.empty(int(count.sum()), np.int64)
-    if len(pre):
-        parallel_range(_bounces.rays_by_tiles, n_faces, *args, count, start, pre, True, work=work)
-    # the exact test of the rays kept (rays_near, as several._Reach.test runs it)
-    first, last = start, start + count
-    n = np.zeros(n_faces, np.int64)
-    test = (real, o, d, length, first, last, pre, margin, parallel)
-    if n_faces:
-        parallel_range(rays_near, n_faces, *test, n, np.zeros(0, np.int64), False)
-    at = np.cumsum(n) - n
-    out = np.empty(int(n.sum()), np.int64)
+    out = np.empty(int(count.sum()), np.int64)
     if len(out):
-        parallel_range(rays_near, n_faces, *test[:5], np.where(n > 0, last, first), *test[6:], at, out, True)
-    src = np.flatnonzero(n > 0)
+        parallel_range(_bounces.rays_by_tiles, n_faces, *args, count, start, out, True, work=work)
+    src = np.flatnonzero(count > 0)
     return acceptance.Candidates(np.full((len(src), 3, 3), np.nan), real[src], np.asarray(normals, np.float64)[faces[src]],
-                                 np.asarray(face_obj, np.int32)[src], src, 0, (at[src], at[src] + n[src], out))
+                                 np.asarray(face_obj, np.int32)[src], src, 0,
+                                 (start[src], start[src] + count[src], out))
 
 
 def _tiles(valid, origin, direction, size):
