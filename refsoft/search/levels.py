@@ -222,6 +222,7 @@ def deepen(scene, view, k, stencil, box, out, refl, parts, opt, search_first, ke
         The first level's (level 1: the other reflectors' vertices searched on this one's
         G-buffer), then one per later bounce drawn (:func:`draw_bounce`'s report).
     """
+    t0 = time.perf_counter()
     first = {"level": 1, "reflector": int(k), "pixels": int(stencil.sum()), "searched": 0}
     if starts is not None:
         starts.begin(view.frame)
@@ -273,6 +274,7 @@ def deepen(scene, view, k, stencil, box, out, refl, parts, opt, search_first, ke
         rparts = sum((object_parts(view.meshes, b, v, fl) for b, _, v, fl in found), [])
         bounces = first_bounces(camera, view.meshes, k, view.view.triangle,
                                 seen_reflectors(parts, rparts, camera, stencil, box), box)
+    first["ms"] = 1000 * (time.perf_counter() - t0)  # the reflectors seen in it; the later levels' own
     _later(scene, view, k, stencil, box, out, bounces, depth, opt, report, keep, starts)
     return report
 
