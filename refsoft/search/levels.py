@@ -16,10 +16,12 @@ is met with the real triangles whose virtual triangles, from the level's search,
 virtual triangles are rasterized with the scene's (:func:`refsoft.search.bounces.seen_reflectors`)
 and a later level drawn by the virtual pass.
 
-A reflector that can see itself (not convex, drawn by every image under the accurate preset) is
-its own level 2 where its pixels' rays meet it again (:func:`deepen_images`), and a later level
-on such a reflector is drawn by its pixels' rays (:func:`draw_bounce`,
-:func:`refsoft.search.exact_levels.rays_level`).
+A reflector that can see itself (not convex), drawn by every image under the accurate preset, is
+its own level 2 where its pixels' rays meet it again (:func:`deepen_images`: the reflectors in its
+image met by the rays alone), and a later level on such a reflector is drawn by its pixels' rays
+(:func:`draw_bounce`, :func:`refsoft.search.exact_levels.rays_level`). Under the paper preset it
+is one more reflector of its own level: its vertices searched on its G-buffer (level 1) or from
+each pixel's eye (a later level), their virtual triangles rasterized with the scene's.
 """
 
 from __future__ import annotations
