@@ -163,6 +163,8 @@ def rays_by_tiles(lo, hi, tri, coarse, fine, index, size, real, rays, margin, pa
             continue
         near = _triangle(real, f, margin, parallel)
         for cr in range(n_cr):
+            if fill and n == count[f]:  # every ray of it written: the bands below hold none
+                break
             kc = 0
             for cc in range(n_cc):
                 if _tile_meets(tri, f, coarse, cr, cc):
