@@ -37,8 +37,6 @@ def _check(verts, normals, faces, fobj, grid):
 def level_rays():
     """The rays of the concave bowl's level 1 (every pixel of it, from the moved origins) and of
     its level 2, as the render meets them with the bowl, 96x72, frame 0."""
-    from refsoft.search import levels
-
     sc = refsoft.load_scene("concave", width=96, height=72)
     grids = []
     real = meet.near_rays
@@ -49,11 +47,9 @@ def level_rays():
 
     meet.near_rays = spy
     try:
-        d = FrameDriver(sc, RenderOptions(bounces=2))
-        view = d.render_frame(0)
+        FrameDriver(sc, RenderOptions(bounces=2)).render_frame(0)
     finally:
         meet.near_rays = real
-    assert levels and view is not None
     return sc, grids
 
 
@@ -70,26 +66,33 @@ def test_the_tiles_keep_the_lists_of_every_ray_tested(level_rays):
 
 
 def test_rays_along_a_triangles_plane_and_scattered_rays():
-    """Random rays over a grid, some through the triangles, some along their planes (kept by the
-    parallel rule wherever they pass), some not finite in a tile."""
+    """Random rays over a grid, some through the triangles, a tile of rays lying in triangle 0's
+    plane far from it (kept by the parallel rule wherever they pass), a zero direction."""
     rng = np.random.default_rng(3)
     h, w = 21, 27
     valid = rng.random((h, w)) < 0.8
     origin = rng.normal(size=(h, w, 3))
-    target = rng.normal(size=(h, w, 3)) * 0.5
-    direction = target - origin
+    direction = rng.normal(size=(h, w, 3)) * 0.5 - origin
     verts = rng.normal(size=(60, 3)) * 0.6
     faces = np.arange(60).reshape(20, 3)
     real = verts[faces]
-    # rays lying in the plane of triangle 0, far from it
     n = np.cross(real[0, 1] - real[0, 0], real[0, 2] - real[0, 0])
-    along = np.cross(n, rng.normal(size=3))
-    direction[3, :5] = along
-    origin[3, :5] = real[0, 0] + 5.0 * np.cross(n / np.linalg.norm(n), along / np.linalg.norm(along))
+    n /= np.linalg.norm(n)
+    along = np.cross(n, [0.3, 0.5, 0.8])
+    along /= np.linalg.norm(along)
+    side = np.cross(n, along)
+    # the fine tile of rows 4-7, columns 4-7: every ray in the plane, 5 to 6 away, nearly parallel
+    tile = (slice(4, 8), slice(4, 8))
+    valid[tile] = True
+    spread = rng.random((4, 4))
+    origin[tile] = real[0, 0] + (5.0 + spread)[..., None] * side + rng.normal(size=(4, 4, 1)) * along
+    direction[tile] = along + 0.01 * spread[..., None] * side
     direction[10, 10] = 0.0  # a zero direction
     normals = np.tile([0.0, 0.0, 1.0], (60, 1))
     got = _check(verts, normals, faces, np.ones(20, np.int32), (valid, origin, direction))
-    assert any(r in lst for lst in _lists(got)[:1] for r in range(1, 5))  # the parallel rays kept by triangle 0
+    index = np.cumsum(valid.ravel()).reshape(h, w) - 1
+    assert got.triangle[0] == 0
+    assert set(index[tile].ravel().tolist()) <= set(_lists(got)[0])  # kept though far: along its plane
 
 
 def test_the_same_lists_with_one_thread(level_rays):
