@@ -163,6 +163,17 @@ def concave():
     return got, want
 
 
+def test_the_concave_bowl_gives_the_same_bits_with_one_thread(concave):
+    """Its level 1 and level 2 are met by the rays' pruning tile by tile (meet.near_rays), run
+    over the triangles in one part per thread."""
+    got, _ = concave
+    with one_thread():
+        f = FrameDriver(refsoft.load_scene("concave", width=80, height=60), RenderOptions(bounces=2)).render_frame(0)
+    assert (f.arrays[BOUNCE_DEPTH] == 2).sum() > 500
+    for key, a in got.items():
+        assert np.array_equal(a, f.arrays[key]), key
+
+
 def test_the_concave_mirror_sees_itself_as_the_truth_does(concave):
     """Measured (80x60, frame 0, 2026-12-07): 99.50% of the bowl's pixels agree with the truth's
     two-bounce paths, 75.8% of them take a second reflection on the bowl, the reflections taken
