@@ -5,6 +5,7 @@ import numpy as np
 
 from .._numba import kernel
 from ._kernels import RECORD_WIDTH, _normalize, search_one
+from ._several import _may_hit, _triangle
 
 
 @kernel
@@ -115,3 +116,110 @@ def best_starts(lo, hi, S, V, X, has, out):
             best = S.shape[0]
         out[i] = best
 
+
+
+@kernel
+def rays_by_tiles(lo, hi, tri, coarse, fine, index, size, real, rays, margin, parallel, count, start, out, fill,
+                  coarse_band, fine_band):
+    """Triangles ``lo .. hi - 1`` (run by :func:`refsoft._parallel.parallel_range`; each writes only
+    its own outputs): the rays that may hit it by :func:`refsoft.search._several.rays_near`'s test
+    (the same arithmetic), ascending, each tested only where its fine tile (``size`` x ``size``
+    pixels of ``index``, four a side in a coarse tile) may come near the triangle
+    (:func:`_tile_meets`, a fine tile tried only in a coarse tile that may).
+
+    Parameters
+    ----------
+    tri : (F, 10) float64
+        Per triangle: centroid, the radius about it that holds the triangle widened by the
+        pruning's margin, the unit normal, the sine and cosine of the angle to its plane within
+        which a ray is kept as parallel, and 1 where every ray is kept (degenerate)
+        (:func:`refsoft.search.meet._triangles`).
+    coarse, fine : (TR, TC, 11) float64
+        Per tile: its origins' centre and radius, its directions' unit axis, the cosine and sine of
+        the cone's half-angle, 1 where it holds a ray, 1 where it is kept for every triangle
+        (:func:`refsoft.search.meet._tiles`).
+    index : (h, w) int64
+        Each pixel's ray index (row-major over the valid pixels), -1 none.
+    real : (F, 3, 3) float64
+        The triangles.
+    rays : (7, R) float64
+        Origins (x, y, z), directions (x, y, z) and direction lengths, one row each.
+    margin, parallel : float
+        ``constants.SEVERAL_PRUNE_MARGIN``, ``constants.SEVERAL_PRUNE_PARALLEL``.
+    count, start : (F,) int64
+        ``fill`` False: ``count`` written (each triangle's number of rays); True: read, and
+        ``start`` where its rays go in ``out``.
+    out : (T,) int64
+    coarse_band, fine_band : (TC,) int64
+        Work: the tiles of one band that are kept.
+    """
+    h, w = index.shape
+    n_cr, n_cc = coarse.shape[0], coarse.shape[1]
+    n_fr, n_fc = fine.shape[0], fine.shape[1]
+    for f in range(lo, hi):
+        n = 0
+        pos = start[f] if fill else 0
+        if fill and count[f] == 0:
+            continue
+        near = _triangle(real, f, margin, parallel)
+        for cr in range(n_cr):
+            if fill and n == count[f]:  # every ray of it written: the bands below hold none
+                break
+            kc = 0
+            for cc in range(n_cc):
+                if _tile_meets(tri, f, coarse, cr, cc):
+                    coarse_band[kc] = cc
+                    kc += 1
+            if kc == 0:
+                continue
+            for fr in range(4 * cr, min(n_fr, 4 * cr + 4)):
+                k = 0
+                for j in range(kc):
+                    for fc in range(4 * coarse_band[j], min(n_fc, 4 * coarse_band[j] + 4)):
+                        if _tile_meets(tri, f, fine, fr, fc):
+                            fine_band[k] = fc
+                            k += 1
+                for r in range(fr * size, min(h, (fr + 1) * size)):
+                    for j in range(k):
+                        c0 = fine_band[j] * size
+                        for c in range(c0, min(w, c0 + size)):
+                            q = index[r, c]
+                            if q >= 0 and _may_hit(near, rays[0, q], rays[1, q], rays[2, q], rays[3, q],
+                                                   rays[4, q], rays[5, q], rays[6, q], margin):
+                                if fill:
+                                    out[pos + n] = q
+                                n += 1
+        if not fill:
+            count[f] = n
+
+
+@kernel(inline=True)
+def _tile_meets(tri, f, tiles, i, j):
+    """Whether a ray of tile (i, j) may pass within the radius of triangle ``f``'s centre, or lie
+    within the parallel rule's angle of its plane: with ``w`` from the tile's centre to the
+    triangle's, a ray from within the tile's radius along a direction within the cone's
+    half-angle ``alpha`` of its axis ``a`` passes the centre at least ``|w| sin(phi) - radius``
+    away, ``phi`` the angle between ``w`` and the ray's line, at least ``angle(w, +-a) - alpha``:
+    it may come near when ``angle(w, +-a) <= alpha + asin((rho + radius) / |w|)``, compared by
+    cosines. A ray within ``eps`` of the plane (sine ``tri``'s parallel rule) may be in the cone
+    when ``|a . n| <= sin(alpha + eps)``."""
+    if tiles[i, j, 9] == 0.0:  # no ray
+        return False
+    if tiles[i, j, 10] != 0.0 or tri[f, 9] != 0.0:
+        return True
+    wx, wy, wz = tri[f, 0] - tiles[i, j, 0], tri[f, 1] - tiles[i, j, 1], tri[f, 2] - tiles[i, j, 2]
+    wl = np.sqrt((wx * wx + wy * wy) + wz * wz)
+    reach = tri[f, 3] + tiles[i, j, 3]
+    if wl <= reach:
+        return True
+    ax, ay, az = tiles[i, j, 4], tiles[i, j, 5], tiles[i, j, 6]
+    ca, sa = tiles[i, j, 7], tiles[i, j, 8]
+    c = abs((wx * ax + wy * ay) + wz * az) / wl
+    sg = reach / wl
+    cg = np.sqrt(1.0 - sg * sg)
+    if c >= ca * cg - sa * sg - 1e-9:
+        return True
+    if ca * tri[f, 8] - sa * tri[f, 7] <= 0.0:  # alpha + eps reaches the plane: cos(alpha + eps) <= 0
+        return True
+    an = abs((ax * tri[f, 4] + ay * tri[f, 5]) + az * tri[f, 6])
+    return an <= sa * tri[f, 8] + ca * tri[f, 7] + 1e-9

@@ -13,9 +13,10 @@ Each vertex starts from its reflection pixel at the previous frame's bounce of t
 where that pixel is still in the stencil (coherence), else from the covered pixel, among
 :data:`~refsoft.constants.BOUNCE_START_SAMPLES` spread over the stencil, where its score is
 highest. A hidden vertex is searched again with spec section 4.6's inverse score where the
-options ask for it (``inverse = "search"``); otherwise its triangles are left out, as ``inverse =
-"discard"`` does, or, drawn by exact acceptance, tried everywhere (``plane``, the paper preset's
-rule, is not applied at a later level).
+options ask for it (``inverse = "search"``); otherwise its walk's end is kept, and the virtual
+pass leaves its triangles out (``discard``) or draws them with the vertex unfolded from that end
+(``plane``, the paper preset's rule: equation 1 keeps ``|V - R|``), or, drawn by exact
+acceptance, they are tried everywhere.
 """
 
 from __future__ import annotations

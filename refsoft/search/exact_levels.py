@@ -132,7 +132,7 @@ def combined(meshes, ids):
 def rays_level(scene, meshes, bounce, camera, rays, reach, opt, entry):
     """A later level on a reflector that sees itself (:func:`refsoft.search.levels.draw_bounce`'s part), drawn by its
     pixels' rays alone: each triangle of the objects a ray of the level can reach that one of
-    the rays comes near (:func:`refsoft.search.several.near_rays`) is met by those rays, the
+    the rays comes near (:func:`refsoft.search.meet.near_rays`) is met by those rays, the
     scene's from the pixel's bounce point, the reflectors' (the next level's, this one too) from a
     point moved along the ray (:func:`refsoft.search.meet.nearest_split`). No vertex is searched
     at such a level: with one eye per pixel there is no enumeration of every image (that of
@@ -149,21 +149,13 @@ def rays_level(scene, meshes, bounce, camera, rays, reach, opt, entry):
 
     ``entry`` (the level's report) receives the candidates.
     """
-    from .several import near_rays
-
-    valid, origin, direction = rays
     offset = meet.self_offset(meshes[bounce.reflector - 1])
     moved, _ = meet.moved(rays, offset)
-
-    def group(ids, ray_list):
-        verts, normals, faces, fobj = combined(meshes, ids)
-        return near_rays(verts, normals, faces, fobj, ray_list)
-
     ids = [k for k, o in enumerate(scene.objects, start=1) if not o.reflector and reach(k)]
     others = [] if bounce.level >= opt.bounces else [k for k in scene.reflector_ids if reach(k)]
     # the reflectors' candidates for the rays from their moved origins, as they are met
-    scene_cand = group(ids, (origin[valid], direction[valid]))
-    ref = group(others, (moved[1][valid], direction[valid]))
+    scene_cand = meet.near_rays(*combined(meshes, ids), rays)
+    ref = meet.near_rays(*combined(meshes, others), moved)
     src, best_c, best_t, best_uv = meet.nearest_split(scene_cand, ref, camera, bounce.box, rays, offset)
     entry["candidates"] = int(len(scene_cand.object_id) + len(ref.object_id))
     h, w = bounce.mask.shape

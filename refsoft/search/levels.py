@@ -16,10 +16,12 @@ is met with the real triangles whose virtual triangles, from the level's search,
 virtual triangles are rasterized with the scene's (:func:`refsoft.search.bounces.seen_reflectors`)
 and a later level drawn by the virtual pass.
 
-A reflector that can see itself (not convex, drawn by every image under the accurate preset) is
-its own level 2 where its pixels' rays meet it again (:func:`deepen_images`), and a later level
-on such a reflector is drawn by its pixels' rays (:func:`draw_bounce`,
-:func:`refsoft.search.exact_levels.rays_level`).
+A reflector that can see itself (not convex), drawn by every image under the accurate preset, is
+its own level 2 where its pixels' rays meet it again (:func:`deepen_images`: the reflectors in its
+image met by the rays alone), and a later level on such a reflector is drawn by its pixels' rays
+(:func:`draw_bounce`, :func:`refsoft.search.exact_levels.rays_level`). Under the paper preset it
+is one more reflector of its own level: its vertices searched on its G-buffer (level 1) or from
+each pixel's eye (a later level), their virtual triangles rasterized with the scene's.
 """
 
 from __future__ import annotations
@@ -30,10 +32,10 @@ import numpy as np
 
 from .. import keys
 from ..raster import shade
-from . import CULLED, meet, search
+from . import CULLED, meet
 from .bounces import (Bounce, bounding_sphere, first_bounces, gbuffer_of, later_bounces, level_rays,
                       object_parts, reaches, search_bounce, seen_reflectors, texel_reach, unfolded)
-from .exact_levels import exact_bounces, exact_level, rays_level, seen_by_rays
+from .exact_levels import combined, exact_bounces, exact_level, rays_level, seen_by_rays
 from .virtual import virtual_pass
 
 #: The per-pixel array of the reflections taken (0 off reflectors).
@@ -70,8 +72,10 @@ class LaterStarts:
 
 
 def _inverse(opt):
-    """A later level's hidden-vertex rule: the inverse search where the options ask for it, else
-    ``discard`` (``plane``, the paper preset's, is the first level's alone)."""
+    """A later level's walk for a hidden vertex: the inverse search where the options ask for it,
+    else its walk's end kept (``discard`` and ``plane``: the virtual pass then leaves its triangles
+    out, or, by ``plane``, draws them with the vertex unfolded from that end: equation 1 turns
+    ``V - R`` about the normal and keeps its length, the one thing the unfolded rule takes)."""
     return "search" if opt.inverse == "search" else "discard"
 
 
@@ -150,8 +154,8 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report, pa
     entry = {"level": bounce.level, "reflector": bounce.reflector, "pixels": int(bounce.mask.sum()),
              "searched": int(seen.sum()), "iterations": int(res.iterations.sum())}
     report.append(entry)
-    others = [] if bounce.level >= opt.bounces else [k for k in scene.reflector_ids
-                                                      if k != bounce.reflector and reach(k)]
+    others = [] if bounce.level >= opt.bounces else [k for k in scene.reflector_ids if reach(k) and (
+        k != bounce.reflector or meet.sees_itself(scene, k))]  # the paper preset: a mirror that sees itself too
     found = []  # the other reflectors' vertices searched at this level: (ids, vertices, virtual, flags)
     for k in others:
         verts = np.asarray(meshes[k - 1].vertices, np.float64)
@@ -172,7 +176,7 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report, pa
     else:
         parts = object_parts(meshes, ids, virtual, flags)
         stencil = bounce.stencil()
-        colour, rid, covered, _ = virtual_pass(scene, parts, camera, stencil, bounce.box, _inverse(opt))
+        colour, rid, covered, _ = virtual_pass(scene, parts, camera, stencil, bounce.box, opt.inverse)
         rparts = sum((object_parts(meshes, k, v, fl) for k, _, v, fl in found), [])
         shows = seen_reflectors(parts, rparts, camera, stencil, bounce.box) if found else {}
         nxt = later_bounces(bounce, shows, meshes) if found else []
@@ -220,6 +224,7 @@ def deepen(scene, view, k, stencil, box, out, refl, parts, opt, search_first, ke
         The first level's (level 1: the other reflectors' vertices searched on this one's
         G-buffer), then one per later bounce drawn (:func:`draw_bounce`'s report).
     """
+    t0 = time.perf_counter()
     first = {"level": 1, "reflector": int(k), "pixels": int(stencil.sum()), "searched": 0}
     if starts is not None:
         starts.begin(view.frame)
@@ -241,6 +246,8 @@ def deepen(scene, view, k, stencil, box, out, refl, parts, opt, search_first, ke
         texels = texel_reach(gb.position, gb.normal, eye, gb.mask, gb.origin)
         reach = (lambda b: reaches(texels, *bounding_sphere(view.meshes[b - 1])))
     near = [b for b in scene.reflector_ids if b != k and reach(b)]  # the others no reflected ray comes near: nothing
+    if opt.images != "all" and meet.sees_itself(scene, k):  # the paper's method: its own vertices searched too
+        near = [k] + near
     if near and opt.images == "all":  # the rays that can meet one of them, as exact_level takes them
         through = np.zeros(rays[0].shape, bool)
         through[rays[0]] = hit[[others.index(b) for b in near]].any(axis=0)
@@ -269,6 +276,7 @@ def deepen(scene, view, k, stencil, box, out, refl, parts, opt, search_first, ke
         rparts = sum((object_parts(view.meshes, b, v, fl) for b, _, v, fl in found), [])
         bounces = first_bounces(camera, view.meshes, k, view.view.triangle,
                                 seen_reflectors(parts, rparts, camera, stencil, box), box)
+    first["ms"] = 1000 * (time.perf_counter() - t0)  # the reflectors seen in it; the later levels' own
     _later(scene, view, k, stencil, box, out, bounces, depth, opt, report, keep, starts)
     return report
 
@@ -292,22 +300,22 @@ def deepen_images(scene, view, k, stencil, box, out, drawn, opt, keep=None, star
     convex, :func:`refsoft.search.several.several_pass`): the reflectors seen in its image, ``k``
     itself among them when it can see itself (:func:`refsoft.search.meet.sees_itself`).
 
-    Each such reflector's vertices are searched on ``k``'s G-buffer as the scene's are: every
-    image (:func:`refsoft.search.images.find_images`) and their candidate virtual triangles
-    (:func:`refsoft.search.several.candidates`: sheets, cuts, the rays' pruning); each pixel's
-    reflected ray is met with them from an origin moved along it (the truth's rule for a mirror
-    that sees itself, :func:`refsoft.search.meet.self_offset`) and with the scene's candidates of
-    the drawing (``drawn``: ``candidates``, ``rays``, ``source``) from its own; where a
-    reflector's triangle is the nearer, the pixel is that reflector's level 2.
+    Each such reflector is met by the pixels' rays alone, as a later level on a reflector that
+    sees itself is (:func:`refsoft.search.exact_levels.rays_level`): each of its triangles that one
+    of the rays comes near (:func:`refsoft.search.meet.near_rays`) is a candidate tested with
+    those rays, from an origin moved along each (the truth's rule for a mirror that sees itself,
+    :func:`refsoft.search.meet.self_offset`), and the scene's candidates of the drawing
+    (``drawn``: ``candidates``, ``rays``) from its own; where a reflector's triangle is the
+    nearer, the pixel is that reflector's level 2. No vertex of theirs is searched: their images
+    in a mirror that is not convex (every image of each vertex on the mirror, sheets, cuts) would
+    place candidates that the rays then test, and the rays' own pruning leaves out no triangle a
+    ray meets (up to its margin), at a fraction of the enumeration's cost.
 
     Returns
     -------
     list of dict
         As :func:`deepen`'s.
     """
-    from .images import find_images
-    from .several import candidates
-
     first = {"level": 1, "reflector": int(k), "pixels": int(stencil.sum()), "searched": 0}
     if starts is not None:
         starts.begin(view.frame)
@@ -318,7 +326,6 @@ def deepen_images(scene, view, k, stencil, box, out, drawn, opt, keep=None, star
     depth = np.where(stencil[r0:r1, c0:c1], np.int8(1), np.int8(0)).astype(np.int8)
     rays = drawn["rays"]
     valid, origin, direction = rays
-    gb, gb_eye, find = drawn["source"]
     others = [b for b in scene.reflector_ids if b != k]
     hit = meet.hits(meet.valid_rays(rays), [bounding_sphere(meshes[b - 1]) for b in others])
     near = ([k] if meet.sees_itself(scene, k) else []) + [b for b, h in zip(others, hit) if h.any()]
@@ -327,22 +334,9 @@ def deepen_images(scene, view, k, stencil, box, out, drawn, opt, keep=None, star
         t0 = time.perf_counter()
         offset = meet.self_offset(meshes[k - 1]) if k in near else 0.0
         # the rays as they meet the reflectors: from their moved origins (the triangle a ray leaves is
-        # then behind it, and no part of it is made)
+        # then behind it)
         moved, _ = meet.moved(rays, offset)
-        ray_list = (moved[1][valid], direction[valid])
-        parts = []
-        for b in near:
-            mesh = meshes[b - 1]
-            verts = np.asarray(mesh.vertices, np.float64)
-            walk = search(gb, gb_eye, verts, opt.neighbourhood, opt.inverse, None, opt.cap)
-            found = find_images(gb, gb_eye, verts, walk)
-            cand, _ = candidates(gb, gb_eye, verts, mesh.normals, mesh.faces, np.full(mesh.n_faces, b, np.int32),
-                                 found, find, opt.neighbourhood, opt.cap, rays=ray_list)
-            parts.append(cand)
-            first["searched"] += len(verts)
-        ref = parts[0]
-        for c in parts[1:]:
-            ref = meet.joined(ref, c)
+        ref = meet.near_rays(*combined(meshes, near), moved)
         src, best_c, best_t, best_uv = meet.nearest_split(drawn["candidates"], ref, camera, box, rays, offset)
         first["candidates"] = int(len(ref.object_id))
         first["ms"] = 1000 * (time.perf_counter() - t0)

@@ -382,3 +382,135 @@ def nearest_split(scene_cand, ref_cand, camera, box, rays, offset):
     src = np.where(ref, np.int8(2), np.where(sc >= 0, np.int8(1), np.int8(0))).astype(np.int8)
     return src, np.where(ref, rc, sc), np.where(ref, rt, st), np.where(ref[..., None], ruv, suv)
 
+
+
+# --- the rays' pruning, tile by tile ----------------------------------------------------------
+#: Pixels per side of a fine tile of rays bounded together (:func:`near_rays`); a coarse tile is
+#: four fine ones a side.
+RAY_TILE = 4
+#: Slack of the bounds: radians added to a tile's cone and to a triangle's parallel angle, and the
+#: relative widening of the tiles' and triangles' radii (the bounds only choose which rays the
+#: exact test sees: wider costs time, never a ray).
+TILE_ANGLE_SLACK = 1e-6
+TILE_RADIUS_SLACK = 1e-6
+
+
+def near_rays(verts, normals, faces, face_obj, rays):
+    """:func:`refsoft.search.several.near_rays` of a level's rays over its box, the same candidates
+    with the same ray lists, each triangle testing only the rays of the tiles that may come near
+    it.
+
+    A tile's rays (``RAY_TILE`` pixels a side, and coarse tiles of four of them a side) are
+    bounded by a sphere about their origins and a cone about their directions; a triangle by the
+    sphere about its centroid that holds it widened by the pruning's margin
+    (``SEVERAL_PRUNE_MARGIN`` in its barycentrics). A tile none of whose rays' lines can pass
+    through that sphere, nor lie within twice ``SEVERAL_PRUNE_PARALLEL``'s angle of the
+    triangle's plane, holds no ray the pruning keeps (kernel
+    :func:`refsoft.search._bounces.rays_by_tiles`); the rays of the others are tested one by one
+    with :func:`refsoft.search._several.rays_near`'s test, in ascending order, as
+    :func:`refsoft.search.several.near_rays` tests every ray.
+
+    Parameters
+    ----------
+    verts, normals : (N, 3) float64
+    faces : (F, 3) int64
+    face_obj : (F,) int32
+    rays : (valid (h, w) bool, origin (h, w, 3), direction (h, w, 3)) float64
+        A ray is the index of a valid pixel in row-major order.
+
+    Returns
+    -------
+    Candidates
+    """
+    from .. import constants
+
+    valid, origin, direction = rays
+    margin, parallel = float(constants.SEVERAL_PRUNE_MARGIN), float(constants.SEVERAL_PRUNE_PARALLEL)
+    verts = np.asarray(verts, np.float64)
+    faces = np.asarray(faces, np.int64).reshape(-1, 3)
+    real = np.ascontiguousarray(verts[faces])
+    o, d = origin[valid].astype(np.float64), direction[valid].astype(np.float64)
+    length = np.sqrt((d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1]) + d[:, 2] * d[:, 2])  # _several's arithmetic
+    columns = np.ascontiguousarray(np.concatenate([o.T, d.T, length[None]]))
+    index = np.full(valid.shape, -1, np.int64)
+    index[valid] = np.arange(len(o))
+    fine, coarse = _tiles(valid, origin, direction, RAY_TILE), _tiles(valid, origin, direction, 4 * RAY_TILE)
+    args = (_triangles(real, margin, parallel), coarse, fine, index, RAY_TILE, real, columns, margin, parallel)
+    n_faces = len(real)
+    count = np.zeros(n_faces, np.int64)
+    work = (lambda: (np.empty(coarse.shape[1], np.int64), np.empty(fine.shape[1], np.int64)))
+    if n_faces:
+        parallel_range(_bounces.rays_by_tiles, n_faces, *args, count, count, np.zeros(0, np.int64), False, work=work)
+    start = np.cumsum(count) - count
+    out = np.empty(int(count.sum()), np.int64)
+    if len(out):
+        parallel_range(_bounces.rays_by_tiles, n_faces, *args, count, start, out, True, work=work)
+    src = np.flatnonzero(count > 0)
+    return acceptance.Candidates(np.full((len(src), 3, 3), np.nan), real[src], np.asarray(normals, np.float64)[faces[src]],
+                                 np.asarray(face_obj, np.int32)[src], src, 0,
+                                 (start[src], start[src] + count[src], out))
+
+
+def _tiles(valid, origin, direction, size):
+    """Each tile's bounds (``size`` pixels a side; :func:`near_rays`), (TR, TC, 11) float64: its
+    origins' centre and radius, its directions' unit axis, the cosine and sine of the cone's
+    half-angle, 1 where it holds a ray, 1 where it is kept for every triangle (a value not
+    finite, or a cone as wide as a half-space)."""
+    h, w = valid.shape
+    tr, tc = -(-h // size), -(-w // size)
+    pad = ((0, tr * size - h), (0, tc * size - w))
+
+    def blocks(a):
+        a = np.pad(a, pad + ((0, 0),) * (a.ndim - 2))
+        return a.reshape((tr, size, tc, size) + a.shape[2:]).swapaxes(1, 2).reshape((tr, tc, size * size) + a.shape[2:])
+
+    v = blocks(valid)
+    o, d = blocks(np.where(valid[..., None], origin, 0.0)), blocks(np.where(valid[..., None], direction, 0.0))
+    n = v.sum(axis=2)
+    out = np.zeros((tr, tc, 11))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        bad = ~np.all(np.isfinite(o) & np.isfinite(d), axis=(2, 3))
+        o, d = np.where(bad[..., None, None], 0.0, o), np.where(bad[..., None, None], 0.0, d)
+        centre = o.sum(axis=2) / np.maximum(n, 1)[..., None]
+        radius = np.max(np.where(v, np.linalg.norm(o - centre[:, :, None], axis=3), 0.0), axis=2)
+        unit = np.where(v[..., None], d / np.linalg.norm(d, axis=3, keepdims=True), 0.0)
+        mean = unit.sum(axis=2)
+        axis = mean / np.linalg.norm(mean, axis=2, keepdims=True)
+        cross = np.linalg.norm(np.cross(unit, axis[:, :, None]), axis=3)
+        dots = np.sum(unit * axis[:, :, None], axis=3)
+        alpha = np.max(np.where(v, np.arctan2(cross, dots), 0.0), axis=2) + TILE_ANGLE_SLACK
+    always = bad | ~np.all(np.isfinite(axis), axis=2) | ~np.isfinite(alpha) | ~(alpha < 0.5 * np.pi)
+    out[..., :3] = centre
+    out[..., 3] = radius * (1.0 + TILE_RADIUS_SLACK)
+    out[..., 4:7] = np.where(always[..., None], 0.0, axis)
+    out[..., 7] = np.where(always, 0.0, np.cos(np.where(always, 0.0, alpha)))
+    out[..., 8] = np.where(always, 1.0, np.sin(np.where(always, 0.0, alpha)))
+    out[..., 9] = n > 0
+    out[..., 10] = always & (n > 0)
+    return np.ascontiguousarray(out)
+
+
+def _triangles(real, margin, parallel):
+    """Each triangle's bounds (:func:`near_rays`), (F, 10) float64: centroid, the radius about it
+    that holds it widened by ``margin`` in its barycentrics, unit normal, the sine and cosine of
+    the angle to its plane within which :func:`refsoft.search._several.rays_near` keeps a ray as
+    parallel (twice that, and the slack), and 1 where it is degenerate (every ray kept)."""
+    centre = real.mean(axis=1)
+    rho = (1.0 + 3.0 * margin) * np.max(np.linalg.norm(real - centre[:, None], axis=2), axis=1)
+    e1, e2 = real[:, 1] - real[:, 0], real[:, 2] - real[:, 0]
+    cross = np.cross(e1, e2)
+    area = np.linalg.norm(cross, axis=1)
+    edges = np.linalg.norm(e1, axis=1) * np.linalg.norm(e2, axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        normal = cross / area[:, None]
+        # |cos(d, n)| <= parallel |e1| |e2| / |e1 x e2|: within asin of that of the plane
+        eps = np.arcsin(np.clip(2.0 * parallel * edges / area, 0.0, 1.0)) + TILE_ANGLE_SLACK
+    always = ~(area > 0) | ~np.all(np.isfinite(normal), axis=1) | ~np.isfinite(rho) | ~(eps < 0.5 * np.pi)
+    out = np.zeros((len(real), 10))
+    out[:, :3] = centre
+    out[:, 3] = np.where(always, 0.0, rho * (1.0 + TILE_RADIUS_SLACK))
+    out[:, 4:7] = np.where(always[:, None], 0.0, normal)
+    out[:, 7] = np.where(always, 1.0, np.sin(np.where(always, 0.0, eps)))
+    out[:, 8] = np.where(always, 0.0, np.cos(np.where(always, 0.0, eps)))
+    out[:, 9] = always
+    return np.ascontiguousarray(out)

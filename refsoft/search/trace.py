@@ -394,11 +394,9 @@ def trace_vertex_bounce(scene, vertex: int, through, frame: int = 0, coherence: 
     path = tuple(check_reflector(scene, k) for k in through)
     if len(path) < 2 or len(path) > 8:
         raise RefsoftError(f"through must name 2 to 8 reflectors (the first bounce's first), got {list(through)}")
-    if any(a == b for a, b in zip(path, path[1:])):
-        raise RefsoftError(f"through names one reflector twice in a row ({list(path)}): a level on a reflector "
-                           "seeing itself is drawn by its pixels' rays, with no walk to replay")
     validate.integer(frame, "frame", 0, None if scene.animation is None else scene.n_frames - 1)
     opts = RenderOptions(coherence=coherence, bounces=len(path), **options)
+    _check_twice(scene, path, opts)
     verts, owner = scene_vertices(scene, frame)
     validate.integer(vertex, "vertex", 0, len(verts) - 1)
     driver = FrameDriver(scene, opts)
@@ -420,6 +418,26 @@ def trace_vertex_bounce(scene, vertex: int, through, frame: int = 0, coherence: 
     rp = VertexReplay(scene.name, path[-1], frame, vertex, obj, local, "walk", tr, gb, tr.eye, verts[vertex], path)
     rp._box = bounce.box
     return rp
+
+
+def _check_twice(scene, path, opts):
+    """Refuse a path that takes one reflector twice in a row where no walk draws that level: a
+    reflector that cannot see itself (convex or flat), or one that can under ``images="all"``
+    (the accurate preset: such a level is drawn by its pixels' rays). With ``images="one"`` (the
+    paper preset) the level is searched by walks from each pixel's eye, and replayed."""
+    from .meet import sees_itself
+
+    for a, b in zip(path, path[1:]):
+        if a != b:
+            continue
+        if not sees_itself(scene, a):
+            raise RefsoftError(f"through names reflector {a} twice in a row ({list(path)}), but it cannot see itself "
+                               "(convex or flat): no path takes it twice")
+        if opts.images == "all":
+            raise RefsoftError(f"through names reflector {a} twice in a row ({list(path)}): with every image "
+                               "(the accurate preset) that level is drawn by its pixels' rays, with no walk to "
+                               "replay; add --preset paper to replay the walk of the papers' method there, or "
+                               f"compare refsoft render and refsoft truth --bounces {len(path)} for the rays' paths")
 
 
 def trace_vertex_images(scene, replay: VertexReplay):
