@@ -363,3 +363,12 @@ BOUNCE_BOUND_FACTOR = 2.5
 #: narrowed to the triangles one of the rays can meet (``refsoft.search.levels``): a cost
 #: choice, the picture is the same.
 BOUNCE_FEW_RAYS = 256
+
+#: Pixels per side of a fine tile of a level's rays bounded together by the rays' pruning
+#: (:func:`refsoft.search.meet.near_rays`); a coarse tile is four fine ones a side.
+RAY_TILE = 4
+#: Slack of the pruning's bounds: radians added to a tile's cone and to a triangle's parallel
+#: angle, and the relative widening of the tiles' and triangles' radii (the bounds only choose
+#: which rays the exact test sees: wider costs time, never a ray).
+TILE_ANGLE_SLACK = 1e-6
+TILE_RADIUS_SLACK = 1e-6

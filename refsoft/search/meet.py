@@ -15,6 +15,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from .. import constants
 from .._parallel import parallel_range
 from ..raster._threads import SERIAL_MAX_VERTICES
 from . import CULLED, HIDDEN, _bounces, acceptance
@@ -385,14 +386,6 @@ def nearest_split(scene_cand, ref_cand, camera, box, rays, offset):
 
 
 # --- the rays' pruning, tile by tile ----------------------------------------------------------
-#: Pixels per side of a fine tile of rays bounded together (:func:`near_rays`); a coarse tile is
-#: four fine ones a side.
-RAY_TILE = 4
-#: Slack of the bounds: radians added to a tile's cone and to a triangle's parallel angle, and the
-#: relative widening of the tiles' and triangles' radii (the bounds only choose which rays the
-#: exact test sees: wider costs time, never a ray).
-TILE_ANGLE_SLACK = 1e-6
-TILE_RADIUS_SLACK = 1e-6
 
 
 def near_rays(verts, normals, faces, face_obj, rays):
@@ -400,9 +393,9 @@ def near_rays(verts, normals, faces, face_obj, rays):
     with the same ray lists, each triangle testing only the rays of the tiles that may come near
     it.
 
-    A tile's rays (``RAY_TILE`` pixels a side, and coarse tiles of four of them a side) are
-    bounded by a sphere about their origins and a cone about their directions; a triangle by the
-    sphere about its centroid that holds it widened by the pruning's margin
+    A tile's rays (:data:`refsoft.constants.RAY_TILE` pixels a side, and coarse tiles of four of
+    them a side) are bounded by a sphere about their origins and a cone about their directions; a
+    triangle by the sphere about its centroid that holds it widened by the pruning's margin
     (``SEVERAL_PRUNE_MARGIN`` in its barycentrics). A tile none of whose rays' lines can pass
     through that sphere, nor lie within twice ``SEVERAL_PRUNE_PARALLEL``'s angle of the
     triangle's plane, holds no ray the pruning keeps (kernel
@@ -434,8 +427,9 @@ def near_rays(verts, normals, faces, face_obj, rays):
     columns = np.ascontiguousarray(np.concatenate([o.T, d.T, length[None]]))
     index = np.full(valid.shape, -1, np.int64)
     index[valid] = np.arange(len(o))
-    fine, coarse = _tiles(valid, origin, direction, RAY_TILE), _tiles(valid, origin, direction, 4 * RAY_TILE)
-    args = (_triangles(real, margin, parallel), coarse, fine, index, RAY_TILE, real, columns, margin, parallel)
+    tile = constants.RAY_TILE
+    fine, coarse = _tiles(valid, origin, direction, tile), _tiles(valid, origin, direction, 4 * tile)
+    args = (_triangles(real, margin, parallel), coarse, fine, index, tile, real, columns, margin, parallel)
     n_faces = len(real)
     count = np.zeros(n_faces, np.int64)
     work = (lambda: (np.empty(coarse.shape[1], np.int64), np.empty(fine.shape[1], np.int64)))
@@ -478,10 +472,10 @@ def _tiles(valid, origin, direction, size):
         axis = mean / np.linalg.norm(mean, axis=2, keepdims=True)
         cross = np.linalg.norm(np.cross(unit, axis[:, :, None]), axis=3)
         dots = np.sum(unit * axis[:, :, None], axis=3)
-        alpha = np.max(np.where(v, np.arctan2(cross, dots), 0.0), axis=2) + TILE_ANGLE_SLACK
+        alpha = np.max(np.where(v, np.arctan2(cross, dots), 0.0), axis=2) + constants.TILE_ANGLE_SLACK
     always = bad | ~np.all(np.isfinite(axis), axis=2) | ~np.isfinite(alpha) | ~(alpha < 0.5 * np.pi)
     out[..., :3] = centre
-    out[..., 3] = radius * (1.0 + TILE_RADIUS_SLACK)
+    out[..., 3] = radius * (1.0 + constants.TILE_RADIUS_SLACK)
     out[..., 4:7] = np.where(always[..., None], 0.0, axis)
     out[..., 7] = np.where(always, 0.0, np.cos(np.where(always, 0.0, alpha)))
     out[..., 8] = np.where(always, 1.0, np.sin(np.where(always, 0.0, alpha)))
@@ -504,11 +498,11 @@ def _triangles(real, margin, parallel):
     with np.errstate(invalid="ignore", divide="ignore"):
         normal = cross / area[:, None]
         # |cos(d, n)| <= parallel |e1| |e2| / |e1 x e2|: within asin of that of the plane
-        eps = np.arcsin(np.clip(2.0 * parallel * edges / area, 0.0, 1.0)) + TILE_ANGLE_SLACK
+        eps = np.arcsin(np.clip(2.0 * parallel * edges / area, 0.0, 1.0)) + constants.TILE_ANGLE_SLACK
     always = ~(area > 0) | ~np.all(np.isfinite(normal), axis=1) | ~np.isfinite(rho) | ~(eps < 0.5 * np.pi)
     out = np.zeros((len(real), 10))
     out[:, :3] = centre
-    out[:, 3] = np.where(always, 0.0, rho * (1.0 + TILE_RADIUS_SLACK))
+    out[:, 3] = np.where(always, 0.0, rho * (1.0 + constants.TILE_RADIUS_SLACK))
     out[:, 4:7] = np.where(always[:, None], 0.0, normal)
     out[:, 7] = np.where(always, 1.0, np.sin(np.where(always, 0.0, eps)))
     out[:, 8] = np.where(always, 0.0, np.cos(np.where(always, 0.0, eps)))
