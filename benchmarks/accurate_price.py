@@ -9,6 +9,10 @@ scenes first: ``--sizes`` takes every word after it).
 With ``--cut``: instead, the silhouette cut of one accurate frame (frame 1 after frame 0), its
 steps predicted (the preset's) against plain bisection, timed alternately in one process (median
 of 7), with the searches each ran.
+With ``--acceptance``: instead, the exact drawing's acceptance of one accurate frame (frame 1
+after frame 0, every reflector), each pixel's ray walked through the candidates' hierarchy
+against the candidates' own loop (the same bits), timed alternately in one process (median of 7),
+with the candidates their bounds cover per valid pixel and the way the preset takes.
 """
 
 from __future__ import annotations
@@ -19,7 +23,7 @@ import time
 
 import refsoft
 from refsoft.frame import FrameDriver, RenderOptions
-from refsoft.search import silhouette, virtual
+from refsoft.search import acceptance, exact, silhouette, virtual
 
 SCENES = ["sphere", "ellipsoid", "quad", "kitchen", "ufo", "ants", "planar"]
 _SPLIT = {"tessellate_only": 0.0, "clip": 0.0}
@@ -96,13 +100,62 @@ def measure_cut(name, size, rounds=7):
     return {p: statistics.median(v) for p, v in times.items()}, searched, edges
 
 
+def measure_acceptance(name, size, rounds=7):
+    """Frame 1's acceptances (every reflector): median ms walked and looped, the candidates per
+    valid pixel their bounds cover, and whether the preset walks (per reflector, in order)."""
+    calls = []
+    nearest = exact.nearest  # the exact drawing's, as exact_pass calls it
+
+    def spy(cand, *args, **kwargs):
+        if not kwargs.get("runs", True) and cand.rays is None:
+            calls.append((cand, args, kwargs))
+        return nearest(cand, *args, **kwargs)
+
+    exact.nearest = spy
+    try:
+        scene = refsoft.load_scene(name, width=size[0], height=size[1])
+        driver = FrameDriver(scene, RenderOptions(preset="accurate"))
+        driver.render_frame(0)
+        calls.clear()
+        driver.render_frame(min(1, scene.n_frames - 1))
+    finally:
+        exact.nearest = nearest
+    times = {True: [], False: []}
+    for _ in range(rounds):
+        for traced in (True, False):
+            t = time.perf_counter()
+            for cand, args, kwargs in calls:
+                nearest(cand, *args, **{**kwargs, "traced": traced})
+            times[traced].append(1000 * (time.perf_counter() - t))
+    cover, walks = [], []
+    for cand, args, kwargs in calls:
+        valid, bbox, box = kwargs["rays"][0], kwargs["screen"][1], args[2]
+        h, c0, c1 = valid.shape[0], int(box[2]), int(box[3])
+        rows = (bbox[:, 1].clip(0, h) - bbox[:, 0].clip(0, h)).clip(0)
+        cols = (bbox[:, 3].clip(c0, c1) - bbox[:, 2].clip(c0, c1)).clip(0)
+        cover.append(float((rows * cols).sum()) / max(int(valid.sum()), 1))
+        walks.append(acceptance._trace_pays(valid, bbox, h, c0, c1, cand.real, None))
+    return {t: statistics.median(v) for t, v in times.items()}, cover, walks
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("scenes", nargs="*", default=SCENES)
     ap.add_argument("--sizes", nargs="+", default=["1024x768", "640x480"])
     ap.add_argument("--frames", type=int, default=3)
     ap.add_argument("--cut", action="store_true", help="time the silhouette cut alone, predicted against bisection")
+    ap.add_argument("--acceptance", action="store_true",
+                    help="time the exact drawing's acceptance alone, walked against looped")
     args = ap.parse_args(argv)
+    if args.acceptance:
+        print("scene size | walked ms | looped ms | candidates covering a pixel (per reflector) | walked by the preset")
+        for size in args.sizes:
+            w, h = (int(x) for x in size.split("x"))
+            for name in args.scenes:
+                ms, cover, walks = measure_acceptance(name, (w, h))
+                print(f"{name} {size} | {ms[True]:.1f} | {ms[False]:.1f} | {' '.join(f'{c:.0f}' for c in cover)} | "
+                      f"{sum(walks)} of {len(walks)}", flush=True)
+        return
     if args.cut:
         print("scene size edges | predicted: ms searches | bisection: ms searches")
         for size in args.sizes:
