@@ -544,6 +544,111 @@ class _Pool:
                           subdivided)
 
 
+# --- every candidate triangle met with the rays that may hit it --------------------------------
+def ray_lists(real, rays):
+    """The reflected rays that may hit each triangle, found through ray tiles
+    (:mod:`refsoft.search._raytiles`): per triangle the rays ``_several._may_hit`` keeps (the
+    test of the candidates' pruning), less those whose tile cannot reach the triangle.
+
+    Parameters
+    ----------
+    real : (F, 3, 3) float64
+        Triangles, world space.
+    rays : tuple
+        :func:`refsoft.search.acceptance.pixel_rays`: ``valid`` (h, w) bool, ``origin`` and
+        ``direction`` (h, w, 3) float64.
+
+    Returns
+    -------
+    first, last : (F,) int64
+        Triangle ``f``'s rays are ``ray[first[f]:last[f]]``, ascending.
+    ray : (K,) int64
+        Indices of valid pixels in row-major order.
+    """
+    from ._raytiles import TILE_WIDTH, rays_near_tiles, tile_bounds
+
+    real = np.ascontiguousarray(real, np.float64).reshape(-1, 3, 3)
+    valid, origin, direction = rays
+    valid = np.ascontiguousarray(valid, bool)
+    if valid.ndim != 2 or np.shape(origin) != valid.shape + (3,) or np.shape(direction) != valid.shape + (3,):
+        raise RefsoftError(f"rays must be valid (h, w) and origin, direction (h, w, 3), got {valid.shape}, "
+                           f"{np.shape(origin)}, {np.shape(direction)}")
+    origin = np.ascontiguousarray(origin, np.float64)
+    direction = np.ascontiguousarray(direction, np.float64)
+    n = len(real)
+    count = np.zeros(n, np.int64)
+    if n == 0 or not valid.any():
+        return count, count.copy(), np.zeros(0, np.int64)
+    h, w = valid.shape
+    ray_id = np.full((h, w), -1, np.int64)
+    ray_id[valid] = np.arange(int(valid.sum()), dtype=np.int64)
+    size, ratio = int(constants.SEVERAL_RAY_TILE), int(constants.SEVERAL_RAY_BLOCK)
+    bounds = []
+    for side in (size, size * ratio):
+        rows, cols = -(-h // side), -(-w // side)
+        b = np.zeros((rows * cols, TILE_WIDTH))
+        parallel_range(tile_bounds, rows, valid, origin, direction, side, cols, b)
+        bounds.append(b)
+    d = direction[valid]
+    dmax = float(np.max(np.sqrt((d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1]) + d[:, 2] * d[:, 2])))
+    dmax = dmax if np.isfinite(dmax) else 0.0  # a ray that is not finite makes its tile keep every ray
+    args = (real, valid, origin, direction, ray_id, bounds[0], bounds[1], size, ratio,
+            float(constants.SEVERAL_PRUNE_MARGIN), float(constants.SEVERAL_PRUNE_PARALLEL), dmax)
+
+    def work():
+        return np.empty(-(-w // (size * ratio)), np.int64), np.empty(-(-w // size), np.int64)
+
+    start = np.zeros(n, np.int64)
+    parallel_range(rays_near_tiles, n, *args, count, start, np.zeros(0, np.int64), False, work=work)
+    start = np.cumsum(count) - count
+    out = np.empty(int(count.sum()), np.int64)
+    if len(out):
+        parallel_range(rays_near_tiles, n, *args, count, start, out, True, work=work)
+    return start, start + count, out
+
+
+def with_ray_lists(cand, verts, normals, faces, face_obj, rays):
+    """``cand`` followed by one candidate per scene triangle it holds (whole, in triangle order),
+    met with every ray that may hit it (:func:`ray_lists`) wherever its pixel, without a
+    projection (virtual corners NaN, as :func:`near_rays`'): where an image was not found, or a
+    virtual triangle misses its image by more than the dilation, the triangle is still drawn at the
+    pixels whose rays hit it. Each pixel keeps the nearest hit, so the picture is the exact ray
+    cast's over the candidates' triangles.
+
+    Parameters
+    ----------
+    cand : Candidates
+        With ray lists (``rays`` not None) or without.
+    verts, normals : (N, 3) float64
+    faces : (F, 3) int64
+    face_obj : (F,) int32
+    rays : tuple
+        :func:`refsoft.search.acceptance.pixel_rays` of the drawing.
+
+    Returns
+    -------
+    Candidates
+    """
+    src = np.unique(np.asarray(cand.triangle, np.int64))
+    faces = np.asarray(faces, np.int64).reshape(-1, 3)
+    real = np.asarray(verts, np.float64)[faces[src]]
+    first, last, ray = ray_lists(real, rays)
+    keep = last > first
+    src, real, first, last = src[keep], real[keep], first[keep], last[keep]
+    n = len(cand.object_id)
+    if cand.rays is None:
+        f0, l0, r0 = np.full(n, -1, np.int64), np.full(n, -1, np.int64), np.zeros(0, np.int64)
+    else:
+        f0, l0, r0 = (np.asarray(a, np.int64) for a in cand.rays)
+    return Candidates(np.concatenate([cand.virtual, np.full((len(src), 3, 3), np.nan)]),
+                      np.concatenate([cand.real, real]),
+                      np.concatenate([cand.normals, np.asarray(normals, np.float64)[faces[src]]]),
+                      np.concatenate([cand.object_id, np.asarray(face_obj, np.int32)[src]]),
+                      np.concatenate([cand.triangle, src]), cand.subdivided,
+                      (np.concatenate([f0, first + len(r0)]), np.concatenate([l0, last + len(r0)]),
+                       np.concatenate([r0, ray])))
+
+
 # --- the method's branch ----------------------------------------------------------------------
 def image_source(scene, view, k, refl, opt):
     """Where reflector ``k``'s images come from, or None (the virtual pass draws it): the images
@@ -599,8 +704,9 @@ def several_pass(scene, view, k, stencil, box, reflected, opt, gb, eye, images, 
     cand, with_sheets = candidates(gb, eye, view.vertices, reflected.normals, reflected.faces,
                                    reflected.face_object, images, find, opt.neighbourhood, opt.cap,
                                    rays=(origin[valid], direction[valid]))
+    drawn = with_ray_lists(cand, view.vertices, reflected.normals, reflected.faces, reflected.face_object, rays)
     colors = np.vstack([np.zeros(3), [o.color for o in scene.objects]]).astype(np.float32)
-    colour, rid, covered, counts = draw(cand, view.camera, mesh, triangle, stencil, box, colors, rays)
+    colour, rid, covered, counts = draw(drawn, view.camera, mesh, triangle, stencil, box, colors, rays)
     if keep is not None:
         keep.update(candidates=cand, rays=rays, source=(gb, eye, find))
     report = {"images": int(len(images.pixel)), "candidates": int(len(cand.object_id)),
