@@ -274,60 +274,28 @@ def cone_trig(sizes_total, cone, out):
 
 
 @kernel(inline=True)
-def _contains_by_cosines(s, cn, cs, v):
-    """``_hierarchy._contains(s, cn, v, 1, 1)`` decided by cosines in float64, where it is sure:
-    1 when the cone-sphere test holds with room to spare, 0 when it fails with room to spare, 2
-    when the two are too close to tell. The room covers the exact test's roundings: its atan2
-    and asin (about 1e-7 rad in float32) and the float32 difference ``V - P`` (a few units in the
-    last place of the coordinates, an angle of that over the distance). ``cs`` is the cell's row
-    of :func:`cone_trig`."""
+def _may_contain(s, cn, cs, v):
+    """A cheap test that is True wherever ``_hierarchy._contains(s, cn, v, 1, 1)`` is (and at
+    some cells more): the same cone-sphere test by cosines, in float64, with a slack of
+    ``1e-4`` in the cosine (float32 atan2 and asin err by about 1e-7 rad: far less). ``cs`` is the
+    cell's row of :func:`cone_trig`."""
     if cs[0] > 1.5:
-        return 0
-    sx, sy, sz = np.float64(s[0]), np.float64(s[1]), np.float64(s[2])
-    vx, vy, vz = np.float64(v[0]), np.float64(v[1]), np.float64(v[2])
-    wx, wy, wz = vx - sx, vy - sy, vz - sz
+        return False
+    wx, wy, wz = np.float64(v[0]) - s[0], np.float64(v[1]) - s[1], np.float64(v[2]) - s[2]
     dist = np.sqrt((wx * wx + wy * wy) + wz * wz)
     r = np.float64(s[3])
-    scale = (abs(sx) + abs(sy) + abs(sz)) + ((abs(vx) + abs(vy)) + abs(vz))
-    err = 1e-6 * scale  # the float32 difference's rounding, generously
-    if dist <= r - err - 1e-4 * r:
-        return 1
-    if dist <= r + err + 1e-4 * r or not dist > 0.0:
-        return 2
+    if dist <= r * 1.0001 + 1e-30:
+        return True
     sr = min(r / dist, 1.0)
     ca, sa = cs[0], cs[1]
     if ca <= 0.0 and sr >= sa:  # the half-angle plus asin(r / dist) reaches pi
-        return 2
+        return True
     ax, ay, az = np.float64(cn[0]), np.float64(cn[1]), np.float64(cn[2])
     an = np.sqrt((ax * ax + ay * ay) + az * az)
     if not an > 0.0:
-        return 2
+        return True
     cos_limit = ca * np.sqrt(1.0 - sr * sr) - sa * sr
-    # an angle error e moves a cosine by at most e
-    room = 1e-4 + 4.0 * err / dist
-    c = ((wx * ax + wy * ay) + wz * az) / (dist * an)
-    if c >= cos_limit + room:
-        return 1
-    if c < cos_limit - room:
-        return 0
-    return 2
-
-
-@kernel(inline=True)
-def _may_contain(s, cn, cs, v):
-    """True wherever ``_hierarchy._contains(s, cn, v, 1, 1)`` is (and at some cells more): a
-    cell above the texels is kept on this (:func:`_contains_by_cosines` not sure it fails)."""
-    return _contains_by_cosines(s, cn, cs, v) != 0
-
-
-@kernel(inline=True)
-def _texel_contains(s, cn, cs, v, fp):
-    """``_hierarchy._contains(s, cn, v, 1, 1)`` itself (test 3 of an image), computed only where
-    :func:`_contains_by_cosines` is not sure."""
-    k = _contains_by_cosines(s, cn, cs, v)
-    if k == 2:
-        return _contains(s, cn, v, like(1.0, fp), like(1.0, fp), fp)
-    return k == 1
+    return ((wx * ax + wy * ay) + wz * az) / (dist * an) >= cos_limit - 1e-4
 
 
 @kernel
@@ -349,12 +317,13 @@ def descend(G, mask, sph, cone, trig, offsets, sizes, n_levels, v, reach, merge_
     every cell whose dilated cone may meet the vertex (children in the order top-left, top-right,
     bottom-left, bottom-right), then the solutions beside a fold (:func:`seed_folds`). A cell
     above the texels is kept when :func:`_may_contain` says it may hold the vertex (a superset of
-    the cone-sphere test, without its arc tangent and arc sine); a texel is reached when the
-    cone-sphere test itself holds (``_hierarchy._contains``, the definition's test 3, through
-    :func:`_texel_contains`). Accepted texels go to ``cand`` (K, CAND_WIDTH) in the order reached; ``record`` (may have no
+    the cone-sphere test, without its arc tangent and arc sine); a texel is reached when that
+    and the cone-sphere test itself (``_hierarchy._contains``, the definition's test 3) hold.
+    Accepted texels go to ``cand`` (K, CAND_WIDTH) in the order reached; ``record`` (may have no
     rows) receives every texel judged. ``trig`` is :func:`cone_trig` of ``cone``.
 
     Returns (accepted, visited cells, pruned cells, judged texels, n_record)."""
+    one = like(1.0, fp)
     n_cand = 0
     visited = 0
     pruned = 0
@@ -365,7 +334,7 @@ def descend(G, mask, sph, cone, trig, offsets, sizes, n_levels, v, reach, merge_
     stack[0, 2] = 0
     sp = 0
     q = offsets[top]
-    if _may_contain(sph[q], cone[q], trig[q], v) if top > 0 else _texel_contains(sph[q], cone[q], trig[q], v, fp):
+    if _may_contain(sph[q], cone[q], trig[q], v) and (top > 0 or _contains(sph[q], cone[q], v, one, one, fp)):
         sp = 1
     else:
         pruned += 1
@@ -406,8 +375,8 @@ def descend(G, mask, sph, cone, trig, offsets, sizes, n_levels, v, reach, merge_
             ci = 2 * i + k // 2
             cj = 2 * j + k % 2
             q = offsets[child] + ci * n + cj
-            if _may_contain(sph[q], cone[q], trig[q], v) if child > 0 else _texel_contains(sph[q], cone[q], trig[q],
-                                                                                            v, fp):
+            if _may_contain(sph[q], cone[q], trig[q], v) and (child > 0 or _contains(sph[q], cone[q], v, one, one,
+                                                                                       fp)):
                 stack[sp, 0] = child
                 stack[sp, 1] = ci
                 stack[sp, 2] = cj
