@@ -259,68 +259,13 @@ def converge(G, mask, sph, cone, sizes0, r, c, v, reach, fp, t, work):
 
 
 @kernel
-def cone_trig(sizes_total, cone, out):
-    """``out`` (cells, 2) float64: the cosine and sine of each cell's cone half-angle (capped at
-    pi; 2, 0 for an empty cell, whose half-angle is negative), for :func:`_may_contain`."""
-    for q in range(sizes_total):
-        a = np.float64(cone[q, 3])
-        if a < 0.0:
-            out[q, 0] = 2.0
-            out[q, 1] = 0.0
-            continue
-        a = min(a, np.pi)
-        out[q, 0] = np.cos(a)
-        out[q, 1] = np.sin(a)
-
-
-@kernel(inline=True)
-def _may_contain(s, cn, cs, v):
-    """A cheap test that is True wherever ``_hierarchy._contains(s, cn, v, 1, 1)`` is (and at
-    some cells more): the same cone-sphere test by cosines, in float64, with a slack of
-    ``1e-4`` in the cosine (float32 atan2 and asin err by about 1e-7 rad: far less). ``cs`` is the
-    cell's row of :func:`cone_trig`."""
-    if cs[0] > 1.5:
-        return False
-    wx, wy, wz = np.float64(v[0]) - s[0], np.float64(v[1]) - s[1], np.float64(v[2]) - s[2]
-    dist = np.sqrt((wx * wx + wy * wy) + wz * wz)
-    r = np.float64(s[3])
-    if dist <= r * 1.0001 + 1e-30:
-        return True
-    sr = min(r / dist, 1.0)
-    ca, sa = cs[0], cs[1]
-    if ca <= 0.0 and sr >= sa:  # the half-angle plus asin(r / dist) reaches pi
-        return True
-    ax, ay, az = np.float64(cn[0]), np.float64(cn[1]), np.float64(cn[2])
-    an = np.sqrt((ax * ax + ay * ay) + az * az)
-    if not an > 0.0:
-        return True
-    cos_limit = ca * np.sqrt(1.0 - sr * sr) - sa * sr
-    return ((wx * ax + wy * ay) + wz * az) / (dist * an) >= cos_limit - 1e-4
-
-
-@kernel
 def enumerate_one(G, mask, sph, cone, offsets, sizes, n_levels, v, reach, merge_dist, fp, stack, cand, t, work,
                   record, n_record):
-    """Every texel of one vertex that is an image (before merging): :func:`descend` with the
-    cones' cosines and sines made here (:func:`cone_trig`). Returns (accepted, visited cells,
-    pruned cells, judged texels, n_record)."""
-    trig = np.empty((sph.shape[0], 2), dtype=np.float64)
-    cone_trig(sph.shape[0], cone, trig)
-    return descend(G, mask, sph, cone, trig, offsets, sizes, n_levels, v, reach, merge_dist, fp, stack, cand, t,
-                   work, record, n_record)
-
-
-@kernel
-def descend(G, mask, sph, cone, trig, offsets, sizes, n_levels, v, reach, merge_dist, fp, stack, cand, t, work,
-            record, n_record):
     """Every texel of one vertex that is an image (before merging), found by descending into
-    every cell whose dilated cone may meet the vertex (children in the order top-left, top-right,
-    bottom-left, bottom-right), then the solutions beside a fold (:func:`seed_folds`). A cell
-    above the texels is kept when :func:`_may_contain` says it may hold the vertex (a superset of
-    the cone-sphere test, without its arc tangent and arc sine); a texel is reached when that
-    and the cone-sphere test itself (``_hierarchy._contains``, the definition's test 3) hold.
-    Accepted texels go to ``cand`` (K, CAND_WIDTH) in the order reached; ``record`` (may have no
-    rows) receives every texel judged. ``trig`` is :func:`cone_trig` of ``cone``.
+    every cell whose dilated cone meets the vertex (children in the order top-left, top-right,
+    bottom-left, bottom-right), then the solutions beside a fold (:func:`seed_folds`). Accepted
+    texels go to ``cand`` (K, CAND_WIDTH) in the order reached; ``record`` (may have no rows)
+    receives every texel judged.
 
     Returns (accepted, visited cells, pruned cells, judged texels, n_record)."""
     one = like(1.0, fp)
@@ -334,7 +279,7 @@ def descend(G, mask, sph, cone, trig, offsets, sizes, n_levels, v, reach, merge_
     stack[0, 2] = 0
     sp = 0
     q = offsets[top]
-    if _may_contain(sph[q], cone[q], trig[q], v) and (top > 0 or _contains(sph[q], cone[q], v, one, one, fp)):
+    if _contains(sph[q], cone[q], v, one, one, fp):
         sp = 1
     else:
         pruned += 1
@@ -375,8 +320,7 @@ def descend(G, mask, sph, cone, trig, offsets, sizes, n_levels, v, reach, merge_
             ci = 2 * i + k // 2
             cj = 2 * j + k % 2
             q = offsets[child] + ci * n + cj
-            if _may_contain(sph[q], cone[q], trig[q], v) and (child > 0 or _contains(sph[q], cone[q], v, one, one,
-                                                                                       fp)):
+            if _contains(sph[q], cone[q], v, one, one, fp):
                 stack[sp, 0] = child
                 stack[sp, 1] = ci
                 stack[sp, 2] = cj
@@ -548,13 +492,11 @@ def enumerate_all(lo, hi, G, mask, sph, cone, offsets, sizes, n_levels, vertices
     work = np.empty((5, 2), dtype=np.float64)
     v = np.empty(3, dtype=G.dtype)
     empty = np.empty((0, RECORD_WIDTH), dtype=np.float64)
-    trig = np.empty((sph.shape[0], 2), dtype=np.float64)  # once per part: O(cells), a vertex costs more
-    cone_trig(sph.shape[0], cone, trig)
     for i in range(lo, hi):
         for k in range(3):
             v[k] = like(vertices[i, k] - origin[k], fp)
-        n_cand, visited, pruned, judged, _ = descend(G, mask, sph, cone, trig, offsets, sizes, n_levels, v, reach,
-                                                     merge_dist, fp, stack, cand, t, work, empty, 0)
+        n_cand, visited, pruned, judged, _ = enumerate_one(G, mask, sph, cone, offsets, sizes, n_levels, v, reach,
+                                                           merge_dist, fp, stack, cand, t, work, empty, 0)
         fr, fc, flr, flc = first_walk(G, mask, sph, cone, sizes[0], first[i, 0], first[i, 1], v, reach, fp, t, work)
         n_keep = merge(cand, n_cand, fr, fc, flr, flc, merge_dist, keep, used)
         for m in range(n_keep):
