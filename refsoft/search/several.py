@@ -72,7 +72,7 @@ def _links(gb, eye, verts, start, count, pixel, edges, neighbourhood, cap):
     fwd = _walks(gb, eye, verts, start, count, pixel, edges, neighbourhood, cap)
     back = _walks(gb, eye, verts, start, count, pixel, edges[:, ::-1], neighbourhood, cap)
     back = back[:, ::-1]
-    pairs = back[_member(back[:, 0] * _KEY + back[:, 1], np.unique(fwd[:, 0] * _KEY + fwd[:, 1]))]
+    pairs = back[_member(back[:, 0] * _KEY + back[:, 1], _sorted_unique(fwd[:, 0] * _KEY + fwd[:, 1]))]
     return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))].reshape(-1, 2)
 
 
@@ -167,7 +167,7 @@ def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, n
     pairs = links(gb, eye, verts, images, edges, neighbourhood, cap)
     with_sheets = sheets(images, pairs)
     pool.add_links(pairs)
-    pool.walked = np.unique(edges[:, 0] * _KEY + edges[:, 1])
+    pool.walked = _sorted_unique(edges[:, 0] * _KEY + edges[:, 1])
     out_t, out_f, out_s, out_r, subdivided = [], [], [], [], []
     todo_faces, todo_src = faces, np.arange(len(faces), dtype=np.int64)
     reach = None if rays is None else _Reach(*rays)
@@ -322,9 +322,38 @@ class _Reach:
 
 
 def _edges(faces):
+    """(E, 2) int64: the faces' edges, each (smaller, larger) once, in lexicographic order (the
+    order of their pair keys)."""
     e = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
     e = np.sort(e, axis=1)
-    return np.unique(e, axis=0)
+    keys = _sorted_unique(e[:, 0] * _KEY + e[:, 1])
+    return np.stack([keys // _KEY, keys % _KEY], axis=1).astype(e.dtype).reshape(-1, 2)
+
+
+def _sorted_unique(a):
+    """The distinct values of an integer array, ascending (1-D): :func:`numpy.unique`'s result, by
+    a sort and a comparison of neighbours (NumPy's unique hashes integers, several times slower on
+    the millions of keys of a frame)."""
+    s = np.sort(np.asarray(a).reshape(-1))
+    if len(s) < 2:
+        return s
+    keep = np.empty(len(s), bool)
+    keep[0] = True
+    np.not_equal(s[1:], s[:-1], out=keep[1:])
+    return s[keep]
+
+
+def _union(a, b):
+    """:func:`numpy.union1d` of ``a`` (sorted, distinct) and ``b``: ``b``'s distinct values, then a
+    stable sort of the two runs (a merge, linear in their lengths) and a comparison of neighbours."""
+    b = _sorted_unique(b)
+    if len(a) == 0:
+        return b.astype(np.result_type(a, b))
+    s = np.sort(np.concatenate([a, b]), kind="stable")
+    keep = np.empty(len(s), bool)
+    keep[0] = True
+    np.not_equal(s[1:], s[:-1], out=keep[1:])
+    return s[keep]
 
 
 #: Pair keys: ``i * _KEY + j`` for indices below 2**31 (vertices, images).
@@ -400,7 +429,7 @@ class _Pool:
         keep = alive | np.any(bare[faces], axis=1)
         if cut:
             keys = _pair_key(faces, faces[:, [1, 2, 0]])
-            keep |= np.any(_member(keys, np.unique(_pair_key(live, live[:, [1, 2, 0]]))), axis=1)
+            keep |= np.any(_member(keys, _sorted_unique(_pair_key(live, live[:, [1, 2, 0]]))), axis=1)
         return keep
 
     def corners(self, faces):
@@ -409,7 +438,7 @@ class _Pool:
 
     def add_links(self, pairs):
         pairs = np.asarray(pairs, np.int64).reshape(-1, 2)
-        self.linked = np.union1d(self.linked, _pair_key(pairs[:, 0], pairs[:, 1]))
+        self.linked = _union(self.linked, _pair_key(pairs[:, 0], pairs[:, 1]))
 
     def triples(self, faces):
         """Every face's linked image triples (i of its first corner, j, k), in nested-loop order
@@ -429,7 +458,7 @@ class _Pool:
     def matched(self, faces, t, owner):
         """(F,) bool: every image of every corner of the face belongs to one of its triples."""
         ok = np.all(self.count[faces] > 0, axis=1)
-        used = np.unique((owner[:, None] * self.m + t).reshape(-1))
+        used = _sorted_unique(owner[:, None] * self.m + t)
         flat = faces.reshape(-1)
         img, corner, _ = _ranges(self.offset[flat], self.count[flat])
         face = corner // 3
@@ -517,7 +546,7 @@ class _Pool:
     def settle(self, faces, gb, eye, find, neighbourhood, cap):
         """Find the images of the corners of ``faces`` not found yet (``find``, in vertex order)
         and link the faces' edges not walked yet."""
-        v = np.unique(faces)
+        v = _sorted_unique(faces)
         v = v[~self.found[v]]
         if len(v):
             found = find(np.concatenate(self.verts)[v])
@@ -531,7 +560,7 @@ class _Pool:
         edges = _edges(faces)
         ek = edges[:, 0] * _KEY + edges[:, 1]
         fresh = ~_member(ek, self.walked)
-        self.walked = np.union1d(self.walked, ek)
+        self.walked = _union(self.walked, ek)
         self.add_links(_links(gb, eye, np.concatenate(self.verts), self.offset, self.count,
                               np.concatenate(self.pixel), edges[fresh], neighbourhood, cap))
 
@@ -629,7 +658,7 @@ def with_ray_lists(cand, verts, normals, faces, face_obj, rays):
     -------
     Candidates
     """
-    src = np.unique(np.asarray(cand.triangle, np.int64))
+    src = _sorted_unique(np.asarray(cand.triangle, np.int64))
     faces = np.asarray(faces, np.int64).reshape(-1, 3)
     real = np.asarray(verts, np.float64)[faces[src]]
     first, last, ray = ray_lists(real, rays)
