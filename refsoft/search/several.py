@@ -16,6 +16,10 @@ triangles, and their exact per-pixel acceptance.
    reflector's interpolated normal at its visible point (as the ray-traced truth does) and
    intersected with the candidate's *real* scene triangle; the nearest hit wins
    (:mod:`refsoft.search.acceptance`). The picture is the same bits as without the pruning.
+4. :func:`with_ray_lists`: each scene triangle with a candidate is also drawn whole, met with every
+   reflected ray that may hit it wherever its pixel (:func:`ray_lists`, through the ray tiles of
+   :mod:`refsoft.search._raytiles`): where a virtual triangle misses its image by more than the
+   dilation, or an image was not found, the triangle is still drawn where it reflects.
 
 See ``docs/sheets.md``.
 """
