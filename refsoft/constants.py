@@ -346,6 +346,13 @@ SEVERAL_LINK_TEXELS = 1
 #: 1 + margin, or ``t`` below -margin times its two edges' lengths. Its parts' corners are its
 #: own up to rounding (1e-16 relative), which the margin covers many times over.
 SEVERAL_PRUNE_MARGIN = 1e-4
+#: Every scene triangle with a candidate is also met with each reflected ray that may hit it, found
+#: through square tiles of SEVERAL_RAY_TILE pixels a side (each bounded by a ball of its rays'
+#: origins and a cone of their directions), grouped SEVERAL_RAY_BLOCK tiles a side: where a
+#: candidate's virtual triangle misses its image by more than the dilation, or an image was not
+#: found, the triangle is still drawn where it reflects.
+SEVERAL_RAY_TILE = 8
+SEVERAL_RAY_BLOCK = 8
 #: A ray whose |det| (Moller-Trumbore) is at most this fraction of |d| |e1| |e2| (within 1e-6
 #: rad of the triangle's plane) is kept without a test: its barycentrics are ill-conditioned.
 SEVERAL_PRUNE_PARALLEL = 1e-6

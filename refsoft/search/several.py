@@ -16,6 +16,10 @@ triangles, and their exact per-pixel acceptance.
    reflector's interpolated normal at its visible point (as the ray-traced truth does) and
    intersected with the candidate's *real* scene triangle; the nearest hit wins
    (:mod:`refsoft.search.acceptance`). The picture is the same bits as without the pruning.
+4. :func:`with_ray_lists`: each scene triangle with a candidate is also drawn whole, met with every
+   reflected ray that may hit it wherever its pixel (:func:`ray_lists`, through the ray tiles of
+   :mod:`refsoft.search._raytiles`): where a virtual triangle misses its image by more than the
+   dilation, or an image was not found, the triangle is still drawn where it reflects.
 
 See ``docs/sheets.md``.
 """
@@ -72,7 +76,7 @@ def _links(gb, eye, verts, start, count, pixel, edges, neighbourhood, cap):
     fwd = _walks(gb, eye, verts, start, count, pixel, edges, neighbourhood, cap)
     back = _walks(gb, eye, verts, start, count, pixel, edges[:, ::-1], neighbourhood, cap)
     back = back[:, ::-1]
-    pairs = back[_member(back[:, 0] * _KEY + back[:, 1], np.unique(fwd[:, 0] * _KEY + fwd[:, 1]))]
+    pairs = back[_member(back[:, 0] * _KEY + back[:, 1], _sorted_unique(fwd[:, 0] * _KEY + fwd[:, 1]))]
     return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))].reshape(-1, 2)
 
 
@@ -167,7 +171,7 @@ def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, n
     pairs = links(gb, eye, verts, images, edges, neighbourhood, cap)
     with_sheets = sheets(images, pairs)
     pool.add_links(pairs)
-    pool.walked = np.unique(edges[:, 0] * _KEY + edges[:, 1])
+    pool.walked = _sorted_unique(edges[:, 0] * _KEY + edges[:, 1])
     out_t, out_f, out_s, out_r, subdivided = [], [], [], [], []
     todo_faces, todo_src = faces, np.arange(len(faces), dtype=np.int64)
     reach = None if rays is None else _Reach(*rays)
@@ -322,9 +326,38 @@ class _Reach:
 
 
 def _edges(faces):
+    """(E, 2) int64: the faces' edges, each (smaller, larger) once, in lexicographic order (the
+    order of their pair keys)."""
     e = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
     e = np.sort(e, axis=1)
-    return np.unique(e, axis=0)
+    keys = _sorted_unique(e[:, 0] * _KEY + e[:, 1])
+    return np.stack([keys // _KEY, keys % _KEY], axis=1).astype(e.dtype).reshape(-1, 2)
+
+
+def _sorted_unique(a):
+    """The distinct values of an integer array, ascending (1-D): :func:`numpy.unique`'s result, by
+    a sort and a comparison of neighbours (NumPy's unique hashes integers, several times slower on
+    the millions of keys of a frame)."""
+    s = np.sort(np.asarray(a).reshape(-1))
+    if len(s) < 2:
+        return s
+    keep = np.empty(len(s), bool)
+    keep[0] = True
+    np.not_equal(s[1:], s[:-1], out=keep[1:])
+    return s[keep]
+
+
+def _union(a, b):
+    """:func:`numpy.union1d` of ``a`` (sorted, distinct) and ``b``: ``b``'s distinct values, then a
+    stable sort of the two runs (a merge, linear in their lengths) and a comparison of neighbours."""
+    b = _sorted_unique(b)
+    if len(a) == 0:
+        return b.astype(np.result_type(a, b))
+    s = np.sort(np.concatenate([a, b]), kind="stable")
+    keep = np.empty(len(s), bool)
+    keep[0] = True
+    np.not_equal(s[1:], s[:-1], out=keep[1:])
+    return s[keep]
 
 
 #: Pair keys: ``i * _KEY + j`` for indices below 2**31 (vertices, images).
@@ -400,7 +433,7 @@ class _Pool:
         keep = alive | np.any(bare[faces], axis=1)
         if cut:
             keys = _pair_key(faces, faces[:, [1, 2, 0]])
-            keep |= np.any(_member(keys, np.unique(_pair_key(live, live[:, [1, 2, 0]]))), axis=1)
+            keep |= np.any(_member(keys, _sorted_unique(_pair_key(live, live[:, [1, 2, 0]]))), axis=1)
         return keep
 
     def corners(self, faces):
@@ -409,7 +442,7 @@ class _Pool:
 
     def add_links(self, pairs):
         pairs = np.asarray(pairs, np.int64).reshape(-1, 2)
-        self.linked = np.union1d(self.linked, _pair_key(pairs[:, 0], pairs[:, 1]))
+        self.linked = _union(self.linked, _pair_key(pairs[:, 0], pairs[:, 1]))
 
     def triples(self, faces):
         """Every face's linked image triples (i of its first corner, j, k), in nested-loop order
@@ -429,7 +462,7 @@ class _Pool:
     def matched(self, faces, t, owner):
         """(F,) bool: every image of every corner of the face belongs to one of its triples."""
         ok = np.all(self.count[faces] > 0, axis=1)
-        used = np.unique((owner[:, None] * self.m + t).reshape(-1))
+        used = _sorted_unique(owner[:, None] * self.m + t)
         flat = faces.reshape(-1)
         img, corner, _ = _ranges(self.offset[flat], self.count[flat])
         face = corner // 3
@@ -517,7 +550,7 @@ class _Pool:
     def settle(self, faces, gb, eye, find, neighbourhood, cap):
         """Find the images of the corners of ``faces`` not found yet (``find``, in vertex order)
         and link the faces' edges not walked yet."""
-        v = np.unique(faces)
+        v = _sorted_unique(faces)
         v = v[~self.found[v]]
         if len(v):
             found = find(np.concatenate(self.verts)[v])
@@ -531,7 +564,7 @@ class _Pool:
         edges = _edges(faces)
         ek = edges[:, 0] * _KEY + edges[:, 1]
         fresh = ~_member(ek, self.walked)
-        self.walked = np.union1d(self.walked, ek)
+        self.walked = _union(self.walked, ek)
         self.add_links(_links(gb, eye, np.concatenate(self.verts), self.offset, self.count,
                               np.concatenate(self.pixel), edges[fresh], neighbourhood, cap))
 
@@ -542,6 +575,111 @@ class _Pool:
         tri_img, f = tri_img.reshape(-1, 3), f.reshape(-1, 3)
         return Candidates(virtual[tri_img], verts[f], normals[f], np.asarray(face_obj, np.int32)[src], src,
                           subdivided)
+
+
+# --- every candidate triangle met with the rays that may hit it --------------------------------
+def ray_lists(real, rays):
+    """The reflected rays that may hit each triangle, found through ray tiles
+    (:mod:`refsoft.search._raytiles`): per triangle the rays ``_several._may_hit`` keeps (the
+    test of the candidates' pruning), less those whose tile cannot reach the triangle.
+
+    Parameters
+    ----------
+    real : (F, 3, 3) float64
+        Triangles, world space.
+    rays : tuple
+        :func:`refsoft.search.acceptance.pixel_rays`: ``valid`` (h, w) bool, ``origin`` and
+        ``direction`` (h, w, 3) float64.
+
+    Returns
+    -------
+    first, last : (F,) int64
+        Triangle ``f``'s rays are ``ray[first[f]:last[f]]``, ascending.
+    ray : (K,) int64
+        Indices of valid pixels in row-major order.
+    """
+    from ._raytiles import TILE_WIDTH, rays_near_tiles, tile_bounds
+
+    real = np.ascontiguousarray(real, np.float64).reshape(-1, 3, 3)
+    valid, origin, direction = rays
+    valid = np.ascontiguousarray(valid, bool)
+    if valid.ndim != 2 or np.shape(origin) != valid.shape + (3,) or np.shape(direction) != valid.shape + (3,):
+        raise RefsoftError(f"rays must be valid (h, w) and origin, direction (h, w, 3), got {valid.shape}, "
+                           f"{np.shape(origin)}, {np.shape(direction)}")
+    origin = np.ascontiguousarray(origin, np.float64)
+    direction = np.ascontiguousarray(direction, np.float64)
+    n = len(real)
+    count = np.zeros(n, np.int64)
+    if n == 0 or not valid.any():
+        return count, count.copy(), np.zeros(0, np.int64)
+    h, w = valid.shape
+    ray_id = np.full((h, w), -1, np.int64)
+    ray_id[valid] = np.arange(int(valid.sum()), dtype=np.int64)
+    size, ratio = int(constants.SEVERAL_RAY_TILE), int(constants.SEVERAL_RAY_BLOCK)
+    bounds = []
+    for side in (size, size * ratio):
+        rows, cols = -(-h // side), -(-w // side)
+        b = np.zeros((rows * cols, TILE_WIDTH))
+        parallel_range(tile_bounds, rows, valid, origin, direction, side, cols, b)
+        bounds.append(b)
+    d = direction[valid]
+    dmax = float(np.max(np.sqrt((d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1]) + d[:, 2] * d[:, 2])))
+    dmax = dmax if np.isfinite(dmax) else 0.0  # a ray that is not finite makes its tile keep every ray
+    args = (real, valid, origin, direction, ray_id, bounds[0], bounds[1], size, ratio,
+            float(constants.SEVERAL_PRUNE_MARGIN), float(constants.SEVERAL_PRUNE_PARALLEL), dmax)
+
+    def work():
+        return np.empty(-(-w // (size * ratio)), np.int64), np.empty(-(-w // size), np.int64)
+
+    start = np.zeros(n, np.int64)
+    parallel_range(rays_near_tiles, n, *args, count, start, np.zeros(0, np.int64), False, work=work)
+    start = np.cumsum(count) - count
+    out = np.empty(int(count.sum()), np.int64)
+    if len(out):
+        parallel_range(rays_near_tiles, n, *args, count, start, out, True, work=work)
+    return start, start + count, out
+
+
+def with_ray_lists(cand, verts, normals, faces, face_obj, rays):
+    """``cand`` followed by one candidate per scene triangle it holds (whole, in triangle order),
+    met with every ray that may hit it (:func:`ray_lists`) wherever its pixel, without a
+    projection (virtual corners NaN, as :func:`near_rays`'): where an image was not found, or a
+    virtual triangle misses its image by more than the dilation, the triangle is still drawn at the
+    pixels whose rays hit it. Each pixel keeps the nearest hit, so the picture is the exact ray
+    cast's over the candidates' triangles.
+
+    Parameters
+    ----------
+    cand : Candidates
+        With ray lists (``rays`` not None) or without.
+    verts, normals : (N, 3) float64
+    faces : (F, 3) int64
+    face_obj : (F,) int32
+    rays : tuple
+        :func:`refsoft.search.acceptance.pixel_rays` of the drawing.
+
+    Returns
+    -------
+    Candidates
+    """
+    src = _sorted_unique(np.asarray(cand.triangle, np.int64))
+    faces = np.asarray(faces, np.int64).reshape(-1, 3)
+    real = np.asarray(verts, np.float64)[faces[src]]
+    first, last, ray = ray_lists(real, rays)
+    keep = last > first
+    src, real, first, last = src[keep], real[keep], first[keep], last[keep]
+    n = len(cand.object_id)
+    if cand.rays is None:
+        f0, l0, r0 = np.full(n, -1, np.int64), np.full(n, -1, np.int64), np.zeros(0, np.int64)
+    else:
+        f0, l0, r0 = (np.asarray(a, np.int64) for a in cand.rays)
+    return Candidates(np.concatenate([cand.virtual, np.full((len(src), 3, 3), np.nan)]),
+                      np.concatenate([cand.real, real]),
+                      np.concatenate([cand.normals, np.asarray(normals, np.float64)[faces[src]]]),
+                      np.concatenate([cand.object_id, np.asarray(face_obj, np.int32)[src]]),
+                      np.concatenate([cand.triangle, src]), cand.subdivided,
+                      (np.concatenate([f0, first + len(r0)]), np.concatenate([l0, last + len(r0)]),
+                       np.concatenate([r0, ray])))
 
 
 # --- the method's branch ----------------------------------------------------------------------
@@ -599,8 +737,9 @@ def several_pass(scene, view, k, stencil, box, reflected, opt, gb, eye, images, 
     cand, with_sheets = candidates(gb, eye, view.vertices, reflected.normals, reflected.faces,
                                    reflected.face_object, images, find, opt.neighbourhood, opt.cap,
                                    rays=(origin[valid], direction[valid]))
+    drawn = with_ray_lists(cand, view.vertices, reflected.normals, reflected.faces, reflected.face_object, rays)
     colors = np.vstack([np.zeros(3), [o.color for o in scene.objects]]).astype(np.float32)
-    colour, rid, covered, counts = draw(cand, view.camera, mesh, triangle, stencil, box, colors, rays)
+    colour, rid, covered, counts = draw(drawn, view.camera, mesh, triangle, stencil, box, colors, rays)
     if keep is not None:
         keep.update(candidates=cand, rays=rays, source=(gb, eye, find))
     report = {"images": int(len(images.pixel)), "candidates": int(len(cand.object_id)),
