@@ -1,5 +1,6 @@
-"""Kernel of :mod:`refsoft.search.exact` (float64): which virtual triangles can be candidates of a
-box's exact acceptance. Its reference: ``tests/search/test_exact.py`` (the same test in NumPy)."""
+"""Kernels of :mod:`refsoft.search.exact` (float64): which virtual triangles can be candidates of a
+box's exact acceptance, their corners, real triangles and dilated screen bounds, and the winners'
+shading. Their references: ``tests/search/test_exact.py`` (the same rules in NumPy)."""
 
 import numpy as np
 
@@ -8,7 +9,26 @@ from ..raster._rays import unit_normal
 
 
 @kernel
-def reaching(lo, hi, clip, faces, flags, lost, width, height, r0, r1, c0, c1, pixels, fraction, band, sat, keep):
+def project(lo, hi, clip, width, height, xy):
+    """Vertices ``lo .. hi - 1``: ``xy[i]`` the view-pixel position of clip coordinates
+    ``clip[i]`` (the expression ``_several.screen_bounds`` computes per corner, once per vertex;
+    meaningless where ``clip[i, 3] <= 0``, which the kernels here never read).
+
+    Parameters
+    ----------
+    clip : (n, 4) float64
+    width, height : float
+        The view's size.
+    xy : (n, 2) float64
+    """
+    for i in range(lo, hi):
+        wv = clip[i, 3]
+        xy[i, 0] = (clip[i, 0] / wv + 1.0) * 0.5 * width
+        xy[i, 1] = (1.0 - clip[i, 1] / wv) * 0.5 * height
+
+
+@kernel
+def reaching(lo, hi, clip, xy, faces, flags, lost, r0, r1, c0, c1, pixels, fraction, band, sat, keep):
     """Triangles ``lo .. hi - 1`` (run by :func:`refsoft._parallel.parallel_range`; each writes
     only its own entry): ``keep[t]`` is False where a vertex has a flag in ``lost`` or where the
     triangle's screen bounds, widened by the acceptance's dilation (``pixels + fraction *`` its
@@ -20,12 +40,12 @@ def reaching(lo, hi, clip, faces, flags, lost, width, height, r0, r1, c0, c1, pi
     Parameters
     ----------
     clip : (n, 4) float64
-        The vertices' clip coordinates.
+        The vertices' clip coordinates (column 3, ``w``, is read).
+    xy : (n, 2) float64
+        Their view-pixel positions (:func:`project`).
     faces : (m, 3) int64
     flags : (n,) uint8
     lost : uint8
-    width, height : float
-        The view's size.
     r0, r1, c0, c1 : float
         The box.
     pixels, fraction : float
@@ -45,12 +65,7 @@ def reaching(lo, hi, clip, faces, flags, lost, width, height, r0, r1, c0, c1, pi
         if not (clip[a, 3] > 0.0 and clip[b, 3] > 0.0 and clip[c, 3] > 0.0):
             keep[t] = True
             continue
-        xa = (clip[a, 0] / clip[a, 3] + 1.0) * 0.5 * width
-        ya = (1.0 - clip[a, 1] / clip[a, 3]) * 0.5 * height
-        xb = (clip[b, 0] / clip[b, 3] + 1.0) * 0.5 * width
-        yb = (1.0 - clip[b, 1] / clip[b, 3]) * 0.5 * height
-        xc = (clip[c, 0] / clip[c, 3] + 1.0) * 0.5 * width
-        yc = (1.0 - clip[c, 1] / clip[c, 3]) * 0.5 * height
+        xa, ya, xb, yb, xc, yc = xy[a, 0], xy[a, 1], xy[b, 0], xy[b, 1], xy[c, 0], xy[c, 1]
         edge = max(np.sqrt((xa - xb) ** 2 + (ya - yb) ** 2), np.sqrt((xb - xc) ** 2 + (yb - yc) ** 2),
                    np.sqrt((xc - xa) ** 2 + (yc - ya) ** 2))
         if not np.isfinite(edge):
@@ -69,13 +84,84 @@ def reaching(lo, hi, clip, faces, flags, lost, width, height, r0, r1, c0, c1, pi
 
 
 @kernel
-def corners(lo, hi, points, corner, out):
-    """Triangles ``lo .. hi - 1``: ``out[t] = points[corner[t]]`` ((3, 3) each; NumPy's fancy
-    indexing of the same, without its per-element cost on hundreds of thousands of corners)."""
-    for t in range(lo, hi):
-        for i in range(3):
-            k = corner[t, i]
-            out[t, i, 0], out[t, i, 1], out[t, i, 2] = points[k, 0], points[k, 1], points[k, 2]
+def gather(lo, hi, keep, faces, face_obj, points, clip, xy, r0, r1, c0, c1, pixels, fraction, corner, obj, real,
+           screen, bbox, dilate, odd):
+    """Candidates ``lo .. hi - 1`` (each writes only its own rows): candidate ``c`` is triangle
+    ``t = keep[c]``; its corners ``corner[c] = faces[t]``, object ``obj[c] = face_obj[t]``, real
+    corners ``real[c] = points[faces[t]]``, and its view-pixel positions, dilated bounds and
+    dilation as ``_several.screen_bounds`` makes them from ``clip`` (the same operations in the
+    same order, the positions from :func:`project`'s ``xy``): a candidate with a vertex at or
+    behind the eye plane has zeros, the whole box and -1; ``odd[c]`` is set where a value is not
+    finite (the caller recomputes those rows with NumPy).
+
+    Parameters
+    ----------
+    keep : (C,) int64
+        The rows of ``faces`` kept, ascending.
+    faces : (m, 3) int64
+    face_obj : (m,) int32
+    points : (n, 3) float64
+        The vertices' real positions.
+    clip : (n, 4) float64
+    xy : (n, 2) float64
+    r0, r1, c0, c1 : int
+        The box.
+    pixels, fraction : float
+        ``SEVERAL_DILATE_PIXELS``, ``SEVERAL_DILATE_FRACTION``.
+    corner : (C, 3) int64
+    obj : (C,) int32
+    real : (C, 3, 3) float64
+    screen : (C, 3, 2) float64
+    bbox : (C, 4) int64
+    dilate : (C,) float64
+    odd : (C,) bool
+    """
+    big = float(1 << 30)
+    for c in range(lo, hi):
+        t = keep[c]
+        obj[c] = face_obj[t]
+        good = True
+        for k in range(3):
+            i = faces[t, k]
+            corner[c, k] = i
+            real[c, k, 0], real[c, k, 1], real[c, k, 2] = points[i, 0], points[i, 1], points[i, 2]
+            good = good and clip[i, 3] > 0.0
+        if not good:
+            for k in range(3):
+                screen[c, k, 0] = 0.0
+                screen[c, k, 1] = 0.0
+            bbox[c, 0], bbox[c, 1], bbox[c, 2], bbox[c, 3] = 0, r1 - r0, c0, c1
+            dilate[c] = -1.0
+            odd[c] = False
+            continue
+        bad = False
+        for k in range(3):
+            i = corner[c, k]
+            x, y = xy[i, 0], xy[i, 1]
+            bad = bad or not (np.isfinite(x) and np.isfinite(y))
+            screen[c, k, 0] = x
+            screen[c, k, 1] = y
+        edge = 0.0
+        for k in range(3):
+            m = (k + 1) % 3
+            dx = screen[c, k, 0] - screen[c, m, 0]
+            dy = screen[c, k, 1] - screen[c, m, 1]
+            e = np.sqrt(dx * dx + dy * dy)
+            edge = e if k == 0 or e > edge else edge
+        d = pixels + fraction * edge
+        bad = bad or not np.isfinite(d)
+        odd[c] = bad
+        if bad:
+            continue
+        lo_x = min(screen[c, 0, 0], screen[c, 1, 0], screen[c, 2, 0]) - d
+        hi_x = max(screen[c, 0, 0], screen[c, 1, 0], screen[c, 2, 0]) + d
+        lo_y = min(screen[c, 0, 1], screen[c, 1, 1], screen[c, 2, 1]) - d
+        hi_y = max(screen[c, 0, 1], screen[c, 1, 1], screen[c, 2, 1]) + d
+        bbox[c, 0] = np.int64(np.floor(min(max(lo_y - 0.5, -big), big))) - r0
+        bbox[c, 1] = np.int64(np.ceil(min(max(hi_y - 0.5, -big), big))) + 1 - r0
+        bbox[c, 2] = np.int64(np.floor(min(max(lo_x - 0.5, -big), big)))
+        bbox[c, 3] = np.int64(np.ceil(min(max(hi_x - 0.5, -big), big))) + 1
+        dilate[c] = d
 
 
 @kernel
