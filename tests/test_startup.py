@@ -16,9 +16,10 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 HEAVY = {"numba", "llvmlite", "trimesh", "scipy", "embreex", "imageio", "PIL", "tqdm", "matplotlib"}
 #: Kernels a one-frame render of the sphere loads from the cache (the accurate preset: the
 #: G-buffer, the search, its refinement, the tessellation and the cut's passes, the exact drawing:
-#: its candidates and their real corners, their second images by the mirror rule, rays, acceptance
-#: and shading, the main view).
-LOADED_KERNELS = 33
+#: its candidates' screen positions, choice and gather, their second images by the mirror rule
+#: (the faces with an imaged corner and their copies interleaved: two kernels where NumPy's fancy
+#: indexing cost more), rays, acceptance and shading, the main view).
+LOADED_KERNELS = 35
 
 MODULES = """
 import json, sys

@@ -204,3 +204,51 @@ def shade_accepted(lo, hi, best_c, best_uv, corner, normals, cand_object, table,
             colour[r, j, 1] = table[obj, 1] * k
             colour[r, j, 2] = table[obj, 2] * k
             rid[r, j] = obj
+
+
+@kernel
+def touching(lo, hi, faces, twin, n, edge, copied, near):
+    """Faces ``lo .. hi - 1`` (each writes only its own entries): ``copied[t]`` whether a corner
+    of face ``t`` has a second image (``twin[i] >= n``), ``near[t]`` whether a corner is marked in
+    ``edge``.
+
+    Parameters
+    ----------
+    faces : (m, 3) int64
+    twin : (n,) int64
+        Each vertex's row in the copies' vertices: itself, or ``n`` and more for a second image.
+    n : int
+    edge : (n,) bool
+    copied, near : (m,) bool
+    """
+    for t in range(lo, hi):
+        a, b, c = faces[t, 0], faces[t, 1], faces[t, 2]
+        copied[t] = twin[a] >= n or twin[b] >= n or twin[c] >= n
+        near[t] = edge[a] or edge[b] or edge[c]
+
+
+@kernel
+def interleave(faces, face_obj, copied, twin, out_faces, out_obj):
+    """Every face and its object, each one ``copied`` followed by its copy (its corners' ``twin``
+    rows, the same object), into the first ``m + copied.sum()`` rows of ``out_faces`` and
+    ``out_obj`` (one pass on one thread: a row's place depends on the faces before it).
+
+    Parameters
+    ----------
+    faces : (m, 3) int64
+    face_obj : (m,) int
+    copied : (m,) bool
+    twin : (n,) int64
+    out_faces : (M, 3) int64
+    out_obj : (M,) int, ``face_obj``'s type
+    """
+    j = 0
+    for t in range(faces.shape[0]):
+        a, b, c = faces[t, 0], faces[t, 1], faces[t, 2]
+        out_faces[j, 0], out_faces[j, 1], out_faces[j, 2] = a, b, c
+        out_obj[j] = face_obj[t]
+        j += 1
+        if copied[t]:
+            out_faces[j, 0], out_faces[j, 1], out_faces[j, 2] = twin[a], twin[b], twin[c]
+            out_obj[j] = face_obj[t]
+            j += 1
