@@ -19,6 +19,8 @@ box, what :func:`refsoft.search.virtual.virtual_pass` gives.
 
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 
 from .. import constants
@@ -229,8 +231,10 @@ def _gathered(keep, faces, face_obj, real, clip, xy, camera, box):
     NumPy rows, :func:`refsoft.search.acceptance._screen_numpy`, where a value is not finite)."""
     r0, r1, c0, c1 = (int(x) for x in box)
     c = len(keep)
-    corner, obj, real_corners = np.empty((c, 3), np.int64), np.empty(c, np.int32), np.empty((c, 3, 3))
-    screen, bbox, dilate, odd = np.empty((c, 3, 2)), np.empty((c, 4), np.int64), np.empty(c), np.zeros(c, bool)
+    # every entry is written by the kernel: arrays kept from the last call will do
+    corner, obj, real_corners = _kept("corner", (c, 3), np.int64), _kept("obj", c, np.int32), _kept("real", (c, 3, 3))
+    screen, bbox, dilate = _kept("screen", (c, 3, 2)), _kept("bbox", (c, 4), np.int64), _kept("dilate", c)
+    odd = _kept("odd", c, bool)
     parallel_range(gather, c, keep, np.ascontiguousarray(faces, np.int64), np.ascontiguousarray(face_obj, np.int32),
                    np.ascontiguousarray(real, np.float64), clip, xy, r0, r1, c0, c1,
                    float(constants.SEVERAL_DILATE_PIXELS), float(constants.SEVERAL_DILATE_FRACTION), corner, obj,
@@ -238,3 +242,24 @@ def _gathered(keep, faces, face_obj, real, clip, xy, camera, box):
     if odd.any():
         screen[odd], bbox[odd], dilate[odd] = _screen_numpy(clip[corner[odd]], camera, box)
     return corner, obj, real_corners, (screen, bbox, dilate)
+
+
+#: Per calling thread, the arrays of :func:`_kept` by name.
+_local = threading.local()
+
+
+def _kept(name, shape, dtype=np.float64):
+    """An array of ``shape`` and ``dtype`` (contents undefined, as ``np.empty``'s) over memory kept
+    for ``name`` per calling thread between calls, grown when too small. The candidates' arrays of
+    one reflector are consumed before :func:`exact_pass` returns; made afresh, their pages are
+    faulted in anew for each reflector, which costs as much as filling them (about 60 MB a frame
+    for the ants' eyes at 640x480)."""
+    shape = (shape,) if np.isscalar(shape) else tuple(shape)
+    size = int(np.prod(shape, dtype=np.int64)) * np.dtype(dtype).itemsize
+    kept = getattr(_local, "arrays", None)
+    if kept is None:
+        kept = _local.arrays = {}
+    memory = kept.get(name)
+    if memory is None or len(memory) < size:
+        memory = kept[name] = np.empty(size + size // 4, np.uint8)  # room to grow by a quarter
+    return memory[:size].view(dtype).reshape(shape)
