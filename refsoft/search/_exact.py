@@ -252,3 +252,37 @@ def interleave(faces, face_obj, copied, twin, out_faces, out_obj):
             out_faces[j, 0], out_faces[j, 1], out_faces[j, 2] = twin[a], twin[b], twin[c]
             out_obj[j] = face_obj[t]
             j += 1
+
+
+@kernel
+def mirror_marks(lo, hi, vertices, origin, point, normal, flags, grazing, margin, border, hidden, culled, twin, edge):
+    """Vertices ``lo .. hi - 1`` (each writes only its own entries), with ``d = (vertex - origin)
+    - point``, ``dn = d . normal`` and ``size = |d|`` (sums left to right, float64): ``twin[i]``
+    whether the vertex is visible (neither ``hidden`` nor ``culled``) and ``border`` or seen at a
+    grazing angle (``dn < grazing * size``); ``edge[i]`` whether it is not ``culled``, ``hidden``
+    and ``border``, by less than the margin (``-dn < margin * size``). As
+    :func:`refsoft.search.virtual.mirror_images` states them.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float64
+    origin : (3,) float64
+        The G-buffer's origin.
+    point, normal : (n, 3) float32 or float64
+        Each vertex's reflection point (relative to ``origin``) and normal there.
+    flags : (n,) uint8
+    grazing, margin : float
+        ``EXACT_TWIN_GRAZING``, ``EXACT_TWIN_HIDDEN``.
+    border, hidden, culled : uint8
+        The flags.
+    twin, edge : (n,) bool
+    """
+    for i in range(lo, hi):
+        d0 = (vertices[i, 0] - origin[0]) - np.float64(point[i, 0])
+        d1 = (vertices[i, 1] - origin[1]) - np.float64(point[i, 1])
+        d2 = (vertices[i, 2] - origin[2]) - np.float64(point[i, 2])
+        dn = (d0 * np.float64(normal[i, 0]) + d1 * np.float64(normal[i, 1])) + d2 * np.float64(normal[i, 2])
+        size = np.sqrt((d0 * d0 + d1 * d1) + d2 * d2)
+        f = flags[i]
+        twin[i] = (f & (hidden | culled)) == 0 and ((f & border) != 0 or dn < grazing * size)
+        edge[i] = (f & culled) == 0 and (f & hidden) != 0 and (f & border) != 0 and -dn < margin * size

@@ -16,7 +16,7 @@ from ..raster import CULL_MODES, _setup, rasterize_trusted, shade_fragments_trus
 from ..raster._threads import SERIAL_MAX_TRIANGLES, serial_if_small
 from ..scene.mesh import concatenate
 from . import BORDER, CULLED, HIDDEN, SearchResult, skips, virtual_vertices
-from ._exact import interleave, touching
+from ._exact import interleave, mirror_marks, touching
 from .tessellate import tessellate
 
 
@@ -186,18 +186,21 @@ def mirror_images(refl, vertices, pixel, flags, points, eye):
     """
     from ..constants import EXACT_TWIN_GRAZING, EXACT_TWIN_HIDDEN
 
-    visible = flags & (HIDDEN | CULLED) == 0
     if points is None:
         at = (pixel[:, 0], pixel[:, 1])
         p, nrm = refl.gbuffer.position[at], refl.gbuffer.normal[at]
     else:
         p, nrm = points[0], points[1]
-    d = np.asarray(vertices, np.float64) - refl.gbuffer.origin - p
-    dn, size = np.sum(d * nrm, axis=1), np.sqrt(np.sum(d * d, axis=1))
-    # the vertices whose reflection point may be wrong: on the outline, or seen at a grazing angle
-    rows = np.flatnonzero(visible & ((flags & BORDER != 0) | (dn < EXACT_TWIN_GRAZING * size)))
-    # hidden by a grazing margin where the walk stopped on the outline: maybe seen at the silhouette
-    edge = (flags & CULLED == 0) & (flags & HIDDEN != 0) & (flags & BORDER != 0) & (-dn < EXACT_TWIN_HIDDEN * size)
+    # the vertices whose reflection point may be wrong: on the outline, or seen at a grazing angle;
+    # and those hidden by a grazing margin where the walk stopped on the outline: maybe seen at the
+    # silhouette (kernel _exact.mirror_marks, one pass)
+    n = len(flags)
+    twin, edge = np.empty(n, bool), np.empty(n, bool)
+    parallel_range(mirror_marks, n, np.ascontiguousarray(vertices, np.float64),
+                   np.ascontiguousarray(refl.gbuffer.origin, np.float64), np.ascontiguousarray(p),
+                   np.ascontiguousarray(nrm), np.ascontiguousarray(flags, np.uint8), float(EXACT_TWIN_GRAZING),
+                   float(EXACT_TWIN_HIDDEN), np.uint8(BORDER), np.uint8(HIDDEN), np.uint8(CULLED), twin, edge)
+    rows = np.flatnonzero(twin)
     origin = refl.gbuffer.origin
 
     def at_texel(hidden_rows):

@@ -1,11 +1,13 @@
-"""The kernels of the exact drawing's second candidates (refsoft/search/_exact.py ``touching`` and
-``interleave``, called by refsoft/search/virtual.py ``with_mirror_copies``) against NumPy's
-indexing, on one thread and on several."""
+"""The kernels of the exact drawing's second candidates (refsoft/search/_exact.py ``mirror_marks``,
+called by refsoft/search/virtual.py ``mirror_images``; ``touching`` and ``interleave``, called by
+``with_mirror_copies``) against NumPy, on one thread and on several."""
 
 import numpy as np
 
 from refsoft._parallel import one_thread, parallel_range
-from refsoft.search._exact import interleave, touching
+from refsoft import constants
+from refsoft.search import BORDER, CULLED, HIDDEN
+from refsoft.search._exact import interleave, mirror_marks, touching
 
 
 def test_touching_marks_the_faces_with_a_twin_or_an_edge_corner(rng):
@@ -44,3 +46,39 @@ def test_interleave_puts_each_copy_right_after_its_face(rng):
     np.testing.assert_array_equal(out_faces[:m + k], want_faces)
     np.testing.assert_array_equal(out_obj[:m + k], face_obj[order])
     assert np.all(out_faces[m + k:] == -7) and np.all(out_obj[m + k:] == -7)  # the rows after untouched
+
+
+def test_mirror_marks_are_the_rules_of_mirror_images(rng):
+    """The vertices imaged again (visible, and on the outline or seen at a grazing angle) and those
+    hidden at the silhouette (not CULLED, HIDDEN and BORDER, by less than the margin), as NumPy
+    states them column by column, bit for bit: float32 reflection points and normals, vertices
+    near the tangent plane, values that are not finite."""
+    n = 3000
+    vertices = rng.normal(size=(n, 3)) * 3.0
+    origin = np.array([0.25, -1.5, 2.0])
+    point = rng.normal(size=(n, 3)).astype(np.float32)
+    normal = rng.normal(size=(n, 3))
+    normal = (normal / np.linalg.norm(normal, axis=1)[:, None]).astype(np.float32)
+    # a third of them close to the tangent plane, on either side
+    near = rng.random(n) < 0.3
+    d = vertices - origin - point
+    vertices[near] -= (np.sum(d * normal, axis=1) * rng.uniform(0.8, 1.2, n))[near, None] * normal[near]
+    vertices[:4, 1] = np.nan
+    flags = rng.choice(np.array([0, BORDER, HIDDEN, HIDDEN | BORDER, CULLED | HIDDEN | BORDER], np.uint8), n)
+    d = (vertices - origin) - point.astype(np.float64)
+    nrm = normal.astype(np.float64)
+    dn = (d[:, 0] * nrm[:, 0] + d[:, 1] * nrm[:, 1]) + d[:, 2] * nrm[:, 2]
+    size = np.sqrt((d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1]) + d[:, 2] * d[:, 2])
+    visible, border = flags & (HIDDEN | CULLED) == 0, flags & BORDER != 0
+    want_twin = visible & (border | (dn < constants.EXACT_TWIN_GRAZING * size))
+    want_edge = (flags & CULLED == 0) & (flags & HIDDEN != 0) & border & (-dn < constants.EXACT_TWIN_HIDDEN * size)
+    grazing = visible & ~border & (dn < constants.EXACT_TWIN_GRAZING * size)
+    assert grazing.sum() > 50 and 50 < want_edge.sum() < np.sum((flags & HIDDEN != 0) & border & (flags & CULLED == 0))
+    for several in (True, False):
+        twin, edge = np.ones(n, bool), np.ones(n, bool)
+        with one_thread(not several):
+            parallel_range(mirror_marks, n, vertices, origin, point, normal, flags, constants.EXACT_TWIN_GRAZING,
+                           constants.EXACT_TWIN_HIDDEN, np.uint8(BORDER), np.uint8(HIDDEN), np.uint8(CULLED), twin,
+                           edge)
+        np.testing.assert_array_equal(twin, want_twin)
+        np.testing.assert_array_equal(edge, want_edge)
