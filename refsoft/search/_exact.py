@@ -286,3 +286,23 @@ def mirror_marks(lo, hi, vertices, origin, point, normal, flags, grazing, margin
         f = flags[i]
         twin[i] = (f & (hidden | culled)) == 0 and ((f & border) != 0 or dn < grazing * size)
         edge[i] = (f & culled) == 0 and (f & hidden) != 0 and (f & border) != 0 and -dn < margin * size
+
+
+@kernel
+def far_apart(lo, hi, a, b, half_width, half_height, pixels, far):
+    """Rows ``lo .. hi - 1`` (each writes only its own entry): ``far[i]`` whether the points of clip
+    coordinates ``a[i]`` and ``b[i]`` are both in front of the eye (``w > 0``) and more than
+    ``pixels`` view pixels apart in x or in y.
+
+    Parameters
+    ----------
+    a, b : (k, 4) float64
+    half_width, half_height : float
+        Half the view's size.
+    pixels : float
+    far : (k,) bool
+    """
+    for i in range(lo, hi):
+        gx = abs(a[i, 0] / a[i, 3] - b[i, 0] / b[i, 3]) * half_width
+        gy = abs(a[i, 1] / a[i, 3] - b[i, 1] / b[i, 3]) * half_height
+        far[i] = a[i, 3] > 0.0 and b[i, 3] > 0.0 and (gx > pixels or gy > pixels)

@@ -16,7 +16,7 @@ from ..raster import CULL_MODES, _setup, rasterize_trusted, shade_fragments_trus
 from ..raster._threads import SERIAL_MAX_TRIANGLES, serial_if_small
 from ..scene.mesh import concatenate
 from . import BORDER, CULLED, HIDDEN, SearchResult, skips, virtual_vertices
-from ._exact import interleave, mirror_marks, touching
+from ._exact import far_apart, interleave, mirror_marks, touching
 from .tessellate import tessellate
 
 
@@ -264,11 +264,10 @@ def with_mirror_copies(part, real, mirror, camera):
         vp = camera.view_proj()
         a = _setup.transform_points(np.asarray(virtual, np.float64)[rows], vp)
         b = _setup.transform_points(images, vp)
-        scale = 0.5 * np.array([camera.width, camera.height], np.float64)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            gap = np.abs(a[:, :2] / a[:, 3:] - b[:, :2] / b[:, 3:]) * scale
         # a vertex at or behind the eye plane: a screen distance means nothing, no copy
-        far = (a[:, 3] > 0) & (b[:, 3] > 0) & np.any(gap > EXACT_TWIN_PIXELS, axis=1)
+        far = np.empty(len(rows), bool)
+        parallel_range(far_apart, len(rows), a, b, 0.5 * float(camera.width), 0.5 * float(camera.height),
+                       float(EXACT_TWIN_PIXELS), far)
         rows, images = rows[far], images[far]
     more_to_do = edge.any() or len(uncut)
     if not len(rows) and not more_to_do:  # no second image, no face copied

@@ -1,13 +1,13 @@
 """The kernels of the exact drawing's second candidates (refsoft/search/_exact.py ``mirror_marks``,
-called by refsoft/search/virtual.py ``mirror_images``; ``touching`` and ``interleave``, called by
-``with_mirror_copies``) against NumPy, on one thread and on several."""
+called by refsoft/search/virtual.py ``mirror_images``; ``far_apart``, ``touching`` and
+``interleave``, called by ``with_mirror_copies``) against NumPy, on one thread and on several."""
 
 import numpy as np
 
 from refsoft._parallel import one_thread, parallel_range
 from refsoft import constants
 from refsoft.search import BORDER, CULLED, HIDDEN
-from refsoft.search._exact import interleave, mirror_marks, touching
+from refsoft.search._exact import far_apart, interleave, mirror_marks, touching
 
 
 def test_touching_marks_the_faces_with_a_twin_or_an_edge_corner(rng):
@@ -82,3 +82,24 @@ def test_mirror_marks_are_the_rules_of_mirror_images(rng):
                            edge)
         np.testing.assert_array_equal(twin, want_twin)
         np.testing.assert_array_equal(edge, want_edge)
+
+
+def test_far_apart_is_the_screen_gap_rule(rng):
+    """Two images far apart: both in front of the eye and more than the threshold apart in view
+    pixels along x or y, as NumPy computes it; points at or behind the eye plane (w = 0 among
+    them) never are."""
+    k, width, height = 4000, 64, 48
+    a = rng.normal(size=(k, 4))
+    a[:, 3] = rng.uniform(-0.3, 2.0, k)
+    a[:10, 3] = 0.0
+    b = a + rng.normal(size=(k, 4)) * np.where(rng.random(k) < 0.5, 1e-3, 0.2)[:, None]
+    scale = 0.5 * np.array([width, height], np.float64)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        gap = np.abs(a[:, :2] / a[:, 3:] - b[:, :2] / b[:, 3:]) * scale
+    want = (a[:, 3] > 0) & (b[:, 3] > 0) & np.any(gap > constants.EXACT_TWIN_PIXELS, axis=1)
+    assert 100 < want.sum() < k - 100
+    for several in (True, False):
+        far = np.zeros(k, bool)
+        with one_thread(not several):
+            parallel_range(far_apart, k, a, b, 0.5 * width, 0.5 * height, float(constants.EXACT_TWIN_PIXELS), far)
+        np.testing.assert_array_equal(far, want)
