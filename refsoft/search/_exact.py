@@ -120,13 +120,12 @@ def gather(lo, hi, keep, faces, face_obj, points, clip, xy, r0, r1, c0, c1, pixe
     for c in range(lo, hi):
         t = keep[c]
         obj[c] = face_obj[t]
-        good = True
-        for k in range(3):
-            i = faces[t, k]
-            corner[c, k] = i
-            real[c, k, 0], real[c, k, 1], real[c, k, 2] = points[i, 0], points[i, 1], points[i, 2]
-            good = good and clip[i, 3] > 0.0
-        if not good:
+        a, b, e = faces[t, 0], faces[t, 1], faces[t, 2]
+        corner[c, 0], corner[c, 1], corner[c, 2] = a, b, e
+        real[c, 0, 0], real[c, 0, 1], real[c, 0, 2] = points[a, 0], points[a, 1], points[a, 2]
+        real[c, 1, 0], real[c, 1, 1], real[c, 1, 2] = points[b, 0], points[b, 1], points[b, 2]
+        real[c, 2, 0], real[c, 2, 1], real[c, 2, 2] = points[e, 0], points[e, 1], points[e, 2]
+        if not (clip[a, 3] > 0.0 and clip[b, 3] > 0.0 and clip[e, 3] > 0.0):
             for k in range(3):
                 screen[c, k, 0] = 0.0
                 screen[c, k, 1] = 0.0
@@ -134,29 +133,28 @@ def gather(lo, hi, keep, faces, face_obj, points, clip, xy, r0, r1, c0, c1, pixe
             dilate[c] = -1.0
             odd[c] = False
             continue
-        bad = False
-        for k in range(3):
-            i = corner[c, k]
-            x, y = xy[i, 0], xy[i, 1]
-            bad = bad or not (np.isfinite(x) and np.isfinite(y))
-            screen[c, k, 0] = x
-            screen[c, k, 1] = y
-        edge = 0.0
-        for k in range(3):
-            m = (k + 1) % 3
-            dx = screen[c, k, 0] - screen[c, m, 0]
-            dy = screen[c, k, 1] - screen[c, m, 1]
-            e = np.sqrt(dx * dx + dy * dy)
-            edge = e if k == 0 or e > edge else edge
+        # the corners' positions in locals (the outputs may alias the inputs for all the compiler
+        # knows: reread from memory otherwise); the same operations as _several.screen_bounds
+        x0, y0, x1, y1, x2, y2 = xy[a, 0], xy[a, 1], xy[b, 0], xy[b, 1], xy[e, 0], xy[e, 1]
+        screen[c, 0, 0], screen[c, 0, 1] = x0, y0
+        screen[c, 1, 0], screen[c, 1, 1] = x1, y1
+        screen[c, 2, 0], screen[c, 2, 1] = x2, y2
+        bad = not (np.isfinite(x0) and np.isfinite(y0) and np.isfinite(x1) and np.isfinite(y1)
+                   and np.isfinite(x2) and np.isfinite(y2))
+        edge = np.sqrt((x0 - x1) * (x0 - x1) + (y0 - y1) * (y0 - y1))
+        e1 = np.sqrt((x1 - x2) * (x1 - x2) + (y1 - y2) * (y1 - y2))
+        edge = e1 if e1 > edge else edge
+        e2 = np.sqrt((x2 - x0) * (x2 - x0) + (y2 - y0) * (y2 - y0))
+        edge = e2 if e2 > edge else edge
         d = pixels + fraction * edge
         bad = bad or not np.isfinite(d)
         odd[c] = bad
         if bad:
             continue
-        lo_x = min(screen[c, 0, 0], screen[c, 1, 0], screen[c, 2, 0]) - d
-        hi_x = max(screen[c, 0, 0], screen[c, 1, 0], screen[c, 2, 0]) + d
-        lo_y = min(screen[c, 0, 1], screen[c, 1, 1], screen[c, 2, 1]) - d
-        hi_y = max(screen[c, 0, 1], screen[c, 1, 1], screen[c, 2, 1]) + d
+        lo_x = min(x0, x1, x2) - d
+        hi_x = max(x0, x1, x2) + d
+        lo_y = min(y0, y1, y2) - d
+        hi_y = max(y0, y1, y2) + d
         bbox[c, 0] = np.int64(np.floor(min(max(lo_y - 0.5, -big), big))) - r0
         bbox[c, 1] = np.int64(np.ceil(min(max(hi_y - 0.5, -big), big))) + 1 - r0
         bbox[c, 2] = np.int64(np.floor(min(max(lo_x - 0.5, -big), big)))
