@@ -1,6 +1,9 @@
-"""Kernels of :mod:`refsoft.search.exact` (float64): which virtual triangles can be candidates of a
-box's exact acceptance, their corners, real triangles and dilated screen bounds, and the winners'
-shading. Their references: ``tests/search/test_exact.py`` (the same rules in NumPy)."""
+"""Kernels of the exact drawing (float64): which virtual triangles can be candidates of a box's
+exact acceptance, their corners, real triangles and dilated screen bounds, and the winners'
+shading (:mod:`refsoft.search.exact`); the second candidates' vertices and faces
+(:func:`refsoft.search.virtual.mirror_images`, :func:`~refsoft.search.virtual.with_mirror_copies`).
+Their references: ``tests/search/test_exact.py`` and ``tests/search/test_copies_kernels.py`` (the
+same rules in NumPy)."""
 
 import numpy as np
 
