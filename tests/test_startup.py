@@ -16,9 +16,11 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 HEAVY = {"numba", "llvmlite", "trimesh", "scipy", "embreex", "imageio", "PIL", "tqdm", "matplotlib"}
 #: Kernels a one-frame render of the sphere loads from the cache (the accurate preset: the
 #: G-buffer, the search, its refinement, the tessellation and the cut's passes, the exact drawing:
-#: its candidates and their real corners, their second images by the mirror rule, rays, acceptance
-#: and shading, the main view).
-LOADED_KERNELS = 33
+#: its candidates' screen positions, choice and gather, their second images by the mirror rule
+#: (the vertices imaged again, those whose image moved, the faces with such a corner and their
+#: copies interleaved: four kernels where NumPy's passes over every vertex and face cost more),
+#: rays, acceptance and shading, the main view).
+LOADED_KERNELS = 37
 
 MODULES = """
 import json, sys

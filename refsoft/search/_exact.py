@@ -1,5 +1,9 @@
-"""Kernel of :mod:`refsoft.search.exact` (float64): which virtual triangles can be candidates of a
-box's exact acceptance. Its reference: ``tests/search/test_exact.py`` (the same test in NumPy)."""
+"""Kernels of the exact drawing (float64): which virtual triangles can be candidates of a box's
+exact acceptance, their corners, real triangles and dilated screen bounds, and the winners'
+shading (:mod:`refsoft.search.exact`); the second candidates' vertices and faces
+(:func:`refsoft.search.virtual.mirror_images`, :func:`~refsoft.search.virtual.with_mirror_copies`).
+Their references: ``tests/search/test_exact.py`` and ``tests/search/test_copies_kernels.py`` (the
+same rules in NumPy)."""
 
 import numpy as np
 
@@ -8,7 +12,26 @@ from ..raster._rays import unit_normal
 
 
 @kernel
-def reaching(lo, hi, clip, faces, flags, lost, width, height, r0, r1, c0, c1, pixels, fraction, band, sat, keep):
+def project(lo, hi, clip, width, height, xy):
+    """Vertices ``lo .. hi - 1``: ``xy[i]`` the view-pixel position of clip coordinates
+    ``clip[i]`` (the expression ``_several.screen_bounds`` computes per corner, once per vertex;
+    meaningless where ``clip[i, 3] <= 0``, which the kernels here never read).
+
+    Parameters
+    ----------
+    clip : (n, 4) float64
+    width, height : float
+        The view's size.
+    xy : (n, 2) float64
+    """
+    for i in range(lo, hi):
+        wv = clip[i, 3]
+        xy[i, 0] = (clip[i, 0] / wv + 1.0) * 0.5 * width
+        xy[i, 1] = (1.0 - clip[i, 1] / wv) * 0.5 * height
+
+
+@kernel
+def reaching(lo, hi, clip, xy, faces, flags, lost, r0, r1, c0, c1, pixels, fraction, band, sat, keep):
     """Triangles ``lo .. hi - 1`` (run by :func:`refsoft._parallel.parallel_range`; each writes
     only its own entry): ``keep[t]`` is False where a vertex has a flag in ``lost`` or where the
     triangle's screen bounds, widened by the acceptance's dilation (``pixels + fraction *`` its
@@ -20,12 +43,12 @@ def reaching(lo, hi, clip, faces, flags, lost, width, height, r0, r1, c0, c1, pi
     Parameters
     ----------
     clip : (n, 4) float64
-        The vertices' clip coordinates.
+        The vertices' clip coordinates (column 3, ``w``, is read).
+    xy : (n, 2) float64
+        Their view-pixel positions (:func:`project`).
     faces : (m, 3) int64
     flags : (n,) uint8
     lost : uint8
-    width, height : float
-        The view's size.
     r0, r1, c0, c1 : float
         The box.
     pixels, fraction : float
@@ -45,12 +68,7 @@ def reaching(lo, hi, clip, faces, flags, lost, width, height, r0, r1, c0, c1, pi
         if not (clip[a, 3] > 0.0 and clip[b, 3] > 0.0 and clip[c, 3] > 0.0):
             keep[t] = True
             continue
-        xa = (clip[a, 0] / clip[a, 3] + 1.0) * 0.5 * width
-        ya = (1.0 - clip[a, 1] / clip[a, 3]) * 0.5 * height
-        xb = (clip[b, 0] / clip[b, 3] + 1.0) * 0.5 * width
-        yb = (1.0 - clip[b, 1] / clip[b, 3]) * 0.5 * height
-        xc = (clip[c, 0] / clip[c, 3] + 1.0) * 0.5 * width
-        yc = (1.0 - clip[c, 1] / clip[c, 3]) * 0.5 * height
+        xa, ya, xb, yb, xc, yc = xy[a, 0], xy[a, 1], xy[b, 0], xy[b, 1], xy[c, 0], xy[c, 1]
         edge = max(np.sqrt((xa - xb) ** 2 + (ya - yb) ** 2), np.sqrt((xb - xc) ** 2 + (yb - yc) ** 2),
                    np.sqrt((xc - xa) ** 2 + (yc - ya) ** 2))
         if not np.isfinite(edge):
@@ -69,13 +87,82 @@ def reaching(lo, hi, clip, faces, flags, lost, width, height, r0, r1, c0, c1, pi
 
 
 @kernel
-def corners(lo, hi, points, corner, out):
-    """Triangles ``lo .. hi - 1``: ``out[t] = points[corner[t]]`` ((3, 3) each; NumPy's fancy
-    indexing of the same, without its per-element cost on hundreds of thousands of corners)."""
-    for t in range(lo, hi):
-        for i in range(3):
-            k = corner[t, i]
-            out[t, i, 0], out[t, i, 1], out[t, i, 2] = points[k, 0], points[k, 1], points[k, 2]
+def gather(lo, hi, keep, faces, face_obj, points, clip, xy, r0, r1, c0, c1, pixels, fraction, corner, obj, real,
+           screen, bbox, dilate, odd):
+    """Candidates ``lo .. hi - 1`` (each writes only its own rows): candidate ``c`` is triangle
+    ``t = keep[c]``; its corners ``corner[c] = faces[t]``, object ``obj[c] = face_obj[t]``, real
+    corners ``real[c] = points[faces[t]]``, and its view-pixel positions, dilated bounds and
+    dilation as ``_several.screen_bounds`` makes them from ``clip`` (the same operations in the
+    same order, the positions from :func:`project`'s ``xy``): a candidate with a vertex at or
+    behind the eye plane has zeros, the whole box and -1; ``odd[c]`` is set where a value is not
+    finite (the caller recomputes those rows with NumPy).
+
+    Parameters
+    ----------
+    keep : (C,) int64
+        The rows of ``faces`` kept, ascending.
+    faces : (m, 3) int64
+    face_obj : (m,) int32
+    points : (n, 3) float64
+        The vertices' real positions.
+    clip : (n, 4) float64
+    xy : (n, 2) float64
+    r0, r1, c0, c1 : int
+        The box.
+    pixels, fraction : float
+        ``SEVERAL_DILATE_PIXELS``, ``SEVERAL_DILATE_FRACTION``.
+    corner : (C, 3) int64
+    obj : (C,) int32
+    real : (C, 3, 3) float64
+    screen : (C, 3, 2) float64
+    bbox : (C, 4) int64
+    dilate : (C,) float64
+    odd : (C,) bool
+    """
+    big = float(1 << 30)
+    for c in range(lo, hi):
+        t = keep[c]
+        obj[c] = face_obj[t]
+        a, b, e = faces[t, 0], faces[t, 1], faces[t, 2]
+        corner[c, 0], corner[c, 1], corner[c, 2] = a, b, e
+        real[c, 0, 0], real[c, 0, 1], real[c, 0, 2] = points[a, 0], points[a, 1], points[a, 2]
+        real[c, 1, 0], real[c, 1, 1], real[c, 1, 2] = points[b, 0], points[b, 1], points[b, 2]
+        real[c, 2, 0], real[c, 2, 1], real[c, 2, 2] = points[e, 0], points[e, 1], points[e, 2]
+        if not (clip[a, 3] > 0.0 and clip[b, 3] > 0.0 and clip[e, 3] > 0.0):
+            for k in range(3):
+                screen[c, k, 0] = 0.0
+                screen[c, k, 1] = 0.0
+            bbox[c, 0], bbox[c, 1], bbox[c, 2], bbox[c, 3] = 0, r1 - r0, c0, c1
+            dilate[c] = -1.0
+            odd[c] = False
+            continue
+        # the corners' positions in locals (the outputs may alias the inputs for all the compiler
+        # knows: reread from memory otherwise); the same operations as _several.screen_bounds
+        x0, y0, x1, y1, x2, y2 = xy[a, 0], xy[a, 1], xy[b, 0], xy[b, 1], xy[e, 0], xy[e, 1]
+        screen[c, 0, 0], screen[c, 0, 1] = x0, y0
+        screen[c, 1, 0], screen[c, 1, 1] = x1, y1
+        screen[c, 2, 0], screen[c, 2, 1] = x2, y2
+        bad = not (np.isfinite(x0) and np.isfinite(y0) and np.isfinite(x1) and np.isfinite(y1)
+                   and np.isfinite(x2) and np.isfinite(y2))
+        edge = np.sqrt((x0 - x1) * (x0 - x1) + (y0 - y1) * (y0 - y1))
+        e1 = np.sqrt((x1 - x2) * (x1 - x2) + (y1 - y2) * (y1 - y2))
+        edge = e1 if e1 > edge else edge
+        e2 = np.sqrt((x2 - x0) * (x2 - x0) + (y2 - y0) * (y2 - y0))
+        edge = e2 if e2 > edge else edge
+        d = pixels + fraction * edge
+        bad = bad or not np.isfinite(d)
+        odd[c] = bad
+        if bad:
+            continue
+        lo_x = min(x0, x1, x2) - d
+        hi_x = max(x0, x1, x2) + d
+        lo_y = min(y0, y1, y2) - d
+        hi_y = max(y0, y1, y2) + d
+        bbox[c, 0] = np.int64(np.floor(min(max(lo_y - 0.5, -big), big))) - r0
+        bbox[c, 1] = np.int64(np.ceil(min(max(hi_y - 0.5, -big), big))) + 1 - r0
+        bbox[c, 2] = np.int64(np.floor(min(max(lo_x - 0.5, -big), big)))
+        bbox[c, 3] = np.int64(np.ceil(min(max(hi_x - 0.5, -big), big))) + 1
+        dilate[c] = d
 
 
 @kernel
@@ -118,3 +205,105 @@ def shade_accepted(lo, hi, best_c, best_uv, corner, normals, cand_object, table,
             colour[r, j, 1] = table[obj, 1] * k
             colour[r, j, 2] = table[obj, 2] * k
             rid[r, j] = obj
+
+
+@kernel
+def touching(lo, hi, faces, twin, n, edge, copied, near):
+    """Faces ``lo .. hi - 1`` (each writes only its own entries): ``copied[t]`` whether a corner
+    of face ``t`` has a second image (``twin[i] >= n``), ``near[t]`` whether a corner is marked in
+    ``edge``.
+
+    Parameters
+    ----------
+    faces : (m, 3) int64
+    twin : (n,) int64
+        Each vertex's row in the copies' vertices: itself, or ``n`` and more for a second image.
+    n : int
+    edge : (n,) bool
+    copied, near : (m,) bool
+    """
+    for t in range(lo, hi):
+        a, b, c = faces[t, 0], faces[t, 1], faces[t, 2]
+        copied[t] = twin[a] >= n or twin[b] >= n or twin[c] >= n
+        near[t] = edge[a] or edge[b] or edge[c]
+
+
+@kernel
+def interleave(faces, face_obj, copied, twin, out_faces, out_obj):
+    """Every face and its object, each one ``copied`` followed by its copy (its corners' ``twin``
+    rows, the same object), into the first ``m + copied.sum()`` rows of ``out_faces`` and
+    ``out_obj`` (one pass on one thread: a row's place depends on the faces before it).
+
+    Parameters
+    ----------
+    faces : (m, 3) int64
+    face_obj : (m,) int
+    copied : (m,) bool
+    twin : (n,) int64
+    out_faces : (M, 3) int64
+    out_obj : (M,) int, ``face_obj``'s type
+    """
+    j = 0
+    for t in range(faces.shape[0]):
+        a, b, c = faces[t, 0], faces[t, 1], faces[t, 2]
+        out_faces[j, 0], out_faces[j, 1], out_faces[j, 2] = a, b, c
+        out_obj[j] = face_obj[t]
+        j += 1
+        if copied[t]:
+            out_faces[j, 0], out_faces[j, 1], out_faces[j, 2] = twin[a], twin[b], twin[c]
+            out_obj[j] = face_obj[t]
+            j += 1
+
+
+@kernel
+def mirror_marks(lo, hi, vertices, origin, point, normal, flags, grazing, margin, border, hidden, culled, twin, edge):
+    """Vertices ``lo .. hi - 1`` (each writes only its own entries), with ``d = (vertex - origin)
+    - point``, ``dn = d . normal`` and ``size = |d|`` (sums left to right, float64): ``twin[i]``
+    whether the vertex is visible (neither ``hidden`` nor ``culled``) and ``border`` or seen at a
+    grazing angle (``dn < grazing * size``); ``edge[i]`` whether it is not ``culled``, ``hidden``
+    and ``border``, by less than the margin (``-dn < margin * size``). As
+    :func:`refsoft.search.virtual.mirror_images` states them.
+
+    Parameters
+    ----------
+    vertices : (n, 3) float64
+    origin : (3,) float64
+        The G-buffer's origin.
+    point, normal : (n, 3) float32 or float64
+        Each vertex's reflection point (relative to ``origin``) and normal there.
+    flags : (n,) uint8
+    grazing, margin : float
+        ``EXACT_TWIN_GRAZING``, ``EXACT_TWIN_HIDDEN``.
+    border, hidden, culled : uint8
+        The flags.
+    twin, edge : (n,) bool
+    """
+    for i in range(lo, hi):
+        d0 = (vertices[i, 0] - origin[0]) - np.float64(point[i, 0])
+        d1 = (vertices[i, 1] - origin[1]) - np.float64(point[i, 1])
+        d2 = (vertices[i, 2] - origin[2]) - np.float64(point[i, 2])
+        dn = (d0 * np.float64(normal[i, 0]) + d1 * np.float64(normal[i, 1])) + d2 * np.float64(normal[i, 2])
+        size = np.sqrt((d0 * d0 + d1 * d1) + d2 * d2)
+        f = flags[i]
+        twin[i] = (f & (hidden | culled)) == 0 and ((f & border) != 0 or dn < grazing * size)
+        edge[i] = (f & culled) == 0 and (f & hidden) != 0 and (f & border) != 0 and -dn < margin * size
+
+
+@kernel
+def far_apart(lo, hi, a, b, half_width, half_height, pixels, far):
+    """Rows ``lo .. hi - 1`` (each writes only its own entry): ``far[i]`` whether the points of clip
+    coordinates ``a[i]`` and ``b[i]`` are both in front of the eye (``w > 0``) and more than
+    ``pixels`` view pixels apart in x or in y.
+
+    Parameters
+    ----------
+    a, b : (k, 4) float64
+    half_width, half_height : float
+        Half the view's size.
+    pixels : float
+    far : (k,) bool
+    """
+    for i in range(lo, hi):
+        gx = abs(a[i, 0] / a[i, 3] - b[i, 0] / b[i, 3]) * half_width
+        gy = abs(a[i, 1] / a[i, 3] - b[i, 1] / b[i, 3]) * half_height
+        far[i] = a[i, 3] > 0.0 and b[i, 3] > 0.0 and (gx > pixels or gy > pixels)

@@ -19,14 +19,16 @@ box, what :func:`refsoft.search.virtual.virtual_pass` gives.
 
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 
 from .. import constants
 from ..raster import _setup
 from .._parallel import parallel_range
 from . import CULLED, HIDDEN
-from ._exact import corners, reaching, shade_accepted
-from .acceptance import Candidates, nearest, pixel_rays, screen_bounds
+from ._exact import gather, project, reaching, shade_accepted
+from .acceptance import Candidates, _screen_numpy, nearest, pixel_rays
 from .virtual import virtual_pass
 
 
@@ -119,20 +121,16 @@ def exact_pass(scene, part, real, camera, reflector_mesh, triangle, stencil, box
     virtual, normals, faces, face_obj, flags = part
     lost = CULLED | (HIDDEN if inverse == "discard" else 0)
     clip = _setup.transform_points(np.asarray(virtual, np.float64), camera.view_proj())
+    xy = _projected(clip, camera)
     # the virtual pass's own leave-out (a vertex without V'), and the triangles whose dilated
     # bounds stay off the box: the acceptance would test no pixel of theirs
-    keep = candidate_triangles(clip, faces, flags, lost, box, camera, band)
-    f = np.asarray(faces, np.int64)[keep]
-    # the candidates' screen bounds from the clip coordinates already made, their real triangles;
-    # the normals and objects of the winners alone
-    real_corners = np.empty((len(f), 3, 3))
-    parallel_range(corners, len(f), np.ascontiguousarray(real, np.float64), f, real_corners)
+    keep = _reaching(clip, xy, faces, flags, lost, box, band)
+    # the candidates' corners, objects, real triangles and screen bounds in one pass over them
+    f, obj, real_corners, screen = _gathered(keep, faces, face_obj, real, clip, xy, camera, box)
     cand = Candidates(None, real_corners, None, None, keep, 0)
     rays = pixel_rays(camera, reflector_mesh, triangle, stencil, box)
-    best_c, best_uv = nearest(cand, camera, stencil, box, rays=rays, screen=screen_bounds(clip, f, camera, box),
-                              runs=False)
-    colour, rid, covered, counts = shade(best_c, best_uv, f, normals, np.asarray(face_obj, np.int32)[keep], scene,
-                                         rays[0])
+    best_c, best_uv = nearest(cand, camera, stencil, box, rays=rays, screen=screen, runs=False)
+    colour, rid, covered, counts = shade(best_c, best_uv, f, normals, obj, scene, rays[0])
     return colour, rid, covered, {"candidates": int(len(keep)), **counts}
 
 
@@ -199,15 +197,69 @@ def candidate_triangles(clip, faces, flags, lost, box, camera, band=None):
         bounds, widened by the acceptance's dilation and one pixel, reach the box, and a pixel of
         ``band`` when given (and those with a vertex at or behind the eye plane).
     """
+    clip = np.ascontiguousarray(clip, np.float64)
+    return _reaching(clip, _projected(clip, camera), faces, flags, lost, box, band)
+
+
+def _projected(clip, camera):
+    """(n, 2) float64: the view-pixel positions of clip coordinates (n, 4) float64 (kernel
+    ``_exact.project``)."""
+    xy = np.empty((len(clip), 2))
+    parallel_range(project, len(clip), clip, float(camera.width), float(camera.height), xy)
+    return xy
+
+
+def _reaching(clip, xy, faces, flags, lost, box, band):
+    """:func:`candidate_triangles` from the clip coordinates and their :func:`_projected`."""
     r0, r1, c0, c1 = (float(b) for b in box)
     keep = np.empty(len(faces), bool)
     sat = np.zeros((1, 1), np.int64)
     if band is not None:
         sat = np.zeros((band.shape[0] + 1, band.shape[1] + 1), np.int64)
         sat[1:, 1:] = np.cumsum(np.cumsum(band, axis=0, dtype=np.int64), axis=1)
-    parallel_range(reaching, len(faces), np.ascontiguousarray(clip, np.float64),
-                   np.ascontiguousarray(faces, np.int64), np.ascontiguousarray(flags, np.uint8), np.uint8(lost),
-                   float(camera.width), float(camera.height), r0, r1, c0, c1,
+    parallel_range(reaching, len(faces), clip, xy, np.ascontiguousarray(faces, np.int64),
+                   np.ascontiguousarray(flags, np.uint8), np.uint8(lost), r0, r1, c0, c1,
                    float(constants.SEVERAL_DILATE_PIXELS), float(constants.SEVERAL_DILATE_FRACTION), band is not None,
                    sat, keep)
     return np.flatnonzero(keep)
+
+
+def _gathered(keep, faces, face_obj, real, clip, xy, camera, box):
+    """The candidates ``keep`` (C,) int64 (rows of ``faces``) gathered in one pass (kernel
+    ``_exact.gather``): their corners (C, 3) int64, objects (C,) int32, real triangles
+    (C, 3, 3) float64 and :func:`refsoft.search.acceptance.screen_bounds` (the same bits; its
+    NumPy rows, :func:`refsoft.search.acceptance._screen_numpy`, where a value is not finite)."""
+    r0, r1, c0, c1 = (int(x) for x in box)
+    c = len(keep)
+    # every entry is written by the kernel: arrays kept from the last call will do
+    corner, obj, real_corners = _kept("corner", (c, 3), np.int64), _kept("obj", c, np.int32), _kept("real", (c, 3, 3))
+    screen, bbox, dilate = _kept("screen", (c, 3, 2)), _kept("bbox", (c, 4), np.int64), _kept("dilate", c)
+    odd = _kept("odd", c, bool)
+    parallel_range(gather, c, keep, np.ascontiguousarray(faces, np.int64), np.ascontiguousarray(face_obj, np.int32),
+                   np.ascontiguousarray(real, np.float64), clip, xy, r0, r1, c0, c1,
+                   float(constants.SEVERAL_DILATE_PIXELS), float(constants.SEVERAL_DILATE_FRACTION), corner, obj,
+                   real_corners, screen, bbox, dilate, odd)
+    if odd.any():
+        screen[odd], bbox[odd], dilate[odd] = _screen_numpy(clip[corner[odd]], camera, box)
+    return corner, obj, real_corners, (screen, bbox, dilate)
+
+
+#: Per calling thread, the arrays of :func:`_kept` by name.
+_local = threading.local()
+
+
+def _kept(name, shape, dtype=np.float64):
+    """An array of ``shape`` and ``dtype`` (contents undefined, as ``np.empty``'s) over memory kept
+    for ``name`` per calling thread between calls, grown when too small. The candidates' arrays of
+    one reflector are consumed before :func:`exact_pass` returns; made afresh, their pages are
+    faulted in anew for each reflector, which costs as much as filling them (about 60 MB a frame
+    for the ants' eyes at 640x480)."""
+    shape = (shape,) if np.isscalar(shape) else tuple(shape)
+    size = int(np.prod(shape, dtype=np.int64)) * np.dtype(dtype).itemsize
+    kept = getattr(_local, "arrays", None)
+    if kept is None:
+        kept = _local.arrays = {}
+    memory = kept.get(name)
+    if memory is None or len(memory) < size:
+        memory = kept[name] = np.empty(size + size // 4, np.uint8)  # room to grow by a quarter
+    return memory[:size].view(dtype).reshape(shape)

@@ -11,10 +11,12 @@ from __future__ import annotations
 import numpy as np
 
 from .._numba import readonly
+from .._parallel import parallel_range
 from ..raster import CULL_MODES, _setup, rasterize_trusted, shade_fragments_trusted
 from ..raster._threads import SERIAL_MAX_TRIANGLES, serial_if_small
 from ..scene.mesh import concatenate
 from . import BORDER, CULLED, HIDDEN, SearchResult, skips, virtual_vertices
+from ._exact import far_apart, interleave, mirror_marks, touching
 from .tessellate import tessellate
 
 
@@ -184,18 +186,21 @@ def mirror_images(refl, vertices, pixel, flags, points, eye):
     """
     from ..constants import EXACT_TWIN_GRAZING, EXACT_TWIN_HIDDEN
 
-    visible = flags & (HIDDEN | CULLED) == 0
     if points is None:
         at = (pixel[:, 0], pixel[:, 1])
         p, nrm = refl.gbuffer.position[at], refl.gbuffer.normal[at]
     else:
         p, nrm = points[0], points[1]
-    d = np.asarray(vertices, np.float64) - refl.gbuffer.origin - p
-    dn, size = np.sum(d * nrm, axis=1), np.sqrt(np.sum(d * d, axis=1))
-    # the vertices whose reflection point may be wrong: on the outline, or seen at a grazing angle
-    rows = np.flatnonzero(visible & ((flags & BORDER != 0) | (dn < EXACT_TWIN_GRAZING * size)))
-    # hidden by a grazing margin where the walk stopped on the outline: maybe seen at the silhouette
-    edge = (flags & CULLED == 0) & (flags & HIDDEN != 0) & (flags & BORDER != 0) & (-dn < EXACT_TWIN_HIDDEN * size)
+    # the vertices whose reflection point may be wrong: on the outline, or seen at a grazing angle;
+    # and those hidden by a grazing margin where the walk stopped on the outline: maybe seen at the
+    # silhouette (kernel _exact.mirror_marks, one pass)
+    n = len(flags)
+    twin, edge = np.empty(n, bool), np.empty(n, bool)
+    parallel_range(mirror_marks, n, np.ascontiguousarray(vertices, np.float64),
+                   np.ascontiguousarray(refl.gbuffer.origin, np.float64), np.ascontiguousarray(p),
+                   np.ascontiguousarray(nrm), np.ascontiguousarray(flags, np.uint8), float(EXACT_TWIN_GRAZING),
+                   float(EXACT_TWIN_HIDDEN), np.uint8(BORDER), np.uint8(HIDDEN), np.uint8(CULLED), twin, edge)
+    rows = np.flatnonzero(twin)
     origin = refl.gbuffer.origin
 
     def at_texel(hidden_rows):
@@ -254,30 +259,33 @@ def with_mirror_copies(part, real, mirror, camera):
     rows, images, edge, at_texel, (uncut, uncut_obj) = mirror
     virtual, normals, faces, face_obj, flags = part
     n = len(virtual)
-    faces = np.asarray(faces, np.int64)
+    faces = np.ascontiguousarray(faces, np.int64)
     if len(rows):
         vp = camera.view_proj()
         a = _setup.transform_points(np.asarray(virtual, np.float64)[rows], vp)
         b = _setup.transform_points(images, vp)
-        scale = 0.5 * np.array([camera.width, camera.height], np.float64)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            gap = np.abs(a[:, :2] / a[:, 3:] - b[:, :2] / b[:, 3:]) * scale
         # a vertex at or behind the eye plane: a screen distance means nothing, no copy
-        far = (a[:, 3] > 0) & (b[:, 3] > 0) & np.any(gap > EXACT_TWIN_PIXELS, axis=1)
+        far = np.empty(len(rows), bool)
+        parallel_range(far_apart, len(rows), a, b, 0.5 * float(camera.width), 0.5 * float(camera.height),
+                       float(EXACT_TWIN_PIXELS), far)
         rows, images = rows[far], images[far]
-    copied = np.zeros(len(faces), bool)
+    more_to_do = edge.any() or len(uncut)
+    if not len(rows) and not more_to_do:  # no second image, no face copied
+        return part, real
     twin = np.arange(n, dtype=np.int64)
     if len(rows):
         twin[rows] = n + np.arange(len(rows))
-        copied = _touches(twin >= n, faces)
+    # the faces with a corner imaged again, and those with a corner hidden at the silhouette
+    m = len(faces)
+    copied, near = np.empty(m, bool), np.empty(m, bool)
+    parallel_range(touching, m, faces, twin, n, np.ascontiguousarray(edge, bool), copied, near)
     extra = np.zeros((0, 3), np.int64)
     extra_obj = np.zeros(0, np.int32)
-    if edge.any() or len(uncut):
+    if more_to_do:
         # a face with a corner hidden at the silhouette, and a face the silhouette cut replaced by a
         # part that may end short (drawn whole): their hidden corners at their texels
-        near = _touches(edge, faces)
         hidden = np.zeros(n, bool)
-        hidden[faces[near].ravel()] = True
+        hidden[faces[np.flatnonzero(near)].ravel()] = True
         hidden[uncut.ravel()] = True
         hidden &= (flags & (HIDDEN | CULLED)) == HIDDEN
         more = np.flatnonzero(hidden)
@@ -286,24 +294,19 @@ def with_mirror_copies(part, real, mirror, camera):
             rows, images = np.concatenate([rows, more]), np.concatenate([images, at_texel(more)])
             copied |= near
             extra, extra_obj = twin[uncut], np.asarray(uncut_obj, np.int32)
-    if not copied.any() and len(extra) == 0:
+    k = int(np.count_nonzero(copied))
+    if k == 0 and len(extra) == 0:
         return part, real
     # each copy right after its face: the same real triangle (one run, where the acceptance
     # tracks runs; the same t, which does not replace the first, where it does not)
-    which = np.flatnonzero(copied)
-    at = which + np.arange(1, len(which) + 1)
-    order = np.repeat(np.arange(len(faces)), 1 + copied)
-    new_faces = faces[order]
-    new_faces[at] = twin[faces[which]]
-    part = (np.concatenate([virtual, images]), np.concatenate([normals, normals[rows]]),
-            np.concatenate([new_faces, extra]), np.concatenate([np.asarray(face_obj)[order], extra_obj]),
+    face_obj = np.asarray(face_obj)
+    new_faces = np.empty((m + k + len(extra), 3), np.int64)
+    new_obj = np.empty(m + k + len(extra), np.result_type(face_obj.dtype, np.int32))
+    interleave(faces, np.ascontiguousarray(face_obj, new_obj.dtype), copied, twin, new_faces, new_obj)
+    new_faces[m + k:], new_obj[m + k:] = extra, extra_obj
+    part = (np.concatenate([virtual, images]), np.concatenate([normals, normals[rows]]), new_faces, new_obj,
             np.concatenate([flags, flags[rows] & ~np.uint8(HIDDEN)]))
     return part, np.concatenate([real, real[rows]])
-
-
-def _touches(mark, faces):
-    """(m,) bool: the faces (m, 3) with a corner marked in ``mark`` (n,) bool."""
-    return mark[faces[:, 0]] | mark[faces[:, 1]] | mark[faces[:, 2]]
 
 
 def _result(like, pixel, flags):

@@ -264,20 +264,35 @@ def test_shading_kernel_matches_the_numpy_shading(rng):
     assert (got[1] > 0).sum() == (best_c >= 0).sum()
 
 
-def test_corners_kernel_is_numpy_fancy_indexing():
-    """``_exact.corners`` gathers each triangle's corners as ``points[corner]`` does, on one
-    thread and on several."""
-    from refsoft._parallel import one_thread, parallel_range
-    from refsoft.search._exact import corners
+def _gathered_numpy(keep, faces, face_obj, points, clip, camera, box):
+    """What ``exact._gathered`` gives, with NumPy: fancy indexing, and the screen bounds of
+    ``acceptance._screen_numpy`` (the NumPy rule ``_several.screen_bounds`` follows)."""
+    f = faces[keep]
+    return f, face_obj[keep], points[f], acceptance._screen_numpy(clip[f], camera, box)
 
-    rng = np.random.default_rng(2)
-    points = rng.normal(size=(50, 3))
-    corner = rng.integers(0, 50, (200, 3)).astype(np.int64)
+
+def test_gather_kernel_is_numpy_indexing_and_the_numpy_screen_bounds(rng):
+    """``_exact.gather`` (through ``exact._gathered``) gives each kept triangle's corners, object,
+    real corners, view positions, dilated bounds and dilation as NumPy does, bit for bit, on one
+    thread and on several: vertices behind the eye plane and positions that are not finite
+    among them."""
+    from refsoft._parallel import one_thread
+
+    n, m = 300, 2000
+    clip = rng.normal(size=(n, 4)) * 2.0
+    clip[:, 3] = rng.uniform(-0.2, 2.0, n)
+    clip[:5, 0] = np.inf
+    clip[5:8, 1] = np.nan
+    faces = rng.integers(0, n, (m, 3))
+    face_obj = rng.integers(1, 9, m).astype(np.int32)
+    points = rng.normal(size=(n, 3))
+    keep = np.flatnonzero(rng.random(m) < 0.6)
+    box = (10, 30, 20, 50)
+    want = _gathered_numpy(keep, faces, face_obj, points, clip, _Camera, box)
+    assert 0 < np.sum(want[3][2] < 0) < len(keep) // 2  # candidates behind the eye plane
     for several in (True, False):
-        out = np.full((200, 3, 3), np.nan)
-        if several:
-            parallel_range(corners, 200, points, corner, out)
-        else:
-            with one_thread():
-                parallel_range(corners, 200, points, corner, out)
-        assert np.array_equal(out, points[corner])
+        with one_thread(not several):
+            clip_ = np.ascontiguousarray(clip)
+            got = exact._gathered(keep, faces, face_obj, points, clip_, exact._projected(clip_, _Camera), _Camera, box)
+        for a, b in zip(got[:3] + got[3], want[:3] + want[3]):
+            assert a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes()
