@@ -22,6 +22,7 @@ from ..raster.rays import box_rays
 from ._several import accept, accept_near, accept_untracked
 from ._several import screen_bounds as _screen_bounds
 from ._traced import LEAF, accept_traced, largest, leaf_boxes, parent_boxes
+from .scratch import kept
 
 
 @dataclass(frozen=True, eq=False)
@@ -203,7 +204,7 @@ def _accept_traced(r0, c0, valid, origin, direction, screen, bbox, dilate, real,
         size.append(-(-size[-1] // 2))
     size = np.asarray(size, np.int64)
     start = np.concatenate([[0], np.cumsum(size)[:-1]]).astype(np.int64)
-    boxes, rects = np.empty((int(size.sum()), 6)), np.empty((int(size.sum()), 4), np.int64)
+    boxes, rects = kept("trace_boxes", (int(size.sum()), 6)), kept("trace_rects", (int(size.sum()), 4), np.int64)
     leaf_boxes(0, int(size[0]), real, bbox, constants.EXACT_TRACE_MARGIN * (big + 1.0), boxes, rects)
     parent_boxes(start, size, boxes, rects)
     parallel_range(accept_traced, valid.shape[0], r0, c0, valid, origin, direction, screen, bbox, dilate, real, start,

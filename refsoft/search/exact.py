@@ -19,8 +19,6 @@ box, what :func:`refsoft.search.virtual.virtual_pass` gives.
 
 from __future__ import annotations
 
-import threading
-
 import numpy as np
 
 from .. import constants
@@ -29,6 +27,7 @@ from .._parallel import parallel_range
 from . import CULLED, HIDDEN
 from ._exact import gather, project, reaching, shade_accepted
 from .acceptance import Candidates, _screen_numpy, nearest, pixel_rays
+from .scratch import kept as _kept
 from .virtual import virtual_pass
 
 
@@ -242,24 +241,3 @@ def _gathered(keep, faces, face_obj, real, clip, xy, camera, box):
     if odd.any():
         screen[odd], bbox[odd], dilate[odd] = _screen_numpy(clip[corner[odd]], camera, box)
     return corner, obj, real_corners, (screen, bbox, dilate)
-
-
-#: Per calling thread, the arrays of :func:`_kept` by name.
-_local = threading.local()
-
-
-def _kept(name, shape, dtype=np.float64):
-    """An array of ``shape`` and ``dtype`` (contents undefined, as ``np.empty``'s) over memory kept
-    for ``name`` per calling thread between calls, grown when too small. The candidates' arrays of
-    one reflector are consumed before :func:`exact_pass` returns; made afresh, their pages are
-    faulted in anew for each reflector, which costs as much as filling them (about 60 MB a frame
-    for the ants' eyes at 640x480)."""
-    shape = (shape,) if np.isscalar(shape) else tuple(shape)
-    size = int(np.prod(shape, dtype=np.int64)) * np.dtype(dtype).itemsize
-    kept = getattr(_local, "arrays", None)
-    if kept is None:
-        kept = _local.arrays = {}
-    memory = kept.get(name)
-    if memory is None or len(memory) < size:
-        memory = kept[name] = np.empty(size + size // 4, np.uint8)  # room to grow by a quarter
-    return memory[:size].view(dtype).reshape(shape)
