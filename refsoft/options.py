@@ -40,7 +40,7 @@ PRESETS = {
                   tessellate_span=0, virtual="mirror", silhouette="texel", images="one", draw="raster",
                   border_restart=False),
     "accurate": dict(method="walk", neighbourhood="box", inverse="discard", refine=True, tessellate=1e-3, max_level=1,
-                     tessellate_span=1, virtual="unfold", silhouette="clip", images="all", draw="exact",
+                     tessellate_span=8, virtual="unfold", silhouette="clip", images="all", draw="exact",
                      border_restart=True),
 }
 
@@ -103,7 +103,8 @@ class RenderOptions:
         Tessellation levels at most (paper 3, accurate 1).
     tessellate_span : int
         Edges whose ends reflect at most this many pixels apart (along both axes) are not split
-        (beyond the thesis; paper 0: every edge measured, accurate 1).
+        (beyond the thesis; paper 0: every edge measured, accurate 8: the exact drawing's dilation
+        covers a shorter edge's curve).
     refine : bool
         Sub-texel reflection points (:mod:`refsoft.search.refine`, beyond the papers; off by
         default): one Gauss-Newton step from the texel found before mirroring the vertex.
