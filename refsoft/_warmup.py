@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import json
 import os
+import dataclasses
 import subprocess
 import sys
 from types import SimpleNamespace
@@ -88,7 +89,9 @@ def warm(options: dict) -> None:
     render calls them through (the same types), while the command, done with its raster,
     compiles the refinement itself (and, with ``images="all"``, the enumeration of every image,
     which the ball's own render skips as convex); then two frames of the reflector's stages (a fresh and a
-    coherent search: whatever is left) and the composite's conversion to 8 bits."""
+    coherent search: whatever is left, the exact drawing's acceptance by the candidates' loop),
+    the traced acceptance and the composite's conversion to 8 bits."""
+    from . import constants
     from .frame.driver import composite
     from .options import RenderOptions
     from .raster import to_uint8
@@ -99,6 +102,10 @@ def warm(options: dict) -> None:
     from .seam import FrameView
 
     opts = RenderOptions(**options)
+    if opts.tessellate is not None and opts.tessellate_span > 1:  # the small ball's edges are
+        # short: a span of 1 measures some of them, so that the tessellation's kernels are compiled
+        # (with the same types) whatever the span
+        opts = dataclasses.replace(opts, tessellate_span=1)
     scene = load_scene("sphere", width=SIZE[0], height=SIZE[1])
     method = vertex_search.VertexSearch(scene, opts)
     method.make_gbuffer = ball_gbuffer
@@ -124,8 +131,15 @@ def warm(options: dict) -> None:
         from .search.images import find_images
 
         find_images(gb, camera.eye, verts, res)
-    for _ in range(2):
-        res = method.reflect(view, k, stencil)
+    # the ball's stencil is small enough that its candidates crowd: its frames would take the
+    # traced acceptance, which most scenes' mirrors never need; they take the candidates' loop
+    # here, and the traced acceptance is compiled last
+    cover, constants.EXACT_TRACE_COVER = constants.EXACT_TRACE_COVER, float("inf")
+    try:
+        for _ in range(2):
+            res = method.reflect(view, k, stencil)
+    finally:
+        constants.EXACT_TRACE_COVER = cover
     if opts.draw in ("exact", "edges"):
         _both_acceptances()
     if res.box is not None:
