@@ -87,10 +87,11 @@ def warm(options: dict) -> None:
     right after the main view's raster, its own first work); then the kernels that come after
     the sub-texel refinement, called on the ball's search results through the functions the
     render calls them through (the same types), while the command, done with its raster,
-    compiles the refinement itself (and, with ``images="all"``, the enumeration of every image,
-    which the ball's own render skips as convex); then two frames of the reflector's stages (a fresh and a
-    coherent search: whatever is left, the exact drawing's acceptance by the candidates' loop),
-    the traced acceptance and the composite's conversion to 8 bits."""
+    compiles the refinement itself; then two frames of the reflector's stages (a fresh and a
+    coherent search: whatever is left, the exact drawing's acceptance by the candidates' loop)
+    and the composite's conversion to 8 bits; last what only some scenes need: with
+    ``images="all"`` the enumeration of every image (which the ball's own render skips as
+    convex), and the traced acceptance."""
     from . import constants
     from .frame.driver import composite
     from .options import RenderOptions
@@ -122,15 +123,9 @@ def warm(options: dict) -> None:
     gcam = gbuffer_camera(scene, 0, opts.widen, opts.gbuffer_size)
     gb = ball_gbuffer(proxy, gcam, opts.precision, gcam.eye)
     verts = view.vertices
-    res = search(gb, camera.eye, verts, opts.neighbourhood, opts.inverse, coherent_starts(None, len(verts), gb.mask.shape),
-                 opts.cap, method=opts.method)
-    _after_refinement(opts, gb, res, verts, camera)
-    if opts.images == "all":
-        # the ball is convex, so its render skips the enumeration: compiled here for the scenes
-        # whose mirrors are not (the render calls it with these types)
-        from .search.images import find_images
-
-        find_images(gb, camera.eye, verts, res)
+    found = search(gb, camera.eye, verts, opts.neighbourhood, opts.inverse,
+                   coherent_starts(None, len(verts), gb.mask.shape), opts.cap, method=opts.method)
+    _after_refinement(opts, gb, found, verts, camera)
     # the ball's stencil is small enough that its candidates crowd: its frames would take the
     # traced acceptance, which most scenes' mirrors never need; they take the candidates' loop
     # here, and the traced acceptance is compiled last
@@ -140,13 +135,19 @@ def warm(options: dict) -> None:
             res = method.reflect(view, k, stencil)
     finally:
         constants.EXACT_TRACE_COVER = cover
-    if opts.draw in ("exact", "edges"):
-        _both_acceptances()
     if res.box is not None:
         colour = np.zeros(stencil.shape + (3,), np.float32)
         reflected = np.full(stencil.shape, -1, np.int32)
         composite(colour, reflected, colour.copy(), res.colour, res.reflected_id, res.covered, res.box, 1.0)
         to_uint8(colour)
+    if opts.images == "all":
+        # the ball is convex, so its render skips the enumeration: compiled here, after what every
+        # scene needs, for the scenes whose mirrors are not (the render calls it with these types)
+        from .search.images import find_images
+
+        find_images(gb, camera.eye, verts, found)
+    if opts.draw in ("exact", "edges"):
+        _both_acceptances()
 
 
 def _both_acceptances() -> None:
