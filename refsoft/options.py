@@ -98,7 +98,8 @@ class RenderOptions:
     tessellate : float, optional
         Szabo's adaptive tessellation of the reflected geometry
         (:mod:`refsoft.search.tessellate`): split triangles whose largest edge error exceeds
-        this threshold (0: every triangle), crack-free, up to ``max_level`` levels. Default off.
+        this threshold (0: every triangle with an edge measured: every one with
+        ``tessellate_span=0``), crack-free, up to ``max_level`` levels. Default off.
     max_level : int
         Tessellation levels at most (paper 3, accurate 1).
     tessellate_span : int

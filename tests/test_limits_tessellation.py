@@ -16,7 +16,7 @@ def test_full_tessellation_estimate_bounds_the_traced_peak(name):
     4 ** max_level triangles per reflected triangle (the frames make 21.5x on planar, 13.6x on
     sphere at this size; tracemalloc's peak is 2.0x and 1.3x an estimate of 4x)."""
     scene = refsoft.load_scene(name, width=320, height=240)
-    opts = RenderOptions(tessellate=0.0, max_level=3)
+    opts = RenderOptions(tessellate=0.0, max_level=3, tessellate_span=0)  # every edge measured, every one split
     FrameDriver(scene, opts).render_frame(0)  # compiled, caches warm
     tracemalloc.start()
     try:
