@@ -106,7 +106,8 @@ def test_leaving_out_triangles_off_the_box_changes_no_pixel():
     vertices reach past its outline, where the box leaves many out; unfolded ones all lie on rays
     through the stencil)."""
     scene = refsoft.load_scene("planar", width=128, height=96)
-    opts = RenderOptions(virtual="mirror")
+    # short edges split too (span 1): more triangles, hundreds of them beyond the box
+    opts = RenderOptions(virtual="mirror", tessellate_span=1)
     spy = _Spy(scene, opts)
     FrameDriver(scene, opts, method=spy).render_frame(0)
     scene_, part, real, camera, mesh, triangle, stencil, box, inverse = spy.seen["args"]
