@@ -79,8 +79,8 @@ class RenderOptions:
         Start each search at the vertex's previous reflection pixel.
     border_restart : bool
         With coherence, a walk from the previous pixel that stops on the G-buffer's border
-        (BORDER) is walked again from the start without history (spec section 4.3) and the
-        higher score kept (beyond the papers; ``paper`` off, ``accurate`` on): a walk can stop at
+        (BORDER) with a score below ``constants.BORDER_RESTART_SCORE`` is walked again from the
+        start without history (spec section 4.3) and the higher score kept (beyond the papers; ``paper`` off, ``accurate`` on): a walk can stop at
         a local maximum on the far border when its vertex's reflection has moved far since the
         previous frame. Not with ``inverse="search"``, whose hidden vertices' scores are another
         score's (the preset's value is then off; True is refused).

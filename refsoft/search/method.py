@@ -15,7 +15,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .. import keys, limits
+from .. import constants, keys, limits
 from ..raster import PRECISIONS, GBuffer, _setup, gbuffer
 from ..seam import ReflectorResult, stencil_box
 from . import BORDER, CULLED, RESTARTED, SEVERAL, SearchResult, levels, search, skips, virtual_vertices
@@ -343,15 +343,19 @@ class VertexSearch:
     def search_vertices(self, gb, eye, verts, prev):
         """:func:`refsoft.search.search` with the options, from the starts ``prev`` (N, 2) or
         None; with ``border_restart``, the walks from a previous pixel that stop on the border
-        walked again from the start without history, the higher score kept (a tie keeps the
-        first walk), their iterations the sum of both."""
+        with a score below :data:`refsoft.constants.BORDER_RESTART_SCORE` walked again from the
+        start without history, the higher score kept (a tie keeps the first walk), their
+        iterations the sum of both."""
         opt = self.options
         res = search(gb, eye, verts, opt.neighbourhood, opt.inverse, prev, opt.cap, method=opt.method)
         if not (opt.border_restart and prev is not None and opt.method == "walk"):
             return res
-        # a walk that restarted (its previous pixel not covered) already began without history
+        # a walk that restarted (its previous pixel not covered) already began without history; a
+        # walk that stopped on the border with a score near 1 reflects there (a far rim's trap scores
+        # low): only the others are walked again
         again = np.flatnonzero(((res.flags & BORDER) != 0) & (prev[:, 0] >= 0)
-                               & ((res.flags & (CULLED | RESTARTED)) == 0))
+                               & ((res.flags & (CULLED | RESTARTED)) == 0)
+                               & (res.score < constants.BORDER_RESTART_SCORE))
         if len(again) == 0:
             return res
         fresh = search(gb, eye, verts[again], opt.neighbourhood, opt.inverse, None, opt.cap, method=opt.method)

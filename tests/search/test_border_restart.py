@@ -6,7 +6,7 @@ import pytest
 
 import refsoft
 from refsoft.frame import FrameDriver, RenderOptions
-from refsoft import raster
+from refsoft import constants, raster
 from refsoft.search import BORDER, CULLED, RESTARTED, search
 from refsoft.search.method import VertexSearch
 from refsoft.truth import TruthRenderer, metrics
@@ -39,16 +39,18 @@ def _ufo_case(rng):
 
 def test_the_restart_keeps_the_better_of_both_walks(rng):
     """Per vertex: the walk from its previous pixel, unless it stopped on the border (not
-    restarted, not culled) and the walk from the start without history scores strictly higher;
-    iterations of both walks when walked twice."""
+    restarted, not culled) with a score below BORDER_RESTART_SCORE and the walk from the start
+    without history scores strictly higher; iterations of both walks when walked twice."""
     scene, cam, gb, verts, prev = _ufo_case(rng)
     opts = RenderOptions(border_restart=True)
     got = VertexSearch(scene, opts).search_vertices(gb, cam.eye, verts, prev)
     first = search(gb, cam.eye, verts, opts.neighbourhood, opts.inverse, prev, opts.cap)
     fresh = search(gb, cam.eye, verts, opts.neighbourhood, opts.inverse, None, opts.cap)
-    again = ((first.flags & BORDER) != 0) & (prev[:, 0] >= 0) & ((first.flags & (CULLED | RESTARTED)) == 0)
+    border = ((first.flags & BORDER) != 0) & (prev[:, 0] >= 0) & ((first.flags & (CULLED | RESTARTED)) == 0)
+    again = border & (first.score < constants.BORDER_RESTART_SCORE)
     take = again & (fresh.score > first.score)
     assert again.sum() > 20 and take.sum() > 5 and (again & ~take).sum() > 5  # every branch exercised
+    assert (border & ~again).sum() > 5  # border walks scoring near 1, not walked again
     for name in ("pixel", "score", "margin", "flags"):
         want = np.where(take.reshape((-1,) + (1,) * (getattr(first, name).ndim - 1)), getattr(fresh, name),
                         getattr(first, name))
