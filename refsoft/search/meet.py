@@ -389,7 +389,7 @@ def nearest_split(scene_cand, ref_cand, camera, box, rays, offset):
 
 
 def near_rays(verts, normals, faces, face_obj, rays):
-    """:func:`refsoft.search.several.near_rays` of a level's rays over its box, the same candidates
+    """:func:`refsoft.search.reach.near_rays` of a level's rays over its box, the same candidates
     with the same ray lists, each triangle testing only the rays of the tiles that may come near
     it.
 
@@ -401,7 +401,7 @@ def near_rays(verts, normals, faces, face_obj, rays):
     triangle's plane, holds no ray the pruning keeps (kernel
     :func:`refsoft.search._bounces.rays_by_tiles`); the rays of the others are tested one by one
     with :func:`refsoft.search._several.rays_near`'s test, in ascending order, as
-    :func:`refsoft.search.several.near_rays` tests every ray.
+    :func:`refsoft.search.reach.near_rays` tests every ray.
 
     Parameters
     ----------

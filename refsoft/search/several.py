@@ -17,7 +17,7 @@ triangles, and their exact per-pixel acceptance.
    intersected with the candidate's *real* scene triangle; the nearest hit wins
    (:mod:`refsoft.search.acceptance`). The picture is the same bits as without the pruning.
 4. :func:`with_ray_lists`: each scene triangle with a candidate is also drawn whole, met with every
-   reflected ray that may hit it wherever its pixel (:func:`ray_lists`, through the ray tiles of
+   reflected ray that may hit it wherever its pixel (:func:`.reach.ray_lists`, through the ray tiles of
    :mod:`refsoft.search._raytiles`): where a virtual triangle misses its image by more than the
    dilation, or an image was not found, the triangle is still drawn where it reflects.
 
@@ -34,9 +34,10 @@ from .. import constants
 from .._parallel import parallel_range
 from ..errors import RefsoftError
 from . import search
-from ._several import linked_triples, nearest_image, rays_near, rays_near_every
+from ._several import linked_triples, nearest_image
 from .acceptance import Candidates, draw, pixel_rays
 from .images import Images, facing_gbuffer, find_images
+from .reach import Reach, ray_lists, take
 
 
 # --- sheets -----------------------------------------------------------------------------------
@@ -128,7 +129,7 @@ def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, n
     """Candidate virtual triangles of every scene triangle (module docstring, step 2).
 
     With ``rays`` (the reflector's reflected rays, those :func:`draw` tests), the candidates of a
-    triangle (or part) no ray comes near (:class:`_Reach`) are left out, and so are its parts:
+    triangle (or part) no ray comes near (:class:`Reach`) are left out, and so are its parts:
     the acceptance would refuse them at every pixel, so the picture is the same bits. Only what
     the others' candidates depend on is still made: a triangle sharing a vertex with one a ray
     comes near is matched and cut (a part at the last level may take its rim triples from walks
@@ -174,7 +175,7 @@ def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, n
     pool.walked = _sorted_unique(edges[:, 0] * _KEY + edges[:, 1])
     out_t, out_f, out_s, out_r, subdivided = [], [], [], [], []
     todo_faces, todo_src = faces, np.arange(len(faces), dtype=np.int64)
-    reach = None if rays is None else _Reach(*rays)
+    reach = None if rays is None else Reach(*rays)
     alive = span = None
     if reach is not None:
         # the scene triangles matched are neither cut nor tested (their candidates are few, each
@@ -185,7 +186,7 @@ def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, n
         span[0][rest], span[1][rest] = reach.test_every(pool.corners(faces[rest]))
         alive = ~rest | (span[1] > span[0])
         keep = pool.needed(faces, alive, max_level > 0, gb, eye, find, neighbourhood, cap)
-        todo_faces, todo_src, alive, span = faces[keep], todo_src[keep], alive[keep], _take(span, keep)
+        todo_faces, todo_src, alive, span = faces[keep], todo_src[keep], alive[keep], take(span, keep)
     for level in range(max_level + 1):
         t, owner = pool.triples(todo_faces)
         kept = slice(None) if alive is None else alive[owner]
@@ -193,7 +194,7 @@ def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, n
         out_f.append(todo_faces[owner[kept]])
         out_s.append(todo_src[owner[kept]])
         if reach is not None:
-            out_r.append(_take(span, owner[kept]))
+            out_r.append(take(span, owner[kept]))
         # a part of a face not matched may reflect where no linked triple draws it
         rest = ~pool.matched(todo_faces, t, owner)
         if not rest.any():
@@ -206,7 +207,7 @@ def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, n
             out_f.append(faces_rest[owner[kept]])
             out_s.append(src_rest[owner[kept]])
             if reach is not None:
-                out_r.append(_take(_take(span, rest), owner[kept]))
+                out_r.append(take(take(span, rest), owner[kept]))
             break
         subdivided.append(src_rest)
         todo_faces, todo_src = pool.cut(faces_rest, src_rest)
@@ -217,7 +218,7 @@ def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, n
         span = reach.test(pool.corners(todo_faces), np.repeat(span[0][rest], 4), np.repeat(span[1][rest], 4))
         alive = span[1] > span[0]
         keep = pool.needed(todo_faces, alive, level + 1 < max_level, gb, eye, find, neighbourhood, cap)
-        todo_faces, todo_src, alive, span = todo_faces[keep], todo_src[keep], alive[keep], _take(span, keep)
+        todo_faces, todo_src, alive, span = todo_faces[keep], todo_src[keep], alive[keep], take(span, keep)
         pool.settle(todo_faces, gb, eye, find, neighbourhood, cap)
     n_sub = len(np.unique(np.concatenate(subdivided))) if subdivided else 0
     cand = pool.candidates(np.concatenate(out_t), np.concatenate(out_f), np.concatenate(out_s), face_obj, n_sub)
@@ -225,104 +226,6 @@ def candidates(gb, eye, verts, normals, faces, face_obj, images: Images, find, n
         cand = replace(cand, rays=(np.concatenate([r[0] for r in out_r]), np.concatenate([r[1] for r in out_r]),
                                    reach.ray()))
     return cand, with_sheets
-
-
-def near_rays(verts, normals, faces, face_obj, rays):
-    """One candidate per triangle a ray comes near (``_Reach``, the pruning of :func:`candidates`),
-    with those rays and no projection (its virtual corners NaN): the acceptance meets it with each
-    ray of its list, wherever the pixel, so the drawing is the ray cast's up to the pruning's
-    margin. A later bounce on a reflector that sees itself (spec section 5.1) is drawn so.
-
-    Parameters
-    ----------
-    verts, normals : (N, 3) float64
-    faces : (F, 3) int64
-    face_obj : (F,) int32
-    rays : tuple of two (R, 3) float64
-        Origins and directions of the rays the candidates are met with.
-
-    Returns
-    -------
-    Candidates
-    """
-    faces = np.asarray(faces, np.int64).reshape(-1, 3)
-    reach = _Reach(*rays)
-    first, last = reach.test_every(np.asarray(verts, np.float64)[faces]) if len(faces) else reach.every(0)
-    src = np.flatnonzero(last > first)
-    return Candidates(np.full((len(src), 3, 3), np.nan), np.asarray(verts, np.float64)[faces[src]],
-                      np.asarray(normals, np.float64)[faces[src]], np.asarray(face_obj, np.int32)[src], src, 0,
-                      (first[src], last[src], reach.ray()))
-
-
-def _take(span, keep):
-    """The rays ``(first, last)`` of the triangles ``keep`` (a mask or indices)."""
-    return span[0][keep], span[1][keep]
-
-
-class _Reach:
-    """The reflected rays that may hit each triangle (:func:`._several.rays_near`): a part is
-    tested against its face's rays alone (a ray that misses a face by the margin misses its parts).
-    A triangle's rays are ``ray()[first:last]`` (ascending): the lists of every test are kept, one
-    after another."""
-
-    def __init__(self, origin, direction):
-        self.origin = np.ascontiguousarray(origin, np.float64).reshape(-1, 3)
-        self.direction = np.ascontiguousarray(direction, np.float64).reshape(-1, 3)
-        d = self.direction
-        self.length = np.sqrt((d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1]) + d[:, 2] * d[:, 2])
-        self.columns = np.ascontiguousarray(np.concatenate([self.origin.T, d.T, self.length[None]]))
-        self.lists = [np.arange(len(self.origin), dtype=np.int64)]  # the first: every ray
-        self.size = len(self.origin)
-        self._ray = None
-
-    def ray(self):
-        """(K,) int64: every list so far."""
-        if self._ray is None or len(self._ray) != self.size:
-            self._ray = np.concatenate(self.lists)
-        return self._ray
-
-    def every(self, n):
-        """``(first, last)``: every ray for each of ``n`` triangles."""
-        return np.zeros(n, np.int64), np.full(n, len(self.origin), np.int64)
-
-    def test_every(self, real):
-        """``(first, last)``: the rays of every ray that may hit each triangle of ``real`` (F, 3,
-        3) float64 (:func:`test` of :meth:`every`, the rays a block at a time:
-        :func:`._several.rays_near_every`)."""
-        real = np.ascontiguousarray(real, np.float64)
-        args = (real, self.columns, float(constants.SEVERAL_PRUNE_MARGIN), float(constants.SEVERAL_PRUNE_PARALLEL))
-        n = np.zeros(len(real), np.int64)
-        at = np.zeros(len(real), np.int64)
-        if len(real):
-            parallel_range(rays_near_every, len(real), *args, n, n, at, np.zeros(0, np.int64), False)
-        start = np.cumsum(n) - n
-        out = np.empty(int(n.sum()), np.int64)
-        if len(out):
-            parallel_range(rays_near_every, len(real), *args, n, start, at, out, True)
-        start += self.size
-        self.lists.append(out)
-        self.size += len(out)
-        return start, start + n
-
-    def test(self, real, first, last):
-        """``(first, last)``: the rays of ``ray()[first:last]`` that may hit each triangle of
-        ``real`` (F, 3, 3) float64 (a new list each)."""
-        real = np.ascontiguousarray(real, np.float64)
-        args = (real, self.origin, self.direction, self.length, np.ascontiguousarray(first, np.int64),
-                np.ascontiguousarray(last, np.int64), self.ray(), float(constants.SEVERAL_PRUNE_MARGIN),
-                float(constants.SEVERAL_PRUNE_PARALLEL))
-        n = np.zeros(len(real), np.int64)
-        if len(real):
-            parallel_range(rays_near, len(real), *args, n, np.zeros(0, np.int64), False)
-        start = np.cumsum(n) - n
-        out = np.empty(int(n.sum()), np.int64)
-        if len(out):  # the second pass skips the rays of the triangles without any
-            args = args[:5] + (np.where(n > 0, args[5], args[4]),) + args[6:]
-            parallel_range(rays_near, len(real), *args, start, out, True)
-        start += self.size
-        self.lists.append(out)
-        self.size += len(out)
-        return start, start + n
 
 
 def _edges(faces):
@@ -578,68 +481,6 @@ class _Pool:
 
 
 # --- every candidate triangle met with the rays that may hit it --------------------------------
-def ray_lists(real, rays):
-    """The reflected rays that may hit each triangle, found through ray tiles
-    (:mod:`refsoft.search._raytiles`): per triangle the rays ``_several._may_hit`` keeps (the
-    test of the candidates' pruning), less those whose tile cannot reach the triangle.
-
-    Parameters
-    ----------
-    real : (F, 3, 3) float64
-        Triangles, world space.
-    rays : tuple
-        :func:`refsoft.search.acceptance.pixel_rays`: ``valid`` (h, w) bool, ``origin`` and
-        ``direction`` (h, w, 3) float64.
-
-    Returns
-    -------
-    first, last : (F,) int64
-        Triangle ``f``'s rays are ``ray[first[f]:last[f]]``, ascending.
-    ray : (K,) int64
-        Indices of valid pixels in row-major order.
-    """
-    from ._raytiles import TILE_WIDTH, rays_near_tiles, tile_bounds
-
-    real = np.ascontiguousarray(real, np.float64).reshape(-1, 3, 3)
-    valid, origin, direction = rays
-    valid = np.ascontiguousarray(valid, bool)
-    if valid.ndim != 2 or np.shape(origin) != valid.shape + (3,) or np.shape(direction) != valid.shape + (3,):
-        raise RefsoftError(f"rays must be valid (h, w) and origin, direction (h, w, 3), got {valid.shape}, "
-                           f"{np.shape(origin)}, {np.shape(direction)}")
-    origin = np.ascontiguousarray(origin, np.float64)
-    direction = np.ascontiguousarray(direction, np.float64)
-    n = len(real)
-    count = np.zeros(n, np.int64)
-    if n == 0 or not valid.any():
-        return count, count.copy(), np.zeros(0, np.int64)
-    h, w = valid.shape
-    ray_id = np.full((h, w), -1, np.int64)
-    ray_id[valid] = np.arange(int(valid.sum()), dtype=np.int64)
-    size, ratio = int(constants.SEVERAL_RAY_TILE), int(constants.SEVERAL_RAY_BLOCK)
-    bounds = []
-    for side in (size, size * ratio):
-        rows, cols = -(-h // side), -(-w // side)
-        b = np.zeros((rows * cols, TILE_WIDTH))
-        parallel_range(tile_bounds, rows, valid, origin, direction, side, cols, b)
-        bounds.append(b)
-    d = direction[valid]
-    dmax = float(np.max(np.sqrt((d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1]) + d[:, 2] * d[:, 2])))
-    dmax = dmax if np.isfinite(dmax) else 0.0  # a ray that is not finite makes its tile keep every ray
-    args = (real, valid, origin, direction, ray_id, bounds[0], bounds[1], size, ratio,
-            float(constants.SEVERAL_PRUNE_MARGIN), float(constants.SEVERAL_PRUNE_PARALLEL), dmax)
-
-    def work():
-        return np.empty(-(-w // (size * ratio)), np.int64), np.empty(-(-w // size), np.int64)
-
-    start = np.zeros(n, np.int64)
-    parallel_range(rays_near_tiles, n, *args, count, start, np.zeros(0, np.int64), False, work=work)
-    start = np.cumsum(count) - count
-    out = np.empty(int(count.sum()), np.int64)
-    if len(out):
-        parallel_range(rays_near_tiles, n, *args, count, start, out, True, work=work)
-    return start, start + count, out
-
-
 def with_ray_lists(cand, verts, normals, faces, face_obj, rays):
     """``cand`` followed by one candidate per scene triangle it holds (whole, in triangle order),
     met with every ray that may hit it (:func:`ray_lists`) wherever its pixel, without a

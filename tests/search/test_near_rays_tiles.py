@@ -1,5 +1,5 @@
 """meet.near_rays (the rays' pruning tile by tile, kernel _bounces.rays_by_tiles) against
-several.near_rays (every ray tested against every triangle): the same candidates, the same ray
+reach.near_rays (every ray tested against every triangle): the same candidates, the same ray
 lists in the same order, the same with one thread."""
 
 import numpy as np
@@ -9,7 +9,7 @@ import refsoft
 from refsoft._parallel import one_thread
 from refsoft.frame.driver import FrameDriver
 from refsoft.options import RenderOptions
-from refsoft.search import meet, several
+from refsoft.search import meet, reach
 from refsoft.search.exact_levels import combined
 
 
@@ -27,7 +27,7 @@ def _same(a, b):
 
 def _check(verts, normals, faces, fobj, grid):
     valid, origin, direction = grid
-    want = several.near_rays(verts, normals, faces, fobj, (origin[valid], direction[valid]))
+    want = reach.near_rays(verts, normals, faces, fobj, (origin[valid], direction[valid]))
     got = meet.near_rays(verts, normals, faces, fobj, grid)
     _same(got, want)
     return got

@@ -1,5 +1,5 @@
 """The ray tiles (refsoft/search/_raytiles.py) and the drawing of every image that meets each
-candidate triangle with the rays that may hit it (several.ray_lists, several.with_ray_lists)."""
+candidate triangle with the rays that may hit it (reach.ray_lists, several.with_ray_lists)."""
 
 import numpy as np
 import pytest
@@ -7,7 +7,7 @@ import pytest
 from refsoft import constants
 from refsoft._parallel import one_thread
 from refsoft.errors import RefsoftError
-from refsoft.search import several
+from refsoft.search import reach, several
 
 import naive_several as naive
 
@@ -50,7 +50,7 @@ def test_ray_lists_are_the_every_ray_lists_less_rays_that_cannot_hit(rng):
     o, d = origin[valid], direction[valid]
     want = naive.rays_near(real, o, d, np.zeros(len(real), int), np.full(len(real), len(o)), np.arange(len(o)),
                            constants.SEVERAL_PRUNE_MARGIN, constants.SEVERAL_PRUNE_PARALLEL)
-    first, last, ray = several.ray_lists(real, (valid, origin, direction))
+    first, last, ray = reach.ray_lists(real, (valid, origin, direction))
     dropped = 0
     for f in range(len(real)):
         got = ray[first[f]:last[f]].tolist()
@@ -74,7 +74,7 @@ def test_ray_lists_prune_tiles_far_from_the_triangle():
     direction[:] = [0.0, 0.0, 1.0]
     origin[20, 30, 0] = 0.0
     tri = np.array([[[-1.1, -1.1, 1.0], [-1.0, -1.1, 1.0], [-1.1, -1.0, 1.0]]])
-    first, last, ray = several.ray_lists(tri, (valid, origin, direction))
+    first, last, ray = reach.ray_lists(tri, (valid, origin, direction))
     rows, cols = np.nonzero(valid)
     assert 0 < last[0] - first[0] < 40
     assert rows[ray].max() < 16 and cols[ray].max() < 16
@@ -84,8 +84,8 @@ def test_ray_lists_same_bits_on_one_thread_and_several(rng):
     rays = _rays()
     real = _triangles(rng, 90)
     with one_thread():
-        a = several.ray_lists(real, rays)
-    b = several.ray_lists(real, rays)
+        a = reach.ray_lists(real, rays)
+    b = reach.ray_lists(real, rays)
     for x, y in zip(a, b):
         np.testing.assert_array_equal(x, y)
 
@@ -93,7 +93,7 @@ def test_ray_lists_same_bits_on_one_thread_and_several(rng):
 def test_ray_lists_refuses_rays_of_other_shapes():
     valid, origin, direction = _rays()
     with pytest.raises(RefsoftError, match="rays must be"):
-        several.ray_lists(np.zeros((1, 3, 3)), (valid, origin[:, :5], direction))
+        reach.ray_lists(np.zeros((1, 3, 3)), (valid, origin[:, :5], direction))
 
 
 def test_no_candidate_triangle_leaves_a_pixel_it_reflects_empty():

@@ -10,7 +10,7 @@ from refsoft._parallel import one_thread
 from refsoft.errors import RefsoftError
 from refsoft.frame import FrameDriver, RenderOptions
 from refsoft.scene.builtin.shapes import bowl
-from refsoft.search import acceptance, several
+from refsoft.search import acceptance, reach, several
 from refsoft.search.images import Images
 from refsoft.search.method import VertexSearch
 from refsoft.search.virtual import reflected_mesh
@@ -346,17 +346,17 @@ def test_rays_near_matches_the_plain_numpy_version():
     kept = sum(len(w) for w in want)
     assert 0 < kept < np.sum(last - first) and want[5] == ray[first[5]:last[5]].tolist()
     assert want[6] == ray[first[6]:last[6]].tolist()
-    reach = several._Reach(origin, direction)
-    every = reach.test(real, *reach.every(len(real)))
-    assert reach.ray()[every[0][0]:every[1][0]].tolist() == naive_ref.rays_near(
+    lists = reach.Reach(origin, direction)
+    every = lists.test(real, *lists.every(len(real)))
+    assert lists.ray()[every[0][0]:every[1][0]].tolist() == naive_ref.rays_near(
         real[:1], origin, direction, [0], [300], np.arange(300), margin, parallel)[0]
     for threads in (True, False):
         with one_thread(not threads):
-            reach = several._Reach(origin, direction)
-            reach.lists.append(ray)  # lists after the first (every ray) are tested in turn
-            reach.size += len(ray)
-            start, end = reach.test(real, first + 300, last + 300)
-        assert [reach.ray()[a:b].tolist() for a, b in zip(start, end)] == want
+            lists = reach.Reach(origin, direction)
+            lists.lists.append(ray)  # lists after the first (every ray) are tested in turn
+            lists.size += len(ray)
+            start, end = lists.test(real, first + 300, last + 300)
+        assert [lists.ray()[a:b].tolist() for a, b in zip(start, end)] == want
 
 
 @pytest.mark.parametrize("max_level", [0, 1, 3])
@@ -431,9 +431,9 @@ def test_acceptance_over_ray_lists_matches_the_plain_loop():
     assert (want[1] >= 0).sum() > 20
     rows, cols = np.nonzero(valid)
     o, d = np.ascontiguousarray(origin[valid]), np.ascontiguousarray(direction[valid])
-    reach = several._Reach(o, d)
-    near = reach.test(real, *reach.every(n))
-    every = reach.every(n)
+    pruned = reach.Reach(o, d)
+    near = pruned.test(real, *pruned.every(n))
+    every = pruned.every(n)
     assert np.sum(near[1] - near[0]) < np.sum(every[1] - every[0]) / 5  # the lists are short
     mixed = (np.where(np.arange(n) % 3 == 0, -1, near[0]), np.where(np.arange(n) % 3 == 0, -1, near[1]))
     for lists, same_tested in ((every, True), (near, False), (mixed, False)):
@@ -441,7 +441,7 @@ def test_acceptance_over_ray_lists_matches_the_plain_loop():
             got = (np.full((h, w), np.inf), np.full((h, w), -1, np.int64), np.zeros((h, w, 2)),
                    np.zeros((h, w), bool))
             args = (accept_near, h, r0, c0, valid, acceptance._spans(valid), origin, direction, rows, cols, o, d,
-                    screen, bbox, dilate, real, acceptance._runs(real), *lists, reach.ray(), *got,
+                    screen, bbox, dilate, real, acceptance._runs(real), *lists, pruned.ray(), *got,
                     np.full((h, w), -1, np.int64))
             with one_thread(not threads):
                 parallel_range(*args)
@@ -490,12 +490,12 @@ def test_rays_near_every_gives_the_lists_of_every_ray():
     n = 2 * RAY_BLOCK + 77
     o = np.concatenate([rng.uniform(-1.2, 1.2, (n, 2)), np.full((n, 1), 2.0)], axis=1)
     d = np.concatenate([rng.normal(0, 0.1, (n, 2)), np.full((n, 1), -1.0)], axis=1)
-    want = several._Reach(o, d)
+    want = reach.Reach(o, d)
     span = want.test(real, *want.every(len(real)))
     lists = [want.ray()[a:b].tolist() for a, b in zip(*span)]
     assert 0 < sum(map(len, lists)) < n * len(real) / 4 and any(x and x[-1] >= 2 * RAY_BLOCK for x in lists)
     for threads in (True, False):
         with one_thread(not threads):
-            got = several._Reach(o, d)
+            got = reach.Reach(o, d)
             span = got.test_every(real)
         assert [got.ray()[a:b].tolist() for a, b in zip(*span)] == lists
