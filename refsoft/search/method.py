@@ -355,7 +355,7 @@ class VertexSearch:
         # low): only the others are walked again
         again = np.flatnonzero(((res.flags & BORDER) != 0) & (prev[:, 0] >= 0)
                                & ((res.flags & (CULLED | RESTARTED)) == 0)
-                               & (res.score < constants.BORDER_RESTART_SCORE))
+                               & (res.score < res.score.dtype.type(constants.BORDER_RESTART_SCORE)))
         if len(again) == 0:
             return res
         fresh = search(gb, eye, verts[again], opt.neighbourhood, opt.inverse, None, opt.cap, method=opt.method)

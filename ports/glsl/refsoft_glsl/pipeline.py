@@ -17,6 +17,8 @@ from .camera import gbuffer_camera
 from .raster import Raster, params_array
 
 HIDDEN, BORDER, CAPPED, RESTARTED, CULLED = 1, 2, 4, 8, 16
+#: Spec 4.3: a walk that stopped on the border is walked again only below this score.
+BORDER_RESTART_SCORE = 0.9
 INVERSE_MODES = ("plane", "search", "discard")
 NEIGHBOURHOODS = {"cross": 5, "box": 9}
 
@@ -270,12 +272,15 @@ class Pipeline:
 
     def _border_restart(self, data, gb, out, n, cap):
         """Spec 4.3's restart beyond the papers (``border_restart``): the walks from a previous
-        pixel that stopped on the border (BORDER, not RESTARTED or CULLED) walked again from the
-        start without history; the higher score kept (a tie keeps the first walk), the
+        pixel that stopped on the border (BORDER, not RESTARTED or CULLED) with a score below
+        :data:`BORDER_RESTART_SCORE` (compared in the score's own precision) walked again from
+        the start without history; the higher score kept (a tie keeps the first walk), the
         iterations summed."""
         gl, real = self.gl, self.real
         flags = gl.read(out["flags"], np.uint32, (n,))
-        again = np.flatnonzero(((flags & BORDER) != 0) & ((flags & (CULLED | RESTARTED)) == 0))
+        score = gl.read(out["score"], real, (n,))
+        again = np.flatnonzero(((flags & BORDER) != 0) & ((flags & (CULLED | RESTARTED)) == 0)
+                               & (score < real(BORDER_RESTART_SCORE)))
         if len(again) == 0:
             return out
         m = len(again)
