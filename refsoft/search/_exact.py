@@ -9,6 +9,7 @@ import numpy as np
 
 from .._numba import kernel
 from ..raster._rays import unit_normal
+from ._several import dilated_bounds
 
 
 @kernel
@@ -119,7 +120,6 @@ def gather(lo, hi, keep, faces, face_obj, points, clip, xy, r0, r1, c0, c1, pixe
     dilate : (C,) float64
     odd : (C,) bool
     """
-    big = float(1 << 30)
     for c in range(lo, hi):
         t = keep[c]
         obj[c] = face_obj[t]
@@ -144,25 +144,7 @@ def gather(lo, hi, keep, faces, face_obj, points, clip, xy, r0, r1, c0, c1, pixe
         screen[c, 2, 0], screen[c, 2, 1] = x2, y2
         bad = not (np.isfinite(x0) and np.isfinite(y0) and np.isfinite(x1) and np.isfinite(y1)
                    and np.isfinite(x2) and np.isfinite(y2))
-        edge = np.sqrt((x0 - x1) * (x0 - x1) + (y0 - y1) * (y0 - y1))
-        e1 = np.sqrt((x1 - x2) * (x1 - x2) + (y1 - y2) * (y1 - y2))
-        edge = e1 if e1 > edge else edge
-        e2 = np.sqrt((x2 - x0) * (x2 - x0) + (y2 - y0) * (y2 - y0))
-        edge = e2 if e2 > edge else edge
-        d = pixels + fraction * edge
-        bad = bad or not np.isfinite(d)
-        odd[c] = bad
-        if bad:
-            continue
-        lo_x = min(x0, x1, x2) - d
-        hi_x = max(x0, x1, x2) + d
-        lo_y = min(y0, y1, y2) - d
-        hi_y = max(y0, y1, y2) + d
-        bbox[c, 0] = np.int64(np.floor(min(max(lo_y - 0.5, -big), big))) - r0
-        bbox[c, 1] = np.int64(np.ceil(min(max(hi_y - 0.5, -big), big))) + 1 - r0
-        bbox[c, 2] = np.int64(np.floor(min(max(lo_x - 0.5, -big), big)))
-        bbox[c, 3] = np.int64(np.ceil(min(max(hi_x - 0.5, -big), big))) + 1
-        dilate[c] = d
+        odd[c] = dilated_bounds(c, x0, y0, x1, y1, x2, y2, bad, pixels, fraction, r0, bbox, dilate)
 
 
 @kernel

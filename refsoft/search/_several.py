@@ -70,9 +70,7 @@ def accept_untracked(lo, hi, r0, c0, valid, span, origin, direction, screen, bbo
         if row0 >= row1:
             continue
         ax, ay, bx, by, cx, cy, sign, lab, lbc, lca, d, plain = _outline(c, screen, dilate)
-        p0x, p0y, p0z = real[c, 0, 0], real[c, 0, 1], real[c, 0, 2]
-        e1x, e1y, e1z = real[c, 1, 0] - p0x, real[c, 1, 1] - p0y, real[c, 1, 2] - p0z
-        e2x, e2y, e2z = real[c, 2, 0] - p0x, real[c, 2, 1] - p0y, real[c, 2, 2] - p0z
+        p0x, p0y, p0z, e1x, e1y, e1z, e2x, e2y, e2z = _real_edges(real, c)
         for r in range(row0, row1):
             y = r + r0 + 0.5
             col0, col1 = max(bbox[c, 2], c0 + span[r, 0]), min(bbox[c, 3], c0 + span[r, 1])
@@ -94,10 +92,7 @@ def accept_untracked(lo, hi, r0, c0, valid, span, origin, direction, screen, bbo
                     continue
                 if tests:
                     x = col + 0.5
-                    fab = sign * ((bx - ax) * (y - ay) - (by - ay) * (x - ax))
-                    fbc = sign * ((cx - bx) * (y - by) - (cy - by) * (x - bx))
-                    fca = sign * ((ax - cx) * (y - cy) - (ay - cy) * (x - cx))
-                    if fab < -d * lab or fbc < -d * lbc or fca < -d * lca:
+                    if not _inside(x, y, ax, ay, bx, by, cx, cy, sign, lab, lbc, lca, d):
                         continue
                 t, u, v = _meet(origin[r, j, 0], origin[r, j, 1], origin[r, j, 2], direction[r, j, 0],
                                 direction[r, j, 1], direction[r, j, 2], p0x, p0y, p0z, e1x, e1y, e1z, e2x, e2y, e2z)
@@ -123,6 +118,26 @@ def _outline(c, screen, dilate):
     d = dilate[c]
     plain = d < 0.0 or abs(area) <= 1e-12 * (lab + lbc + lca) * (lab + lbc + lca)
     return ax, ay, bx, by, cx, cy, sign, lab, lbc, lca, d, plain
+
+
+@kernel(inline=True)
+def _inside(x, y, ax, ay, bx, by, cx, cy, sign, lab, lbc, lca, d):
+    """Whether the point (x, y) passes the three edge tests of the screen triangle (ax, ay), (bx,
+    by), (cx, cy) dilated by ``d`` (:func:`_outline`'s values): each edge's signed distance times
+    its length, inside positive, at least ``-d`` times its length."""
+    fab = sign * ((bx - ax) * (y - ay) - (by - ay) * (x - ax))
+    fbc = sign * ((cx - bx) * (y - by) - (cy - by) * (x - bx))
+    fca = sign * ((ax - cx) * (y - cy) - (ay - cy) * (x - cx))
+    return not (fab < -d * lab or fbc < -d * lbc or fca < -d * lca)
+
+
+@kernel(inline=True)
+def _real_edges(real, c):
+    """Candidate ``c``'s real triangle as Moller-Trumbore takes it: its first corner and the
+    edges from it to the other two (9 floats)."""
+    p0x, p0y, p0z = real[c, 0, 0], real[c, 0, 1], real[c, 0, 2]
+    return (p0x, p0y, p0z, real[c, 1, 0] - p0x, real[c, 1, 1] - p0y, real[c, 1, 2] - p0z, real[c, 2, 0] - p0x,
+            real[c, 2, 1] - p0y, real[c, 2, 2] - p0z)
 
 
 @kernel(inline=True)
@@ -153,9 +168,7 @@ def _raster_one(c, lo, hi, r0, c0, valid, span, origin, direction, screen, bbox,
     if row0 >= row1:
         return
     ax, ay, bx, by, cx, cy, sign, lab, lbc, lca, d, plain = _outline(c, screen, dilate)
-    p0x, p0y, p0z = real[c, 0, 0], real[c, 0, 1], real[c, 0, 2]
-    e1x, e1y, e1z = real[c, 1, 0] - p0x, real[c, 1, 1] - p0y, real[c, 1, 2] - p0z
-    e2x, e2y, e2z = real[c, 2, 0] - p0x, real[c, 2, 1] - p0y, real[c, 2, 2] - p0z
+    p0x, p0y, p0z, e1x, e1y, e1z, e2x, e2y, e2z = _real_edges(real, c)
     for r in range(row0, row1):
         y = r + r0 + 0.5
         # only the row's valid columns
@@ -173,10 +186,7 @@ def _raster_one(c, lo, hi, r0, c0, valid, span, origin, direction, screen, bbox,
             if not plain:
                 x = col + 0.5
                 # signed distances to the three edges, inside positive
-                fab = sign * ((bx - ax) * (y - ay) - (by - ay) * (x - ax))
-                fbc = sign * ((cx - bx) * (y - by) - (cy - by) * (x - bx))
-                fca = sign * ((ax - cx) * (y - cy) - (ay - cy) * (x - cx))
-                if fab < -d * lab or fbc < -d * lbc or fca < -d * lca:
+                if not _inside(x, y, ax, ay, bx, by, cx, cy, sign, lab, lbc, lca, d):
                     continue
             tested[r, j] = True
             seen[r, j] = run[c]
@@ -224,19 +234,8 @@ def accept_near(lo, hi, r0, c0, valid, span, origin, direction, ray_row, ray_col
         b = _first_on_row(ray_row, ray, a, last[c], row1)
         if a >= b:
             continue
-        ax, ay = screen[c, 0, 0], screen[c, 0, 1]
-        bx, by = screen[c, 1, 0], screen[c, 1, 1]
-        cx, cy = screen[c, 2, 0], screen[c, 2, 1]
-        area = (bx - ax) * (cy - ay) - (by - ay) * (cx - ax)
-        sign = 1.0 if area >= 0.0 else -1.0
-        lab = np.sqrt((bx - ax) * (bx - ax) + (by - ay) * (by - ay))
-        lbc = np.sqrt((cx - bx) * (cx - bx) + (cy - by) * (cy - by))
-        lca = np.sqrt((ax - cx) * (ax - cx) + (ay - cy) * (ay - cy))
-        d = dilate[c]
-        plain = d < 0.0 or abs(area) <= 1e-12 * (lab + lbc + lca) * (lab + lbc + lca)
-        p0x, p0y, p0z = real[c, 0, 0], real[c, 0, 1], real[c, 0, 2]
-        e1x, e1y, e1z = real[c, 1, 0] - p0x, real[c, 1, 1] - p0y, real[c, 1, 2] - p0z
-        e2x, e2y, e2z = real[c, 2, 0] - p0x, real[c, 2, 1] - p0y, real[c, 2, 2] - p0z
+        ax, ay, bx, by, cx, cy, sign, lab, lbc, lca, d, plain = _outline(c, screen, dilate)
+        p0x, p0y, p0z, e1x, e1y, e1z, e2x, e2y, e2z = _real_edges(real, c)
         for q in range(a, b):
             k = ray[q]
             r, j = ray_row[k], ray_col[k]
@@ -246,10 +245,7 @@ def accept_near(lo, hi, r0, c0, valid, span, origin, direction, ray_row, ray_col
             if not plain:
                 y = r + r0 + 0.5
                 x = col + 0.5
-                fab = sign * ((bx - ax) * (y - ay) - (by - ay) * (x - ax))
-                fbc = sign * ((cx - bx) * (y - by) - (cy - by) * (x - bx))
-                fca = sign * ((ax - cx) * (y - cy) - (ay - cy) * (x - cx))
-                if fab < -d * lab or fbc < -d * lbc or fca < -d * lca:
+                if not _inside(x, y, ax, ay, bx, by, cx, cy, sign, lab, lbc, lca, d):
                     continue
             tested[r, j] = True
             seen[r, j] = run[c]
@@ -554,7 +550,6 @@ def screen_bounds(lo, hi, clip, corner, width, height, r0, r1, c0, c1, pixels, f
     dilate : (C,) float64
     odd : (C,) bool
     """
-    big = float(1 << 30)
     for c in range(lo, hi):
         good = clip[corner[c, 0], 3] > 0.0 and clip[corner[c, 1], 3] > 0.0 and clip[corner[c, 2], 3] > 0.0
         if not good:
@@ -574,24 +569,31 @@ def screen_bounds(lo, hi, clip, corner, width, height, r0, r1, c0, c1, pixels, f
             bad = bad or not (np.isfinite(x) and np.isfinite(y))
             screen[c, k, 0] = x
             screen[c, k, 1] = y
-        edge = 0.0
-        for k in range(3):
-            m = (k + 1) % 3
-            dx = screen[c, k, 0] - screen[c, m, 0]
-            dy = screen[c, k, 1] - screen[c, m, 1]
-            e = np.sqrt(dx * dx + dy * dy)
-            edge = e if k == 0 or e > edge else edge
-        d = pixels + fraction * edge
-        bad = bad or not np.isfinite(d)
+        bad = dilated_bounds(c, screen[c, 0, 0], screen[c, 0, 1], screen[c, 1, 0], screen[c, 1, 1], screen[c, 2, 0],
+                             screen[c, 2, 1], bad, pixels, fraction, r0, bbox, dilate)
         odd[c] = bad
-        if bad:
-            continue
-        lo_x = min(screen[c, 0, 0], screen[c, 1, 0], screen[c, 2, 0]) - d
-        hi_x = max(screen[c, 0, 0], screen[c, 1, 0], screen[c, 2, 0]) + d
-        lo_y = min(screen[c, 0, 1], screen[c, 1, 1], screen[c, 2, 1]) - d
-        hi_y = max(screen[c, 0, 1], screen[c, 1, 1], screen[c, 2, 1]) + d
-        bbox[c, 0] = np.int64(np.floor(min(max(lo_y - 0.5, -big), big))) - r0
-        bbox[c, 1] = np.int64(np.ceil(min(max(hi_y - 0.5, -big), big))) + 1 - r0
-        bbox[c, 2] = np.int64(np.floor(min(max(lo_x - 0.5, -big), big)))
-        bbox[c, 3] = np.int64(np.ceil(min(max(hi_x - 0.5, -big), big))) + 1
-        dilate[c] = d
+
+
+@kernel(inline=True)
+def dilated_bounds(c, x0, y0, x1, y1, x2, y2, bad, pixels, fraction, r0, bbox, dilate):
+    """Candidate ``c``'s dilation (``pixels`` plus ``fraction`` of its longest screen edge) and its
+    dilated bounds in box rows and view columns, written to ``dilate[c]`` and ``bbox[c]`` from its
+    corners' view-pixel positions, unless ``bad`` (a position that is not finite) or the dilation
+    is not finite: returns whether either was (the row is left to the caller's NumPy)."""
+    big = float(1 << 30)
+    edge = np.sqrt((x0 - x1) * (x0 - x1) + (y0 - y1) * (y0 - y1))
+    e = np.sqrt((x1 - x2) * (x1 - x2) + (y1 - y2) * (y1 - y2))
+    edge = e if e > edge else edge
+    e = np.sqrt((x2 - x0) * (x2 - x0) + (y2 - y0) * (y2 - y0))
+    edge = e if e > edge else edge
+    d = pixels + fraction * edge
+    if bad or not np.isfinite(d):
+        return True
+    lo_x, hi_x = min(x0, x1, x2) - d, max(x0, x1, x2) + d
+    lo_y, hi_y = min(y0, y1, y2) - d, max(y0, y1, y2) + d
+    bbox[c, 0] = np.int64(np.floor(min(max(lo_y - 0.5, -big), big))) - r0
+    bbox[c, 1] = np.int64(np.ceil(min(max(hi_y - 0.5, -big), big))) + 1 - r0
+    bbox[c, 2] = np.int64(np.floor(min(max(lo_x - 0.5, -big), big)))
+    bbox[c, 3] = np.int64(np.ceil(min(max(hi_x - 0.5, -big), big))) + 1
+    dilate[c] = d
+    return False

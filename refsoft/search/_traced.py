@@ -21,7 +21,7 @@ for bit (``tests/naive_several_pool.py``).
 import numpy as np
 
 from .._numba import kernel
-from ._several import _meet, _outline
+from ._several import _inside, _meet, _outline, _real_edges
 
 #: Candidates per leaf of the hierarchy.
 LEAF = 4
@@ -143,10 +143,8 @@ def accept_traced(lo, hi, r0, c0, valid, origin, direction, screen, bbox, dilate
                     for c in range(node * LEAF, min(n, (node + 1) * LEAF)):
                         if r < bbox[c, 0] or r >= bbox[c, 1] or col < bbox[c, 2] or col >= bbox[c, 3]:
                             continue
-                        p0x, p0y, p0z = real[c, 0, 0], real[c, 0, 1], real[c, 0, 2]
-                        t, u, v = _meet(ox, oy, oz, dx, dy, dz, p0x, p0y, p0z, real[c, 1, 0] - p0x,
-                                        real[c, 1, 1] - p0y, real[c, 1, 2] - p0z, real[c, 2, 0] - p0x,
-                                        real[c, 2, 1] - p0y, real[c, 2, 2] - p0z)
+                        p0x, p0y, p0z, e1x, e1y, e1z, e2x, e2y, e2z = _real_edges(real, c)
+                        t, u, v = _meet(ox, oy, oz, dx, dy, dz, p0x, p0y, p0z, e1x, e1y, e1z, e2x, e2y, e2z)
                         if not (t > 0.0) or t > bt or (t == bt and c > bc):
                             continue
                         if not _covers(c, screen, dilate, x, y):
@@ -183,12 +181,7 @@ def _covers(c, screen, dilate, x, y):
     already passed): the dilated screen triangle's three edge tests, or none for a sliver or an
     unusable projection."""
     ax, ay, bx, by, cx, cy, sign, lab, lbc, lca, d, plain = _outline(c, screen, dilate)
-    if plain:
-        return True
-    fab = sign * ((bx - ax) * (y - ay) - (by - ay) * (x - ax))
-    fbc = sign * ((cx - bx) * (y - by) - (cy - by) * (x - bx))
-    fca = sign * ((ax - cx) * (y - cy) - (ay - cy) * (x - cx))
-    return not (fab < -d * lab or fbc < -d * lbc or fca < -d * lca)
+    return plain or _inside(x, y, ax, ay, bx, by, cx, cy, sign, lab, lbc, lca, d)
 
 
 @kernel(inline=True)
