@@ -18,8 +18,11 @@ with the candidates their bounds cover per valid pixel and the way the preset ta
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import statistics
 import time
+
+import numpy as np
 
 import refsoft
 from refsoft.frame import FrameDriver, RenderOptions
@@ -69,17 +72,30 @@ def measure(name, size, frames):
     return med, st, pst
 
 
-def measure_cut(name, size, rounds=7):
-    """Median ms of frame 1's silhouette cuts (every reflector) with predicted steps and with
-    plain bisection, and the searches of each."""
+def _owned(value):
+    """``value`` with its arrays copied (in tuples and in dataclasses' fields too)."""
+    if isinstance(value, np.ndarray):
+        return value.copy()
+    if isinstance(value, tuple):
+        return tuple(_owned(v) for v in value)
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return dataclasses.replace(value, **{f.name: _owned(getattr(value, f.name)) for f in dataclasses.fields(value)
+                                             if f.init})
+    return value
+
+
+def _frame_one_calls(module, function, name, size):
+    """The arguments (args, kwargs) of every call of ``module.function`` while an accurate driver
+    renders frame 1 of scene ``name`` at ``size`` (after frame 0, outside the record)."""
     calls = []
-    clip = silhouette.clip_at_silhouette
+    real = getattr(module, function)
 
     def spy(*args, **kwargs):
-        calls.append((args, kwargs))
-        return clip(*args, **kwargs)
+        # copies: a stage may hand over views of memory it reuses for the next reflector
+        calls.append((_owned(args), {k: _owned(v) for k, v in kwargs.items()}))
+        return real(*args, **kwargs)
 
-    silhouette.clip_at_silhouette = spy
+    setattr(module, function, spy)
     try:
         scene = refsoft.load_scene(name, width=size[0], height=size[1])
         driver = FrameDriver(scene, RenderOptions(preset="accurate"))
@@ -87,7 +103,15 @@ def measure_cut(name, size, rounds=7):
         calls.clear()
         driver.render_frame(min(1, scene.n_frames - 1))
     finally:
-        silhouette.clip_at_silhouette = clip
+        setattr(module, function, real)
+    return calls
+
+
+def measure_cut(name, size, rounds=7):
+    """Median ms of frame 1's silhouette cuts (every reflector) with predicted steps and with
+    plain bisection, and the searches of each."""
+    clip = silhouette.clip_at_silhouette
+    calls = _frame_one_calls(silhouette, "clip_at_silhouette", name, size)
     times = {True: [], False: []}
     searched = {}
     for _ in range(rounds):
@@ -103,32 +127,18 @@ def measure_cut(name, size, rounds=7):
 def measure_acceptance(name, size, rounds=7):
     """Frame 1's acceptances (every reflector): median ms walked and looped, the candidates per
     valid pixel their bounds cover, and whether the preset walks (per reflector, in order)."""
-    calls = []
     nearest = exact.nearest  # the exact drawing's, as exact_pass calls it
-
-    def spy(cand, *args, **kwargs):
-        if not kwargs.get("runs", True) and cand.rays is None:
-            calls.append((cand, args, kwargs))
-        return nearest(cand, *args, **kwargs)
-
-    exact.nearest = spy
-    try:
-        scene = refsoft.load_scene(name, width=size[0], height=size[1])
-        driver = FrameDriver(scene, RenderOptions(preset="accurate"))
-        driver.render_frame(0)
-        calls.clear()
-        driver.render_frame(min(1, scene.n_frames - 1))
-    finally:
-        exact.nearest = nearest
+    calls = [((cand, *args), kwargs) for (cand, *args), kwargs in _frame_one_calls(exact, "nearest", name, size)
+             if not kwargs.get("runs", True) and cand.rays is None]
     times = {True: [], False: []}
     for _ in range(rounds):
         for traced in (True, False):
             t = time.perf_counter()
-            for cand, args, kwargs in calls:
-                nearest(cand, *args, **{**kwargs, "traced": traced})
+            for args, kwargs in calls:
+                nearest(*args, **{**kwargs, "traced": traced})
             times[traced].append(1000 * (time.perf_counter() - t))
     cover, walks = [], []
-    for cand, args, kwargs in calls:
+    for (cand, *args), kwargs in calls:
         valid, bbox, box = kwargs["rays"][0], kwargs["screen"][1], args[2]
         h, c0, c1 = valid.shape[0], int(box[2]), int(box[3])
         rows = (bbox[:, 1].clip(0, h) - bbox[:, 0].clip(0, h)).clip(0)
