@@ -19,7 +19,7 @@ from .. import constants
 from .._parallel import parallel_range
 from ..raster import _setup, shade
 from ..raster.rays import box_rays
-from ._several import accept, accept_near, accept_untracked
+from ._several import accept, accept_near, accept_untracked, ray_bounds
 from ._several import screen_bounds as _screen_bounds
 from ._traced import LEAF, accept_traced, largest, leaf_boxes, parent_boxes
 from .scratch import kept
@@ -164,7 +164,8 @@ def nearest(cand: Candidates, camera, stencil, box, *, rays=None, screen=None, t
             _accept_traced(r0, c0, valid, origin, direction, screen, bbox, dilate, real, best_t, best_c, best_uv)
         elif cand.rays is None and not runs:
             parallel_range(accept_untracked, h, r0, c0, valid, _spans(valid), origin, direction, screen, bbox, dilate,
-                           real, best_t, best_c, best_uv)
+                           real, _ray_bounds(valid, origin, direction), constants.EXACT_TRACE_MARGIN, best_t, best_c,
+                           best_uv)
         elif cand.rays is None:
             parallel_range(accept, h, r0, c0, valid, _spans(valid), origin, direction, screen, bbox, dilate, real,
                            _runs(real), best_t, best_c, best_uv, tested, seen)
@@ -197,7 +198,8 @@ def _accept_traced(r0, c0, valid, origin, direction, screen, bbox, dilate, real,
     big = largest(real)
     if not np.isfinite(big):  # the boxes would not bound such a triangle: the candidates' own loop
         parallel_range(accept_untracked, valid.shape[0], r0, c0, valid, _spans(valid), origin, direction, screen,
-                       bbox, dilate, real, best_t, best_c, best_uv)
+                       bbox, dilate, real, _ray_bounds(valid, origin, direction), constants.EXACT_TRACE_MARGIN, best_t,
+                       best_c, best_uv)
         return
     size = [-(-len(real) // LEAF)]
     while size[-1] > 1:
@@ -257,6 +259,15 @@ def _runs(real):
     new = np.ones(len(real), bool)
     new[1:] = np.any(bits[1:] != bits[:-1], axis=1)
     return np.cumsum(new, dtype=np.int64)
+
+
+def _ray_bounds(valid, origin, direction):
+    """(7,) float64: the box of the valid pixels' ray origins (min x, y, z, max x, y, z) and their
+    directions' largest length (kernel ``_several.ray_bounds`` per row, then over the rows)."""
+    rows = np.empty((valid.shape[0], 7))
+    parallel_range(ray_bounds, valid.shape[0], valid, origin, direction, rows)
+    return np.concatenate([rows[:, :3].min(axis=0, initial=np.inf), rows[:, 3:6].max(axis=0, initial=-np.inf),
+                           [rows[:, 6].max(initial=0.0)]])
 
 
 def _spans(valid):

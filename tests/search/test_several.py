@@ -310,7 +310,7 @@ def test_acceptance_kernel_matches_the_plain_loop():
         # without runs and without `tested` (the exact drawing's kernel): the same winners
         plain = (np.full((h, w), np.inf), np.full((h, w), -1, np.int64), np.zeros((h, w, 2)))
         args = (accept_untracked, h, r0, c0, valid, acceptance._spans(valid), origin, direction, screen, bbox, dilate,
-                real, *plain)
+                real, acceptance._ray_bounds(valid, origin, direction), constants.EXACT_TRACE_MARGIN, *plain)
         if threads:
             parallel_range(*args)
         else:
