@@ -80,21 +80,22 @@ def accept_untracked(lo, hi, r0, c0, valid, span, origin, direction, screen, bbo
         ax, ay, bx, by, cx, cy, sign, lab, lbc, lca, d, plain = _outline(c, screen, dilate)
         p0x, p0y, p0z, e1x, e1y, e1z, e2x, e2y, e2z = _real_edges(real, c)
         near = _nearest_reach(real, c, origins)
+        # narrowed to exactly the columns that pass the three edge tests, unless an edge's values
+        # are too large to narrow: then each column is tested
+        k1, a1, b1 = _edge(ax, ay, bx, by, sign, -d * lab)
+        k2, a2, b2 = _edge(bx, by, cx, cy, sign, -d * lbc)
+        k3, a3, b3 = _edge(cx, cy, ax, ay, sign, -d * lca)
+        tests = not plain and (k1 == LOOSE or k2 == LOOSE or k3 == LOOSE)
+        bc0, bc1 = bbox[c, 2], bbox[c, 3]
         for r in range(row0, row1):
             y = r + r0 + 0.5
-            col0, col1 = max(bbox[c, 2], c0 + span[r, 0]), min(bbox[c, 3], c0 + span[r, 1])
+            col0, col1 = max(bc0, c0 + span[r, 0]), min(bc1, c0 + span[r, 1])
             if col0 >= col1:
                 continue
-            # narrowed to exactly the columns that pass the three edge tests, unless an edge's
-            # values are too large to narrow: then each column is tested
-            tests = False
             if not plain:
-                col0, col1, loose = _narrow_exactly(col0, col1, y, ax, ay, bx, by, sign, -d * lab)
-                tests |= loose
-                col0, col1, loose = _narrow_exactly(col0, col1, y, bx, by, cx, cy, sign, -d * lbc)
-                tests |= loose
-                col0, col1, loose = _narrow_exactly(col0, col1, y, cx, cy, ax, ay, sign, -d * lca)
-                tests |= loose
+                col0, col1 = _narrow_row(k1, a1, b1, col0, col1, y, ax, ay, bx, by, sign, -d * lab)
+                col0, col1 = _narrow_row(k2, a2, b2, col0, col1, y, bx, by, cx, cy, sign, -d * lbc)
+                col0, col1 = _narrow_row(k3, a3, b3, col0, col1, y, cx, cy, ax, ay, sign, -d * lca)
             for col in range(col0, col1):
                 j = col - c0
                 if not valid[r, j]:
@@ -340,37 +341,51 @@ def _fails(col, y, ax, ay, bx, by, sign, limit):
     return sign * ((bx - ax) * (y - ay) - (by - ay) * (x - ax)) < limit
 
 
+#: How an edge narrows a row's columns (:func:`_edge`): not at all (values too large: each column
+#: is tested), all or none (an edge along the rows), a prefix or a suffix of them.
+LOOSE, ALONG, PREFIX, SUFFIX = 0, 1, 2, 3
+
+
 @kernel(inline=True)
-def _narrow(col0, col1, y, ax, ay, bx, by, sign, limit):
-    """The columns of ``col0 .. col1 - 1`` that may pass :func:`accept`'s test of the edge from
-    (ax, ay) to (bx, by) on row centre ``y``, ``sign * ((bx - ax) * (y - ay) - (by - ay) * (x - ax))
-    >= limit`` at ``x = col + 0.5``: its value is monotone in ``x`` (each rounded operation is), so
-    the passing columns are a prefix or a suffix. Where it changes is estimated by solving the
-    edge's equation for ``x``, then moved column by column to where the test itself (the same
-    expression, :func:`_fails`) changes: the same columns as a bisection with the test, in one or
-    two evaluations instead of its branches. The caller still tests each column; this only
-    skips columns that fail. Edges too large for the products to stay finite are not narrowed."""
+def _edge(ax, ay, bx, by, sign, limit):
+    """How the edge test of :func:`_narrow` narrows a row (LOOSE, ALONG, PREFIX or SUFFIX; its
+    value is monotone in ``x``, each rounded operation being so), and where on row centre ``y``
+    it changes, estimated as ``a + (y - ay) * b`` (the edge's equation solved for ``x``)."""
     if not (abs(ax) < 1e100 and abs(ay) < 1e100 and abs(bx) < 1e100 and abs(by) < 1e100 and abs(limit) < 1e100):
+        return LOOSE, 0.0, 0.0
+    if by - ay == 0.0:
+        return ALONG, 0.0, 0.0
+    # sign * (by - ay) > 0: the value falls as x grows
+    return (PREFIX if sign * (by - ay) > 0.0 else SUFFIX), ax - sign * limit / (by - ay), (bx - ax) / (by - ay)
+
+
+@kernel(inline=True)
+def _narrow_row(kind, a, b, col0, col1, y, ax, ay, bx, by, sign, limit):
+    """The columns of ``col0 .. col1 - 1`` on row centre ``y`` that pass the edge test
+    ``sign * ((bx - ax) * (y - ay) - (by - ay) * (x - ax)) >= limit`` at ``x = col + 0.5``, for an
+    edge :func:`_edge` made ``(kind, a, b)`` of: from the estimate, moved column by column to where
+    the test itself (:func:`_fails`) changes, so exactly the columns a bisection with the test
+    finds (LOOSE: all, tested by the caller; ALONG: the first column's test decides for all)."""
+    if kind == LOOSE:
         return col0, col1
-    slope = sign * (by - ay)  # > 0: the value falls as x grows, < 0: it rises
-    if slope == 0.0:
+    if kind == ALONG:
+        if col0 < col1 and _fails(col0, y, ax, ay, bx, by, sign, limit):
+            return col0, col0
         return col0, col1
-    # the estimate only saves steps: an infinite one is clamped to the range, and the loops below
-    # decide
-    guess = np.ceil(ax + ((bx - ax) * (y - ay) - sign * limit) / (by - ay) - 0.5)
+    # the estimate only saves steps (one not finite is clamped to the range): the loops decide
+    guess = np.ceil(a + (y - ay) * b - 0.5)
     k = col0
     if guess > col1:
         k = col1
     elif guess >= col0:
         k = int(guess)
-    if slope > 0.0:  # a prefix passes: k becomes the first failing column
+    if kind == PREFIX:  # k becomes the first failing column
         while k > col0 and _fails(k - 1, y, ax, ay, bx, by, sign, limit):
             k -= 1
         while k < col1 and not _fails(k, y, ax, ay, bx, by, sign, limit):
             k += 1
         return col0, k
-    # a suffix passes: k becomes the first passing column
-    while k > col0 and not _fails(k - 1, y, ax, ay, bx, by, sign, limit):
+    while k > col0 and not _fails(k - 1, y, ax, ay, bx, by, sign, limit):  # k: the first passing one
         k -= 1
     while k < col1 and _fails(k, y, ax, ay, bx, by, sign, limit):
         k += 1
@@ -378,20 +393,15 @@ def _narrow(col0, col1, y, ax, ay, bx, by, sign, limit):
 
 
 @kernel(inline=True)
-def _narrow_exactly(col0, col1, y, ax, ay, bx, by, sign, limit):
-    """:func:`_narrow`, and whether the columns it keeps may still fail the edge's test (True only
-    where the edge's values are too large to narrow). An edge along the row (its value the same
-    at every column, the product with ``by - ay = 0`` being exactly 0) is tested once: all its
-    columns pass or none does."""
-    if not (abs(ax) < 1e100 and abs(ay) < 1e100 and abs(bx) < 1e100 and abs(by) < 1e100 and abs(limit) < 1e100):
-        return col0, col1, True
-    if by - ay == 0.0:
-        x = col0 + 0.5
-        if col0 < col1 and sign * ((bx - ax) * (y - ay) - (by - ay) * (x - ax)) < limit:
-            return col0, col0, False
-        return col0, col1, False
-    lo, hi = _narrow(col0, col1, y, ax, ay, bx, by, sign, limit)
-    return lo, hi, False
+def _narrow(col0, col1, y, ax, ay, bx, by, sign, limit):
+    """The columns of ``col0 .. col1 - 1`` that may pass :func:`accept`'s test of the edge from
+    (ax, ay) to (bx, by) on row centre ``y`` (:func:`_narrow_row`; an edge along the rows or
+    with values too large is not narrowed). The caller still tests each column; this only skips
+    columns that fail."""
+    kind, a, b = _edge(ax, ay, bx, by, sign, limit)
+    if kind == ALONG:
+        return col0, col1
+    return _narrow_row(kind, a, b, col0, col1, y, ax, ay, bx, by, sign, limit)
 
 
 @kernel(inline=True)

@@ -8,7 +8,7 @@ import pytest
 from refsoft import constants
 from refsoft._parallel import one_thread, parallel_range
 from refsoft.search import acceptance
-from refsoft.search._several import _narrow, _nearest_reach, accept_untracked
+from refsoft.search._several import ALONG, LOOSE, _edge, _narrow_row, _nearest_reach, accept_untracked
 
 import naive_several_pool
 
@@ -27,42 +27,44 @@ def _edges(rng, n):
         ax, ay, bx, by = rng.uniform(-50, 250, 4)
         kind = i % 6
         if kind == 1:
-            by = ay + rng.choice([1e-9, -1e-9, 1e-300, 5e-324])
+            by = ay + rng.choice([1e-9, -1e-9, 1e-300, 5e-324, 0.0])
         elif kind == 2:
             bx = ax
         elif kind == 3:
             ax, bx = ax + 1e6, bx - 1e6
         elif kind == 4:
-            ax, ay, bx, by = rng.uniform(-1e90, 1e90, 4)
-        limit = rng.choice([-rng.uniform(0, 50), 0.0, rng.uniform(0, 50), -1e95 if kind == 5 else -3.0])
+            ax, ay, bx, by = rng.uniform(-1e90, 1e90, 4) * rng.choice([1.0, 1e20])
+        limit = rng.choice([-rng.uniform(0, 50), 0.0, rng.uniform(0, 50), -1e120 if kind == 5 else -3.0])
         out.append((ax, ay, bx, by, rng.choice([-1.0, 1.0]), limit))
     return out
 
 
 def test_narrowing_keeps_exactly_the_columns_an_edge_admits():
     """The estimated-then-corrected narrowing gives the prefix or suffix of columns that pass the
-    edge's own test, checked column by column, on every kind of edge (with a huge limit it may
-    keep more: the caller then tests each column; it never drops a passing one)."""
+    edge's own test, checked column by column, on every kind of edge; an edge along the rows keeps
+    all or none; one with values too large to narrow keeps every column (the caller then tests
+    each)."""
     rng = np.random.default_rng(7)
-    exact = narrowed = 0
+    kinds = {LOOSE: 0, ALONG: 0, "narrowed": 0, "exact": 0}
     for ax, ay, bx, by, sign, limit in _edges(rng, 600):
         col0 = int(rng.integers(-20, 150))
         col1 = col0 + int(rng.integers(0, 120))
         y = float(rng.integers(-10, 200)) + 0.5
-        lo, hi = _narrow(col0, col1, y, ax, ay, bx, by, sign, limit)
+        kind, a, b = _edge(ax, ay, bx, by, sign, limit)
+        lo, hi = _narrow_row(kind, a, b, col0, col1, y, ax, ay, bx, by, sign, limit)
         want = _passing(col0, col1, y, ax, ay, bx, by, sign, limit)
-        big = max(abs(ax), abs(ay), abs(bx), abs(by), abs(limit)) >= 1e100
-        if big:  # not narrowed
-            assert (lo, hi) == (col0, col1)
+        if max(abs(ax), abs(ay), abs(bx), abs(by), abs(limit)) >= 1e100:
+            assert kind == LOOSE and (lo, hi) == (col0, col1)
+            kinds[LOOSE] += 1
             continue
-        if (by - ay) == 0.0:
-            assert (lo, hi) == (col0, col1)
+        assert list(range(lo, hi)) == want, (ax, ay, bx, by, sign, limit, col0, col1, y)
+        if by - ay == 0.0:
+            assert kind == ALONG and want in ([], list(range(col0, col1)))
+            kinds[ALONG] += 1
             continue
-        got = list(range(lo, hi))
-        assert got == want, (ax, ay, bx, by, sign, limit, col0, col1, y)
-        exact += 1
-        narrowed += len(want) < col1 - col0
-    assert exact > 400 and narrowed > 150
+        kinds["exact"] += 1
+        kinds["narrowed"] += len(want) < col1 - col0
+    assert kinds["exact"] > 300 and kinds["narrowed"] > 150 and kinds[LOOSE] > 50 and kinds[ALONG] > 50
 
 
 def test_nearest_reach_bounds_every_hit():
