@@ -19,9 +19,9 @@ HEAVY = {"numba", "llvmlite", "trimesh", "scipy", "embreex", "imageio", "PIL", "
 #: its candidates' screen positions, choice and gather, their second images by the mirror rule
 #: (the vertices imaged again, those whose image moved, the faces with such a corner and their
 #: copies interleaved: four kernels where NumPy's passes over every vertex and face cost more),
-#: rays, their origins' bounds (what a candidate's triangle can reach no nearer than), acceptance
-#: and shading, the main view).
-LOADED_KERNELS = 38
+#: rays (each row's eye rays in a loop of their own, which vectorizes), their origins' bounds (what
+#: a candidate's triangle can reach no nearer than), acceptance and shading, the main view).
+LOADED_KERNELS = 39
 
 MODULES = """
 import json, sys

@@ -37,20 +37,65 @@ def primary_rays(lo, hi, rows, cols, width, height, inv, eye, perspective, verti
 
 @kernel
 def box_rays(lo, hi, r0, c0, stencil, triangle, width, height, inv, eye, perspective, vertices, normals, faces,
-             valid, origin, direction):
+             valid, origin, direction, camera):
     """:func:`primary_rays` of every ``stencil`` (h, w) pixel of box rows ``lo .. hi - 1`` (view
     rows ``r0 + r``, columns ``c0 + c``; ``triangle`` (h, w) their visible triangles), written in
     place: ``origin``, ``direction`` (h, w, 3) float64 and ``valid`` (h, w) bool (``ok``); the
-    other pixels are left as they are (zeros)."""
+    other pixels are left as they are (zeros). The same arithmetic: each row's eye rays first
+    (:func:`camera_rays`, a loop that vectorizes), into ``camera`` (6, w) float64 (work)."""
+    w = stencil.shape[1]
     for r in range(lo, hi):
-        for c in range(stencil.shape[1]):
+        first, last = w, 0
+        for c in range(w):
+            if stencil[r, c]:
+                first = min(first, c)
+                last = c + 1
+        if first >= last:
+            continue
+        camera_rays(r + r0, first, last, c0, width, height, inv[0, 0], inv[0, 1], inv[0, 2], inv[0, 3], inv[1, 0],
+                    inv[1, 1], inv[1, 2], inv[1, 3], inv[2, 0], inv[2, 1], inv[2, 2], inv[2, 3], inv[3, 0], inv[3, 1],
+                    inv[3, 2], inv[3, 3], camera[0], camera[1], camera[2], camera[3], camera[4], camera[5])
+        for c in range(first, last):
             if not stencil[r, c]:
                 continue
-            hx, hy, hz, rx, ry, rz, good = _pixel_ray(r + r0, c + c0, triangle[r, c], width, height, inv, eye,
-                                                      perspective, vertices, normals, faces)
+            k = c - first
+            if perspective:
+                ox, oy, oz = eye[0], eye[1], eye[2]
+            else:
+                ox, oy, oz = camera[0, k], camera[1, k], camera[2, k]
+            hx, hy, hz, rx, ry, rz, good = _reflect_at(ox, oy, oz, camera[3, k], camera[4, k], camera[5, k],
+                                                       triangle[r, c], vertices, normals, faces)
             origin[r, c, 0], origin[r, c, 1], origin[r, c, 2] = hx, hy, hz
             direction[r, c, 0], direction[r, c, 1], direction[r, c, 2] = rx, ry, rz
             valid[r, c] = good
+
+
+@kernel
+def camera_rays(row, c_lo, c_hi, col_offset, width, height, i00, i01, i02, i03, i10, i11, i12, i13, i20, i21, i22,
+                i23, i30, i31, i32, i33, NX, NY, NZ, DX, DY, DZ):
+    """The eye rays through view pixels (row, c + col_offset), c in ``c_lo .. c_hi - 1``, with
+    :func:`_pixel_ray`'s arithmetic (``i``: the inverse view-projection's entries): ``NX, NY, NZ``
+    their near points, ``DX, DY, DZ`` their unit directions, at ``c - c_lo``. Separate arrays
+    and no branch, so that the loop vectorizes (its divisions are most of a ray's work)."""
+    y = (height - row - 0.5) / height * 2.0 - 1.0
+    for c in range(c_lo, c_hi):
+        x = (c + col_offset + 0.5) / width * 2.0 - 1.0
+        wn = ((i30 * x + i31 * y) + i32 * -1.0) + i33
+        nx = (((i00 * x + i01 * y) + i02 * -1.0) + i03) / wn
+        ny = (((i10 * x + i11 * y) + i12 * -1.0) + i13) / wn
+        nz = (((i20 * x + i21 * y) + i22 * -1.0) + i23) / wn
+        wf = ((i30 * x + i31 * y) + i32 * 1.0) + i33
+        dx = (((i00 * x + i01 * y) + i02 * 1.0) + i03) / wf - nx
+        dy = (((i10 * x + i11 * y) + i12 * 1.0) + i13) / wf - ny
+        dz = (((i20 * x + i21 * y) + i22 * 1.0) + i23) / wf - nz
+        length = np.sqrt((dx * dx + dy * dy) + dz * dz)
+        k = c - c_lo
+        NX[k] = nx
+        NY[k] = ny
+        NZ[k] = nz
+        DX[k] = dx / length
+        DY[k] = dy / length
+        DZ[k] = dz / length
 
 
 @kernel(inline=True)
@@ -70,6 +115,14 @@ def _pixel_ray(row, col, t_index, width, height, inv, eye, perspective, vertices
         ox, oy, oz = eye[0], eye[1], eye[2]
     else:
         ox, oy, oz = nx_, ny_, nz_
+    return _reflect_at(ox, oy, oz, dx, dy, dz, t_index, vertices, normals, faces)
+
+
+@kernel(inline=True)
+def _reflect_at(ox, oy, oz, dx, dy, dz, t_index, vertices, normals, faces):
+    """The ray ``o + t d``'s hit on triangle ``t_index``'s plane (Moller-Trumbore) and ``d``
+    reflected about the normal interpolated there: ``(hit x, y, z, ray x, y, z, ok)`` (ok False
+    where the ray is parallel to the plane: then hit is ``o`` and ray ``d``)."""
     ia, ib, ic = faces[t_index, 0], faces[t_index, 1], faces[t_index, 2]
     ax, ay, az = vertices[ia, 0], vertices[ia, 1], vertices[ia, 2]
     e1x, e1y, e1z = vertices[ib, 0] - ax, vertices[ib, 1] - ay, vertices[ib, 2] - az

@@ -67,7 +67,8 @@ def primary_rays(camera, mesh, rows, cols, tri):
 
 def box_rays(camera, mesh, triangle, stencil, box):
     """:func:`primary_rays` of every ``stencil`` pixel of ``box`` (r0, r1, c0, c1), written into
-    box-shaped arrays (kernel ``_rays.box_rays``, the same arithmetic).
+    box-shaped arrays (kernel ``_rays.box_rays``, the same arithmetic, each row's eye rays in one
+    vectorized loop).
 
     Parameters
     ----------
@@ -98,5 +99,5 @@ def box_rays(camera, mesh, triangle, stencil, box):
                    np.ascontiguousarray(linalg.inv(camera.view_proj())), np.asarray(camera.eye, np.float64),
                    camera.projection == "perspective", np.ascontiguousarray(mesh.vertices, np.float64),
                    np.ascontiguousarray(mesh.normals, np.float64), np.ascontiguousarray(mesh.faces, np.int64), valid,
-                   origin, direction)
+                   origin, direction, work=lambda: (np.empty((6, max(w, 1))),))
     return valid, origin, direction
