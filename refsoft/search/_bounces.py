@@ -6,6 +6,7 @@ import numpy as np
 from .._numba import kernel
 from ._kernels import RECORD_WIDTH, _normalize, search_one
 from ._several import _may_hit, _triangle
+from ._tessellate import _unit
 
 
 @kernel
@@ -48,6 +49,36 @@ def search_each(lo, hi, G, mask, V, starts, n_candidates, cap, inverse, fp, pixe
         iterations[i] = it
         flags[i] = fl
 
+
+
+@kernel
+def edge_errors(lo, hi, P, N, mask, origin, E, verts, pixel, e0, e1, out):
+    """``out[i]`` for ``i`` in ``lo .. hi - 1``: the thesis's error of edge (e0[i], e1[i]) at a
+    later bounce, taken at the texel halfway between its ends' pixels (rounded down) with that
+    texel's own eye ``E`` (h, w, 3) float64 world; 1 where an end has no pixel or that texel is
+    not covered. ``_tessellate.edge_errors`` without sub-texel points, the one eye replaced by the
+    texel's (with every eye the camera's: its results bit for bit)."""
+    for i in range(lo, hi):
+        a = e0[i]
+        b = e1[i]
+        out[i] = 1.0
+        if pixel[a, 0] < 0 or pixel[a, 1] < 0 or pixel[b, 0] < 0 or pixel[b, 1] < 0:
+            continue
+        hr = (pixel[a, 0] + pixel[b, 0]) // 2
+        hc = (pixel[a, 1] + pixel[b, 1]) // 2
+        if not mask[hr, hc]:
+            continue
+        px = np.float64(P[hr, hc, 0]) + origin[0]
+        py = np.float64(P[hr, hc, 1]) + origin[1]
+        pz = np.float64(P[hr, hc, 2]) + origin[2]
+        nx, ny, nz = np.float64(N[hr, hc, 0]), np.float64(N[hr, hc, 1]), np.float64(N[hr, hc, 2])
+        mx = 0.5 * (verts[a, 0] + verts[b, 0])
+        my = 0.5 * (verts[a, 1] + verts[b, 1])
+        mz = 0.5 * (verts[a, 2] + verts[b, 2])
+        vx, vy, vz = _unit(E[hr, hc, 0] - px, E[hr, hc, 1] - py, E[hr, hc, 2] - pz)
+        wx, wy, wz = _unit(mx - px, my - py, mz - pz)
+        bx, by, bz = _unit(vx + wx, vy + wy, vz + wz)
+        out[i] = 1.0 - ((nx * bx + ny * by + nz * bz) + 1.0) / 2.0
 
 
 @kernel

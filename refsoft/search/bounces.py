@@ -114,7 +114,7 @@ def gbuffer_of(bounce: Bounce, camera, precision="float32") -> GBuffer:
 
 
 def search_bounce(bounce: Bounce, gb: GBuffer, vertices, neighbourhood="cross", cap=None,
-                  previous=None, inverse="discard") -> SearchResult:
+                  previous=None, inverse="discard", start=None, G=None) -> SearchResult:
     """The walk of spec section 4.2 for every vertex on a bounce's G-buffer, each pixel's eye
     its own (:class:`Bounce`).
 
@@ -139,6 +139,13 @@ def search_bounce(bounce: Bounce, gb: GBuffer, vertices, neighbourhood="cross", 
         section 4.6's inverse search from there (``search``), its score with each pixel's own
         eye; ``iterations`` counts both walks. The unfolded rule (:func:`unfolded`) then places
         the vertex's virtual vertex on the camera's ray through the pixel found.
+    start : ndarray (N, 2) int, optional
+        Pixels of the bounce's G-buffer the vertices start from (a vertex added between two
+        searched ones: the pixel its parents' lead to, as the first level's tessellation starts
+        them), -1 where none: those start as without it (``previous`` is then not read). A pixel
+        given that is not covered starts as without it too, flag RESTARTED.
+    G : ndarray (h, w, 9), optional
+        :func:`packed` of the bounce, when the caller has it.
 
     Returns
     -------
@@ -161,15 +168,68 @@ def search_bounce(bounce: Bounce, gb: GBuffer, vertices, neighbourhood="cross", 
     iterations, flags = np.zeros(n, np.int32), np.full(n, CULLED, np.uint8)
     if not n or not gb.mask.any():
         return SearchResult(pixel, score, margin, iterations, flags, neighbourhood, inverse, cap)
-    G = packed(bounce, gb)
+    G = packed(bounce, gb) if G is None else G
     rel = np.ascontiguousarray((verts - gb.origin).astype(dt))
-    own, restarted = own_starts(bounce, previous, n)
-    starts = _starts(G, gb.mask, rel, own)
+    if start is None:
+        own, restarted = own_starts(bounce, previous, n)
+        starts = _starts(G, gb.mask, rel, own)
+    else:
+        starts, restarted = _given_starts(G, gb.mask, rel, start)
     flags[:] = 0
     parallel_range(_bounces.search_each, n, G, gb.mask, rel, starts, constants.NEIGHBOURHOODS[neighbourhood], cap,
                    inverse == "search", fp, pixel, score, margin, iterations, flags)
     flags[restarted] |= np.uint8(RESTARTED)
     return SearchResult(pixel, score, margin, iterations, flags, neighbourhood, inverse, cap)
+
+
+class LevelSearch:
+    """A later level's own search, for the vertices the tessellation and the silhouette cut add
+    (the ``level`` of :func:`refsoft.search.tessellate.tessellate` and
+    :func:`refsoft.search.silhouette.clip_at_silhouette`): :func:`search_bounce` on the bounce's
+    G-buffer with each pixel's own eye, and the thesis's edge error with the eye of the texel it
+    is taken at (kernel :func:`refsoft.search._bounces.edge_errors`). With every eye the camera's,
+    both are the first level's bit for bit.
+
+    Parameters
+    ----------
+    bounce : Bounce
+    gb : GBuffer
+        :func:`gbuffer_of` the bounce.
+    neighbourhood : {"cross", "box"}
+    cap : int, optional
+    inverse : {"discard", "search"}
+        As :func:`search_bounce`'s.
+    """
+
+    def __init__(self, bounce: Bounce, gb: GBuffer, neighbourhood="cross", cap=None, inverse="discard"):
+        self.bounce, self.gb = bounce, gb
+        self.neighbourhood, self.cap, self.inverse = neighbourhood, cap, inverse
+        self.G = packed(bounce, gb)  # once: every tessellation level's and the cut's walks read it
+        self.eyes = np.ascontiguousarray(bounce.eye, np.float64)
+
+    def search(self, vertices, start) -> SearchResult:
+        """The walks of vertices (M, 3) float64 world from pixels ``start`` (M, 2) int of the
+        G-buffer (-1: the best sample), :func:`search_bounce`'s results."""
+        return search_bounce(self.bounce, self.gb, vertices, self.neighbourhood, self.cap, None, self.inverse,
+                             start=start, G=self.G)
+
+    def edge_errors(self, verts, pixel, e0, e1) -> np.ndarray:
+        """The thesis's error (E,) float64 of edges (verts[e0], verts[e1]) (``verts`` (n, 3)
+        float64 world, ``pixel`` (n, 2) their pixels, -1 none), each with the eye of the texel
+        it is taken at."""
+        gb = self.gb
+        out = np.empty(len(e0))
+        parallel_range(_bounces.edge_errors, len(e0), gb.position, gb.normal, gb.mask,
+                       np.asarray(gb.origin, np.float64), self.eyes, np.ascontiguousarray(verts, np.float64),
+                       np.ascontiguousarray(pixel, np.int64), np.ascontiguousarray(e0, np.int64),
+                       np.ascontiguousarray(e1, np.int64), out, serial=len(e0) <= SERIAL_MAX_VERTICES)
+        return out
+
+    def walked(self):
+        """The packed G-buffer as :func:`refsoft.search._packed` gives it for the one-walk
+        kernels: ``(G, mask, fp, (0, 0))`` (the bounce's box holds every covered pixel, and a
+        neighbour outside it is outside the buffer)."""
+        return self.G, np.ascontiguousarray(self.gb.mask), self.gb.position.dtype.type(0), (0, 0)
 
 
 def packed(bounce: Bounce, gb: GBuffer) -> np.ndarray:
@@ -181,6 +241,22 @@ def packed(bounce: Bounce, gb: GBuffer) -> np.ndarray:
     eye_rel = np.ascontiguousarray((bounce.eye - gb.origin).astype(dt))
     parallel_range(_bounces.pack_eyes, h, gb.position, gb.normal, gb.mask, eye_rel, dt(0), G)
     return G
+
+
+def _given_starts(G, mask, rel, start):
+    """:func:`search_bounce`'s starts from ``start`` (N, 2) int G-buffer pixels: each covered one
+    as it is, the best sample (:func:`_starts`) for the others; and (N,) bool the given pixels
+    that were not covered (they restart)."""
+    start = np.asarray(start, np.int64).reshape(-1, 2)
+    h, w = mask.shape
+    r, c = start[:, 0], start[:, 1]
+    given = (r >= 0) & (c >= 0)
+    ok = given & (r < h) & (c < w)
+    ok[ok] = mask[r[ok], c[ok]]
+    out = start.copy()
+    if not ok.all():
+        out[~ok] = _starts(G, mask, rel[~ok])
+    return out, given & ~ok
 
 
 def own_starts(bounce: Bounce, previous, n):
@@ -231,10 +307,17 @@ def unfolded(bounce: Bounce, result: SearchResult, vertices) -> np.ndarray:
     """Virtual vertices (N, 3) float64 world: on the camera's ray through each vertex's reflection
     pixel, at the path's length to the bounce point plus ``|V - R|`` (spec section 5.1); NaN
     where the search found no pixel."""
+    return unfolded_at(bounce, result.pixel, vertices)
+
+
+def unfolded_at(bounce: Bounce, pixel, vertices) -> np.ndarray:
+    """:func:`unfolded` of vertices (N, 3) whose reflection pixels in the bounce's G-buffer are
+    ``pixel`` (N, 2) int (-1: none, NaN there)."""
     verts = np.asarray(vertices, np.float64).reshape(-1, 3)
+    pixel = np.asarray(pixel).reshape(-1, 2)
     out = np.full(verts.shape, np.nan)
-    ok = result.pixel[:, 0] >= 0
-    r, c = result.pixel[ok, 0], result.pixel[ok, 1]
+    ok = pixel[:, 0] >= 0
+    r, c = pixel[ok, 0], pixel[ok, 1]
     length = bounce.path[r, c] + np.linalg.norm(verts[ok] - bounce.position[r, c], axis=1)
     out[ok] = bounce.origin + length[:, None] * bounce.direction[r, c]
     return out

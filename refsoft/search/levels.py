@@ -33,8 +33,8 @@ import numpy as np
 from .. import keys
 from ..raster import shade
 from . import CULLED, meet
-from .bounces import (Bounce, bounding_sphere, first_bounces, gbuffer_of, later_bounces, level_rays,
-                      object_parts, reaches, search_bounce, seen_reflectors, texel_reach, unfolded)
+from .bounces import (Bounce, LevelSearch, bounding_sphere, first_bounces, gbuffer_of, later_bounces, level_rays,
+                      object_parts, reaches, search_bounce, seen_reflectors, texel_reach, unfolded, unfolded_at)
 from .exact_levels import combined, exact_bounces, exact_level, rays_level, seen_by_rays
 from .virtual import virtual_pass
 
@@ -102,7 +102,9 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report, pa
     vertices : ndarray (N, 3) float64
         The non-reflectors' vertices (:func:`refsoft.scene.scene_vertices`).
     opt : RenderOptions
-        Read: ``neighbourhood``, ``cap``, ``precision``, ``images``, ``bounces`` (the last level).
+        Read: ``neighbourhood``, ``cap``, ``precision``, ``images``, ``bounces`` (the last level);
+        drawn by the virtual pass (``images = "one"``), ``tessellate``, ``max_level``,
+        ``tessellate_span`` and ``silhouette`` too (:func:`refined_level`).
     report : list
         Receives one dict per bounce drawn (level, reflector, pixels, vertices searched, ms).
     path : tuple of int
@@ -149,8 +151,9 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report, pa
         seen = meet.narrowed(meshes, ids, vertices, rays, seen)
     virtual = np.zeros((len(vertices), 3))
     flags = np.full(len(vertices), CULLED, np.uint8)
+    pixel = np.full((len(vertices), 2), -1, np.int32)
     res = _search(bounce, gb, vertices, seen, opt, starts, path, 0)
-    virtual[seen], flags[seen] = unfolded(bounce, res, vertices[seen]), res.flags
+    virtual[seen], flags[seen], pixel[seen] = unfolded(bounce, res, vertices[seen]), res.flags, res.pixel
     entry = {"level": bounce.level, "reflector": bounce.reflector, "pixels": int(bounce.mask.sum()),
              "searched": int(seen.sum()), "iterations": int(res.iterations.sum())}
     report.append(entry)
@@ -174,7 +177,11 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report, pa
         nxt = exact_bounces(bounce.level + 1, refl, rays, bounce.path, bounce.direction, bounce.origin, bounce.box,
                             bounce.shape)
     else:
-        parts = object_parts(meshes, ids, virtual, flags)
+        if opt.tessellate is None and opt.silhouette != "clip":
+            parts = object_parts(meshes, ids, virtual, flags)
+        else:  # as the first level: tessellated, then cut at the silhouette, searched with each pixel's eye
+            parts, counts = refined_level(bounce, gb, camera, meshes, ids, vertices, virtual, pixel, flags, opt)
+            entry.update(counts)
         stencil = bounce.stencil()
         colour, rid, covered, _ = virtual_pass(scene, parts, camera, stencil, bounce.box, opt.inverse)
         rparts = sum((object_parts(meshes, k, v, fl) for k, _, v, fl in found), [])
@@ -185,6 +192,67 @@ def draw_bounce(scene, meshes, bounce: Bounce, camera, vertices, opt, report, pa
               draw_bounce(scene, meshes, b, camera, vertices, opt, report, path, keep, starts), scene)
     entry["ms"] = 1000 * (time.perf_counter() - t0)
     return colour, rid, covered, depth
+
+
+def refined_level(bounce: Bounce, gb, camera, meshes, ids, vertices, virtual, pixel, flags, opt):
+    """A later level's virtual geometry of the non-reflectors ``ids`` after the options that add
+    vertices, as the first level's (:func:`refsoft.search.virtual.refined_parts`): Szabo's adaptive
+    tessellation (``opt.tessellate``, ``max_level``, ``tessellate_span``), then the cut at the
+    silhouette (``opt.silhouette == "clip"``), the new vertices searched on the level's G-buffer
+    with each pixel's own eye (:class:`~refsoft.search.bounces.LevelSearch`) and unfolded
+    (:func:`~refsoft.search.bounces.unfolded_at`). The cut's steps are bisections (the first
+    level's prediction scores with one eye).
+
+    Parameters
+    ----------
+    bounce : Bounce
+    gb : GBuffer
+        :func:`~refsoft.search.bounces.gbuffer_of` the bounce.
+    camera, meshes
+        The frame's.
+    ids : list of int
+        The non-reflectors, their vertices consecutive in ``vertices`` in that order.
+    vertices : ndarray (N, 3) float64
+    virtual : ndarray (N, 3) float64
+        Their virtual vertices at this level.
+    pixel : ndarray (N, 2) int32
+        Their reflection pixels in ``gb`` (-1 where not searched).
+    flags : ndarray (N,) uint8
+    opt : RenderOptions
+
+    Returns
+    -------
+    parts : list of one part
+        (virtual (n', 3) float64, normals (n', 3), faces (m', 3) int64, face object (m',)
+        int32, flags (n',) uint8): the input vertices first, then the new ones.
+    counts : dict
+        ``tessellation`` (vertices searched, levels, triangles) and ``silhouette`` (edges cut,
+        searches) when those ran.
+    """
+    from .silhouette import clip_at_silhouette
+    from .tessellate import tessellate
+
+    _, normals, faces, face_obj = combined(meshes, ids)
+    level = LevelSearch(bounce, gb, opt.neighbourhood, opt.cap, _inverse(opt))
+    eye = np.asarray(camera.eye, np.float64)  # not read: the level's own eyes are
+    counts = {}
+    n = len(vertices)
+    if opt.tessellate is not None:
+        t = tessellate(gb, eye, vertices, normals, faces, face_obj, pixel, flags, opt.tessellate, opt.max_level,
+                       opt.neighbourhood, _inverse(opt), opt.cap, min_span=opt.tessellate_span, level=level)
+        virtual = np.concatenate([virtual, unfolded_at(bounce, t.pixel[n:], t.vertices[n:])])
+        vertices, normals, faces, face_obj, pixel, flags = t.vertices, t.normals, t.faces, t.face_obj, t.pixel, t.flags
+        counts["tessellation"] = {"vertices_searched": int(t.searched), "levels": int(t.levels),
+                                  "triangles": int(len(t.faces))}
+    if opt.silhouette == "clip":
+        c = clip_at_silhouette(gb, eye, vertices, normals, faces, face_obj, pixel, flags, opt.neighbourhood, opt.cap,
+                               level=level)
+        virtual = np.concatenate([virtual, unfolded_at(bounce, c.pixel, c.vertices)])
+        normals = np.concatenate([normals, c.normals])
+        flags = np.concatenate([flags, c.flags])
+        faces, face_obj = c.faces, c.face_obj
+        counts["silhouette"] = {"edges_cut": int(c.cut), "vertices_searched": int(c.searched)}
+    return [(virtual, normals, np.asarray(faces, np.int64), np.asarray(face_obj, np.int32), flags)], counts
 
 
 def blend(colour, rid, covered, depth, box, bounce: Bounce, deeper, scene):

@@ -82,7 +82,8 @@ def mixed_faces(faces, flags) -> np.ndarray:
 
 
 def clip_at_silhouette(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, neighbourhood="cross",
-                       cap=None, method="walk", iterations: int = CLIP_ITERATIONS, predict: bool = False) -> Clip:
+                       cap=None, method="walk", iterations: int = CLIP_ITERATIONS, predict: bool = False,
+                       level=None) -> Clip:
     """Cut the reflected triangles of one reflector at its silhouette (see the module's text).
 
     Parameters
@@ -104,6 +105,10 @@ def clip_at_silhouette(gbuffer, eye, vertices, normals, faces, face_obj, pixel, 
         Place the steps at the predicted cut where the bracket's ends reflect at the same or
         neighbouring texels (:func:`refsoft.search._silhouette.cut_edges`; the walk only): the
         bracket is closed to the same width with fewer searches, the cut point moves within it.
+    level : LevelSearch, optional
+        A later bounce's G-buffer (spec section 5.1, :class:`refsoft.search.bounces.LevelSearch`):
+        the bisection's walks on it with each pixel's own eye (its ``walked``); ``method`` is not
+        read and ``predict`` not used (the prediction scores with one eye).
 
     Returns
     -------
@@ -126,9 +131,10 @@ def clip_at_silhouette(gbuffer, eye, vertices, normals, faces, face_obj, pixel, 
     key = _distinct(np.sort(vis * np.int64(n) + hid))
     vis, hid = key // n, key % n
     p_vis, p_hid = vertices[vis], vertices[hid]
-    if method == "walk":
+    if method == "walk" or level is not None:
         lo_t, got_pixel, got_flags, searched = _bisect(gbuffer, eye, p_vis, p_hid, pixel[vis], pixel[hid], flags[vis],
-                                                       neighbourhood, cap, iterations, predict)
+                                                       neighbourhood, cap, iterations, predict and level is None,
+                                                       None if level is None else level.walked())
     else:
         lo_t, got_pixel, got_flags = _bisect_searches(gbuffer, eye, p_vis, p_hid, pixel[vis], flags[vis],
                                                       neighbourhood, cap, method, iterations)
@@ -148,11 +154,14 @@ def clip_at_silhouette(gbuffer, eye, vertices, normals, faces, face_obj, pixel, 
     return Clip(cut_v, cut_n, got_pixel, got_flags, out, out_obj, len(key), searched, np.c_[vis, hid], lo_t)
 
 
-def _bisect(gbuffer, eye, p_vis, p_hid, pixel, end, flags, neighbourhood, cap, iterations, predict=False):
+def _bisect(gbuffer, eye, p_vis, p_hid, pixel, end, flags, neighbourhood, cap, iterations, predict=False,
+            walked=None):
     """Every cut edge in one kernel pass (:func:`refsoft.search._silhouette.cut_edges`): without
     ``predict``, :func:`_bisect_searches`'s results bit for bit (without a search call and array
     bookkeeping per step); with it, the bracket closed to the same width with the steps placed
-    at the predicted cut. ``end``: the hidden ends' pixels. Returns (t (M,) float64, pixel (M, 2)
+    at the predicted cut. ``end``: the hidden ends' pixels; ``walked``: the packed G-buffer to walk
+    on (``(G, mask, fp, offset)``, as :func:`refsoft.search._packed` gives it) in place of the
+    eye's. Returns (t (M,) float64, pixel (M, 2)
     int32, flags (M,) uint8, searches run)."""
     from . import _check_options, _packed, start_pixel
     from . import _kernels as _search_kernels
@@ -167,7 +176,7 @@ def _bisect(gbuffer, eye, p_vis, p_hid, pixel, end, flags, neighbourhood, cap, i
     got_pixel = np.ascontiguousarray(pixel, dtype=np.int32).copy()
     got_flags = np.ascontiguousarray(flags, dtype=np.uint8).copy()
     default = start_pixel(gbuffer.mask)
-    G, mask, fp, (r0, c0) = _packed(gbuffer, eye)
+    G, mask, fp, (r0, c0) = _packed(gbuffer, eye) if walked is None else walked
 
     def work():
         return (np.empty(3, dtype=dt), np.empty((2, 9), dtype=dt), np.zeros((2, 9), dtype=bool),

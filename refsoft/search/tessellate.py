@@ -221,15 +221,17 @@ def outline_edges(faces, pixel, offset, rows=None) -> np.ndarray:
 
 
 def _triangle_errors(gbuffer, eye, verts, pixel, flags, offset, f, threshold, min_span, metric="thesis",
-                     measured=None) -> np.ndarray:
+                     measured=None, level=None) -> np.ndarray:
     """Each triangle's largest edge error (:func:`edge_errors`), (T,) float64; -inf for a
     triangle with a CULLED corner (no reflection to refine) and, when adaptive (``threshold >
     0``), for one all of whose corners are hidden (no visible reflection whose error could be
     measured; full tessellation still splits it). Edges whose ends' pixels are at most
     ``min_span`` apart count 0. ``metric``: "thesis" (:func:`edge_errors`) or "pixels"
     (:func:`edge_pixel_errors`, which needs ``offset``). ``measured`` ((T, 3) bool): the edges
-    measured, the others count 0."""
+    measured, the others count 0. ``level``: a later level's edge error (:func:`tessellate`)."""
     errors = _edge_pixel_errors if metric == "pixels" else _edge_errors
+    if level is not None:  # each texel's own eye
+        errors = (lambda gb, eye, v, p, off, a, b: level.edge_errors(v, p, a, b))
     if measured is None:  # one kernel pass: which edges are measured, which triangles are bad
         f = np.ascontiguousarray(f, dtype=np.int64)
         need = np.empty(3 * len(f), dtype=bool)
@@ -438,7 +440,7 @@ class Tessellation:
 
 def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, threshold, max_level,
                neighbourhood="cross", inverse="plane", cap=None, crack_free=True, surface=None,
-               method="walk", min_span: int = 0, metric: str = "thesis", outline=None) -> Tessellation:
+               method="walk", min_span: int = 0, metric: str = "thesis", outline=None, level=None) -> Tessellation:
     """Refine the reflected triangles of one reflector until every triangle's largest edge error
     is at most ``threshold`` (0: every triangle, i.e. full tessellation) or ``max_level`` levels.
 
@@ -478,6 +480,12 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
         away from the straight edge (:func:`edge_pixel_errors`; with ``surface`` only): where
         an outline is drawn a fraction of a pixel off, its pixels show the other object, where
         an edge inside an object changes the shading only.
+    level : LevelSearch, optional
+        A later bounce's G-buffer (spec section 5.1, :class:`refsoft.search.bounces.LevelSearch`):
+        the edge errors taken with the eye of the texel they are taken at and the new vertices
+        searched with each pixel's own eye (its ``edge_errors`` and ``search``, from the same
+        starts), in place of ``eye``'s; the thesis's metric, without ``surface`` or ``outline``
+        (``method`` is not read).
 
     Returns
     -------
@@ -493,6 +501,8 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
         validate.number(outline, "outline threshold", minimum=0.0)
     if (metric == "pixels" or outline is not None) and surface is None:
         raise RefsoftError("the tessellation's pixel metric needs the sub-texel points (surface)")
+    if level is not None and (surface is not None or outline is not None):
+        raise RefsoftError("a later bounce's tessellation takes the thesis's metric without sub-texel points")
     # the vertices' arrays, grown in place as levels add vertices (no copy of all rows per level)
     rows = _Rows([np.asarray(vertices, dtype=np.float64), np.asarray(normals, dtype=np.float64),
                   np.asarray(pixel, dtype=np.int32), np.asarray(flags, dtype=np.uint8)]
@@ -517,7 +527,8 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
         if len(cand) == 0:
             break
         f = faces if active is None else faces[cand]
-        split = _triangle_errors(gbuffer, eye, allv, allp, allf, alloff, f, threshold, min_span, metric) > threshold
+        split = _triangle_errors(gbuffer, eye, allv, allp, allf, alloff, f, threshold, min_span, metric,
+                                 level=level) > threshold
         if outline is not None:  # and the pixel metric on the edges that can draw an outline
             measured = outline_edges(faces, allp, alloff, cand)
             split |= _triangle_errors(gbuffer, eye, allv, allp, allf, alloff, f, outline, min_span, "pixels",
@@ -531,7 +542,10 @@ def tessellate(gbuffer, eye, vertices, normals, faces, face_obj, pixel, flags, t
         new_v = 0.5 * (allv[ea] + allv[eb])
         new_n = normalize_rows(alln[ea] + alln[eb])
         start = _midpoint_starts(gbuffer.mask, allp[ea].astype(np.int64), allp[eb].astype(np.int64))
-        res = search(gbuffer, eye, new_v, neighbourhood, inverse, start, cap, method=method)
+        if level is None:
+            res = search(gbuffer, eye, new_v, neighbourhood, inverse, start, cap, method=method)
+        else:
+            res = level.search(new_v, start)
         new = [new_v, new_n, res.pixel, res.flags]
         if refined:
             from .refine import refine
