@@ -434,3 +434,20 @@ def shade_visible(lo, hi, index, X, Y, IW, slot, B, tri, faces, normals, face_ob
                 object_id[r, cc] = k
                 local_triangle[r, cc] = local
             c = end
+
+
+
+@kernel
+def world_positions(lo, hi, r0, c0, c1, position, mask, origin, out):
+    """For the G-buffer's rows ``r0 + lo .. r0 + hi - 1``, columns ``c0 .. c1 - 1`` (run by
+    :func:`refsoft._parallel.parallel_range`): ``out = float32(float64(position) + origin)`` where
+    ``mask``, zero elsewhere (the world positions rounded once to float32). ``position`` (H, W, 3)
+    float32 or float64 relative to ``origin`` (3,) float64; ``out`` (H, W, 3) float32."""
+    for r in range(r0 + lo, r0 + hi):
+        for c in range(c0, c1):
+            if mask[r, c]:
+                for k in range(3):
+                    out[r, c, k] = np.float32(np.float64(position[r, c, k]) + origin[k])
+            else:
+                for k in range(3):
+                    out[r, c, k] = np.float32(0.0)

@@ -16,7 +16,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .. import constants, keys, limits
+from .._parallel import parallel_range
 from ..raster import PRECISIONS, GBuffer, _setup, gbuffer
+from ..raster._kernels import world_positions
 from ..seam import ReflectorResult, stencil_box
 from . import BORDER, CULLED, RESTARTED, SEVERAL, SearchResult, levels, search, skips, virtual_vertices
 from .convex import several_possible
@@ -53,9 +55,8 @@ def gbuffer_outputs(gb: GBuffer, k: int) -> dict:
     position = limits.zeros(gb.position.shape, np.float32)
     if gb.mask.any():
         r0, r1, c0, c1 = stencil_box(gb.mask)  # only the covered box is converted
-        m = gb.mask[r0:r1, c0:c1, None]
-        world = gb.position[r0:r1, c0:c1].astype(np.float64) + gb.origin
-        position[r0:r1, c0:c1] = np.where(m, world, 0.0)
+        parallel_range(world_positions, r1 - r0, r0, c0, c1, np.ascontiguousarray(gb.position),
+                       np.ascontiguousarray(gb.mask), np.asarray(gb.origin, np.float64), position)
     return {keys.GBUFFER_POSITION(k): position, keys.GBUFFER_NORMAL(k): np.asarray(gb.normal, dtype=np.float32),
             keys.GBUFFER_MASK(k): gb.mask, keys.GBUFFER_VIEW_PROJ(k): gb.view_proj}
 
