@@ -40,11 +40,16 @@ def box_rays(lo, hi, r0, c0, stencil, triangle, width, height, inv, eye, perspec
              valid, origin, direction, camera):
     """:func:`primary_rays` of every ``stencil`` (h, w) pixel of box rows ``lo .. hi - 1`` (view
     rows ``r0 + r``, columns ``c0 + c``; ``triangle`` (h, w) their visible triangles), written in
-    place: ``origin``, ``direction`` (h, w, 3) float64 and ``valid`` (h, w) bool (``ok``); the
-    other pixels are left as they are (zeros). The same arithmetic: each row's eye rays first
+    place: ``origin``, ``direction`` (h, w, 3) float64 and ``valid`` (h, w) bool (``ok``); zeros
+    and False at the other pixels. The same arithmetic: each row's eye rays first
     (:func:`camera_rays`, a loop that vectorizes), into ``camera`` (6, w) float64 (work)."""
     w = stencil.shape[1]
     for r in range(lo, hi):
+        for c in range(w):
+            valid[r, c] = False
+            for k in range(3):
+                origin[r, c, k] = 0.0
+                direction[r, c, k] = 0.0
         first, last = w, 0
         for c in range(w):
             if stencil[r, c]:

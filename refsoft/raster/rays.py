@@ -65,7 +65,7 @@ def primary_rays(camera, mesh, rows, cols, tri):
     return hit, ray, ok
 
 
-def box_rays(camera, mesh, triangle, stencil, box):
+def box_rays(camera, mesh, triangle, stencil, box, out=None):
     """:func:`primary_rays` of every ``stencil`` pixel of ``box`` (r0, r1, c0, c1), written into
     box-shaped arrays (kernel ``_rays.box_rays``, the same arithmetic, each row's eye rays in one
     vectorized loop).
@@ -79,6 +79,9 @@ def box_rays(camera, mesh, triangle, stencil, box):
         The visible triangle of ``mesh`` per view pixel.
     stencil : (H, W) bool
     box : (r0, r1, c0, c1)
+    out : tuple, optional
+        ``(valid, origin, direction)`` arrays of the shapes and dtypes below to write into (any
+        contents), instead of new ones.
 
     Returns
     -------
@@ -92,8 +95,9 @@ def box_rays(camera, mesh, triangle, stencil, box):
 
     r0, r1, c0, c1 = (int(x) for x in box)
     h, w = r1 - r0, c1 - c0
-    valid = np.zeros((h, w), bool)
-    origin, direction = np.zeros((h, w, 3)), np.zeros((h, w, 3))
+    if out is None:
+        out = np.empty((h, w), bool), np.empty((h, w, 3)), np.empty((h, w, 3))
+    valid, origin, direction = out
     parallel_range(kernel, h, r0, c0, np.ascontiguousarray(stencil[r0:r1, c0:c1], bool),
                    np.ascontiguousarray(triangle[r0:r1, c0:c1], np.int64), float(camera.width), float(camera.height),
                    np.ascontiguousarray(linalg.inv(camera.view_proj())), np.asarray(camera.eye, np.float64),

@@ -61,7 +61,7 @@ class Candidates:
 
 
 # --- drawing ----------------------------------------------------------------------------------
-def pixel_rays(camera, reflector_mesh, triangle, stencil, box):
+def pixel_rays(camera, reflector_mesh, triangle, stencil, box, scratch=False):
     """The reflected ray of every stencil pixel of the box (the truth's,
     :func:`refsoft.raster.rays.primary_rays`, through :func:`refsoft.raster.rays.box_rays`).
 
@@ -69,6 +69,9 @@ def pixel_rays(camera, reflector_mesh, triangle, stencil, box):
     ----------
     camera, reflector_mesh, triangle, stencil, box
         As :func:`draw`.
+    scratch : bool
+        Write them into this thread's scratch memory (:func:`refsoft.search.scratch.kept`), for
+        a caller done with them before it asks again: no fresh pages each time.
 
     Returns
     -------
@@ -77,7 +80,11 @@ def pixel_rays(camera, reflector_mesh, triangle, stencil, box):
     origin, direction : (h, w, 3) float64
         Each box pixel's reflected ray (zeros off the stencil).
     """
-    return box_rays(camera, reflector_mesh, triangle, stencil, box)
+    out = None
+    if scratch:
+        h, w = int(box[1]) - int(box[0]), int(box[3]) - int(box[2])
+        out = kept("rays_valid", (h, w), bool), kept("rays_origin", (h, w, 3)), kept("rays_direction", (h, w, 3))
+    return box_rays(camera, reflector_mesh, triangle, stencil, box, out)
 
 
 def draw(cand: Candidates, camera, reflector_mesh, triangle, stencil, box, colors, rays=None):
@@ -117,7 +124,7 @@ def draw(cand: Candidates, camera, reflector_mesh, triangle, stencil, box, color
 
 
 def nearest(cand: Candidates, camera, stencil, box, *, rays=None, screen=None, triangle=None, reflector_mesh=None,
-            runs=True, traced=None):
+            runs=True, traced=None, scratch=False):
     """Per box pixel the candidate whose real triangle the pixel's reflected ray meets nearest,
     among those whose dilated virtual triangle covers it (:func:`draw` without the shading).
 
@@ -141,6 +148,9 @@ def nearest(cand: Candidates, camera, stencil, box, *, rays=None, screen=None, t
         triangles (kernel ``_traced.accept_traced``) instead of testing every pixel each candidate
         covers (True), or not (False); by default whichever :func:`_trace_pays` expects to be
         cheaper. The result is the same bits.
+    scratch : bool
+        Return arrays in this thread's scratch memory (:func:`refsoft.search.scratch.kept`), for
+        a caller done with them before it asks again.
 
     Returns
     -------
@@ -153,9 +163,15 @@ def nearest(cand: Candidates, camera, stencil, box, *, rays=None, screen=None, t
     h, w = r1 - r0, c1 - c0
     valid, origin, direction = pixel_rays(camera, reflector_mesh, triangle, stencil, box) if rays is None else rays
     screen, bbox, dilate = _screen(cand.virtual, camera, box) if screen is None else screen
-    best_t = np.full((h, w), np.inf)
-    best_c = np.full((h, w), -1, np.int64)
-    best_uv = np.zeros((h, w, 2))
+    if scratch:
+        best_t, best_c, best_uv = kept("best_t", (h, w)), kept("best_c", (h, w), np.int64), kept("best_uv", (h, w, 2))
+        best_t.fill(np.inf)
+        best_c.fill(-1)
+        best_uv.fill(0.0)
+    else:
+        best_t = np.full((h, w), np.inf)
+        best_c = np.full((h, w), -1, np.int64)
+        best_uv = np.zeros((h, w, 2))
     if len(screen):
         real = np.ascontiguousarray(cand.real)
         tested, seen = (np.zeros((h, w), bool), np.full((h, w), -1, np.int64)) if runs or cand.rays is not None else (

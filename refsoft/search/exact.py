@@ -127,8 +127,9 @@ def exact_pass(scene, part, real, camera, reflector_mesh, triangle, stencil, box
     # the candidates' corners, objects, real triangles and screen bounds in one pass over them
     f, obj, real_corners, screen = _gathered(keep, faces, face_obj, real, clip, xy, camera, box)
     cand = Candidates(None, real_corners, None, None, keep, 0)
-    rays = pixel_rays(camera, reflector_mesh, triangle, stencil, box)
-    best_c, best_uv = nearest(cand, camera, stencil, box, rays=rays, screen=screen, runs=False)
+    # the rays and the winners in scratch memory: shaded before this returns
+    rays = pixel_rays(camera, reflector_mesh, triangle, stencil, box, scratch=True)
+    best_c, best_uv = nearest(cand, camera, stencil, box, rays=rays, screen=screen, runs=False, scratch=True)
     colour, rid, covered, counts = shade(best_c, best_uv, f, normals, obj, scene, rays[0])
     return colour, rid, covered, {"candidates": int(len(keep)), **counts}
 

@@ -297,6 +297,12 @@ def test_primary_ray_kernel_equals_the_numpy_rays_and_hits():
         assert np.array_equal(valid[at], ok) and valid.sum() == len(rows)
         assert origin[at].tobytes() == hit.tobytes() and direction[at].tobytes() == ray.tobytes()
         assert not origin[~valid].any() and not direction[~valid].any()
+        # written into arrays holding anything (scratch memory): the same arrays
+        h, w = box[1] - box[0], box[3] - box[2]
+        out = np.ones((h, w), bool), np.full((h, w, 3), np.nan), np.full((h, w, 3), -7.0)
+        again = box_rays(cam, ball, view.triangle, stencil, box, out=out)
+        assert all(a is b for a, b in zip(again, out))
+        assert all(a.tobytes() == b.tobytes() for a, b in zip(again, (valid, origin, direction)))
 
 
 def test_reflected_rays_split_over_threads_hit_what_one_embree_call_hits():
