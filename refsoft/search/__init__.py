@@ -19,6 +19,7 @@ from ..errors import RefsoftError
 from ..raster import GBuffer
 from ..raster._threads import SERIAL_MAX_VERTICES
 from . import _kernels, _lanes
+from .scratch import kept
 from ._kernels import BAD_START, BORDER, CAPPED, CULLED, HIDDEN, RESTARTED, SEVERAL
 
 __all__ = ["search", "virtual_vertices", "start_pixel", "SearchResult", "trace_search", "Trace", "scores_at",
@@ -111,7 +112,7 @@ def _check_gbuffer(gbuffer):
     return dt.type
 
 
-def _packed(gbuffer: GBuffer, eye):
+def _packed(gbuffer: GBuffer, eye, scratch=False):
     """The G-buffer packed for the one-search-at-a-time kernels (traces, the hierarchy,
     :func:`scores_at`), cropped to the covered pixels. (:func:`search` reads the positions and
     normals where they are and computes U with each score: the same values.)
@@ -122,7 +123,9 @@ def _packed(gbuffer: GBuffer, eye):
     origin; ``mask`` (h, w) the coverage; both cover the covered pixels' bounding box plus a
     one-pixel margin (clipped to the buffer, so a neighbour outside the crop is outside the
     buffer); ``offset`` = (row, col) of the crop's first pixel; ``fp`` a prototype scalar of
-    the precision."""
+    the precision. With ``scratch``, ``G`` lies in this thread's scratch memory
+    (:func:`refsoft.search.scratch.kept`) and holds anything at uncovered pixels, which a walk
+    never reads (it tests the mask first): for a caller done with it before it asks again."""
     dt = _check_gbuffer(gbuffer)
     fp = dt(0)  # prototype scalar: the kernels compute in its precision
     h, w = gbuffer.mask.shape
@@ -135,7 +138,8 @@ def _packed(gbuffer: GBuffer, eye):
         c0, c1 = max(int(cols[0]) - 1, 0), min(int(cols[-1]) + 2, w)
     mask = np.ascontiguousarray(gbuffer.mask[r0:r1, c0:c1])
     eye_rel = (np.asarray(eye, dtype=np.float64) - gbuffer.origin).astype(dt)
-    G = np.zeros((r1 - r0, c1 - c0, _kernels.PACKED), dtype=dt)
+    shape = (r1 - r0, c1 - c0, _kernels.PACKED)
+    G = kept("packed", shape, dt) if scratch else np.zeros(shape, dtype=dt)
     parallel_range(_kernels.pack, r1 - r0, np.ascontiguousarray(gbuffer.position[r0:r1, c0:c1]),
                    np.ascontiguousarray(gbuffer.normal[r0:r1, c0:c1]), mask, eye_rel, fp, G)
     return G, mask, fp, (r0, c0)

@@ -176,7 +176,8 @@ def _bisect(gbuffer, eye, p_vis, p_hid, pixel, end, flags, neighbourhood, cap, i
     got_pixel = np.ascontiguousarray(pixel, dtype=np.int32).copy()
     got_flags = np.ascontiguousarray(flags, dtype=np.uint8).copy()
     default = start_pixel(gbuffer.mask)
-    G, mask, fp, (r0, c0) = _packed(gbuffer, eye) if walked is None else walked
+    # in scratch memory: read only by the walks below, before this returns
+    G, mask, fp, (r0, c0) = _packed(gbuffer, eye, scratch=True) if walked is None else walked
 
     def work():
         return (np.empty(3, dtype=dt), np.empty((2, 9), dtype=dt), np.zeros((2, 9), dtype=bool),

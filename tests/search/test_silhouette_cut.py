@@ -167,3 +167,23 @@ def test_mixed_faces_and_the_faces_after_the_cut_equal_plain_numpy(mixed_edges):
     want_faces[rows] = parts
     np.testing.assert_array_equal(clip.faces, want_faces)
     np.testing.assert_array_equal(clip.face_obj, np.repeat(comb.face_object, counts))
+
+
+def test_the_cut_walks_packed_scratch_memory_whatever_it_held(mixed_edges):
+    """The packed G-buffer the cut walks lies in scratch memory whose uncovered texels hold
+    anything: with that memory first filled with NaN the cut is the same bits, and the packed
+    texels the walks read (the covered ones) are the fresh packing's."""
+    from refsoft.search import _packed
+    from refsoft.search.scratch import kept
+
+    scene, gb, verts, res, vis, hid, _ = mixed_edges
+    eye = scene.camera.eye
+    args = (gb, eye, verts[vis], verts[hid], res.pixel[vis], res.pixel[hid], res.flags[vis], "box", None, 8)
+    first = [a.copy() for a in silhouette._bisect(*args)[:3]]
+    fresh = _packed(gb, eye)
+    kept("packed", fresh[0].shape, fresh[0].dtype).fill(np.nan)
+    again = silhouette._bisect(*args)[:3]
+    for a, b in zip(first, again):
+        assert a.tobytes() == b.tobytes()
+    G, mask = _packed(gb, eye, scratch=True)[:2]
+    assert np.array_equal(G[mask], fresh[0][fresh[1]]) and np.isnan(G[~mask]).all() and (~mask).any()
