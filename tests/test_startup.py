@@ -20,8 +20,9 @@ HEAVY = {"numba", "llvmlite", "trimesh", "scipy", "embreex", "imageio", "PIL", "
 #: (the vertices imaged again, those whose image moved, the faces with such a corner and their
 #: copies interleaved: four kernels where NumPy's passes over every vertex and face cost more),
 #: rays (each row's eye rays in a loop of their own, which vectorizes), their origins' bounds (what
-#: a candidate's triangle can reach no nearer than), acceptance and shading, the main view, and the
-#: G-buffer's world positions for the outputs).
+#: a candidate's triangle can reach no nearer than), the area the candidates' bounds cover (which
+#: acceptance pays), acceptance and shading, the main view, and the G-buffer's world positions for
+#: the outputs).
 LOADED_KERNELS = 40
 
 MODULES = """

@@ -170,6 +170,19 @@ def _nearest_reach(real, c, origins):
 
 
 @kernel
+def bounds_area(bbox, h, c0, c1):
+    """The pixels of the box (rows ``0 .. h - 1``, view columns ``c0 .. c1 - 1``) the candidates'
+    bounds ``bbox`` (C, 4) cover, summed over the candidates (float64)."""
+    total = 0.0
+    for c in range(bbox.shape[0]):
+        rows = min(max(bbox[c, 1], 0), h) - min(max(bbox[c, 0], 0), h)
+        cols = min(max(bbox[c, 3], c0), c1) - min(max(bbox[c, 2], c0), c1)
+        if rows > 0 and cols > 0:
+            total += float(rows * cols)
+    return total
+
+
+@kernel
 def ray_bounds(lo, hi, valid, origin, direction, out):
     """For box rows ``lo .. hi - 1`` (run by :func:`refsoft._parallel.parallel_range`): ``out[r]``
     (7,) the bounds of the row's valid rays, min x, y, z and max x, y, z of their origins and the

@@ -19,7 +19,7 @@ from .. import constants
 from .._parallel import parallel_range
 from ..raster import _setup, shade
 from ..raster.rays import box_rays
-from ._several import accept, accept_near, accept_untracked, ray_bounds
+from ._several import accept, accept_near, accept_untracked, bounds_area, ray_bounds
 from ._several import screen_bounds as _screen_bounds
 from ._traced import LEAF, accept_traced, largest, leaf_boxes, parent_boxes
 from .scratch import kept
@@ -201,9 +201,7 @@ def _trace_pays(valid, bbox, h, c0, c1, real, traced):
     hierarchy's depth)."""
     if traced is not None:
         return bool(traced)
-    rows = np.clip(bbox[:, 1], 0, h) - np.clip(bbox[:, 0], 0, h)
-    cols = np.clip(bbox[:, 3], c0, c1) - np.clip(bbox[:, 2], c0, c1)
-    covered = float(np.sum(np.maximum(rows, 0) * np.maximum(cols, 0), dtype=np.float64))
+    covered = float(bounds_area(bbox, h, c0, c1))
     return covered > constants.EXACT_TRACE_COVER * float(np.count_nonzero(valid))
 
 

@@ -135,3 +135,21 @@ def test_ray_bounds_are_the_valid_rays_box(rows):
     o, d = origin[valid], direction[valid]
     want = np.concatenate([o.min(0), o.max(0), [np.sqrt(((d * d).sum(1))).max()]])
     assert np.allclose(got, want, rtol=1e-15, atol=0) and np.array_equal(got[:6], want[:6])
+
+
+def test_bounds_area_is_numpys_clipped_sum():
+    """The pixels the candidates' bounds cover in the box, against NumPy's clipped products:
+    bounds inside, across and outside the box, empty and reversed ones."""
+    from refsoft.search._several import bounds_area
+
+    rng = np.random.default_rng(9)
+    h, c0, c1 = 40, 100, 180
+    lo = rng.integers(-30, 70, (500, 2))
+    bbox = np.stack([lo[:, 0], lo[:, 0] + rng.integers(-5, 60, 500), lo[:, 1] + 80,
+                     lo[:, 1] + 80 + rng.integers(-5, 90, 500)], axis=1).astype(np.int64)
+    rows = np.clip(bbox[:, 1], 0, h) - np.clip(bbox[:, 0], 0, h)
+    cols = np.clip(bbox[:, 3], c0, c1) - np.clip(bbox[:, 2], c0, c1)
+    want = float(np.sum(np.maximum(rows, 0) * np.maximum(cols, 0)))
+    assert want > 0 and ((rows <= 0) | (cols <= 0)).any()
+    assert bounds_area(bbox, h, c0, c1) == want
+    assert bounds_area(bbox[:0], h, c0, c1) == 0.0
