@@ -28,28 +28,16 @@ LEAF = 4
 
 
 @kernel
-def largest(real):
-    """The largest ``|coordinate|`` of the triangles (C, 3, 3), NaN when a value is not finite."""
-    big = 0.0
-    for c in range(real.shape[0]):
-        for i in range(3):
-            for a in range(3):
-                x = real[c, i, a]
-                if not np.isfinite(x):
-                    return np.nan
-                big = max(big, abs(x))
-    return big
-
-
-@kernel
-def leaf_boxes(lo, hi, real, bbox, margin, boxes, rects):
-    """Leaves ``lo .. hi - 1``: the box (min x, y, z, max x, y, z) of the real triangles
-    ``leaf * LEAF .. (leaf + 1) * LEAF - 1``, widened by ``margin`` on every side, and the bounds
-    (row0, row1, col0, col1) of their dilated screen bounds ``bbox``."""
+def leaf_boxes(lo, hi, real, bbox, boxes, rects):
+    """Leaves ``lo .. hi - 1`` (run by :func:`refsoft._parallel.parallel_range`): the box (min x,
+    y, z, max x, y, z) of the real triangles ``leaf * LEAF .. (leaf + 1) * LEAF - 1`` (NaN in its
+    first value when one of theirs is not finite), and the bounds (row0, row1, col0, col1) of
+    their dilated screen bounds ``bbox``. :func:`widen` then adds the margin."""
     n = real.shape[0]
     for leaf in range(lo, hi):
         mnx = mny = mnz = np.inf
         mxx = mxy = mxz = -np.inf
+        finite = True
         rects[leaf, 0], rects[leaf, 1] = bbox[leaf * LEAF, 0], bbox[leaf * LEAF, 1]
         rects[leaf, 2], rects[leaf, 3] = bbox[leaf * LEAF, 2], bbox[leaf * LEAF, 3]
         for c in range(leaf * LEAF, min(n, (leaf + 1) * LEAF)):
@@ -57,10 +45,32 @@ def leaf_boxes(lo, hi, real, bbox, margin, boxes, rects):
             rects[leaf, 2], rects[leaf, 3] = min(rects[leaf, 2], bbox[c, 2]), max(rects[leaf, 3], bbox[c, 3])
             for i in range(3):
                 x, y, z = real[c, i, 0], real[c, i, 1], real[c, i, 2]
+                finite = finite and np.isfinite(x) and np.isfinite(y) and np.isfinite(z)
                 mnx, mny, mnz = min(mnx, x), min(mny, y), min(mnz, z)
                 mxx, mxy, mxz = max(mxx, x), max(mxy, y), max(mxz, z)
-        boxes[leaf, 0], boxes[leaf, 1], boxes[leaf, 2] = mnx - margin, mny - margin, mnz - margin
-        boxes[leaf, 3], boxes[leaf, 4], boxes[leaf, 5] = mxx + margin, mxy + margin, mxz + margin
+        boxes[leaf, 0], boxes[leaf, 1], boxes[leaf, 2] = mnx if finite else np.nan, mny, mnz
+        boxes[leaf, 3], boxes[leaf, 4], boxes[leaf, 5] = mxx, mxy, mxz
+
+
+@kernel
+def widen(n, boxes, fraction):
+    """The leaves' boxes ``boxes[:n]`` widened on every side by ``fraction`` times the largest
+    ``|coordinate|`` among them plus one (the largest of the triangles': a box's sides are their
+    coordinates). Returns that coordinate; NaN, with nothing widened, when a box holds a value that
+    is not finite."""
+    big = 0.0
+    for leaf in range(n):
+        for q in range(6):
+            x = boxes[leaf, q]
+            if not np.isfinite(x):
+                return np.nan
+            big = max(big, abs(x))
+    margin = fraction * (big + 1.0)
+    for leaf in range(n):
+        for q in range(3):
+            boxes[leaf, q] = boxes[leaf, q] - margin
+            boxes[leaf, 3 + q] = boxes[leaf, 3 + q] + margin
+    return big
 
 
 @kernel

@@ -21,7 +21,7 @@ from ..raster import _setup, shade
 from ..raster.rays import box_rays
 from ._several import accept, accept_near, accept_untracked, bounds_area, ray_bounds
 from ._several import screen_bounds as _screen_bounds
-from ._traced import LEAF, accept_traced, largest, leaf_boxes, parent_boxes
+from ._traced import LEAF, accept_traced, leaf_boxes, parent_boxes, widen
 from .scratch import kept
 
 
@@ -209,19 +209,19 @@ def _accept_traced(r0, c0, valid, origin, direction, screen, bbox, dilate, real,
     """Kernel ``_traced.accept_traced`` with its hierarchy over the candidates in their order,
     :data:`._traced.LEAF` a leaf. With a value that is not finite among the triangles, the
     candidates' own loop (the same bits)."""
-    big = largest(real)
-    if not np.isfinite(big):  # the boxes would not bound such a triangle: the candidates' own loop
-        parallel_range(accept_untracked, valid.shape[0], r0, c0, valid, _spans(valid), origin, direction, screen,
-                       bbox, dilate, real, _ray_bounds(valid, origin, direction), constants.EXACT_TRACE_MARGIN, best_t,
-                       best_c, best_uv)
-        return
     size = [-(-len(real) // LEAF)]
     while size[-1] > 1:
         size.append(-(-size[-1] // 2))
     size = np.asarray(size, np.int64)
     start = np.concatenate([[0], np.cumsum(size)[:-1]]).astype(np.int64)
     boxes, rects = kept("trace_boxes", (int(size.sum()), 6)), kept("trace_rects", (int(size.sum()), 4), np.int64)
-    leaf_boxes(0, int(size[0]), real, bbox, constants.EXACT_TRACE_MARGIN * (big + 1.0), boxes, rects)
+    parallel_range(leaf_boxes, int(size[0]), real, bbox, boxes, rects)
+    if not np.isfinite(widen(int(size[0]), boxes, constants.EXACT_TRACE_MARGIN)):
+        # the boxes would not bound such a triangle: the candidates' own loop
+        parallel_range(accept_untracked, valid.shape[0], r0, c0, valid, _spans(valid), origin, direction, screen,
+                       bbox, dilate, real, _ray_bounds(valid, origin, direction), constants.EXACT_TRACE_MARGIN, best_t,
+                       best_c, best_uv)
+        return
     parent_boxes(start, size, boxes, rects)
     parallel_range(accept_traced, valid.shape[0], r0, c0, valid, origin, direction, screen, bbox, dilate, real, start,
                    size, boxes, rects, constants.EXACT_TRACE_MARGIN, best_t, best_c, best_uv,

@@ -100,13 +100,25 @@ def test_nearest_traced_equals_the_loop_and_picks_by_cover():
     assert not acceptance._trace_pays(valid, bbox[:1], h, c0, c0 + w, real, None)
 
 
-def test_largest_coordinate():
-    """``_traced.largest``: the largest |coordinate| (the boxes' margin), NaN with a value that is
-    not finite."""
+def test_leaf_boxes_widened_by_the_largest_coordinate():
+    """``leaf_boxes`` then ``widen``: each leaf's box is its triangles' coordinates' bounds widened
+    by the margin of the largest |coordinate| (NumPy's), and ``widen`` returns that coordinate;
+    a value that is not finite (inf or NaN, in any leaf) gives NaN."""
+    from refsoft._parallel import parallel_range
+
     rng = np.random.default_rng(7)
-    real = rng.uniform(-3, 5, (500, 3, 3))
-    assert _traced.largest(real) == np.abs(real).max()
-    real[3, 2, 1] = np.inf
-    assert np.isnan(_traced.largest(real))
-    real[3, 2, 1] = np.nan
-    assert np.isnan(_traced.largest(real))
+    real = rng.uniform(-3, 5, (501, 3, 3))
+    bbox = rng.integers(0, 50, (501, 4)).astype(np.int64)
+    n = -(-len(real) // _traced.LEAF)
+    boxes, rects = np.empty((n, 6)), np.empty((n, 4), np.int64)
+    parallel_range(_traced.leaf_boxes, n, real, bbox, boxes, rects)
+    fraction = 1e-9
+    assert _traced.widen(n, boxes, fraction) == np.abs(real).max()
+    margin = fraction * (np.abs(real).max() + 1.0)
+    padded = np.concatenate([real, np.full((n * _traced.LEAF - len(real), 3, 3), np.nan)]).reshape(n, -1, 3)
+    assert np.array_equal(boxes[:, :3], np.nanmin(padded, axis=1) - margin)
+    assert np.array_equal(boxes[:, 3:], np.nanmax(padded, axis=1) + margin)
+    for bad in (np.inf, -np.inf, np.nan):
+        real[3, 2, 1] = bad
+        parallel_range(_traced.leaf_boxes, n, real, bbox, boxes, rects)
+        assert np.isnan(_traced.widen(n, boxes, fraction))
