@@ -120,7 +120,9 @@ def _write_member(zf, name, array, level, pages=None, float_level=None):
         # on a G-buffer, whose float bytes seldom repeat beyond the runs of zeros; or stored)
         floats = array.dtype.kind in "fc"
         other = float_level if floats and float_level is not None else level
-        deflate = fh._compressor = PieceDeflate(level, zlib.Z_RLE if floats else zlib.Z_DEFAULT_STRATEGY, other)
+        picture = _picture(array)
+        deflate = fh._compressor = PieceDeflate(level, zlib.Z_RLE if floats else zlib.Z_DEFAULT_STRATEGY, other,
+                                                picture)
         fh.write(header)
         # a repeating piece bypasses the member writer (when it has the state this module
         # knows): its CRC-32 is combined from the piece's, not computed over its bytes again
@@ -130,9 +132,13 @@ def _write_member(zf, name, array, level, pages=None, float_level=None):
         shortest = 1 if other == 0 else NPZ_SHORTEST_RUN
         runs = repeating_runs(data, NPZ_UNIT_BYTES, NPZ_PERIOD_BYTES, skip, shortest)
         if direct:
-            _write_runs(fh, deflate, data, runs)
+            _write_runs(fh, deflate, data, runs, picture is not None)
             return
         for lo, hi, pattern in runs:  # through the member writer, which reads every byte
+            if pattern is None and picture is not None:  # a picture's other bytes: one segment
+                deflate.span = (data, lo, hi)
+                fh.write(data[lo:hi])
+                continue
             if pattern is None:
                 for a in range(lo, hi, NPZ_PIECE_BYTES):
                     fh.write(data[a:min(hi, a + NPZ_PIECE_BYTES)])
@@ -147,15 +153,20 @@ def _write_member(zf, name, array, level, pages=None, float_level=None):
 _WRITER_STATE = ("_file_size", "_crc", "_compress_size", "_fileobj")
 
 
-def _write_runs(fh, deflate, data, runs):
+def _write_runs(fh, deflate, data, runs, picture=False):
     """What ``fh.write`` of each run does (the member writer's size, CRC-32, compressed size and
     output), in one pass: a repeating piece's CRC-32 is combined from the piece's (zlib's
-    ``crc32_combine64``), not computed over its bytes, which are not read."""
+    ``crc32_combine64``), not computed over its bytes, which are not read; a picture's other
+    bytes are one segment (:meth:`~refsoft.io.deflate.PieceDeflate.segment`)."""
     join = combine()
     chunk = _chunk_bytes()
     crc, out, held = fh._crc, [], 0
     for lo, hi, pattern in runs:
-        if pattern is None:
+        if pattern is None and picture:
+            crc = zlib.crc32(data[lo:hi], crc)
+            out.append(deflate.segment(data, lo, hi))
+            held += len(out[-1])
+        elif pattern is None:
             for a in range(lo, hi, NPZ_PIECE_BYTES):  # CRC-32 and deflate a piece while it is in cache
                 piece = data[a:min(hi, a + NPZ_PIECE_BYTES)]
                 crc = zlib.crc32(piece, crc)
@@ -181,6 +192,19 @@ def _write_out(fh, out) -> int:
     out.clear()
     fh._fileobj.write(blob)
     return len(blob)
+
+
+def _picture(array):
+    """(pixel, row) bytes of an array whose bytes are a picture's pixels, row after row: (H, W)
+    of integers or bools (a frame's id maps, a G-buffer's mask) or (H, W, 3 or 4) of uint8 (its
+    image), written in C order; else None."""
+    if array.dtype.kind not in "iub" or array.size == 0 or (array.flags.f_contiguous and not array.flags.c_contiguous):
+        return None  # (a Fortran-ordered array's bytes are written column by column)
+    if array.ndim == 2:
+        return array.itemsize, array.shape[1] * array.itemsize
+    if array.ndim == 3 and array.dtype == np.uint8 and array.shape[2] in (3, 4):
+        return array.shape[2], array.shape[1] * array.shape[2]
+    return None
 
 
 def _incompressible(data, level) -> bool:
