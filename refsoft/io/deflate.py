@@ -9,7 +9,6 @@ import zlib
 import numpy as np
 
 from ..constants import NPZ_LITERAL_SHARE
-from .neighbour import neighbour_deflate
 
 #: (pattern, n, level, strategy) -> (deflate output, CRC-32) of a repeating piece.
 _PIECES = {}
@@ -74,6 +73,8 @@ class PieceDeflate:
         where the stream is a picture (``picture``: (pixel, row) bytes) with few literals
         (:func:`~refsoft.io.neighbour.neighbour_deflate`, after the open block), else zlib's."""
         if self._picture is not None:
+            from .neighbour import neighbour_deflate  # (Numba: loaded by the first picture written)
+
             pixel, row = self._picture
             seg = neighbour_deflate(data, lo, hi, pixel, row, most_literals=int((hi - lo) * NPZ_LITERAL_SHARE))
             if seg is not None:

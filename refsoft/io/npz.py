@@ -148,6 +148,10 @@ def _write_member(zf, name, array, level, pages=None, float_level=None):
                 fh.write(data[a:min(hi, a + _chunk_bytes())])
 
 
+#: Pixels of the narrowest array written as a picture (:func:`_picture`): an (N, 2) or (N, 3)
+#: array holds one vertex per row, whose values seldom repeat the row above.
+PICTURE_MIN_WIDTH = 8
+
 #: What zipfile's member writer (``_ZipWriteFile``, Python 3.10-3.13) keeps of a member being
 #: written: its size, CRC-32 and compressed size, and the archive's file.
 _WRITER_STATE = ("_file_size", "_crc", "_compress_size", "_fileobj")
@@ -198,8 +202,11 @@ def _picture(array):
     """(pixel, row) bytes of an array whose bytes are a picture's pixels, row after row: (H, W)
     of integers or bools (a frame's id maps, a G-buffer's mask) or (H, W, 3 or 4) of uint8 (its
     image), written in C order; else None."""
-    if array.dtype.kind not in "iub" or array.size == 0 or (array.flags.f_contiguous and not array.flags.c_contiguous):
+    if array.dtype.kind not in "iub" or array.ndim not in (2, 3) or array.size == 0 or (
+            array.flags.f_contiguous and not array.flags.c_contiguous):
         return None  # (a Fortran-ordered array's bytes are written column by column)
+    if array.shape[1] < PICTURE_MIN_WIDTH:  # a list of vertices' pixels or ids, not a picture
+        return None
     if array.ndim == 2:
         return array.itemsize, array.shape[1] * array.itemsize
     if array.ndim == 3 and array.dtype == np.uint8 and array.shape[2] in (3, 4):

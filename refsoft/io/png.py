@@ -11,7 +11,6 @@ import numpy as np
 from ..constants import NPZ_LITERAL_SHARE
 from ..errors import RefsoftError
 from .atomic import atomic_path
-from .neighbour import neighbour_deflate
 
 
 def write_png(path, image, level=None):
@@ -33,6 +32,8 @@ def _zlib_stream(rows, pixel: int, level: int) -> bytes:
     rows are not flat (more than :data:`~refsoft.constants.NPZ_LITERAL_SHARE` literals) or
     ``level`` is 0."""
     if level:
+        from .neighbour import neighbour_deflate  # (Numba: loaded by the first PNG written)
+
         seg = neighbour_deflate(rows, 0, rows.size, pixel, rows.shape[1], final=True,
                                 most_literals=int(rows.size * NPZ_LITERAL_SHARE))
         if seg is not None:

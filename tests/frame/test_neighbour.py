@@ -103,11 +103,12 @@ def test_npz_pictures_read_back_every_way(tmp_path, small_units, monkeypatch):
     CRC-32; written past zipfile's member writer or through it, one file; a rerun writes the
     same bytes; the flat pictures written by the encoder, the noisy one by zlib alone."""
     import refsoft.io
+    import refsoft.io.neighbour
 
     arrays = _pictures(np.random.default_rng(8))
     calls = []
-    real = refsoft.io.deflate.neighbour_deflate
-    monkeypatch.setattr(refsoft.io.deflate, "neighbour_deflate",
+    real = refsoft.io.neighbour.neighbour_deflate
+    monkeypatch.setattr(refsoft.io.neighbour, "neighbour_deflate",
                         lambda data, *a, **k: calls.append(real(data, *a, **k) is not None) or real(data, *a, **k))
     clean = np.zeros((70, 90, 3), np.uint8)  # rectangles: a few literals where each starts
     clean[10:40, 20:60] = (200, 10, 30)
@@ -117,6 +118,12 @@ def test_npz_pictures_read_back_every_way(tmp_path, small_units, monkeypatch):
     calls.clear()
     refsoft.io.write_npz_level(tmp_path / "noisy.npz", {"noisy": arrays["noisy"]}, 1, 0)
     assert calls and not any(calls)  # left to zlib
+    calls.clear()
+    vertices = np.repeat(np.arange(300, dtype=np.int32), 2).reshape(300, 2)  # one vertex per row
+    refsoft.io.write_npz_level(tmp_path / "v.npz", {"pixel": vertices}, 1, 0)
+    assert calls == []  # not a picture: zlib's
+    with np.load(tmp_path / "v.npz") as z:
+        assert z["pixel"].tobytes() == vertices.tobytes()
     refsoft.io.write_npz_level(tmp_path / "a.npz", arrays, 1, 0)
     refsoft.io.write_npz_level(tmp_path / "again.npz", arrays, 1, 0)
     with monkeypatch.context() as m:
