@@ -22,12 +22,13 @@ its process CPU per frame: what the command costs beside its writer (the scene's
 folder, ``stats.json``, the progress).
 With ``--parts``: instead, one frame's files written whole (``write_frame``) from fresh copies of
 its arrays, the writer thread's CPU milliseconds (min and median of 7, the variants in turn),
-with each part of the writer turned off in turn: the repeating pieces written past zipfile's
-member writer (their CRC-32 combined by zlib, their untouched pages not read), the untouched pages
-not read, the float members' other bytes stored (``FRAME_FLOAT_LEVEL = 0``), the PNG's
-unfiltered rows (Pillow's encoder instead); and the npz's bytes.
-With ``--png``: instead, the frame's PNG deflated three ways (the command's, stored, "Up"
-filter with ``Z_RLE``): CPU milliseconds and bytes.
+with each part of the writer turned off in turn: the pictures (image, id maps, masks, the PNG)
+deflated as copies from the left or above (zlib instead), the repeating pieces written past
+zipfile's member writer (their CRC-32 combined by zlib, their untouched pages not read), the
+untouched pages not read, the float members' other bytes stored (``FRAME_FLOAT_LEVEL = 0``), the
+PNG's unfiltered rows (Pillow's encoder instead); and the npz's bytes.
+With ``--png``: instead, the frame's PNG deflated four ways (the command's copies from the left
+or above, zlib level 1, stored, "Up" filter with ``Z_RLE``): CPU milliseconds and bytes.
 With ``--members``: instead, one frame (frame 1 after frame 0) written whole, the best of 3
 writes of fresh copies (whose untouched pages are the render's): per member its bytes, the share
 of them in repeating runs, its bytes in the file and the writer thread's CPU milliseconds; the
@@ -192,12 +193,18 @@ def members(names, size):
 
 
 def _variants():
+    import zlib
     from unittest import mock
 
     from refsoft import io
     from refsoft.frame import outputs
 
+    def zlib_stream(rows, pixel, level):
+        return zlib.compress(rows, level)
+
     return {"as it is": [],
+            "pictures by zlib": [mock.patch.object(io.npz, "_picture", lambda array: None),
+                                 mock.patch.object(io.png, "_zlib_stream", zlib_stream)],
             "every byte through zipfile's member writer": [mock.patch.object(io.crc, "_COMBINE", [None])],
             "untouched pages read": [mock.patch.object(io.pages.PageMap, "untouched", lambda self, data: None)],
             "float bytes deflated": [mock.patch.object(outputs, "FRAME_FLOAT_LEVEL", None)],
@@ -233,11 +240,14 @@ def parts(names, size, rounds=7):
 
 
 def png(names, size, rounds=7):
-    """The frame's PNG (frame 1's image) written at zlib level 1 unfiltered (as the command writes
-    it), at level 0 (stored), and with every row's "Up" filter and zlib's run-length strategy
-    (``Z_RLE``): the image's deflate CPU milliseconds (min of 7; the filter's own NumPy time
-    included) and the PNG's bytes."""
+    """The frame's PNG (frame 1's image) deflated as copies of the pixel to the left or above (as
+    the command writes it: :func:`refsoft.io.png._zlib_stream`, with its Adler-32), by zlib at
+    level 1 unfiltered, at level 0 (stored), and with every row's "Up" filter and zlib's
+    run-length strategy (``Z_RLE``): the image's deflate CPU milliseconds (min of 7; the rows'
+    and the filter's own NumPy time included) and the zlib stream's bytes."""
     import zlib
+
+    from refsoft.io.png import _zlib_stream as png_stream
 
     print("scene | PNG | CPU ms (min of 7) | bytes")
     for name in names:
@@ -261,7 +271,10 @@ def png(names, size, rounds=7):
             z = zlib.compressobj(1, zlib.DEFLATED, 15, 8, zlib.Z_RLE)
             return z.compress(rows) + z.flush()
 
-        for what, rows, deflate in (("level 1, unfiltered", unfiltered, lambda r: zlib.compress(r, 1)),
+        pixel = 3 if img.ndim == 3 else 1
+        for what, rows, deflate in (("copies from the left or above, unfiltered", unfiltered,
+                                     lambda r: png_stream(r, pixel, 1)),
+                                    ("level 1, unfiltered", unfiltered, lambda r: zlib.compress(r, 1)),
                                     ("level 0 (stored)", unfiltered, lambda r: zlib.compress(r, 0)),
                                     ("level 1, Up filter, Z_RLE", up, rle)):
             best = float("inf")

@@ -46,9 +46,13 @@ NPZ_PERIOD_BYTES = 24
 #: around it (a full flush ends zlib's block, and a block's Huffman tables cost more CPU and
 #: bytes than zlib's run-length matches over a few pages).
 NPZ_SHORTEST_RUN = 4
-#: Largest run written as one cached deflate output (rounded down to a multiple of
-#: ``NPZ_UNIT_BYTES`` and ``NPZ_PERIOD_BYTES``); a longer run is written as several.
+#: Bytes of other bytes CRC-32'd and deflated at a time (while in cache), and of deflate output
+#: held before it is written to the file.
 NPZ_PIECE_BYTES = 1 << 18
+#: Largest piece of a repeating run written as one cached deflate output: a run is written as
+#: pieces of a multiple of ``NPZ_UNIT_BYTES`` and ``NPZ_PERIOD_BYTES`` times a power of two, at
+#: most this long (refsoft.io.npz._repeat_sizes: a 9.4 MB G-buffer's zeros in 12 pieces, of 2 sizes).
+NPZ_REPEAT_BYTES = 1 << 20
 #: Bytes of an array sampled (in 4 places) to decide whether deflating it pays; arrays smaller
 #: than 4 samples are always deflated.
 NPZ_SAMPLE_BYTES = 1 << 11

@@ -12,8 +12,8 @@ import zlib
 
 import numpy as np
 
-from ..constants import (NPZ_PERIOD_BYTES, NPZ_PIECE_BYTES, NPZ_SAMPLE_BYTES, NPZ_SHORTEST_RUN, NPZ_STORE_RATIO,
-                         NPZ_UNIT_BYTES)
+from ..constants import (NPZ_PERIOD_BYTES, NPZ_PIECE_BYTES, NPZ_REPEAT_BYTES, NPZ_SAMPLE_BYTES, NPZ_SHORTEST_RUN,
+                         NPZ_STORE_RATIO, NPZ_UNIT_BYTES)
 from .atomic import atomic_path
 from .crc import combine
 from .deflate import PieceDeflate
@@ -92,11 +92,23 @@ def _npy_parts(array):
     return buf.getvalue(), data.view(np.uint8)
 
 
-def _chunk_bytes() -> int:
-    """Bytes of the longest repeating piece: a multiple of NPZ_UNIT_BYTES and NPZ_PERIOD_BYTES (so
-    that a run's later pieces start its pattern over) of at most NPZ_PIECE_BYTES."""
-    step = math.lcm(NPZ_UNIT_BYTES, NPZ_PERIOD_BYTES)
-    return max(1, NPZ_PIECE_BYTES // step) * step
+def _repeat_sizes(n: int) -> list:
+    """The pieces a repeating run of ``n`` bytes (whole units) is written as: multiples of
+    ``lcm(NPZ_UNIT_BYTES, NPZ_PERIOD_BYTES)`` (so that each starts the run's pattern over) in
+    powers of two, largest first, at most :data:`~refsoft.constants.NPZ_REPEAT_BYTES` each, then
+    the rest. A run of any length is a few pieces of a few sizes, all cached after the first frames
+    (a cut into equal pieces left a new size at each run's end, compressed again every frame)."""
+    base = math.lcm(NPZ_UNIT_BYTES, NPZ_PERIOD_BYTES)
+    top = base << max(0, (NPZ_REPEAT_BYTES // base).bit_length() - 1)  # the largest base * 2**k allowed
+    whole, rest = divmod(n, base)
+    tops, whole = divmod(whole * base, top)
+    sizes = [top] * tops
+    for bit in range((whole // base).bit_length() - 1, -1, -1):
+        if (whole // base) >> bit & 1:
+            sizes.append(base << bit)
+    if rest:
+        sizes.append(rest)
+    return sizes
 
 
 def _write_member(zf, name, array, level, pages=None, float_level=None):
@@ -143,9 +155,11 @@ def _write_member(zf, name, array, level, pages=None, float_level=None):
                 for a in range(lo, hi, NPZ_PIECE_BYTES):
                     fh.write(data[a:min(hi, a + NPZ_PIECE_BYTES)])
                 continue
-            for a in range(lo, hi, _chunk_bytes()):
+            a = lo
+            for n in _repeat_sizes(hi - lo):
                 deflate.pattern = pattern
-                fh.write(data[a:min(hi, a + _chunk_bytes())])
+                fh.write(data[a:a + n])
+                a += n
 
 
 #: Pixels of the narrowest array written as a picture (:func:`_picture`): an (N, 2) or (N, 3)
@@ -163,7 +177,6 @@ def _write_runs(fh, deflate, data, runs, picture=False):
     ``crc32_combine64``), not computed over its bytes, which are not read; a picture's other
     bytes are one segment (:meth:`~refsoft.io.deflate.PieceDeflate.segment`)."""
     join = combine()
-    chunk = _chunk_bytes()
     crc, out, held = fh._crc, [], 0
     for lo, hi, pattern in runs:
         if pattern is None and picture:
@@ -177,13 +190,12 @@ def _write_runs(fh, deflate, data, runs, picture=False):
                 out.append(deflate.compress(piece))
                 held += len(out[-1])
         else:
-            for a in range(lo, hi, chunk):
-                n = min(hi, a + chunk) - a
+            for n in _repeat_sizes(hi - lo):
                 piece, piece_crc = deflate.repeat(pattern, n)
                 crc = join(crc, piece_crc, n)
                 out.append(piece)
                 held += len(piece)
-        if held >= chunk:  # the output held in memory stays small
+        if held >= NPZ_PIECE_BYTES:  # the output held in memory stays small
             fh._compress_size += _write_out(fh, out)
             held = 0
     fh._compress_size += _write_out(fh, out)
