@@ -54,8 +54,9 @@ NPZ_PIECE_BYTES = 1 << 18
 #: most this long (refsoft.io.npz._repeat_sizes: a 9.4 MB G-buffer's zeros in 12 pieces, of 2 sizes).
 NPZ_REPEAT_BYTES = 1 << 20
 #: Bytes of an array sampled (in 4 places) to decide whether deflating it pays; arrays smaller
-#: than 4 samples are always deflated.
-NPZ_SAMPLE_BYTES = 1 << 11
+#: than 4 samples are always deflated. Deflating samples of high-entropy floats costs ~0.1 ms
+#: per 8 KiB; 2 KiB tell them from the frame's compressible arrays as well as 8 do.
+NPZ_SAMPLE_BYTES = 1 << 9
 #: An array whose samples deflate to more than this share of their size is stored as it is
 #: (zip's "stored"): high-entropy floats (virtual vertices, scores, margins) deflate to 0.6-0.9
 #: of their size at ~60 MB/s, where storing them costs nothing.
