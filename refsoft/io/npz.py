@@ -5,6 +5,7 @@ pages not read (:mod:`refsoft.io.pages`)."""
 
 from __future__ import annotations
 
+import functools
 import io
 import math
 import zipfile
@@ -92,14 +93,20 @@ def _npy_parts(array):
     return buf.getvalue(), data.view(np.uint8)
 
 
-def _repeat_sizes(n: int) -> list:
+def _repeat_sizes(n: int) -> tuple:
     """The pieces a repeating run of ``n`` bytes (whole units) is written as: multiples of
     ``lcm(NPZ_UNIT_BYTES, NPZ_PERIOD_BYTES)`` (so that each starts the run's pattern over) in
     powers of two, largest first, at most :data:`~refsoft.constants.NPZ_REPEAT_BYTES` each, then
     the rest. A run of any length is a few pieces of a few sizes, all cached after the first frames
     (a cut into equal pieces left a new size at each run's end, compressed again every frame)."""
-    base = math.lcm(NPZ_UNIT_BYTES, NPZ_PERIOD_BYTES)
-    top = base << max(0, (NPZ_REPEAT_BYTES // base).bit_length() - 1)  # the largest base * 2**k allowed
+    return _cut(n, NPZ_UNIT_BYTES, NPZ_PERIOD_BYTES, NPZ_REPEAT_BYTES)
+
+
+@functools.lru_cache(maxsize=4096)
+def _cut(n: int, unit: int, period: int, most: int) -> tuple:
+    """:func:`_repeat_sizes` (a frame's runs recur: their cuts are kept)."""
+    base = math.lcm(unit, period)
+    top = base << max(0, (most // base).bit_length() - 1)  # the largest base * 2**k allowed
     whole, rest = divmod(n, base)
     tops, whole = divmod(whole * base, top)
     sizes = [top] * tops
@@ -108,7 +115,7 @@ def _repeat_sizes(n: int) -> list:
             sizes.append(base << bit)
     if rest:
         sizes.append(rest)
-    return sizes
+    return tuple(sizes)
 
 
 def _write_member(zf, name, array, level, pages=None, float_level=None):

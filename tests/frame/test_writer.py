@@ -215,7 +215,7 @@ def test_repeating_runs_are_written_in_few_sizes():
         sizes = npz._repeat_sizes(n)
         assert sum(sizes) == n
         whole = [s for s in sizes if s % base == 0]
-        assert sizes[:len(whole)] == whole and len(sizes) - len(whole) <= 1  # the rest, last
+        assert list(sizes[:len(whole)]) == whole and len(sizes) - len(whole) <= 1  # the rest, last
         assert all(s // base & (s // base - 1) == 0 and s <= top for s in whole)  # a power of two
         assert whole == sorted(whole, reverse=True) and len(sizes) <= n // top + 7
         sizes_seen.update(sizes)
