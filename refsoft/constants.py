@@ -61,11 +61,11 @@ NPZ_SAMPLE_BYTES = 1 << 9
 #: (zip's "stored"): high-entropy floats (virtual vertices, scores, margins) deflate to 0.6-0.9
 #: of their size at ~60 MB/s, where storing them costs nothing.
 NPZ_STORE_RATIO = 0.5
-#: A picture's bytes (a frame's image, its id maps, its PNG's rows) outside their repeating runs
-#: are written by :func:`refsoft.io.neighbour.neighbour_deflate` (each byte a copy of the pixel
-#: to its left or above, or a literal: 3-4 times zlib level 1's speed on a flat frame) unless more
-#: than this share of them must be literals (a textured picture: zlib's output is then much
-#: smaller, and as fast).
+#: A picture's bytes (a frame's image, its id maps, its G-buffer masks, its PNG's rows) outside
+#: their repeating runs are written by :func:`refsoft.io.neighbour.neighbour_deflate` (each byte
+#: a copy of the pixel to its left or above, or a literal: 3-5 times zlib level 1's speed on a flat
+#: frame) unless more than this share of them must be literals (a textured picture: zlib's output
+#: is then much smaller, and as fast).
 NPZ_LITERAL_SHARE = 1 / 32
 
 # --- Shading (spec section 5) -----------------------------------------------------------

@@ -4,10 +4,10 @@ left, of the pixel above, or a literal, in one block of deflate's fixed Huffman 
 A frame's image, its id maps and its PNG's rows are flat (98-99.9 % of the pixels of the
 kitchen, ufo and ants frames equal the one to their left or above), and zlib's level 1 spends
 ~1.2 ms per MB looking for matches anywhere in its window. This encoder looks only at those two
-distances, found by NumPy, and runs at 2-4 GB/s on such a frame; its output is a standard deflate stream that
-zlib, zipfile, NumPy and every PNG reader decode (tests/frame/test_neighbour.py decodes it with
-``zlib``). zlib cannot be told to search only some distances, and Python's ``zlib`` module is
-the only deflate encoder a refsoft install has, hence this one.
+distances (where each byte differs from them: NumPy) and runs at 2-4 GB/s on such a frame; its
+output is a standard deflate stream that zlib, zipfile, NumPy and every PNG reader decode
+(tests/frame/test_neighbour.py). zlib cannot be told to search only some distances, and
+Python's ``zlib`` module is the only deflate encoder a refsoft install has, hence this one.
 
 The segment refers to ``data`` before ``lo`` (up to 32 KiB back) as the bytes the decoder has
 already produced, so it may follow any byte-aligned deflate output of ``data[:lo]`` that refers
@@ -19,6 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._numba import kernel
+from ..errors import RefsoftError
 
 #: The farthest a deflate match may refer back (RFC 1951: 32 KiB).
 WINDOW = 32768
@@ -115,8 +116,17 @@ def neighbour_deflate(data, lo: int, hi: int, pixel: int, row: int, final: bool 
     Returns
     -------
     bytes or None
+
+    Raises
+    ------
+    RefsoftError
+        ``data`` is not (n,) uint8, the segment is outside it, or a distance is below 1.
     """
-    data = np.ascontiguousarray(data).reshape(-1).view(np.uint8)
+    data = np.asarray(data)
+    if data.dtype != np.uint8 or data.ndim != 1 or not 0 <= lo <= hi <= data.size or min(pixel, row) < 1:
+        raise RefsoftError(f"neighbour_deflate needs (n,) uint8 bytes, 0 <= lo <= hi <= n and distances >= 1, got "
+                           f"{data.dtype} {data.shape}, lo {lo}, hi {hi}, distances {pixel}, {row}")
+    data = np.ascontiguousarray(data)
     pixel = pixel if 1 <= pixel <= WINDOW else 0
     row = row if 1 <= row <= WINDOW and row != pixel else 0
     np_, nr = _differs(data, lo, hi, pixel), _differs(data, lo, hi, row)
@@ -127,8 +137,9 @@ def neighbour_deflate(data, lo: int, hi: int, pixel: int, row: int, final: bool 
     pd, pb = _distance(pixel) if pixel else (0, 0)
     rd, rb = _distance(row) if row else (0, 0)
     out = np.empty((hi - lo) * 9 // 8 + 16, np.uint8)
-    n = _encode(data, lo, hi, pixel, pd, pb, mp, row, rd, rb, mr, final, -1 if most_literals is None else most_literals,
-                out, _LIT_VAL, _LIT_BITS, _LEN_VAL, _LEN_BITS)
+    most = -1 if most_literals is None else int(most_literals)
+    n = _encode(data, lo, hi, pixel, pd, pb, mp, row, rd, rb, mr, final, most, out, _LIT_VAL, _LIT_BITS, _LEN_VAL,
+                _LEN_BITS)
     return None if n < 0 else out[:n].tobytes()
 
 

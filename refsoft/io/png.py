@@ -34,7 +34,7 @@ def _zlib_stream(rows, pixel: int, level: int) -> bytes:
     if level:
         from .neighbour import neighbour_deflate  # (Numba: loaded by the first PNG written)
 
-        seg = neighbour_deflate(rows, 0, rows.size, pixel, rows.shape[1], final=True,
+        seg = neighbour_deflate(rows.reshape(-1), 0, rows.size, pixel, rows.shape[1], final=True,
                                 most_literals=int(rows.size * NPZ_LITERAL_SHARE))
         if seg is not None:
             return b"\x78\x01" + seg + struct.pack(">I", zlib.adler32(rows))

@@ -78,7 +78,18 @@ def test_long_runs_and_literal_limit():
     one = np.zeros(600, np.uint8)
     one[300] = 9  # two literals: the first byte (nothing before it), the 9
     assert neighbour_deflate(one, 0, one.size, 1, 50, most_literals=1) is None
-    assert zlib.decompress(neighbour_deflate(one, 0, one.size, 1, 50, final=True, most_literals=2), -15) == one.tobytes()
+    two = neighbour_deflate(one, 0, one.size, 1, 50, final=True, most_literals=2)
+    assert zlib.decompress(two, -15) == one.tobytes()
+
+
+def test_bad_segments_are_refused():
+    from refsoft.errors import RefsoftError
+
+    data = np.zeros(100, np.uint8)
+    for args in [(data, 0, 101, 3, 30), (data, 50, 40, 3, 30), (data, -1, 10, 3, 30), (data, 0, 10, 0, 30),
+                 (data.astype(np.int32), 0, 10, 3, 30), (data.reshape(10, 10), 0, 10, 3, 30)]:
+        with pytest.raises(RefsoftError):
+            neighbour_deflate(*args)
 
 
 def _pictures(rng):
