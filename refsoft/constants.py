@@ -67,6 +67,9 @@ NPZ_STORE_RATIO = 0.5
 #: frame) unless more than this share of them must be literals (a textured picture: zlib's output
 #: is then much smaller, and as fast).
 NPZ_LITERAL_SHARE = 1 / 32
+#: A picture's other bytes shorter than this (a G-buffer mask's reflector rows) go to zlib: the
+#: encoder's fixed cost (its NumPy passes, ~40 us) is more than zlib takes over them.
+NPZ_PICTURE_BYTES = 1 << 16
 
 # --- Shading (spec section 5) -----------------------------------------------------------
 #: Fixed world-space direction *towards* the light (normalised at import).

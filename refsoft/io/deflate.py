@@ -8,7 +8,7 @@ import zlib
 
 import numpy as np
 
-from ..constants import NPZ_LITERAL_SHARE
+from ..constants import NPZ_LITERAL_SHARE, NPZ_PICTURE_BYTES
 
 #: (pattern, n, level, strategy) -> (deflate output, CRC-32) of a repeating piece.
 _PIECES = {}
@@ -70,9 +70,10 @@ class PieceDeflate:
     def segment(self, data, lo: int, hi: int) -> bytes:
         """The deflate output of ``data[lo:hi]`` (``data``: the member's whole (n,) uint8 bytes, of
         which ``data[:lo]`` went before), each byte copied from the pixel to its left or above
-        where the stream is a picture (``picture``: (pixel, row) bytes) with few literals
+        where the stream is a picture (``picture``: (pixel, row) bytes), the segment at least
+        :data:`~refsoft.constants.NPZ_PICTURE_BYTES` long and with few literals
         (:func:`~refsoft.io.neighbour.neighbour_deflate`, after the open block), else zlib's."""
-        if self._picture is not None:
+        if self._picture is not None and hi - lo >= NPZ_PICTURE_BYTES:
             from .neighbour import neighbour_deflate  # (Numba: loaded by the first picture written)
 
             pixel, row = self._picture

@@ -102,11 +102,13 @@ def _pictures(rng):
 
 @pytest.fixture
 def small_units(monkeypatch):
-    """Units of 128 bytes, runs of 2 units or more: pictures cut into several runs."""
+    """Units of 128 bytes, runs of 2 units or more: pictures cut into several runs, each written
+    by the encoder however short."""
     import refsoft.io
 
     monkeypatch.setattr(refsoft.io.npz, "NPZ_UNIT_BYTES", 128)
     monkeypatch.setattr(refsoft.io.npz, "NPZ_SHORTEST_RUN", 2)
+    monkeypatch.setattr(refsoft.io.deflate, "NPZ_PICTURE_BYTES", 0)
 
 
 def test_npz_pictures_read_back_every_way(tmp_path, small_units, monkeypatch):
@@ -130,6 +132,12 @@ def test_npz_pictures_read_back_every_way(tmp_path, small_units, monkeypatch):
     refsoft.io.write_npz_level(tmp_path / "noisy.npz", {"noisy": arrays["noisy"]}, 1, 0)
     assert calls and not any(calls)  # left to zlib
     calls.clear()
+    monkeypatch.setattr(refsoft.io.deflate, "NPZ_PICTURE_BYTES", clean.nbytes + 1)
+    refsoft.io.write_npz_level(tmp_path / "short.npz", {"image": clean}, 1, 0)
+    assert calls == []  # shorter than NPZ_PICTURE_BYTES: zlib's
+    with np.load(tmp_path / "short.npz") as z:
+        assert z["image"].tobytes() == clean.tobytes()
+    monkeypatch.setattr(refsoft.io.deflate, "NPZ_PICTURE_BYTES", 0)
     vertices = np.repeat(np.arange(300, dtype=np.int32), 2).reshape(300, 2)  # one vertex per row
     refsoft.io.write_npz_level(tmp_path / "v.npz", {"pixel": vertices}, 1, 0)
     assert calls == []  # not a picture: zlib's
