@@ -9,10 +9,12 @@ runs in turn (so that both see the same state of the machine):
   ``main``, in this process), its frames written by the background writer.
 
 It prints per round the wall and process CPU milliseconds per frame of both, their ratios
-(command / loop), and the command's ``stats.json`` medians (``total``: the render's stages;
-``write_cpu``: the writer thread's CPU per frame). The CPU ratio is the better guide on a shared
-machine: the loop's CPU is the render's, the command's adds the writer's and what it costs the
-render (the GIL, caches).
+(command / loop), the same of the command's frames alone (``run_frames``: from the first frame's
+render to the last frame's files and ``stats.json``; without the command's start, its parser and
+the scene's loading, which the loop does not pay either), and the command's ``stats.json``
+medians (``total``: the render's stages; ``write_cpu``: the writer thread's CPU per frame). The
+CPU ratio is the better guide on a shared machine: the loop's CPU is the render's, the command's
+adds the writer's and what it costs the render (the GIL, caches).
 
 Run: ``python benchmarks/writer.py [SCENE ...] [--frames 10] [--rounds 3] [--size 1024x768] [--bare]``;
 ``--bare``: each round also runs the command with its files not written (``write_frame`` a no-op),
@@ -20,12 +22,13 @@ its process CPU per frame: what the command costs beside its writer (the scene's
 folder, ``stats.json``, the progress).
 With ``--parts``: instead, one frame's files written whole (``write_frame``) from fresh copies of
 its arrays, the writer thread's CPU milliseconds (min and median of 7, the variants in turn),
-with each part of the writer turned off in turn: the repeating pieces written past zipfile's
-member writer (their CRC-32 combined by zlib, their untouched pages not read), the untouched pages
-not read, the float members' other bytes stored (``FRAME_FLOAT_LEVEL = 0``), the PNG's
-unfiltered rows (Pillow's encoder instead); and the npz's bytes.
-With ``--png``: instead, the frame's PNG deflated three ways (the command's, stored, "Up"
-filter with ``Z_RLE``): CPU milliseconds and bytes.
+with each part of the writer turned off in turn: the pictures (image, id maps, masks, the PNG)
+deflated as copies from the left or above (zlib instead), the repeating pieces written past
+zipfile's member writer (their CRC-32 combined by zlib, their untouched pages not read), the
+untouched pages not read, the float members' other bytes stored (``FRAME_FLOAT_LEVEL = 0``), the
+PNG's unfiltered rows (Pillow's encoder instead); and the npz's bytes.
+With ``--png``: instead, the frame's PNG deflated four ways (the command's copies from the left
+or above, zlib level 1, stored, "Up" filter with ``Z_RLE``): CPU milliseconds and bytes.
 With ``--members``: instead, one frame (frame 1 after frame 0) written whole, the best of 3
 writes of fresh copies (whose untouched pages are the render's): per member its bytes, the share
 of them in repeating runs, its bytes in the file and the writer thread's CPU milliseconds; the
@@ -53,18 +56,31 @@ SCENES = ["kitchen", "ufo", "ants"]
 
 def _command(argv, n, write=True):
     """Wall and process CPU seconds per frame of ``refsoft ARGV`` in this process (``write=False``:
-    its frames' files not written, ``write_frame`` a no-op)."""
+    its frames' files not written, ``write_frame`` a no-op), and of its frames alone
+    (``run_frames``: from the first frame's render to the last frame's files and ``stats.json``,
+    without the command's start: its parser, the scene's loading, the folder)."""
     from unittest import mock
 
     from refsoft.frame import driver
 
-    with mock.patch.object(driver, "write_frame", driver.write_frame if write else lambda out, fr: None):
+    frames = []
+    real_run = driver.run_frames
+
+    def timed_run(*args, **kwargs):
+        t, c = time.perf_counter(), time.process_time()
+        try:
+            return real_run(*args, **kwargs)
+        finally:
+            frames.append(((time.perf_counter() - t) / n, (time.process_time() - c) / n))
+
+    with mock.patch.object(driver, "write_frame", driver.write_frame if write else lambda out, fr: None), \
+            mock.patch.object(driver, "run_frames", timed_run):
         t, c = time.perf_counter(), time.process_time()
         code = cli_main(argv)
         took = (time.perf_counter() - t) / n, (time.process_time() - c) / n
     if code:
         raise SystemExit(f"refsoft {' '.join(argv)} exited with {code}")
-    return took
+    return took, frames[0]
 
 
 def _round(scene, name, n, size, out, bare=False):
@@ -75,32 +91,35 @@ def _round(scene, name, n, size, out, bare=False):
     loop = (time.perf_counter() - t) / n, (time.process_time() - c) / n
     w, h = size
     argv = ["render", name, "--frames", str(n), "--width", str(w), "--height", str(h), "--out", out, "--overwrite"]
-    cmd = _command(argv, n)
+    cmd, run = _command(argv, n)
     with open(os.path.join(out, "stats.json")) as fh:
         frames = json.load(fh)["frames"]
     med = {k: statistics.median(f["time_ms"][k] for f in frames) for k in ("total", "write", "write_cpu")}
-    med["bare_cpu"] = 1000 * _command(argv, n, write=False)[1] if bare else float("nan")
-    return loop, cmd, med
+    med["bare_cpu"] = 1000 * _command(argv, n, write=False)[0][1] if bare else float("nan")
+    return loop, cmd, run, med
 
 
 def ratios(names, n, rounds, size, bare=False):
     out = tempfile.mkdtemp(prefix="refsoft-writer-")
     try:
         print("scene round | loop wall, CPU ms/frame | command wall, CPU ms/frame | wall ratio | CPU ratio | "
+              "its frames wall, CPU ms/frame | frames' wall ratio | frames' CPU ratio | "
               "stats total, write, write_cpu ms" + (" | command without writing, CPU ms/frame" if bare else ""))
         for name in names:
             scene = refsoft.load_scene(name, width=size[0], height=size[1])
             FrameDriver(scene).render_frame(0)  # compiled (or loaded from the cache) outside the timing
             rows = []
             for r in range(rounds):
-                loop, cmd, med = _round(scene, name, n, size, os.path.join(out, name), bare)
-                rows.append((cmd[0] / loop[0], cmd[1] / loop[1]))
+                loop, cmd, run, med = _round(scene, name, n, size, os.path.join(out, name), bare)
+                rows.append((cmd[0] / loop[0], cmd[1] / loop[1], run[0] / loop[0], run[1] / loop[1]))
                 print(f"{name} {r} | {1000 * loop[0]:.0f}, {1000 * loop[1]:.0f} | {1000 * cmd[0]:.0f}, "
-                      f"{1000 * cmd[1]:.0f} | {rows[-1][0]:.3f} | {rows[-1][1]:.3f} | "
+                      f"{1000 * cmd[1]:.0f} | {rows[-1][0]:.3f} | {rows[-1][1]:.3f} | {1000 * run[0]:.0f}, "
+                      f"{1000 * run[1]:.0f} | {rows[-1][2]:.3f} | {rows[-1][3]:.3f} | "
                       f"{med['total']:.0f}, {med['write']:.0f}, {med['write_cpu']:.1f}"
                       + (f" | {med['bare_cpu']:.0f}" if bare else ""), flush=True)
-            print(f"{name}: wall ratio {min(r[0] for r in rows):.3f}-{max(r[0] for r in rows):.3f}, "
-                  f"CPU ratio {min(r[1] for r in rows):.3f}-{max(r[1] for r in rows):.3f}", flush=True)
+            spread = [f"{min(r[i] for r in rows):.3f}-{max(r[i] for r in rows):.3f}" for i in range(4)]
+            print(f"{name}: command: wall ratio {spread[0]}, CPU ratio {spread[1]}; its frames: wall ratio "
+                  f"{spread[2]}, CPU ratio {spread[3]}", flush=True)
     finally:
         shutil.rmtree(out, ignore_errors=True)
 
@@ -174,12 +193,18 @@ def members(names, size):
 
 
 def _variants():
+    import zlib
     from unittest import mock
 
     from refsoft import io
     from refsoft.frame import outputs
 
+    def zlib_stream(rows, pixel, level):
+        return zlib.compress(rows, level)
+
     return {"as it is": [],
+            "pictures by zlib": [mock.patch.object(io.npz, "_picture", lambda array: None),
+                                 mock.patch.object(io.png, "_zlib_stream", zlib_stream)],
             "every byte through zipfile's member writer": [mock.patch.object(io.crc, "_COMBINE", [None])],
             "untouched pages read": [mock.patch.object(io.pages.PageMap, "untouched", lambda self, data: None)],
             "float bytes deflated": [mock.patch.object(outputs, "FRAME_FLOAT_LEVEL", None)],
@@ -215,11 +240,14 @@ def parts(names, size, rounds=7):
 
 
 def png(names, size, rounds=7):
-    """The frame's PNG (frame 1's image) written at zlib level 1 unfiltered (as the command writes
-    it), at level 0 (stored), and with every row's "Up" filter and zlib's run-length strategy
-    (``Z_RLE``): the image's deflate CPU milliseconds (min of 7; the filter's own NumPy time
-    included) and the PNG's bytes."""
+    """The frame's PNG (frame 1's image) deflated as copies of the pixel to the left or above (as
+    the command writes it: :func:`refsoft.io.png._zlib_stream`, with its Adler-32), by zlib at
+    level 1 unfiltered, at level 0 (stored), and with every row's "Up" filter and zlib's
+    run-length strategy (``Z_RLE``): the image's deflate CPU milliseconds (min of 7; the rows'
+    and the filter's own NumPy time included) and the zlib stream's bytes."""
     import zlib
+
+    from refsoft.io.png import _zlib_stream as png_stream
 
     print("scene | PNG | CPU ms (min of 7) | bytes")
     for name in names:
@@ -243,7 +271,10 @@ def png(names, size, rounds=7):
             z = zlib.compressobj(1, zlib.DEFLATED, 15, 8, zlib.Z_RLE)
             return z.compress(rows) + z.flush()
 
-        for what, rows, deflate in (("level 1, unfiltered", unfiltered, lambda r: zlib.compress(r, 1)),
+        pixel = 3 if img.ndim == 3 else 1
+        for what, rows, deflate in (("copies from the left or above, unfiltered", unfiltered,
+                                     lambda r: png_stream(r, pixel, 1)),
+                                    ("level 1, unfiltered", unfiltered, lambda r: zlib.compress(r, 1)),
                                     ("level 0 (stored)", unfiltered, lambda r: zlib.compress(r, 0)),
                                     ("level 1, Up filter, Z_RLE", up, rle)):
             best = float("inf")

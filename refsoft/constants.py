@@ -46,16 +46,30 @@ NPZ_PERIOD_BYTES = 24
 #: around it (a full flush ends zlib's block, and a block's Huffman tables cost more CPU and
 #: bytes than zlib's run-length matches over a few pages).
 NPZ_SHORTEST_RUN = 4
-#: Largest run written as one cached deflate output (rounded down to a multiple of
-#: ``NPZ_UNIT_BYTES`` and ``NPZ_PERIOD_BYTES``); a longer run is written as several.
+#: Bytes of other bytes CRC-32'd and deflated at a time (while in cache), and of deflate output
+#: held before it is written to the file.
 NPZ_PIECE_BYTES = 1 << 18
+#: Largest piece of a repeating run written as one cached deflate output: a run is written as
+#: pieces of a multiple of ``NPZ_UNIT_BYTES`` and ``NPZ_PERIOD_BYTES`` times a power of two, at
+#: most this long (refsoft.io.npz._repeat_sizes: a 9.4 MB G-buffer's zeros in 12 pieces, of 2 sizes).
+NPZ_REPEAT_BYTES = 1 << 20
 #: Bytes of an array sampled (in 4 places) to decide whether deflating it pays; arrays smaller
-#: than 4 samples are always deflated.
-NPZ_SAMPLE_BYTES = 1 << 11
+#: than 4 samples are always deflated. Deflating samples of high-entropy floats costs ~0.1 ms
+#: per 8 KiB; 2 KiB tell them from the frame's compressible arrays as well as 8 do.
+NPZ_SAMPLE_BYTES = 1 << 9
 #: An array whose samples deflate to more than this share of their size is stored as it is
 #: (zip's "stored"): high-entropy floats (virtual vertices, scores, margins) deflate to 0.6-0.9
 #: of their size at ~60 MB/s, where storing them costs nothing.
 NPZ_STORE_RATIO = 0.5
+#: A picture's bytes (a frame's image, its id maps, its G-buffer masks, its PNG's rows) outside
+#: their repeating runs are written by :func:`refsoft.io.neighbour.neighbour_deflate` (each byte
+#: a copy of the pixel to its left or above, or a literal: 3-5 times zlib level 1's speed on a flat
+#: frame) unless more than this share of them must be literals (a textured picture: zlib's output
+#: is then much smaller, and as fast).
+NPZ_LITERAL_SHARE = 1 / 32
+#: A picture's other bytes shorter than this (a G-buffer mask's reflector rows) go to zlib: the
+#: encoder's fixed cost (its NumPy passes, ~40 us) is more than zlib takes over them.
+NPZ_PICTURE_BYTES = 1 << 16
 
 # --- Shading (spec section 5) -----------------------------------------------------------
 #: Fixed world-space direction *towards* the light (normalised at import).

@@ -21,7 +21,7 @@ from ..raster import color_pass, to_uint8
 from ..scene.model import Scene
 from ..seam import FrameView
 from ..options import RenderOptions
-from .outputs import frame_stats, write_frame
+from .outputs import StatsFile, frame_stats, write_frame
 
 #: Timing keys every frame reports after its method's own stages.
 FRAME_STAGES = ("main", "composite")
@@ -395,7 +395,6 @@ def run_to_folder(driver, indices, out, kind, options, progress=False, keep=True
     (frames, stats)."""
     import os
 
-    from ..io import write_json
     from .outputs import prepare_run_folder, run_manifest
 
     written = indices if write is None else [f for f in indices if f in write]
@@ -405,14 +404,18 @@ def run_to_folder(driver, indices, out, kind, options, progress=False, keep=True
     if on_start is not None:
         on_start()
 
+    def written_of(frames):
+        return frames if write is None else [f for f in frames if f.index in write]
+
     def stats_of(frames):
-        return frame_stats(frames if write is None else [f for f in frames if f.index in write], options)
+        return frame_stats(written_of(frames), options)
 
     run_files = getattr(getattr(driver, "method", None), "run_files", None)
     written_once = []
+    stats_file = StatsFile(options)  # each frame's entry encoded once, not at every rewrite
 
     def save(frames):
-        write_json(os.path.join(out, "stats.json"), stats_of(frames))
+        stats_file.write(os.path.join(out, "stats.json"), written_of(frames))
         if run_files is not None and frames and not written_once:  # once, after the first frame
             from ..io import write_npz
 

@@ -45,8 +45,60 @@ def frame_stats(frames, options=None) -> dict:
     truth: reflector pixels and hits); a summary over the frames (with the median write of a
     frame's files, wall and CPU milliseconds, when they were written)."""
     out = {} if options is None else {"options": options.as_dict()}
-    out["frames"] = [{"frame": f.index, "time_ms": {k: round(v, 3) for k, v in f.time_ms.items()}, **f.report}
-                     for f in frames]
+    out["frames"] = [frame_entry(f) for f in frames]
+    out["summary"] = _summary(frames, options)
+    return out
+
+
+def frame_entry(frame) -> dict:
+    """A frame's entry in ``stats.json``: its index, stage milliseconds (rounded to the
+    microsecond) and what its reflection method reports."""
+    return {"frame": frame.index, "time_ms": {k: round(v, 3) for k, v in frame.time_ms.items()}, **frame.report}
+
+
+class StatsFile:
+    """``stats.json`` written again after each frame of a run (:func:`frame_stats` of the frames
+    so far, the bytes :func:`refsoft.io.write_json` writes): each frame's entry is encoded once
+    and kept, so that a long run's rewrites cost the summary and the copy, not an encoding of
+    every earlier frame."""
+
+    #: Stands for the frames' entries in the encoded rest of the file.
+    _HOLE = "\x00frames\x00"
+
+    def __init__(self, options=None):
+        self._options = options
+        self._done = []  # (frame, its entry as JSON, indented as an item of the list)
+
+    def text(self, frames) -> str:
+        """The file's text for ``frames`` (a list that grows from one call to the next)."""
+        import json
+
+        keep = 0
+        while keep < min(len(frames), len(self._done)) and self._done[keep][0] is frames[keep]:
+            keep += 1
+        del self._done[keep:]
+        for f in frames[keep:]:
+            entry = json.dumps(frame_entry(f), indent=1)
+            self._done.append((f, "\n".join("  " + line for line in entry.split("\n"))))
+        out = {} if self._options is None else {"options": self._options.as_dict()}
+        out["frames"] = [self._HOLE] if frames else []
+        out["summary"] = _summary(frames, self._options)
+        text = json.dumps(out, indent=1)
+        if frames:
+            text = text.replace("  " + json.dumps(self._HOLE), ",\n".join(t for _, t in self._done), 1)
+        return text + "\n"
+
+    def write(self, path, frames) -> None:
+        """Write the file for ``frames`` to ``path`` atomically."""
+        from ..io import atomic_path
+
+        with atomic_path(path) as tmp:
+            with open(tmp, "w") as fh:
+                fh.write(self.text(frames))
+
+
+def _summary(frames, options) -> dict:
+    """``stats.json``'s summary over ``frames``."""
     summary = {}
     means = [np.mean([v["mean"] for v in f.report["iterations"].values()]) for f in frames
              if f.report.get("iterations")]
@@ -69,8 +121,7 @@ def frame_stats(frames, options=None) -> dict:
         summary["median_write_ms"] = float(np.median(writes))
         summary["median_write_cpu_ms"] = float(np.median([f.time_ms["write_cpu"] for f in frames
                                                            if "write_cpu" in f.time_ms]))
-    out["summary"] = summary
-    return out
+    return summary
 
 
 def write_gbuffers(scene, out, frame: int = 0, reflectors=None, widen: float = 1.0, precision="float32",

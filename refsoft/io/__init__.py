@@ -4,7 +4,8 @@ Writes are atomic (:mod:`refsoft.io.atomic`): every output is written under a te
 the same folder, then renamed, so an interrupted run never leaves a torn file and never damages
 an existing one. A frame's ``.npz`` is written by :mod:`refsoft.io.npz` (with
 :mod:`~refsoft.io.runs`, :mod:`~refsoft.io.deflate`, :mod:`~refsoft.io.crc` and
-:mod:`~refsoft.io.pages`), its PNG by :mod:`refsoft.io.png`.
+:mod:`~refsoft.io.pages`), its PNG by :mod:`refsoft.io.png`; the flat pictures of both (the
+image, the id maps) by :mod:`refsoft.io.neighbour`.
 
 Reads (:func:`read_npz`, :func:`read_json`, :mod:`refsoft.io.read`) turn a missing, unreadable or
 malformed file into one :class:`~refsoft.errors.InputFileError` whose one-line message names the

@@ -8,6 +8,8 @@ import zlib
 
 import numpy as np
 
+from ..constants import NPZ_LITERAL_SHARE, NPZ_PICTURE_BYTES
+
 #: (pattern, n, level, strategy) -> (deflate output, CRC-32) of a repeating piece.
 _PIECES = {}
 #: Entries kept at most: a run's patterns are few (zeros, the background's ids and colours), but a
@@ -41,23 +43,47 @@ class PieceDeflate:
     """A raw deflate stream (what zipfile's ZIP_DEFLATED compressor writes) fed in pieces: a piece
     that repeats a pattern ends the stream's open block with a full flush (after which zlib refers
     to nothing earlier) and is written as :func:`repeat_piece` (:meth:`repeat`); any other piece
-    goes to zlib at ``other_level`` (default ``level``; 0: stored blocks). ``pattern``: set by a
-    caller that hands the next piece through zipfile's member writer (which calls
-    :meth:`compress`), to say that it repeats this pattern."""
+    goes to zlib at ``other_level`` (default ``level``; 0: stored blocks), or, for a picture, to
+    :meth:`segment`. ``pattern`` and ``span``: set by a caller that hands the next piece through
+    zipfile's member writer (which calls :meth:`compress`), to say that it repeats this pattern,
+    or that it is ``data[lo:hi]`` of the member's bytes ``data`` (``span = (data, lo, hi)``)."""
 
-    def __init__(self, level: int, strategy: int = zlib.Z_DEFAULT_STRATEGY, other_level=None):
+    def __init__(self, level: int, strategy: int = zlib.Z_DEFAULT_STRATEGY, other_level=None, picture=None):
         self._level = level
         self._strategy = strategy
         self._z = zlib.compressobj(level if other_level is None else other_level, zlib.DEFLATED, -15, 8, strategy)
         self._open = False  # input given to self._z since its last full flush
+        self._picture = picture
         self.pattern = None
+        self.span = None
 
     def compress(self, data) -> bytes:
         if self.pattern is not None:
             pattern, self.pattern = self.pattern, None
             return self.repeat(pattern, memoryview(data).nbytes)[0]
+        if self.span is not None:
+            (whole, lo, hi), self.span = self.span, None
+            return self.segment(whole, lo, hi)
         self._open = True
         return self._z.compress(data)
+
+    def segment(self, data, lo: int, hi: int) -> bytes:
+        """The deflate output of ``data[lo:hi]`` (``data``: the member's whole (n,) uint8 bytes, of
+        which ``data[:lo]`` went before), each byte copied from the pixel to its left or above
+        where the stream is a picture (``picture``: (pixel, row) bytes), the segment at least
+        :data:`~refsoft.constants.NPZ_PICTURE_BYTES` long and with few literals
+        (:func:`~refsoft.io.neighbour.neighbour_deflate`, after the open block), else zlib's."""
+        if self._picture is not None and hi - lo >= NPZ_PICTURE_BYTES:
+            from .neighbour import neighbour_deflate  # (Numba: loaded by the first picture written)
+
+            pixel, row = self._picture
+            seg = neighbour_deflate(data, lo, hi, pixel, row, most_literals=int((hi - lo) * NPZ_LITERAL_SHARE))
+            if seg is not None:
+                out = self._z.flush(zlib.Z_FULL_FLUSH) if self._open else b""
+                self._open = False
+                return out + seg
+        self._open = True
+        return self._z.compress(data[lo:hi])
 
     def repeat(self, pattern: bytes, n: int):
         """The deflate output of ``n`` bytes repeating ``pattern``, after the stream's open block,

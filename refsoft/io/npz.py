@@ -5,6 +5,7 @@ pages not read (:mod:`refsoft.io.pages`)."""
 
 from __future__ import annotations
 
+import functools
 import io
 import math
 import zipfile
@@ -12,8 +13,8 @@ import zlib
 
 import numpy as np
 
-from ..constants import (NPZ_PERIOD_BYTES, NPZ_PIECE_BYTES, NPZ_SAMPLE_BYTES, NPZ_SHORTEST_RUN, NPZ_STORE_RATIO,
-                         NPZ_UNIT_BYTES)
+from ..constants import (NPZ_PERIOD_BYTES, NPZ_PIECE_BYTES, NPZ_REPEAT_BYTES, NPZ_SAMPLE_BYTES, NPZ_SHORTEST_RUN,
+                         NPZ_STORE_RATIO, NPZ_UNIT_BYTES)
 from .atomic import atomic_path
 from .crc import combine
 from .deflate import PieceDeflate
@@ -92,11 +93,29 @@ def _npy_parts(array):
     return buf.getvalue(), data.view(np.uint8)
 
 
-def _chunk_bytes() -> int:
-    """Bytes of the longest repeating piece: a multiple of NPZ_UNIT_BYTES and NPZ_PERIOD_BYTES (so
-    that a run's later pieces start its pattern over) of at most NPZ_PIECE_BYTES."""
-    step = math.lcm(NPZ_UNIT_BYTES, NPZ_PERIOD_BYTES)
-    return max(1, NPZ_PIECE_BYTES // step) * step
+def _repeat_sizes(n: int) -> tuple:
+    """The pieces a repeating run of ``n`` bytes (whole units) is written as: multiples of
+    ``lcm(NPZ_UNIT_BYTES, NPZ_PERIOD_BYTES)`` (so that each starts the run's pattern over) in
+    powers of two, largest first, at most :data:`~refsoft.constants.NPZ_REPEAT_BYTES` each, then
+    the rest. A run of any length is a few pieces of a few sizes, all cached after the first frames
+    (a cut into equal pieces left a new size at each run's end, compressed again every frame)."""
+    return _cut(n, NPZ_UNIT_BYTES, NPZ_PERIOD_BYTES, NPZ_REPEAT_BYTES)
+
+
+@functools.lru_cache(maxsize=4096)
+def _cut(n: int, unit: int, period: int, most: int) -> tuple:
+    """:func:`_repeat_sizes` (a frame's runs recur: their cuts are kept)."""
+    base = math.lcm(unit, period)
+    top = base << max(0, (most // base).bit_length() - 1)  # the largest base * 2**k allowed
+    whole, rest = divmod(n, base)
+    tops, whole = divmod(whole * base, top)
+    sizes = [top] * tops
+    for bit in range((whole // base).bit_length() - 1, -1, -1):
+        if (whole // base) >> bit & 1:
+            sizes.append(base << bit)
+    if rest:
+        sizes.append(rest)
+    return tuple(sizes)
 
 
 def _write_member(zf, name, array, level, pages=None, float_level=None):
@@ -120,7 +139,9 @@ def _write_member(zf, name, array, level, pages=None, float_level=None):
         # on a G-buffer, whose float bytes seldom repeat beyond the runs of zeros; or stored)
         floats = array.dtype.kind in "fc"
         other = float_level if floats and float_level is not None else level
-        deflate = fh._compressor = PieceDeflate(level, zlib.Z_RLE if floats else zlib.Z_DEFAULT_STRATEGY, other)
+        picture = _picture(array)
+        deflate = fh._compressor = PieceDeflate(level, zlib.Z_RLE if floats else zlib.Z_DEFAULT_STRATEGY, other,
+                                                picture)
         fh.write(header)
         # a repeating piece bypasses the member writer (when it has the state this module
         # knows): its CRC-32 is combined from the piece's, not computed over its bytes again
@@ -130,45 +151,58 @@ def _write_member(zf, name, array, level, pages=None, float_level=None):
         shortest = 1 if other == 0 else NPZ_SHORTEST_RUN
         runs = repeating_runs(data, NPZ_UNIT_BYTES, NPZ_PERIOD_BYTES, skip, shortest)
         if direct:
-            _write_runs(fh, deflate, data, runs)
+            _write_runs(fh, deflate, data, runs, picture is not None)
             return
         for lo, hi, pattern in runs:  # through the member writer, which reads every byte
+            if pattern is None and picture is not None:  # a picture's other bytes: one segment
+                deflate.span = (data, lo, hi)
+                fh.write(data[lo:hi])
+                continue
             if pattern is None:
                 for a in range(lo, hi, NPZ_PIECE_BYTES):
                     fh.write(data[a:min(hi, a + NPZ_PIECE_BYTES)])
                 continue
-            for a in range(lo, hi, _chunk_bytes()):
+            a = lo
+            for n in _repeat_sizes(hi - lo):
                 deflate.pattern = pattern
-                fh.write(data[a:min(hi, a + _chunk_bytes())])
+                fh.write(data[a:a + n])
+                a += n
 
+
+#: Pixels of the narrowest array written as a picture (:func:`_picture`): an (N, 2) or (N, 3)
+#: array holds one vertex per row, whose values seldom repeat the row above.
+PICTURE_MIN_WIDTH = 8
 
 #: What zipfile's member writer (``_ZipWriteFile``, Python 3.10-3.13) keeps of a member being
 #: written: its size, CRC-32 and compressed size, and the archive's file.
 _WRITER_STATE = ("_file_size", "_crc", "_compress_size", "_fileobj")
 
 
-def _write_runs(fh, deflate, data, runs):
+def _write_runs(fh, deflate, data, runs, picture=False):
     """What ``fh.write`` of each run does (the member writer's size, CRC-32, compressed size and
     output), in one pass: a repeating piece's CRC-32 is combined from the piece's (zlib's
-    ``crc32_combine64``), not computed over its bytes, which are not read."""
+    ``crc32_combine64``), not computed over its bytes, which are not read; a picture's other
+    bytes are one segment (:meth:`~refsoft.io.deflate.PieceDeflate.segment`)."""
     join = combine()
-    chunk = _chunk_bytes()
     crc, out, held = fh._crc, [], 0
     for lo, hi, pattern in runs:
-        if pattern is None:
+        if pattern is None and picture:
+            crc = zlib.crc32(data[lo:hi], crc)
+            out.append(deflate.segment(data, lo, hi))
+            held += len(out[-1])
+        elif pattern is None:
             for a in range(lo, hi, NPZ_PIECE_BYTES):  # CRC-32 and deflate a piece while it is in cache
                 piece = data[a:min(hi, a + NPZ_PIECE_BYTES)]
                 crc = zlib.crc32(piece, crc)
                 out.append(deflate.compress(piece))
                 held += len(out[-1])
         else:
-            for a in range(lo, hi, chunk):
-                n = min(hi, a + chunk) - a
+            for n in _repeat_sizes(hi - lo):
                 piece, piece_crc = deflate.repeat(pattern, n)
                 crc = join(crc, piece_crc, n)
                 out.append(piece)
                 held += len(piece)
-        if held >= chunk:  # the output held in memory stays small
+        if held >= NPZ_PIECE_BYTES:  # the output held in memory stays small
             fh._compress_size += _write_out(fh, out)
             held = 0
     fh._compress_size += _write_out(fh, out)
@@ -181,6 +215,22 @@ def _write_out(fh, out) -> int:
     out.clear()
     fh._fileobj.write(blob)
     return len(blob)
+
+
+def _picture(array):
+    """(pixel, row) bytes of an array whose bytes are a picture's pixels, row after row: (H, W)
+    of integers or bools (a frame's id maps, a G-buffer's mask) or (H, W, 3 or 4) of uint8 (its
+    image), written in C order; else None."""
+    if array.dtype.kind not in "iub" or array.ndim not in (2, 3) or array.size == 0 or (
+            array.flags.f_contiguous and not array.flags.c_contiguous):
+        return None  # (a Fortran-ordered array's bytes are written column by column)
+    if array.shape[1] < PICTURE_MIN_WIDTH:  # a list of vertices' pixels or ids, not a picture
+        return None
+    if array.ndim == 2:
+        return array.itemsize, array.shape[1] * array.itemsize
+    if array.ndim == 3 and array.dtype == np.uint8 and array.shape[2] in (3, 4):
+        return array.shape[2], array.shape[1] * array.shape[2]
+    return None
 
 
 def _incompressible(data, level) -> bool:

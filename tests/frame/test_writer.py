@@ -134,10 +134,11 @@ def _odd_arrays():
 @pytest.fixture
 def small_pieces(monkeypatch):
     """Units of 128 bytes, repeating pieces of at most 512 (384: a multiple of the unit and the
-    24-byte period), runs of 2 units or more, samples of 64 bytes."""
+    24-byte period), other bytes 512 at a time, runs of 2 units or more, samples of 64 bytes."""
     import refsoft.io
 
     monkeypatch.setattr(refsoft.io.npz, "NPZ_PIECE_BYTES", 512)
+    monkeypatch.setattr(refsoft.io.npz, "NPZ_REPEAT_BYTES", 512)
     monkeypatch.setattr(refsoft.io.npz, "NPZ_UNIT_BYTES", 128)
     monkeypatch.setattr(refsoft.io.npz, "NPZ_SHORTEST_RUN", 2)
     monkeypatch.setattr(refsoft.io.npz, "NPZ_SAMPLE_BYTES", 64)
@@ -199,6 +200,26 @@ def test_repeating_runs_reuse_their_deflate_output(tmp_path, small_pieces, monke
     for (pattern, n, level, strategy), (out, crc) in refsoft.io.deflate._PIECES.items():
         piece = refsoft.io.deflate.repeat_bytes(pattern, n)
         assert zlib.decompressobj(-15).decompress(out) == piece.tobytes() and crc == zlib.crc32(piece)
+
+
+def test_repeating_runs_are_written_in_few_sizes():
+    """A repeating run is cut into pieces that each start its pattern over (multiples of the unit
+    and the period), of sizes base * 2**k up to the cap, largest first, then the rest: every run
+    of a frame is a few pieces of a few sizes."""
+    from refsoft.io import npz
+
+    base = 12288  # lcm(4096, 24)
+    top = 64 * base  # the largest base * 2**k of at most NPZ_REPEAT_BYTES (1 MiB)
+    sizes_seen = set()
+    for n in range(4096, 40 * 1024 * 1024, 4096 * 997):
+        sizes = npz._repeat_sizes(n)
+        assert sum(sizes) == n
+        whole = [s for s in sizes if s % base == 0]
+        assert list(sizes[:len(whole)]) == whole and len(sizes) - len(whole) <= 1  # the rest, last
+        assert all(s // base & (s // base - 1) == 0 and s <= top for s in whole)  # a power of two
+        assert whole == sorted(whole, reverse=True) and len(sizes) <= n // top + 7
+        sizes_seen.update(sizes)
+    assert len(sizes_seen) <= 9  # 64 * base and the smaller powers, 4096 and 8192
 
 
 def test_repeating_runs_match_the_naive_cut():
