@@ -88,8 +88,9 @@ def warm(options: dict) -> None:
     the sub-texel refinement, called on the ball's search results through the functions the
     render calls them through (the same types), while the command, done with its raster,
     compiles the refinement itself; then two frames of the reflector's stages (a fresh and a
-    coherent search: whatever is left, the exact drawing's acceptance by the candidates' loop)
-    and the composite's conversion to 8 bits; last what only some scenes need: with
+    coherent search: whatever is left, the exact drawing's acceptance by the candidates' loop),
+    the composite's conversion to 8 bits and the frame writer's encoder of flat pictures; last
+    what only some scenes need: with
     ``images="all"`` the enumeration of every image (which the ball's own render skips as
     convex), and the traced acceptance."""
     from . import constants
@@ -140,6 +141,7 @@ def warm(options: dict) -> None:
         reflected = np.full(stencil.shape, -1, np.int32)
         composite(colour, reflected, colour.copy(), res.colour, res.reflected_id, res.covered, res.box, 1.0)
         to_uint8(colour)
+    _picture_encoder()
     if opts.images == "all":
         # the ball is convex, so its render skips the enumeration: compiled here, after what every
         # scene needs, for the scenes whose mirrors are not (the render calls it with these types)
@@ -148,6 +150,18 @@ def warm(options: dict) -> None:
         find_images(gb, camera.eye, verts, found)
     if opts.draw in ("exact", "edges"):
         _both_acceptances()
+
+
+def _picture_encoder() -> None:
+    """The frame writer's encoder of flat pictures (:mod:`refsoft.io.neighbour`), through the PNG
+    writer as a render's frames call it (a flat image, written to a temporary folder)."""
+    import tempfile
+
+    from .frame.outputs import FRAME_LEVEL
+    from .io import write_png_rows
+
+    with tempfile.TemporaryDirectory() as folder:
+        write_png_rows(os.path.join(folder, "flat.png"), np.zeros((256, 256, 3), np.uint8), FRAME_LEVEL)
 
 
 def _both_acceptances() -> None:

@@ -57,6 +57,37 @@ def test_a_render_after_the_warm_up_calls_its_kernels_with_the_same_types(option
     assert max(calls.values()) <= 1, calls
 
 
+WRITER_CHILD = r"""
+import json, sys, tempfile
+import refsoft
+from refsoft import _numba, _warmup
+_warmup.warm({"preset": "accurate"})
+warmed = {d: set(d.signatures) for d in _numba.KERNELS}
+from refsoft.io import neighbour
+encoded, plain = [], neighbour.neighbour_deflate
+def counted(*a, **k):
+    got = plain(*a, **k)
+    encoded.append(got is not None)
+    return got
+neighbour.neighbour_deflate = counted
+with tempfile.TemporaryDirectory() as out:
+    refsoft.render("kitchen", frames=1, width=640, height=480, out=out)
+print(json.dumps({"warmed": sorted(d.py_func.__name__ for d in _numba.KERNELS if warmed.get(d)),
+                  "encoded": sum(encoded),
+                  "new": sorted(d.py_func.__name__ for d in _numba.KERNELS if set(d.signatures) - warmed.get(d, set()))}))
+"""
+
+
+def test_the_warm_up_compiles_the_frame_writers_picture_encoder():
+    """The README's job writes its frames' flat pictures with the encoder of refsoft.io.neighbour:
+    the warm-up compiles it with the types the writer calls it with (a frame written after it
+    compiles no new specialisation of the encoder)."""
+    out = subprocess.run([sys.executable, "-c", WRITER_CHILD], capture_output=True, text=True, check=True)
+    got = json.loads(out.stdout.strip().splitlines()[-1])
+    assert "_encode" in got["warmed"] and got["encoded"] > 0  # the frame's pictures went through it
+    assert not {"_encode", "_run"} & set(got["new"]), got["new"]
+
+
 def test_the_warm_up_compiles_the_enumeration_of_every_image():
     """With ``images="all"`` the warm-up compiles the enumeration's kernels (the ball's render
     skips it as convex) with the types a render on a mirror that is not convex calls them with."""
