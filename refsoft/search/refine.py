@@ -70,7 +70,8 @@ def refine(gbuffer: GBuffer, eye, vertices, result):
     v = np.ascontiguousarray((verts - o).astype(dt))
     e = ((eye - o).astype(dt))
     parallel_range(_refine.refine, len(v), gbuffer.position, gbuffer.normal, gbuffer.mask, v, e, pix,
-                   np.ascontiguousarray(result.flags, dtype=np.uint8), dt(0), p, nrm, off)
+                   np.ascontiguousarray(result.flags, dtype=np.uint8), dt(0), p, nrm, off,
+                   work=lambda: _refine.refine_work(dt))
     return p, nrm, off
 
 
