@@ -15,13 +15,14 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 #: Packages a command that renders nothing must not import.
 HEAVY = {"numba", "llvmlite", "trimesh", "scipy", "embreex", "imageio", "PIL", "tqdm", "matplotlib"}
 #: Kernels a one-frame render of the sphere loads from the cache (the accurate preset: the
-#: G-buffer, the search, its refinement, the tessellation and the cut's passes, the exact drawing:
+#: G-buffer, the search, its refinement (the reflection pixels' check, one pass where NumPy's
+#: took several, and the steps), the tessellation and the cut's passes, the exact drawing:
 #: its candidates' screen positions, choice and gather, their second images by the mirror rule
 #: (the vertices imaged again, those whose image moved, the faces with such a corner and their
 #: copies interleaved: four kernels where NumPy's passes over every vertex and face cost more),
 #: rays (each row's eye rays in a loop of their own, which vectorizes), their origins' bounds (what
 #: a candidate's triangle can reach no nearer than), acceptance and shading, the main view).
-LOADED_KERNELS = 39
+LOADED_KERNELS = 40
 
 MODULES = """
 import json, sys

@@ -149,13 +149,15 @@ def _put(B, m, P, N, r, c, vx, vy, vz):
 
 
 @kernel
-def refine(lo, hi, P, N, mask, vertices, eye, pixel, flags, fp, out_p, out_n, out_offset, B, S):
+def refine(lo, hi, P, N, mask, vertices, origin, eye, pixel, flags, fp, out_p, out_n, out_offset, B, S):
     """For each vertex ``lo .. hi - 1`` (run over every vertex by
     :func:`refsoft._parallel.parallel_range`): one Gauss-Newton step on ``N(x) - h(x) = 0`` from
     its reflection pixel, with the residual's derivatives by central differences (one-sided next to uncovered texels,
     none along an axis with no covered neighbour), then P and N at the new point by the same
-    first-order model (:func:`_surface`). Arithmetic in the precision of ``fp``. Vertices
-    CULLED or HIDDEN keep their texel's P and N (offset 0; zeros when CULLED).
+    first-order model (:func:`_surface`). Arithmetic in the precision of ``fp``, ``vertices``
+    (world space, float64) taken relative to ``origin`` (3,) float64 and rounded to it; ``eye``
+    relative to the origin already. Vertices CULLED or HIDDEN keep their texel's P and N
+    (offset 0; zeros when CULLED).
 
     The vertices go in blocks of ``BLOCK``: the five residuals of each vertex's step (at its
     texel and its stencils' four) are gathered into the columns of ``B`` (12, 5 BLOCK) and
@@ -176,7 +178,9 @@ def refine(lo, hi, P, N, mask, vertices, eye, pixel, flags, fp, out_p, out_n, ou
                 continue
             r = pixel[i, 0]
             c = pixel[i, 1]
-            vx, vy, vz = vertices[i, 0], vertices[i, 1], vertices[i, 2]
+            vx = like(vertices[i, 0] - origin[0], fp)
+            vy = like(vertices[i, 1] - origin[1], fp)
+            vz = like(vertices[i, 2] - origin[2], fp)
             ar, ac, br, bc, sa = _stencil(mask, r, c, 1, 0, fp)
             cr, cc, dr, dc, sb = _stencil(mask, r, c, 0, 1, fp)
             S[0, i - b0] = sa
@@ -213,6 +217,24 @@ def refine(lo, hi, P, N, mask, vertices, eye, pixel, flags, fp, out_p, out_n, ou
             out_offset[i, 0] = t0
             out_offset[i, 1] = t1
             _surface(P, N, mask, r, c, t0, t1, fp, out_p, out_n, i)
+
+
+@kernel
+def check_pixels(pixel, flags, mask):
+    """Whether every vertex not CULLED has its reflection pixel (row, col) on a covered texel:
+    0 yes; 1 a pixel lies outside the (h, w) ``mask``; else 2 a pixel is not covered."""
+    h, w = mask.shape
+    found = 0
+    for i in range(pixel.shape[0]):
+        if flags[i] & CULLED:
+            continue
+        r = pixel[i, 0]
+        c = pixel[i, 1]
+        if r < 0 or r >= h or c < 0 or c >= w:
+            return 1
+        if not mask[r, c]:
+            found = 2
+    return found
 
 
 def refine_work(dtype):

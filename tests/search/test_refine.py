@@ -136,6 +136,20 @@ def test_bad_inputs_are_refused():
         refine(gb, (0, 0), verts, res)
     with pytest.raises(refsoft.RefsoftError, match="covered"):
         surface_at(gb, [[0, 0]], [[0.0, 0.0]])
+    # a reflection pixel outside the G-buffer or on an uncovered texel (a CULLED vertex's is not read)
+    import dataclasses
+
+    h, w = gb.mask.shape
+    uncovered = np.argwhere(~gb.mask)[0]
+    for pixel, what in (((h, 0), "outside"), ((0, -1), "outside"), (tuple(uncovered), "not covered")):
+        bad = res.pixel.copy()
+        bad[3] = pixel
+        with pytest.raises(refsoft.RefsoftError, match=what):
+            refine(gb, cam.eye, verts, dataclasses.replace(res, pixel=bad))
+        flags = res.flags.copy()
+        flags[3] |= search.CULLED
+        p, n, off = refine(gb, cam.eye, verts, dataclasses.replace(res, pixel=bad, flags=flags))
+        assert not p[3].any() and not n[3].any() and not off[3].any() and n[4].any()
     with pytest.raises(refsoft.RefsoftError, match="differ in number"):
         surface_at(gb, res.pixel[:2], np.zeros((3, 2)))
 
