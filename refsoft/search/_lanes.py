@@ -84,10 +84,11 @@ def score_batch(n, P0, P1, P2, N0, N1, N2, ex, ey, ez, VX, VY, VZ, INV, OUT, fp)
 # Per walk slot, the columns of its int64 state ``W``: the vertex's row (-1: the slot is free),
 # the current pixel, the candidate moved to last (0: none, the previous neighbourhood's scores are
 # unknown; -1: none, and the current pixel's score is unknown too: it is scored with the
-# neighbours in the next round, a walk's start as every other candidate), the iterations of this phase and of the first, the phase (1: inverse search), the
-# flags. Its float state ``SV`` (working precision) holds the vertex (columns 0-2) and the score
-# at the current pixel (column S0). The state is in two arrays, not one per field: each array
-# a helper takes costs it a reference count increment and decrement per call.
+# neighbours in the next round, a walk's start as every other candidate), the iterations of this
+# phase and of the first, the phase (1: inverse search), the flags. Its float state ``SV``
+# (working precision) holds the vertex (columns 0-2) and the score at the current pixel (column
+# S0). The state is in two arrays, not one per field: each array a helper takes costs it a
+# reference count increment and decrement per call.
 VI, R, C, MOVED, IT, IT0, PH, FL = range(8)
 S0 = 3
 
@@ -220,9 +221,9 @@ def _end(inverse_search, fp, s, it, best_k, best, second, border, W, SV, px, py,
     position ``(px, py, pz)`` and normal ``(nx, ny, nz)`` (scalars: the G-buffer's arrays,
     shared by the threads, are not passed, and their reference counts not touched per walk). A
     hidden vertex's walk goes on as the inverse search from there, its pixel's inverse score
-    computed in the next round (with ``inverse_search``: returns ``(False, ...)``); otherwise returns ``(True, score, margin,
-    iterations, flags)``, the vertex's results (its pixel is the walk's: the slot is free once
-    they are written)."""
+    computed in the next round (with ``inverse_search``: returns ``(False, ...)``); otherwise
+    returns ``(True, score, margin, iterations, flags)``, the vertex's results (its pixel is the
+    walk's: the slot is free once they are written)."""
     s0 = SV[s, S0]
     if best_k == 0:
         res_s = best
