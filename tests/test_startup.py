@@ -15,7 +15,8 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 #: Packages a command that renders nothing must not import.
 HEAVY = {"numba", "llvmlite", "trimesh", "scipy", "embreex", "imageio", "PIL", "tqdm", "matplotlib"}
 #: Kernels a one-frame render of the sphere loads from the cache (the accurate preset: the
-#: G-buffer, the search, its refinement, the tessellation and the cut's passes, the exact drawing:
+#: G-buffer, the search, its refinement (the reflection pixels' check, one pass where NumPy's
+#: took several, and the steps), the tessellation and the cut's passes, the exact drawing:
 #: its candidates' screen positions, choice and gather, their second images by the mirror rule
 #: (the vertices imaged again, those whose image moved, the faces with such a corner and their
 #: copies interleaved: four kernels where NumPy's passes over every vertex and face cost more),
@@ -23,7 +24,7 @@ HEAVY = {"numba", "llvmlite", "trimesh", "scipy", "embreex", "imageio", "PIL", "
 #: a candidate's triangle can reach no nearer than), the area the candidates' bounds cover (which
 #: acceptance pays), acceptance and shading, the main view, and the G-buffer's world positions for
 #: the outputs).
-LOADED_KERNELS = 40
+LOADED_KERNELS = 41
 
 MODULES = """
 import json, sys

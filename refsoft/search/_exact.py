@@ -9,7 +9,9 @@ import numpy as np
 
 from .._numba import kernel
 from ..raster._rays import unit_normal
-from ._several import dilated_bounds
+
+#: Candidates of :func:`gather` whose bounds are computed together.
+GATHER_BLOCK = 512
 
 
 @kernel
@@ -89,14 +91,21 @@ def reaching(lo, hi, clip, xy, faces, flags, lost, r0, r1, c0, c1, pixels, fract
 
 @kernel
 def gather(lo, hi, keep, faces, face_obj, points, clip, xy, r0, r1, c0, c1, pixels, fraction, corner, obj, real,
-           screen, bbox, dilate, odd):
+           screen, bbox, dilate, odd, W, B):
     """Candidates ``lo .. hi - 1`` (each writes only its own rows): candidate ``c`` is triangle
     ``t = keep[c]``; its corners ``corner[c] = faces[t]``, object ``obj[c] = face_obj[t]``, real
     corners ``real[c] = points[faces[t]]``, and its view-pixel positions, dilated bounds and
     dilation as ``_several.screen_bounds`` makes them from ``clip`` (the same operations in the
     same order, the positions from :func:`project`'s ``xy``): a candidate with a vertex at or
     behind the eye plane has zeros, the whole box and -1; ``odd[c]`` is set where a value is not
-    finite (the caller recomputes those rows with NumPy).
+    finite (the caller recomputes those rows with NumPy: their bounds and dilation are left as
+    they came out).
+
+    The candidates go in blocks of ``GATHER_BLOCK``: their corners and screen positions are
+    copied, the positions also into the rows of ``W`` (x0, y0, x1, y1, x2, y2, and 1 where the
+    triangle reaches behind the eye), then the block's bounds are computed from them in one
+    branch-free loop that vectorizes (:func:`_block_bounds`, the bounds into ``B``) and copied
+    out.
 
     Parameters
     ----------
@@ -119,32 +128,75 @@ def gather(lo, hi, keep, faces, face_obj, points, clip, xy, r0, r1, c0, c1, pixe
     bbox : (C, 4) int64
     dilate : (C,) float64
     odd : (C,) bool
+    W, B : (7, GATHER_BLOCK) float64, (4, GATHER_BLOCK) int64
+        Work memory (:func:`gather_work`).
     """
-    for c in range(lo, hi):
-        t = keep[c]
-        obj[c] = face_obj[t]
-        a, b, e = faces[t, 0], faces[t, 1], faces[t, 2]
-        corner[c, 0], corner[c, 1], corner[c, 2] = a, b, e
-        real[c, 0, 0], real[c, 0, 1], real[c, 0, 2] = points[a, 0], points[a, 1], points[a, 2]
-        real[c, 1, 0], real[c, 1, 1], real[c, 1, 2] = points[b, 0], points[b, 1], points[b, 2]
-        real[c, 2, 0], real[c, 2, 1], real[c, 2, 2] = points[e, 0], points[e, 1], points[e, 2]
-        if not (clip[a, 3] > 0.0 and clip[b, 3] > 0.0 and clip[e, 3] > 0.0):
-            for k in range(3):
-                screen[c, k, 0] = 0.0
-                screen[c, k, 1] = 0.0
-            bbox[c, 0], bbox[c, 1], bbox[c, 2], bbox[c, 3] = 0, r1 - r0, c0, c1
-            dilate[c] = -1.0
-            odd[c] = False
-            continue
-        # the corners' positions in locals (the outputs may alias the inputs for all the compiler
-        # knows: reread from memory otherwise); the same operations as _several.screen_bounds
-        x0, y0, x1, y1, x2, y2 = xy[a, 0], xy[a, 1], xy[b, 0], xy[b, 1], xy[e, 0], xy[e, 1]
-        screen[c, 0, 0], screen[c, 0, 1] = x0, y0
-        screen[c, 1, 0], screen[c, 1, 1] = x1, y1
-        screen[c, 2, 0], screen[c, 2, 1] = x2, y2
-        bad = not (np.isfinite(x0) and np.isfinite(y0) and np.isfinite(x1) and np.isfinite(y1)
-                   and np.isfinite(x2) and np.isfinite(y2))
-        odd[c] = dilated_bounds(c, x0, y0, x1, y1, x2, y2, bad, pixels, fraction, r0, bbox, dilate)
+    for b0 in range(lo, hi, GATHER_BLOCK):
+        b1 = min(b0 + GATHER_BLOCK, hi)
+        for c in range(b0, b1):
+            t = keep[c]
+            obj[c] = face_obj[t]
+            a, b, e = faces[t, 0], faces[t, 1], faces[t, 2]
+            corner[c, 0], corner[c, 1], corner[c, 2] = a, b, e
+            real[c, 0, 0], real[c, 0, 1], real[c, 0, 2] = points[a, 0], points[a, 1], points[a, 2]
+            real[c, 1, 0], real[c, 1, 1], real[c, 1, 2] = points[b, 0], points[b, 1], points[b, 2]
+            real[c, 2, 0], real[c, 2, 1], real[c, 2, 2] = points[e, 0], points[e, 1], points[e, 2]
+            q = c - b0
+            if not (clip[a, 3] > 0.0 and clip[b, 3] > 0.0 and clip[e, 3] > 0.0):
+                x0 = y0 = x1 = y1 = x2 = y2 = 0.0
+                W[6, q] = 1.0
+            else:
+                x0, y0, x1, y1, x2, y2 = xy[a, 0], xy[a, 1], xy[b, 0], xy[b, 1], xy[e, 0], xy[e, 1]
+                W[6, q] = 0.0
+            screen[c, 0, 0], screen[c, 0, 1] = x0, y0
+            screen[c, 1, 0], screen[c, 1, 1] = x1, y1
+            screen[c, 2, 0], screen[c, 2, 1] = x2, y2
+            W[0, q], W[1, q], W[2, q], W[3, q], W[4, q], W[5, q] = x0, y0, x1, y1, x2, y2
+        _block_bounds(b1 - b0, W, B, r0, r1, c0, c1, pixels, fraction, dilate[b0:b1], odd[b0:b1])
+        for c in range(b0, b1):
+            q = c - b0
+            bbox[c, 0], bbox[c, 1], bbox[c, 2], bbox[c, 3] = B[0, q], B[1, q], B[2, q], B[3, q]
+
+
+@kernel
+def _block_bounds(n, W, B, r0, r1, c0, c1, pixels, fraction, dilate, odd):
+    """Columns ``0 .. n - 1`` of ``W`` (:func:`gather`'s): the bounds (into ``B``), dilation and
+    ``odd`` of ``_several.dilated_bounds`` (the same operations in the same order), or those of
+    a candidate behind the eye, chosen by selects (no branch): a loop that vectorizes, the same
+    values. (A row whose positions or dilation are not finite gets bounds from zeros: the
+    caller replaces them.)"""
+    big = float(1 << 30)
+    for q in range(n):
+        x0, y0, x1, y1, x2, y2 = W[0, q], W[1, q], W[2, q], W[3, q], W[4, q], W[5, q]
+        back = W[6, q] != 0.0
+        edge = np.sqrt((x0 - x1) * (x0 - x1) + (y0 - y1) * (y0 - y1))
+        e = np.sqrt((x1 - x2) * (x1 - x2) + (y1 - y2) * (y1 - y2))
+        edge = e if e > edge else edge
+        e = np.sqrt((x2 - x0) * (x2 - x0) + (y2 - y0) * (y2 - y0))
+        edge = e if e > edge else edge
+        d = pixels + fraction * edge
+        finite = (np.isfinite(x0) & np.isfinite(y0) & np.isfinite(x1) & np.isfinite(y1) & np.isfinite(x2)
+                  & np.isfinite(y2) & np.isfinite(d))
+        lo_x, hi_x = min(x0, x1, x2) - d, max(x0, x1, x2) + d
+        lo_y, hi_y = min(y0, y1, y2) - d, max(y0, y1, y2) + d
+        if not finite:  # no conversion of a value that is not finite to an integer
+            lo_x = hi_x = lo_y = hi_y = 0.0
+        b_0 = np.int64(np.floor(min(max(lo_y - 0.5, -big), big))) - r0
+        b_1 = np.int64(np.ceil(min(max(hi_y - 0.5, -big), big))) + 1 - r0
+        b_2 = np.int64(np.floor(min(max(lo_x - 0.5, -big), big)))
+        b_3 = np.int64(np.ceil(min(max(hi_x - 0.5, -big), big))) + 1
+        B[0, q] = 0 if back else b_0
+        B[1, q] = r1 - r0 if back else b_1
+        B[2, q] = c0 if back else b_2
+        B[3, q] = c1 if back else b_3
+        dilate[q] = -1.0 if back else d
+        odd[q] = not (finite or back)
+
+
+def gather_work():
+    """The work memory of one part of :func:`gather` (made by the caller, so that the kernel
+    allocates nothing)."""
+    return np.empty((7, GATHER_BLOCK)), np.empty((4, GATHER_BLOCK), np.int64)
 
 
 @kernel

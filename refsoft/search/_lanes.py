@@ -3,9 +3,9 @@ for bit, as :func:`refsoft.search._kernels.search_one`, the one-walk search the 
 
 Each thread takes the vertices in groups of ``SEARCH_GROUP`` and advances ``LANES`` walks
 together: every round gathers the candidates that need a score (covered, and not in the previous
-neighbourhood, whose scores are known) of all its walks into one block of per-channel rows,
-scores them in one branch-free loop that LLVM vectorizes (8 float32 lanes with AVX2), then
-compares each walk's candidates in the visiting order, as the one-walk search does. Vectorized
+neighbourhood, whose scores are known; a walk's first pixel too) of all its walks into one block
+of per-channel rows, scores them in one branch-free loop that LLVM vectorizes (8 float32 lanes
+with AVX2), then compares each walk's candidates in the visiting order, as the one-walk search does. Vectorized
 square roots, divisions, products and sums are IEEE operations rounded exactly like the scalar
 ones, and there is no contraction (``fastmath=False``), so every score is the scalar score bit
 for bit. A walk that ends makes room for the next vertex of the group.
@@ -32,7 +32,7 @@ from numba import literally
 
 from .._numba import kernel, like
 from ..constants import LONE_MARGIN, NO_SCORE
-from ._kernels import OFFSETS, RESTART, RESTARTED, REUSE, _normalize, end_walk_at, score_pnu
+from ._kernels import OFFSETS, RESTART, RESTARTED, REUSE, end_walk_at
 
 #: Walks advanced together by one thread.
 LANES = 16
@@ -83,20 +83,14 @@ def score_batch(n, P0, P1, P2, N0, N1, N2, ex, ey, ez, VX, VY, VZ, INV, OUT, fp)
 
 # Per walk slot, the columns of its int64 state ``W``: the vertex's row (-1: the slot is free),
 # the current pixel, the candidate moved to last (0: none, the previous neighbourhood's scores are
-# unknown), the iterations of this phase and of the first, the phase (1: inverse search), the
-# flags. Its float state ``SV`` (working precision) holds the vertex (columns 0-2) and the score
-# at the current pixel (column S0). The state is in two arrays, not one per field: each array
-# a helper takes costs it a reference count increment and decrement per call.
+# unknown; -1: none, and the current pixel's score is unknown too: it is scored with the
+# neighbours in the next round, a walk's start as every other candidate), the iterations of this
+# phase and of the first, the phase (1: inverse search), the flags. Its float state ``SV``
+# (working precision) holds the vertex (columns 0-2) and the score at the current pixel (column
+# S0). The state is in two arrays, not one per field: each array a helper takes costs it a
+# reference count increment and decrement per call.
 VI, R, C, MOVED, IT, IT0, PH, FL = range(8)
 S0 = 3
-
-
-@kernel(inline=True)
-def _score_at(P, N, eye, r, c, vx, vy, vz, inverse, fp):
-    """The (inverse) score of vertex ``(vx, vy, vz)`` at pixel (r, c), one at a time."""
-    ux, uy, uz = _normalize(eye[0] - P[r, c, 0], eye[1] - P[r, c, 1], eye[2] - P[r, c, 2], fp)
-    return score_pnu(P[r, c, 0], P[r, c, 1], P[r, c, 2], N[r, c, 0], N[r, c, 1], N[r, c, 2], ux, uy, uz, vx, vy, vz,
-                     inverse, fp)
 
 
 # The walks' helpers are compiled on their own and LLVM inlines their machine code into
@@ -106,9 +100,10 @@ def _score_at(P, N, eye, r, c, vx, vy, vz, inverse, fp):
 
 
 @kernel(llvm_inline=True)
-def _begin(P, N, eye, vertices, starts, default_r, default_c, fp, i, s, W, SV):
+def _begin(vertices, starts, default_r, default_c, i, s, W, SV):
     """Walk slot ``s`` takes the vertex of row ``i``: its start (previous pixel, else the
-    default start) and the start's score; counters cleared, flags RESTARTED or none."""
+    default start), whose score the next round computes; counters cleared, flags RESTARTED or
+    none."""
     W[s, VI] = i
     for k in range(3):
         SV[s, k] = vertices[i, k]
@@ -120,21 +115,22 @@ def _begin(P, N, eye, vertices, starts, default_r, default_c, fp, i, s, W, SV):
         c0 = default_c
     W[s, R] = r0
     W[s, C] = c0
-    SV[s, S0] = _score_at(P, N, eye, r0, c0, SV[s, 0], SV[s, 1], SV[s, 2], False, fp)
     W[s, IT] = 0
     W[s, IT0] = 0
     W[s, PH] = 0
-    W[s, MOVED] = 0
+    W[s, MOVED] = -1
 
 
 @kernel(llvm_inline=True)
 def _gather(P, N, mask, NB, W, SV, cand, INV, IDX):
     """Gathers the candidates of this round that need a score, those of every active walk that
-    are covered and not in its previous neighbourhood (whose scores are known): column ``m`` of
-    ``cand`` (9, NB * LANES) holds P, N of the candidate's pixel and its walk's vertex (one row
-    per channel), ``INV[m]`` whether that walk is in its inverse phase. ``IDX[s * NB + k - 1]``
-    is where walk ``s``'s candidate ``k`` is: column ``m``; -1 uncovered or outside; ``-2 - j``
-    known, the previous neighbourhood's candidate ``j``. Returns the number of columns filled."""
+    are covered and not in its previous neighbourhood (whose scores are known), and the current
+    pixel of a walk that has just started (its start's, or its inverse phase's): column ``m`` of
+    ``cand`` (9, (NB + 1) * LANES) holds P, N of the candidate's pixel and its walk's vertex (one
+    row per channel), ``INV[m]`` whether that walk is in its inverse phase. ``IDX[s * (NB + 1) +
+    k]`` is where walk ``s``'s candidate ``k`` is: column ``m``; -1 uncovered or outside (or,
+    for the current pixel ``k = 0``, known); ``-2 - j`` known, the previous neighbourhood's
+    candidate ``j``. Returns the number of columns filled."""
     h, w = mask.shape
     m = 0
     for s in range(LANES):
@@ -143,8 +139,17 @@ def _gather(P, N, mask, NB, W, SV, cand, INV, IDX):
         r = W[s, R]
         c = W[s, C]
         moved = W[s, MOVED]
+        IDX[s * (NB + 1)] = -1
+        if moved < 0:  # a start: covered (the start rules), scored here
+            IDX[s * (NB + 1)] = m
+            for ch in range(3):
+                cand[ch, m] = P[r, c, ch]
+                cand[3 + ch, m] = N[r, c, ch]
+                cand[6 + ch, m] = SV[s, ch]
+            INV[m] = W[s, PH] == 1
+            m += 1
         for k in range(1, NB + 1):
-            q = s * NB + k - 1
+            q = s * (NB + 1) + k
             rr = r + OFFSETS[k, 0]
             cc = c + OFFSETS[k, 1]
             if not (rr >= 0 and rr < h and cc >= 0 and cc < w and mask[rr, cc]):
@@ -172,6 +177,9 @@ def _compare(s, NB, SV, PREV, IDX, OUT, CUR, fp):
     Returns ``(best_k, best, second, border)``: the best candidate (0: the current pixel), its
     score, the second-best score (``NO_SCORE`` when there is none) and whether a candidate is uncovered
     or outside."""
+    j0 = IDX[s * (NB + 1)]
+    if j0 >= 0:  # the current pixel scored in this round
+        SV[s, S0] = OUT[j0]
     s0 = SV[s, S0]
     best = s0
     best_k = 0
@@ -179,7 +187,7 @@ def _compare(s, NB, SV, PREV, IDX, OUT, CUR, fp):
     border = False
     CUR[0] = s0
     for k in range(1, NB + 1):
-        j = IDX[s * NB + k - 1]
+        j = IDX[s * (NB + 1) + k]
         if j == -1:
             border = True
             continue
@@ -208,14 +216,14 @@ def _move(s, NB, best_k, best, it, CUR, PREV, W, SV):
 
 
 @kernel(llvm_inline=True)
-def _end(inverse_search, fp, s, it, best_k, best, second, border, W, SV, px, py, pz, nx, ny, nz, ex, ey, ez):
+def _end(inverse_search, fp, s, it, best_k, best, second, border, W, SV, px, py, pz, nx, ny, nz):
     """Walk ``s`` stops after ``it`` steps: converged (``best_k`` 0) or capped, at a pixel of
-    position ``(px, py, pz)`` and normal ``(nx, ny, nz)``, the eye at ``(ex, ey, ez)`` (scalars:
-    the G-buffer's arrays, shared by the threads, are not passed, and their reference counts
-    not touched per walk). A hidden vertex's walk goes on as the inverse search from there (with
-    ``inverse_search``: returns ``(False, ...)``); otherwise returns ``(True, score, margin,
-    iterations, flags)``, the vertex's results (its pixel is the walk's: the slot is free once
-    they are written)."""
+    position ``(px, py, pz)`` and normal ``(nx, ny, nz)`` (scalars: the G-buffer's arrays,
+    shared by the threads, are not passed, and their reference counts not touched per walk). A
+    hidden vertex's walk goes on as the inverse search from there, its pixel's inverse score
+    computed in the next round (with ``inverse_search``: returns ``(False, ...)``); otherwise
+    returns ``(True, score, margin, iterations, flags)``, the vertex's results (its pixel is the
+    walk's: the slot is free once they are written)."""
     s0 = SV[s, S0]
     if best_k == 0:
         res_s = best
@@ -233,9 +241,7 @@ def _end(inverse_search, fp, s, it, best_k, best, second, border, W, SV, px, py,
         W[s, FL] = fl
         W[s, IT0] = total
         W[s, IT] = 0
-        W[s, MOVED] = 0
-        ux, uy, uz = _normalize(ex - px, ey - py, ez - pz, fp)
-        SV[s, S0] = score_pnu(px, py, pz, nx, ny, nz, ux, uy, uz, vx, vy, vz, True, fp)
+        W[s, MOVED] = -1
     return not inverse, res_s, res_m, total, fl
 
 
@@ -250,7 +256,7 @@ def search_group(P, N, mask, eye, vertices, starts, default_r, default_c, cap, i
     # per candidate of a round: P, N of its pixel and its vertex (one row per channel), whether
     # its walk is in the inverse phase, its score; where each walk's candidates are (_gather);
     # per walk slot: its state (W, SV) and the previous neighbourhood's scores
-    for j in range(NB * LANES):
+    for j in range((NB + 1) * LANES):
         for k in range(9):
             cand[k, j] = 0
         INV[j] = False
@@ -279,7 +285,7 @@ def search_group(P, N, mask, eye, vertices, starts, default_r, default_c, cap, i
     active = 0
     for s in range(LANES):
         if nxt < hi:
-            _begin(P, N, eye, vertices, starts, default_r, default_c, fp, nxt, s, W, SV)
+            _begin(vertices, starts, default_r, default_c, nxt, s, W, SV)
             nxt += 1
             active += 1
     while active > 0:
@@ -298,7 +304,7 @@ def search_group(P, N, mask, eye, vertices, starts, default_r, default_c, cap, i
             c = W[s, C]
             done, res_s, res_m, total, fl = _end(inverse_search, fp, s, it, best_k, best, second, border, W, SV,
                                                  P[r, c, 0], P[r, c, 1], P[r, c, 2], N[r, c, 0], N[r, c, 1],
-                                                 N[r, c, 2], eye[0], eye[1], eye[2])
+                                                 N[r, c, 2])
             if not done:
                 continue
             i = W[s, VI]
@@ -309,7 +315,7 @@ def search_group(P, N, mask, eye, vertices, starts, default_r, default_c, cap, i
             iterations[i] = total
             flags_out[i] = fl
             if nxt < hi:  # the slot takes the group's next vertex
-                _begin(P, N, eye, vertices, starts, default_r, default_c, fp, nxt, s, W, SV)
+                _begin(vertices, starts, default_r, default_c, nxt, s, W, SV)
                 nxt += 1
             else:
                 W[s, VI] = -1
@@ -338,15 +344,15 @@ def _make_search(n_neighbours):
 
 def search_work(n_neighbours, dtype):
     """The work arrays of one part of a lanes kernel (``n_neighbours`` around the current pixel,
-    ``dtype`` the G-buffer's float type): per candidate of a round ``cand`` (9, NB LANES) (P, N
-    of its pixel, its vertex), ``INV`` (NB LANES,) bool, ``OUT`` (NB LANES,) scores, ``IDX``
-    (NB LANES,) int64; ``CUR`` (NB + 1,); per walk slot ``W`` (LANES, 8) int64, ``SV``
-    (LANES, 4) and ``PREV`` (LANES, NB + 1). Made by the caller (:func:`search_group` sets
+    ``dtype`` the G-buffer's float type): per candidate of a round ``cand`` (9, (NB + 1) LANES)
+    (P, N of its pixel, its vertex), ``INV`` ((NB + 1) LANES,) bool, ``OUT`` ((NB + 1) LANES,)
+    scores, ``IDX`` ((NB + 1) LANES,) int64; ``CUR`` (NB + 1,); per walk slot ``W`` (LANES, 8)
+    int64, ``SV`` (LANES, 4) and ``PREV`` (LANES, NB + 1). Made by the caller (:func:`search_group` sets
     them) so that the kernel allocates nothing."""
     nb, dt = n_neighbours, np.dtype(dtype)
-    return (np.empty((9, nb * LANES), dt), np.empty(nb * LANES, np.bool_), np.empty(nb * LANES, dt),
-            np.empty(nb * LANES, np.int64), np.empty(nb + 1, dt), np.empty((LANES, 8), np.int64),
-            np.empty((LANES, 4), dt), np.empty((LANES, nb + 1), dt))
+    k = (nb + 1) * LANES
+    return (np.empty((9, k), dt), np.empty(k, np.bool_), np.empty(k, dt), np.empty(k, np.int64), np.empty(nb + 1, dt),
+            np.empty((LANES, 8), np.int64), np.empty((LANES, 4), dt), np.empty((LANES, nb + 1), dt))
 
 
 #: The lanes kernel by candidates per step (current pixel included), as ``search.NEIGHBOURHOODS``.

@@ -4,7 +4,12 @@ import numpy as np
 
 from .._numba import kernel, like
 from ._kernels import CULLED, HIDDEN, _normalize
+from ._lanes import VECTOR, _normalize_select
 from ..constants import MAX_OFFSET
+
+#: Vertices whose steps' residuals are computed together (5 per vertex: a multiple of ``VECTOR``
+#: columns).
+BLOCK = 32
 
 
 # _residual and _stencil are compiled on their own, not inlined at Numba's level: LLVM inlines
@@ -67,21 +72,12 @@ def _surface(P, N, mask, r, c, t0, t1, fp, out_p, out_n, i):
     out_n[i, 2] = nz
 
 
-@kernel
-def gauss_newton_step(P, N, mask, r, c, vx, vy, vz, ex, ey, ez, fp):
-    """One Gauss-Newton step on ``N(x) - h(x) = 0`` for the vertex (vx, vy, vz) from the covered
-    texel (r, c), the residual's derivatives by central differences (one-sided next to uncovered
-    texels, none along an axis with no covered neighbour): the offset (rows, cols) in texels,
-    not clamped."""
+@kernel(inline=True)
+def _solve(d0, pa, pb, pc, pd, sa, sb, fp):
+    """The Gauss-Newton step (rows, cols) from the residual ``d0`` at the texel and at the
+    stencils' texels (the derivative ``pa - pb`` times ``sa`` along rows, ``pc - pd`` times
+    ``sb`` along columns), not clamped."""
     zero = like(0.0, fp)
-    d0 = _residual(P, N, r, c, vx, vy, vz, ex, ey, ez, fp)
-    # the residual's derivatives along rows (j0) and columns (j1)
-    ar, ac, br, bc, sa = _stencil(mask, r, c, 1, 0, fp)
-    pa = _residual(P, N, ar, ac, vx, vy, vz, ex, ey, ez, fp)
-    pb = _residual(P, N, br, bc, vx, vy, vz, ex, ey, ez, fp)
-    cr, cc, dr, dc, sb = _stencil(mask, r, c, 0, 1, fp)
-    pc = _residual(P, N, cr, cc, vx, vy, vz, ex, ey, ez, fp)
-    pd = _residual(P, N, dr, dc, vx, vy, vz, ex, ey, ez, fp)
     j00, j01, j02 = (pa[0] - pb[0]) * sa, (pa[1] - pb[1]) * sa, (pa[2] - pb[2]) * sa
     j10, j11, j12 = (pc[0] - pd[0]) * sb, (pc[1] - pd[1]) * sb, (pc[2] - pd[2]) * sb
     # normal equations of min |d0 + J t|^2, t = (rows, cols)
@@ -104,37 +100,148 @@ def gauss_newton_step(P, N, mask, r, c, vx, vy, vz, ex, ey, ez, fp):
 
 
 @kernel
-def refine(lo, hi, P, N, mask, vertices, eye, pixel, flags, fp, out_p, out_n, out_offset):
+def gauss_newton_step(P, N, mask, r, c, vx, vy, vz, ex, ey, ez, fp):
+    """One Gauss-Newton step on ``N(x) - h(x) = 0`` for the vertex (vx, vy, vz) from the covered
+    texel (r, c), the residual's derivatives by central differences (one-sided next to uncovered
+    texels, none along an axis with no covered neighbour): the offset (rows, cols) in texels,
+    not clamped."""
+    d0 = _residual(P, N, r, c, vx, vy, vz, ex, ey, ez, fp)
+    # the residual's derivatives along rows and columns
+    ar, ac, br, bc, sa = _stencil(mask, r, c, 1, 0, fp)
+    pa = _residual(P, N, ar, ac, vx, vy, vz, ex, ey, ez, fp)
+    pb = _residual(P, N, br, bc, vx, vy, vz, ex, ey, ez, fp)
+    cr, cc, dr, dc, sb = _stencil(mask, r, c, 0, 1, fp)
+    pc = _residual(P, N, cr, cc, vx, vy, vz, ex, ey, ez, fp)
+    pd = _residual(P, N, dr, dc, vx, vy, vz, ex, ey, ez, fp)
+    return _solve(d0, pa, pb, pc, pd, sa, sb, fp)
+
+
+@kernel
+def residual_batch(n, B, ex, ey, ez, fp):
+    """Columns ``0 .. n - 1`` of the block ``B`` (12, M): from P (rows 0-2), N (3-5) and the
+    vertex V (6-8) of a texel, the residual ``N - normalize(normalize(O - P) + normalize(V - P))``
+    (rows 9-11), the arithmetic of :func:`_residual` written with selects (no branch) so that
+    the loop vectorizes: the same values, bit for bit."""
+    for j in range(n):
+        px = B[0, j]
+        py = B[1, j]
+        pz = B[2, j]
+        vx = B[6, j]
+        vy = B[7, j]
+        vz = B[8, j]
+        ux, uy, uz = _normalize_select(ex - px, ey - py, ez - pz, fp)
+        bx, by, bz = _normalize_select(vx - px, vy - py, vz - pz, fp)
+        hx, hy, hz = _normalize_select(ux + bx, uy + by, uz + bz, fp)
+        B[9, j] = B[3, j] - hx
+        B[10, j] = B[4, j] - hy
+        B[11, j] = B[5, j] - hz
+
+
+@kernel(llvm_inline=True)
+def _put(B, m, P, N, r, c, vx, vy, vz):
+    """Column ``m`` of the block: P and N of texel (r, c) and the vertex."""
+    for k in range(3):
+        B[k, m] = P[r, c, k]
+        B[3 + k, m] = N[r, c, k]
+    B[6, m] = vx
+    B[7, m] = vy
+    B[8, m] = vz
+
+
+@kernel
+def refine(lo, hi, P, N, mask, vertices, origin, eye, pixel, flags, fp, out_p, out_n, out_offset, B, S):
     """For each vertex ``lo .. hi - 1`` (run over every vertex by
     :func:`refsoft._parallel.parallel_range`): one Gauss-Newton step on ``N(x) - h(x) = 0`` from
     its reflection pixel, with the residual's derivatives by central differences (one-sided next to uncovered texels,
     none along an axis with no covered neighbour), then P and N at the new point by the same
-    first-order model (:func:`_surface`). Arithmetic in the precision of ``fp``. Vertices
-    CULLED or HIDDEN keep their texel's P and N (offset 0; zeros when CULLED)."""
+    first-order model (:func:`_surface`). Arithmetic in the precision of ``fp``, ``vertices``
+    (world space, float64) taken relative to ``origin`` (3,) float64 and rounded to it; ``eye``
+    relative to the origin already. Vertices CULLED or HIDDEN keep their texel's P and N
+    (offset 0; zeros when CULLED).
+
+    The vertices go in blocks of ``BLOCK``: the five residuals of each vertex's step (at its
+    texel and its stencils' four) are gathered into the columns of ``B`` (12, 5 BLOCK) and
+    computed together by :func:`residual_batch` (vectorized), then each step is solved as
+    :func:`gauss_newton_step` solves it (the same offsets, bit for bit). ``S`` (2, BLOCK) holds
+    each vertex's stencil scales. ``B`` and ``S`` are :func:`refine_work`'s arrays."""
     zero = like(0.0, fp)
     lim = like(MAX_OFFSET, fp)
     ex, ey, ez = eye[0], eye[1], eye[2]
-    for i in range(lo, hi):
+    for j in range(B.shape[1]):  # columns past the block's end are computed too, never read
+        for k in range(12):
+            B[k, j] = zero
+    for b0 in range(lo, hi, BLOCK):
+        b1 = min(b0 + BLOCK, hi)
+        m = 0
+        for i in range(b0, b1):
+            if flags[i] & (CULLED | HIDDEN):
+                continue
+            r = pixel[i, 0]
+            c = pixel[i, 1]
+            vx = like(vertices[i, 0] - origin[0], fp)
+            vy = like(vertices[i, 1] - origin[1], fp)
+            vz = like(vertices[i, 2] - origin[2], fp)
+            ar, ac, br, bc, sa = _stencil(mask, r, c, 1, 0, fp)
+            cr, cc, dr, dc, sb = _stencil(mask, r, c, 0, 1, fp)
+            S[0, i - b0] = sa
+            S[1, i - b0] = sb
+            _put(B, m, P, N, r, c, vx, vy, vz)
+            _put(B, m + 1, P, N, ar, ac, vx, vy, vz)
+            _put(B, m + 2, P, N, br, bc, vx, vy, vz)
+            _put(B, m + 3, P, N, cr, cc, vx, vy, vz)
+            _put(B, m + 4, P, N, dr, dc, vx, vy, vz)
+            m += 5
+        residual_batch((m + VECTOR - 1) // VECTOR * VECTOR, B, ex, ey, ez, fp)
+        m = 0
+        for i in range(b0, b1):
+            r = pixel[i, 0]
+            c = pixel[i, 1]
+            out_offset[i, 0] = zero
+            out_offset[i, 1] = zero
+            if flags[i] & CULLED:
+                for k in range(3):
+                    out_p[i, k] = zero
+                    out_n[i, k] = zero
+                continue
+            if flags[i] & HIDDEN:
+                for k in range(3):
+                    out_p[i, k] = P[r, c, k]
+                    out_n[i, k] = N[r, c, k]
+                continue
+            t0, t1 = _solve((B[9, m], B[10, m], B[11, m]), (B[9, m + 1], B[10, m + 1], B[11, m + 1]),
+                            (B[9, m + 2], B[10, m + 2], B[11, m + 2]), (B[9, m + 3], B[10, m + 3], B[11, m + 3]),
+                            (B[9, m + 4], B[10, m + 4], B[11, m + 4]), S[0, i - b0], S[1, i - b0], fp)
+            m += 5
+            t0 = min(max(t0, -lim), lim)
+            t1 = min(max(t1, -lim), lim)
+            out_offset[i, 0] = t0
+            out_offset[i, 1] = t1
+            _surface(P, N, mask, r, c, t0, t1, fp, out_p, out_n, i)
+
+
+@kernel
+def check_pixels(pixel, flags, mask):
+    """Whether every vertex not CULLED has its reflection pixel (row, col) on a covered texel:
+    0 yes; 1 a pixel lies outside the (h, w) ``mask``; else 2 a pixel is not covered."""
+    h, w = mask.shape
+    found = 0
+    for i in range(pixel.shape[0]):
+        if flags[i] & CULLED:
+            continue
         r = pixel[i, 0]
         c = pixel[i, 1]
-        out_offset[i, 0] = zero
-        out_offset[i, 1] = zero
-        if flags[i] & CULLED:
-            for k in range(3):
-                out_p[i, k] = zero
-                out_n[i, k] = zero
-            continue
-        if flags[i] & HIDDEN:
-            for k in range(3):
-                out_p[i, k] = P[r, c, k]
-                out_n[i, k] = N[r, c, k]
-            continue
-        t0, t1 = gauss_newton_step(P, N, mask, r, c, vertices[i, 0], vertices[i, 1], vertices[i, 2], ex, ey, ez, fp)
-        t0 = min(max(t0, -lim), lim)
-        t1 = min(max(t1, -lim), lim)
-        out_offset[i, 0] = t0
-        out_offset[i, 1] = t1
-        _surface(P, N, mask, r, c, t0, t1, fp, out_p, out_n, i)
+        if r < 0 or r >= h or c < 0 or c >= w:
+            return 1
+        if not mask[r, c]:
+            found = 2
+    return found
+
+
+def refine_work(dtype):
+    """The work arrays of one part of :func:`refine`: the block ``B`` (12, 5 BLOCK) and the
+    stencil scales ``S`` (2, BLOCK), of the G-buffer's float type (made by the caller, so that
+    the kernel allocates nothing)."""
+    return np.empty((12, 5 * BLOCK), dtype), np.empty((2, BLOCK), dtype)
 
 
 @kernel

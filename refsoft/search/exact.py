@@ -25,7 +25,7 @@ from .. import constants
 from ..raster import _setup
 from .._parallel import parallel_range
 from . import CULLED, HIDDEN
-from ._exact import gather, project, reaching, shade_accepted
+from ._exact import gather, gather_work, project, reaching, shade_accepted
 from .acceptance import Candidates, _screen_numpy, nearest, pixel_rays
 from .scratch import kept as _kept
 from .virtual import virtual_pass
@@ -238,7 +238,7 @@ def _gathered(keep, faces, face_obj, real, clip, xy, camera, box):
     parallel_range(gather, c, keep, np.ascontiguousarray(faces, np.int64), np.ascontiguousarray(face_obj, np.int32),
                    np.ascontiguousarray(real, np.float64), clip, xy, r0, r1, c0, c1,
                    float(constants.SEVERAL_DILATE_PIXELS), float(constants.SEVERAL_DILATE_FRACTION), corner, obj,
-                   real_corners, screen, bbox, dilate, odd)
+                   real_corners, screen, bbox, dilate, odd, work=gather_work)
     if odd.any():
         screen[odd], bbox[odd], dilate[odd] = _screen_numpy(clip[corner[odd]], camera, box)
     return corner, obj, real_corners, (screen, bbox, dilate)

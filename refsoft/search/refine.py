@@ -54,23 +54,20 @@ def refine(gbuffer: GBuffer, eye, vertices, result):
     verts = validate.points(vertices, "vertices", len(result))
     eye = validate.point(eye, "eye")
     n = len(verts)
-    p = np.zeros((n, 3), dtype=dt)
-    nrm = np.zeros((n, 3), dtype=dt)
-    off = np.zeros((n, 2), dtype=dt)
     if n == 0:
-        return p, nrm, off
+        return np.zeros((0, 3), dt), np.zeros((0, 3), dt), np.zeros((0, 2), dt)
     pix = np.ascontiguousarray(result.pixel, dtype=np.int64)
-    ok = (result.flags & _refine.CULLED) == 0
-    if np.any(ok & ((pix[:, 0] < 0) | (pix[:, 0] >= gbuffer.mask.shape[0]) | (pix[:, 1] < 0)
-                    | (pix[:, 1] >= gbuffer.mask.shape[1]))):
+    flags = np.ascontiguousarray(result.flags, dtype=np.uint8)
+    bad = _refine.check_pixels(pix, flags, gbuffer.mask)
+    if bad == 1:
         raise RefsoftError("refine: a reflection pixel lies outside the G-buffer")
-    if np.any(ok & ~gbuffer.mask[np.clip(pix[:, 0], 0, None), np.clip(pix[:, 1], 0, None)]):
+    if bad == 2:
         raise RefsoftError("refine: a reflection pixel is not covered by the reflector")
-    o = gbuffer.origin
-    v = np.ascontiguousarray((verts - o).astype(dt))
+    o = np.ascontiguousarray(gbuffer.origin, dtype=np.float64)
     e = ((eye - o).astype(dt))
-    parallel_range(_refine.refine, len(v), gbuffer.position, gbuffer.normal, gbuffer.mask, v, e, pix,
-                   np.ascontiguousarray(result.flags, dtype=np.uint8), dt(0), p, nrm, off)
+    p, nrm, off = np.empty((n, 3), dt), np.empty((n, 3), dt), np.empty((n, 2), dt)  # every row written
+    parallel_range(_refine.refine, n, gbuffer.position, gbuffer.normal, gbuffer.mask, np.ascontiguousarray(verts), o, e,
+                   pix, flags, dt(0), p, nrm, off, work=lambda: _refine.refine_work(dt))
     return p, nrm, off
 
 

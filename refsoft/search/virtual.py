@@ -94,16 +94,16 @@ def refined_parts(scene, meshes, refl, verts, opt, eye, reflected=None, with_rea
         reflected = reflected_mesh(scene, meshes)[1]
     res, gb = refl.result, refl.gbuffer
     vertices, normals, faces, face_obj = verts, reflected.normals, reflected.faces, reflected.face_object
-    pixel, flags, surface, virtual = res.pixel, res.flags, refl.surface, refl.virtual64
+    pixel, flags, surface = res.pixel, res.flags, refl.surface
+    virtual = [refl.virtual64]  # its pieces, concatenated once at the end
     points = surface  # every vertex's sub-texel point (P, N), or None
     counts = {}
     if opt.tessellate is not None:
         t = tessellate(gb, eye, verts, normals, faces, face_obj, pixel, flags, opt.tessellate, opt.max_level,
                        opt.neighbourhood, opt.inverse, opt.cap, surface=surface, method=opt.method,
                        min_span=opt.tessellate_span)
-        virtual = np.concatenate([virtual, _new_virtual(refl, opt, eye, t.vertices[len(verts):], t.pixel[len(verts):],
-                                                        t.flags[len(verts):],
-                                                        None if surface is None else t.surface, len(verts))])
+        virtual.append(_new_virtual(refl, opt, eye, t.vertices[len(verts):], t.pixel[len(verts):],
+                                    t.flags[len(verts):], None if surface is None else t.surface, len(verts)))
         vertices, normals, faces, face_obj, pixel, flags = t.vertices, t.normals, t.faces, t.face_obj, t.pixel, t.flags
         points = None if surface is None else t.surface
         counts["tessellation"] = {"vertices_searched": int(t.searched), "levels": int(t.levels),
@@ -122,7 +122,7 @@ def refined_parts(scene, meshes, refl, verts, opt, eye, reflected=None, with_rea
             from .refine import refine as refine_points
 
             new_surface = refine_points(gb, eye, c.vertices, _result(res, c.pixel, c.flags))
-        virtual = np.concatenate([virtual, _new_virtual(refl, opt, eye, c.vertices, c.pixel, c.flags, new_surface, 0)])
+        virtual.append(_new_virtual(refl, opt, eye, c.vertices, c.pixel, c.flags, new_surface, 0))
         if with_real:  # the cut points' real positions (only the exact drawing reads them)
             vertices = np.concatenate([vertices, c.vertices])
             pixel = np.concatenate([pixel, c.pixel])
@@ -132,6 +132,7 @@ def refined_parts(scene, meshes, refl, verts, opt, eye, reflected=None, with_rea
         flags = np.concatenate([flags, c.flags])
         faces, face_obj = c.faces, c.face_obj
         counts["silhouette"] = {"edges_cut": int(c.cut), "vertices_searched": int(c.searched)}
+    virtual = virtual[0] if len(virtual) == 1 else np.concatenate(virtual)
     parts = [(virtual, normals, faces, face_obj, flags)]
     if not with_real:
         return parts, counts

@@ -7,6 +7,7 @@ import pytest
 
 import refsoft
 from naive import naive_refine
+from naive_refine import refine_same_arithmetic
 from refsoft import Camera, primitives, raster, search
 from refsoft.truth.analytic import sphere_reflection_points
 from refsoft.truth.metrics import virtual_distance, window_to_pixel
@@ -38,6 +39,30 @@ def test_kernel_matches_the_numpy_reference(precision, tol):
     np.testing.assert_allclose(n, rn, rtol=0, atol=tol)
     visible = (res.flags & (search.HIDDEN | search.CULLED)) == 0
     assert np.all(np.abs(off) <= 1.0) and np.mean(np.any(off[visible] != 0, axis=1)) > 0.99
+
+
+@pytest.mark.parametrize("precision", ["float32", "float64"])
+@pytest.mark.parametrize("size", [(240, 180), (20, 15)])  # (20, 15): few texels, many one-sided stencils
+def test_kernel_matches_its_own_arithmetic_in_numpy_bit_for_bit_on_one_thread_and_several(precision, size):
+    """The kernel computes the residuals of a block of vertices together (vectorized): the same
+    bits as the step written out in NumPy in the kernel's order, on one thread and on several
+    (whose parts start inside a block)."""
+    import numba
+
+    cam, gb, verts, res = _ball(precision, n=1001, size=size)
+    dt = gb.position.dtype.type
+    want = refine_same_arithmetic(gb.position, gb.normal, gb.mask, (verts - gb.origin).astype(dt),
+                                  (cam.eye - gb.origin).astype(dt), res.pixel, res.flags, search.HIDDEN,
+                                  search.CULLED)
+    assert np.any(res.flags & search.HIDDEN) and np.any(res.flags & search.BORDER)
+    for threads in (1, numba.config.NUMBA_NUM_THREADS):
+        numba.set_num_threads(threads)
+        try:
+            got = refine(gb, cam.eye, verts, res)
+        finally:
+            numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+        for g, w in zip(got, want):
+            assert g.dtype == w.dtype and g.tobytes() == w.tobytes()
 
 
 def test_refined_points_are_much_closer_to_the_exact_ones():
@@ -111,6 +136,20 @@ def test_bad_inputs_are_refused():
         refine(gb, (0, 0), verts, res)
     with pytest.raises(refsoft.RefsoftError, match="covered"):
         surface_at(gb, [[0, 0]], [[0.0, 0.0]])
+    # a reflection pixel outside the G-buffer or on an uncovered texel (a CULLED vertex's is not read)
+    import dataclasses
+
+    h, w = gb.mask.shape
+    uncovered = np.argwhere(~gb.mask)[0]
+    for pixel, what in (((h, 0), "outside"), ((0, -1), "outside"), (tuple(uncovered), "not covered")):
+        bad = res.pixel.copy()
+        bad[3] = pixel
+        with pytest.raises(refsoft.RefsoftError, match=what):
+            refine(gb, cam.eye, verts, dataclasses.replace(res, pixel=bad))
+        flags = res.flags.copy()
+        flags[3] |= search.CULLED
+        p, n, off = refine(gb, cam.eye, verts, dataclasses.replace(res, pixel=bad, flags=flags))
+        assert not p[3].any() and not n[3].any() and not off[3].any() and n[4].any()
     with pytest.raises(refsoft.RefsoftError, match="differ in number"):
         surface_at(gb, res.pixel[:2], np.zeros((3, 2)))
 
