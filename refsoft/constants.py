@@ -326,6 +326,13 @@ SEVERAL_MAX_LEVEL = 3
 #: straight where the real image curves; the per-pixel ray test accepts only exact hits.
 SEVERAL_DILATE_PIXELS = 1.0
 SEVERAL_DILATE_FRACTION = 0.25
+#: On a flat mirror (every vertex normal the same, every vertex in the plane they give, within
+#: EXACT_FLAT_TOLERANCE times the mirror's size) a straight edge's image is straight: a candidate
+#: is dilated by SEVERAL_DILATE_PIXELS alone, unless a corner lies within EXACT_FLAT_NEAR times the
+#: mirror's size of its plane, where the search cannot tell the reflection point well (the score
+#: hardly changes along a line of texels): those keep the whole dilation.
+EXACT_FLAT_TOLERANCE = 1e-9
+EXACT_FLAT_NEAR = 0.01
 #: The exact drawing (``draw="exact"``) draws a triangle a second time, with its vertices' images
 #: by the ``mirror`` rule, when one of them lies more than this many view pixels from its image
 #: by the preset's rule (:func:`refsoft.search.virtual.with_mirror_copies`): where the search's

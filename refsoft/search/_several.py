@@ -679,3 +679,19 @@ def dilated_bounds(c, x0, y0, x1, y1, x2, y2, bad, pixels, fraction, r0, bbox, d
     bbox[c, 3] = np.int64(np.ceil(min(max(hi_x - 0.5, -big), big))) + 1
     dilate[c] = d
     return False
+
+
+@kernel
+def flat_bounds(lo, hi, loose, corner, screen, pixels, r0, bbox, dilate):
+    """Candidates ``lo .. hi - 1`` of a flat mirror (run by :func:`refsoft._parallel.
+    parallel_range`): each one whose projection is usable (``dilate >= 0``) and none of whose
+    corners ``corner[c]`` is ``loose`` dilated by ``pixels`` alone (:func:`dilated_bounds` with no
+    fraction of its longest edge), its ``bbox`` and ``dilate`` rewritten; the others (and one
+    whose values turn out not finite) left as they are."""
+    for c in range(lo, hi):
+        if dilate[c] < 0.0 or loose[corner[c, 0]] or loose[corner[c, 1]] or loose[corner[c, 2]]:
+            continue
+        b0, b1, b2, b3, d = bbox[c, 0], bbox[c, 1], bbox[c, 2], bbox[c, 3], dilate[c]
+        if dilated_bounds(c, screen[c, 0, 0], screen[c, 0, 1], screen[c, 1, 0], screen[c, 1, 1], screen[c, 2, 0],
+                          screen[c, 2, 1], False, pixels, 0.0, r0, bbox, dilate):
+            bbox[c, 0], bbox[c, 1], bbox[c, 2], bbox[c, 3], dilate[c] = b0, b1, b2, b3, d

@@ -26,6 +26,7 @@ from ..raster import _setup
 from .._parallel import parallel_range
 from . import CULLED, HIDDEN
 from ._exact import gather, gather_work, project, reaching, shade_accepted
+from ._several import flat_bounds
 from .acceptance import Candidates, _screen_numpy, nearest, pixel_rays
 from .scratch import kept as _kept
 from .virtual import virtual_pass
@@ -126,12 +127,38 @@ def exact_pass(scene, part, real, camera, reflector_mesh, triangle, stencil, box
     keep = _reaching(clip, xy, faces, flags, lost, box, band)
     # the candidates' corners, objects, real triangles and screen bounds in one pass over them
     f, obj, real_corners, screen = _gathered(keep, faces, face_obj, real, clip, xy, camera, box)
+    plane = flat_plane(reflector_mesh)
+    if plane is not None:  # straight edges' images are straight: no dilation for their curve
+        normal, offset, near = plane
+        loose = np.abs(np.asarray(real, np.float64) @ normal - offset) < near
+        parallel_range(flat_bounds, len(keep), loose, f, screen[0], float(constants.SEVERAL_DILATE_PIXELS), int(box[0]),
+                       screen[1], screen[2])
     cand = Candidates(None, real_corners, None, None, keep, 0)
     # the rays and the winners in scratch memory: shaded before this returns
     rays = pixel_rays(camera, reflector_mesh, triangle, stencil, box, scratch=True)
     best_c, best_uv = nearest(cand, camera, stencil, box, rays=rays, screen=screen, runs=False, scratch=True)
     colour, rid, covered, counts = shade(best_c, best_uv, f, normals, obj, scene, rays[0])
     return colour, rid, covered, {"candidates": int(len(keep)), **counts}
+
+
+def flat_plane(mesh):
+    """A flat mirror's plane: ``(normal (3,), offset, near)`` when every vertex normal of ``mesh``
+    is the first one and every vertex lies in the plane ``normal . x = offset`` through the first
+    vertex, within :data:`refsoft.constants.EXACT_FLAT_TOLERANCE` times the mesh's size, with
+    ``near`` :data:`~refsoft.constants.EXACT_FLAT_NEAR` times its size; None otherwise."""
+    v = np.asarray(mesh.vertices, np.float64)
+    n = np.asarray(mesh.normals, np.float64)
+    if len(v) == 0 or not np.isfinite(v).all() or not np.isfinite(n).all():
+        return None
+    size = float(np.linalg.norm(v.max(axis=0) - v.min(axis=0)))
+    normal = n[0]
+    if size == 0.0 or abs(float(normal @ normal) - 1.0) > 1e-6:
+        return None
+    tol = constants.EXACT_FLAT_TOLERANCE
+    offset = float(v[0] @ normal)
+    if np.abs(n - normal).max() > tol or np.abs(v @ normal - offset).max() > tol * size:
+        return None
+    return normal, offset, constants.EXACT_FLAT_NEAR * size
 
 
 def shade(best_c, best_uv, corner, normals, cand_object, scene, valid):
