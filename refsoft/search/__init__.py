@@ -89,8 +89,9 @@ def start_pixel(mask) -> tuple[int, int] | None:
     any_r = np.flatnonzero(mask.any(axis=1))
     if len(any_r) == 0:
         return None
-    any_c = np.flatnonzero(mask.any(axis=0))
-    r0, r1, c0, c1 = int(any_r[0]), int(any_r[-1]), int(any_c[0]), int(any_c[-1])
+    r0, r1 = int(any_r[0]), int(any_r[-1])
+    any_c = np.flatnonzero(mask[r0:r1 + 1].any(axis=0))  # the covered rows hold every covered pixel
+    c0, c1 = int(any_c[0]), int(any_c[-1])
     r = (r0 + r1) // 2
     c = (c0 + c1) // 2
     if mask[r, c]:
