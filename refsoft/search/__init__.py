@@ -90,8 +90,9 @@ def start_pixel(mask) -> tuple[int, int] | None:
     any_r = np.flatnonzero(mask.any(axis=1))
     if len(any_r) == 0:
         return None
-    any_c = np.flatnonzero(mask.any(axis=0))
-    r0, r1, c0, c1 = int(any_r[0]), int(any_r[-1]), int(any_c[0]), int(any_c[-1])
+    r0, r1 = int(any_r[0]), int(any_r[-1])
+    any_c = np.flatnonzero(mask[r0:r1 + 1].any(axis=0))  # the covered rows hold every covered pixel
+    c0, c1 = int(any_c[0]), int(any_c[-1])
     r = (r0 + r1) // 2
     c = (c0 + c1) // 2
     if mask[r, c]:
@@ -112,6 +113,11 @@ def _check_gbuffer(gbuffer):
     return dt.type
 
 
+#: Packs of at most this many pixels run on the calling thread (tens of microseconds: less than
+#: waking another thread costs).
+PACK_SERIAL_PIXELS = 1 << 12
+
+
 def _packed(gbuffer: GBuffer, eye, scratch=False):
     """The G-buffer packed for the one-search-at-a-time kernels (traces, the hierarchy,
     :func:`scores_at`), cropped to the covered pixels. (:func:`search` reads the positions and
@@ -130,18 +136,19 @@ def _packed(gbuffer: GBuffer, eye, scratch=False):
     fp = dt(0)  # prototype scalar: the kernels compute in its precision
     h, w = gbuffer.mask.shape
     rows = np.flatnonzero(gbuffer.mask.any(axis=1))
-    cols = np.flatnonzero(gbuffer.mask.any(axis=0))
     if len(rows) == 0:
         r0 = r1 = c0 = c1 = 0
     else:
         r0, r1 = max(int(rows[0]) - 1, 0), min(int(rows[-1]) + 2, h)
+        cols = np.flatnonzero(gbuffer.mask[r0:r1].any(axis=0))  # the covered rows hold every covered pixel
         c0, c1 = max(int(cols[0]) - 1, 0), min(int(cols[-1]) + 2, w)
     mask = np.ascontiguousarray(gbuffer.mask[r0:r1, c0:c1])
     eye_rel = (np.asarray(eye, dtype=np.float64) - gbuffer.origin).astype(dt)
     shape = (r1 - r0, c1 - c0, _kernels.PACKED)
     G = kept("packed", shape, dt) if scratch else np.zeros(shape, dtype=dt)
     parallel_range(_kernels.pack, r1 - r0, np.ascontiguousarray(gbuffer.position[r0:r1, c0:c1]),
-                   np.ascontiguousarray(gbuffer.normal[r0:r1, c0:c1]), mask, eye_rel, fp, G)
+                   np.ascontiguousarray(gbuffer.normal[r0:r1, c0:c1]), mask, eye_rel, fp, G,
+                   serial=mask.size <= PACK_SERIAL_PIXELS)
     return G, mask, fp, (r0, c0)
 
 

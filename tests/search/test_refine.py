@@ -49,7 +49,10 @@ def test_kernel_matches_its_own_arithmetic_in_numpy_bit_for_bit_on_one_thread_an
     (whose parts start inside a block)."""
     import numba
 
-    cam, gb, verts, res = _ball(precision, n=1001, size=size)
+    from refsoft.search.refine import SERIAL_MAX_REFINED
+
+    cam, gb, verts, res = _ball(precision, n=2501, size=size)
+    assert len(verts) > SERIAL_MAX_REFINED  # run on several threads where there are
     dt = gb.position.dtype.type
     want = refine_same_arithmetic(gb.position, gb.normal, gb.mask, (verts - gb.origin).astype(dt),
                                   (cam.eye - gb.origin).astype(dt), res.pixel, res.flags, search.HIDDEN,
