@@ -114,8 +114,9 @@ def rays_near(real, origin, direction, first, last, ray, margin, parallel):
         l2 = np.sqrt((e2[0] * e2[0] + e2[1] * e2[1]) + e2[2] * e2[2])
         d = direction[r]
         dx, dy, dz = d[:, 0], d[:, 1], d[:, 2]
-        px, py, pz = dy * e2[2] - dz * e2[1], dz * e2[0] - dx * e2[2], dx * e2[1] - dy * e2[0]
-        det = (e1[0] * px + e1[1] * py) + e1[2] * pz
+        with np.errstate(invalid="ignore", over="ignore"):  # a triangle that is not finite gives NaN
+            px, py, pz = dy * e2[2] - dz * e2[1], dz * e2[0] - dx * e2[2], dx * e2[1] - dy * e2[0]
+            det = (e1[0] * px + e1[1] * py) + e1[2] * pz
         ld = np.sqrt((dx * dx + dy * dy) + dz * dz)
         s = origin[r] - p0
         sx, sy, sz = s[:, 0], s[:, 1], s[:, 2]
