@@ -6,7 +6,7 @@ import numpy as np
 from .._numba import kernel
 from ._kernels import RECORD_WIDTH, _normalize, search_one
 from ._several import _may_hit, _triangle
-from ._tessellate import _unit
+from ._tessellate import thesis_error
 
 
 @kernel
@@ -72,13 +72,7 @@ def edge_errors(lo, hi, P, N, mask, origin, E, verts, pixel, e0, e1, out):
         py = np.float64(P[hr, hc, 1]) + origin[1]
         pz = np.float64(P[hr, hc, 2]) + origin[2]
         nx, ny, nz = np.float64(N[hr, hc, 0]), np.float64(N[hr, hc, 1]), np.float64(N[hr, hc, 2])
-        mx = 0.5 * (verts[a, 0] + verts[b, 0])
-        my = 0.5 * (verts[a, 1] + verts[b, 1])
-        mz = 0.5 * (verts[a, 2] + verts[b, 2])
-        vx, vy, vz = _unit(E[hr, hc, 0] - px, E[hr, hc, 1] - py, E[hr, hc, 2] - pz)
-        wx, wy, wz = _unit(mx - px, my - py, mz - pz)
-        bx, by, bz = _unit(vx + wx, vy + wy, vz + wz)
-        out[i] = 1.0 - ((nx * bx + ny * by + nz * bz) + 1.0) / 2.0
+        out[i] = thesis_error(px, py, pz, nx, ny, nz, E[hr, hc, 0], E[hr, hc, 1], E[hr, hc, 2], verts, a, b)
 
 
 @kernel

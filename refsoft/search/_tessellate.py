@@ -16,6 +16,20 @@ def _unit(x, y, z):
     return 0.0, 0.0, 0.0
 
 
+@kernel(inline=True)
+def thesis_error(px, py, pz, nx, ny, nz, ex, ey, ez, verts, a, b):
+    """The thesis's error ``1 - (dot(N, b) + 1) / 2`` at the surface point (px, py, pz) with normal
+    (nx, ny, nz), ``b`` the normalised bisector of the directions from it to the eye (ex, ey, ez)
+    and to the midpoint of vertices ``verts[a]`` and ``verts[b]`` (float64)."""
+    mx = 0.5 * (verts[a, 0] + verts[b, 0])
+    my = 0.5 * (verts[a, 1] + verts[b, 1])
+    mz = 0.5 * (verts[a, 2] + verts[b, 2])
+    vx, vy, vz = _unit(ex - px, ey - py, ez - pz)
+    wx, wy, wz = _unit(mx - px, my - py, mz - pz)
+    bx, by, bz = _unit(vx + wx, vy + wy, vz + wz)
+    return 1.0 - ((nx * bx + ny * by + nz * bz) + 1.0) / 2.0
+
+
 @kernel
 def edge_errors(lo, hi, P, N, mask, origin, eye, verts, pixel, offset, e0, e1, subtexel, fp, out):
     """``out[i]`` for ``i`` in ``lo .. hi - 1`` (run over every edge by
@@ -53,13 +67,7 @@ def edge_errors(lo, hi, P, N, mask, origin, eye, verts, pixel, offset, e0, e1, s
             py = np.float64(P[hr, hc, 1]) + origin[1]
             pz = np.float64(P[hr, hc, 2]) + origin[2]
             nx, ny, nz = np.float64(N[hr, hc, 0]), np.float64(N[hr, hc, 1]), np.float64(N[hr, hc, 2])
-        mx = 0.5 * (verts[a, 0] + verts[b, 0])
-        my = 0.5 * (verts[a, 1] + verts[b, 1])
-        mz = 0.5 * (verts[a, 2] + verts[b, 2])
-        vx, vy, vz = _unit(eye[0] - px, eye[1] - py, eye[2] - pz)
-        wx, wy, wz = _unit(mx - px, my - py, mz - pz)
-        bx, by, bz = _unit(vx + wx, vy + wy, vz + wz)
-        out[i] = 1.0 - ((nx * bx + ny * by + nz * bz) + 1.0) / 2.0
+        out[i] = thesis_error(px, py, pz, nx, ny, nz, eye[0], eye[1], eye[2], verts, a, b)
 
 
 @kernel
