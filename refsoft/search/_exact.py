@@ -9,6 +9,7 @@ import numpy as np
 
 from .._numba import kernel
 from ..raster._rays import unit_normal
+from ._several import dilated_box, dilation
 
 #: Candidates of :func:`gather` whose bounds are computed together.
 GATHER_BLOCK = 512
@@ -165,26 +166,16 @@ def _block_bounds(n, W, B, r0, r1, c0, c1, pixels, fraction, dilate, odd):
     a candidate behind the eye, chosen by selects (no branch): a loop that vectorizes, the same
     values. (A row whose positions or dilation are not finite gets bounds from zeros: the
     caller replaces them.)"""
-    big = float(1 << 30)
     for q in range(n):
         x0, y0, x1, y1, x2, y2 = W[0, q], W[1, q], W[2, q], W[3, q], W[4, q], W[5, q]
         back = W[6, q] != 0.0
-        edge = np.sqrt((x0 - x1) * (x0 - x1) + (y0 - y1) * (y0 - y1))
-        e = np.sqrt((x1 - x2) * (x1 - x2) + (y1 - y2) * (y1 - y2))
-        edge = e if e > edge else edge
-        e = np.sqrt((x2 - x0) * (x2 - x0) + (y2 - y0) * (y2 - y0))
-        edge = e if e > edge else edge
-        d = pixels + fraction * edge
+        d = dilation(x0, y0, x1, y1, x2, y2, pixels, fraction)
         finite = (np.isfinite(x0) & np.isfinite(y0) & np.isfinite(x1) & np.isfinite(y1) & np.isfinite(x2)
                   & np.isfinite(y2) & np.isfinite(d))
-        lo_x, hi_x = min(x0, x1, x2) - d, max(x0, x1, x2) + d
-        lo_y, hi_y = min(y0, y1, y2) - d, max(y0, y1, y2) + d
-        if not finite:  # no conversion of a value that is not finite to an integer
-            lo_x = hi_x = lo_y = hi_y = 0.0
-        b_0 = np.int64(np.floor(min(max(lo_y - 0.5, -big), big))) - r0
-        b_1 = np.int64(np.ceil(min(max(hi_y - 0.5, -big), big))) + 1 - r0
-        b_2 = np.int64(np.floor(min(max(lo_x - 0.5, -big), big)))
-        b_3 = np.int64(np.ceil(min(max(hi_x - 0.5, -big), big))) + 1
+        # no conversion of a value that is not finite to an integer: such a row's bounds from zeros
+        b_0, b_1, b_2, b_3 = dilated_box(x0 if finite else 0.0, y0 if finite else 0.0, x1 if finite else 0.0,
+                                         y1 if finite else 0.0, x2 if finite else 0.0, y2 if finite else 0.0,
+                                         d if finite else 0.0, r0)
         B[0, q] = 0 if back else b_0
         B[1, q] = r1 - r0 if back else b_1
         B[2, q] = c0 if back else b_2

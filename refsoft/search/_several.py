@@ -662,23 +662,37 @@ def dilated_bounds(c, x0, y0, x1, y1, x2, y2, bad, pixels, fraction, r0, bbox, d
     dilated bounds in box rows and view columns, written to ``dilate[c]`` and ``bbox[c]`` from its
     corners' view-pixel positions, unless ``bad`` (a position that is not finite) or the dilation
     is not finite: returns whether either was (the row is left to the caller's NumPy)."""
-    big = float(1 << 30)
+    d = dilation(x0, y0, x1, y1, x2, y2, pixels, fraction)
+    if bad or not np.isfinite(d):
+        return True
+    bbox[c, 0], bbox[c, 1], bbox[c, 2], bbox[c, 3] = dilated_box(x0, y0, x1, y1, x2, y2, d, r0)
+    dilate[c] = d
+    return False
+
+
+@kernel(inline=True)
+def dilation(x0, y0, x1, y1, x2, y2, pixels, fraction):
+    """``pixels`` plus ``fraction`` of the longest edge of the screen triangle (x0, y0), (x1, y1),
+    (x2, y2) (no branch: a loop of it vectorizes)."""
     edge = np.sqrt((x0 - x1) * (x0 - x1) + (y0 - y1) * (y0 - y1))
     e = np.sqrt((x1 - x2) * (x1 - x2) + (y1 - y2) * (y1 - y2))
     edge = e if e > edge else edge
     e = np.sqrt((x2 - x0) * (x2 - x0) + (y2 - y0) * (y2 - y0))
     edge = e if e > edge else edge
-    d = pixels + fraction * edge
-    if bad or not np.isfinite(d):
-        return True
+    return pixels + fraction * edge
+
+
+@kernel(inline=True)
+def dilated_box(x0, y0, x1, y1, x2, y2, d, r0):
+    """The pixel bounds (row0, row1, col0, col1), half-open, rows from ``r0``, whose centres the
+    screen triangle dilated by ``d`` may cover (finite values: each clamped to 2**30)."""
+    big = float(1 << 30)
     lo_x, hi_x = min(x0, x1, x2) - d, max(x0, x1, x2) + d
     lo_y, hi_y = min(y0, y1, y2) - d, max(y0, y1, y2) + d
-    bbox[c, 0] = np.int64(np.floor(min(max(lo_y - 0.5, -big), big))) - r0
-    bbox[c, 1] = np.int64(np.ceil(min(max(hi_y - 0.5, -big), big))) + 1 - r0
-    bbox[c, 2] = np.int64(np.floor(min(max(lo_x - 0.5, -big), big)))
-    bbox[c, 3] = np.int64(np.ceil(min(max(hi_x - 0.5, -big), big))) + 1
-    dilate[c] = d
-    return False
+    return (np.int64(np.floor(min(max(lo_y - 0.5, -big), big))) - r0,
+            np.int64(np.ceil(min(max(hi_y - 0.5, -big), big))) + 1 - r0,
+            np.int64(np.floor(min(max(lo_x - 0.5, -big), big))),
+            np.int64(np.ceil(min(max(hi_x - 0.5, -big), big))) + 1)
 
 
 @kernel
