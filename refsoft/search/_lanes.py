@@ -121,6 +121,18 @@ def _begin(vertices, starts, default_r, default_c, i, s, W, SV):
     W[s, MOVED] = -1
 
 
+@kernel(inline=True)
+def _push(cand, INV, m, P, N, r, c, SV, s, inverse):
+    """Candidate ``m`` of the batch: pixel (r, c)'s P and N and slot ``s``'s vertex, scored
+    inversely where ``inverse``. Returns ``m + 1``."""
+    for ch in range(3):
+        cand[ch, m] = P[r, c, ch]
+        cand[3 + ch, m] = N[r, c, ch]
+        cand[6 + ch, m] = SV[s, ch]
+    INV[m] = inverse
+    return m + 1
+
+
 @kernel(llvm_inline=True)
 def _gather(P, N, mask, NB, W, SV, cand, INV, IDX):
     """Gathers the candidates of this round that need a score, those of every active walk that
@@ -142,12 +154,7 @@ def _gather(P, N, mask, NB, W, SV, cand, INV, IDX):
         IDX[s * (NB + 1)] = -1
         if moved < 0:  # a start: covered (the start rules), scored here
             IDX[s * (NB + 1)] = m
-            for ch in range(3):
-                cand[ch, m] = P[r, c, ch]
-                cand[3 + ch, m] = N[r, c, ch]
-                cand[6 + ch, m] = SV[s, ch]
-            INV[m] = W[s, PH] == 1
-            m += 1
+            m = _push(cand, INV, m, P, N, r, c, SV, s, W[s, PH] == 1)
         for k in range(1, NB + 1):
             q = s * (NB + 1) + k
             rr = r + OFFSETS[k, 0]
@@ -161,12 +168,7 @@ def _gather(P, N, mask, NB, W, SV, cand, INV, IDX):
                     IDX[q] = -2 - j
                     continue
             IDX[q] = m
-            for ch in range(3):
-                cand[ch, m] = P[rr, cc, ch]
-                cand[3 + ch, m] = N[rr, cc, ch]
-                cand[6 + ch, m] = SV[s, ch]
-            INV[m] = W[s, PH] == 1
-            m += 1
+            m = _push(cand, INV, m, P, N, rr, cc, SV, s, W[s, PH] == 1)
     return m
 
 

@@ -19,18 +19,7 @@ from refsoft.search.levels import BOUNCE_DEPTH
 from refsoft.search.silhouette import clip_at_silhouette
 from refsoft.search.tessellate import tessellate
 
-from test_bounce_search import two_balls
-
-
-def _bounce(cam, gb, eye):
-    """A first level's G-buffer as a level-2 bounce whose every pixel's eye is ``eye``."""
-    m = gb.mask
-    pos = np.where(m[..., None], gb.position.astype(np.float64) + gb.origin, 0.0)
-    nrm = np.where(m[..., None], gb.normal.astype(np.float64), 0.0)
-    eyes = np.where(m[..., None], np.asarray(eye, np.float64), 0.0)
-    d = pos - np.asarray(cam.eye)
-    direction = d / np.maximum(np.linalg.norm(d, axis=-1, keepdims=True), 1e-300)
-    return make_bounce(2, 1, m, pos, nrm, eyes, np.zeros(m.shape), direction, cam.eye)
+from test_bounce_search import _bounce, two_balls
 
 
 @pytest.fixture(scope="module")
